@@ -1,0 +1,320 @@
+//! Scenario and driver-model settings: one serde struct whose defaults are the paper's.
+//!
+//! A TOML file may set any subset of fields; the rest keep their defaults. Unknown fields are an
+//! error, so a misspelt key never silently leaves a default in place.
+
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+
+/// Why a configuration could not be used.
+#[derive(Debug, thiserror::Error)]
+pub enum ConfigError {
+    #[error("cannot read config file {path}: {source}")]
+    Read {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    #[error("malformed config file {path}: {message}")]
+    Parse { path: PathBuf, message: String },
+    #[error("invalid setting {field} = {value}: {reason}")]
+    Invalid {
+        field: &'static str,
+        value: String,
+        reason: &'static str,
+    },
+}
+
+/// Everything an episode needs besides the controller.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct Config {
+    pub scenario: Scenario,
+    pub demand: Demand,
+    /// Longitudinal model of HDVs (SUMO's IDM) and of idm-mobil CAVs (the Rust IDM).
+    pub idm: Idm,
+    /// Lane-change model of idm-mobil CAVs (HDVs on the main road use SUMO's LC2013).
+    pub mobil: Mobil,
+    /// Stochastic merge decision of HDVs on the ramp.
+    pub ramp_merge: RampMerge,
+    pub sumo: SumoSettings,
+}
+
+/// The episode's setting: which traffic, how long, on which road.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct Scenario {
+    /// CAV penetration α: probability that an inserted vehicle is a CAV.
+    pub alpha: f64,
+    /// Total arrival rate λ (veh/h), main road and ramp together.
+    pub lambda: f64,
+    /// Seed of the demand and of the HDVs' stochastic merging.
+    pub seed: u64,
+    /// Episode length H in steps.
+    pub steps: u32,
+    /// Step length dt (s); also the planning period.
+    pub dt: f64,
+    /// Speed limit v_max (m/s): CAV desired speed, upper bound of every command, and the speed of
+    /// the free-flow reference t*.
+    pub v_max: f64,
+    /// Acceleration used for the free-flow reference t* (m/s²): the IDM maximum acceleration.
+    pub free_flow_accel: f64,
+    pub vehicle_length: f64,
+    pub vehicle_width: f64,
+    /// Time SUMO takes to move a vehicle across one lane (s, `--lanechange.duration`).
+    pub lane_change_duration: f64,
+    /// The merge network; `None` uses the one embedded in the binary (`sumo_net/merge.net.xml`).
+    pub net_file: Option<PathBuf>,
+}
+
+/// How vehicles are generated.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct Demand {
+    /// Share of λ arriving on the ramp; the rest arrives on the two main lanes equally.
+    pub ramp_share: f64,
+    /// Insertion speed range (m/s), uniform.
+    pub insertion_speed: [f64; 2],
+    /// HDV desired speed range (m/s), uniform.
+    pub hdv_desired_speed: [f64; 2],
+}
+
+/// Intelligent Driver Model parameters (highway-env's values, in bumper-to-bumper terms).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct Idm {
+    /// Maximum acceleration a (m/s²).
+    pub accel: f64,
+    /// Comfortable deceleration b (m/s², positive).
+    pub decel: f64,
+    /// Jam distance s0 (m, bumper to bumper).
+    pub min_gap: f64,
+    /// Safe time headway T (s).
+    pub time_headway: f64,
+    /// Acceleration exponent δ.
+    pub delta: f64,
+    /// Hardest braking a vehicle can do (m/s², positive); SUMO's emergencyDecel and the Rust
+    /// IDM's lower clamp.
+    pub max_decel: f64,
+}
+
+/// MOBIL lane-change parameters (highway-env's values).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct Mobil {
+    /// Politeness p: weight of the followers' gain.
+    pub politeness: f64,
+    /// Acceleration gain a lane change must bring (m/s²).
+    pub gain_threshold: f64,
+    /// Braking the change may impose on the new follower at most (m/s², positive).
+    pub safe_braking: f64,
+    /// Minimum time between two lane-change decisions of one vehicle (s).
+    pub decision_interval: f64,
+}
+
+/// Ramp HDVs decide to merge with per-step probability `(ξ)^exponent`, where ξ ∈ [0, 1] is the
+/// share of the merge zone already driven (so the probability reaches 1 at the zone's end); a
+/// decided HDV then merges as soon as SUMO finds the gap safe.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct RampMerge {
+    pub exponent: f64,
+}
+
+/// How SUMO is run.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct SumoSettings {
+    /// Let SUMO print its warnings and step log.
+    pub verbose: bool,
+    /// Extra SUMO command-line options, appended last.
+    pub extra_args: Vec<String>,
+}
+
+impl Default for Scenario {
+    fn default() -> Self {
+        Scenario {
+            alpha: 0.5,
+            lambda: 3000.0,
+            seed: 0,
+            steps: 400,
+            dt: 0.2,
+            v_max: 35.0,
+            free_flow_accel: 3.0,
+            vehicle_length: 5.0,
+            vehicle_width: 2.0,
+            lane_change_duration: 1.0,
+            net_file: None,
+        }
+    }
+}
+
+impl Default for Demand {
+    fn default() -> Self {
+        Demand {
+            ramp_share: 0.2,
+            insertion_speed: [25.0, 35.0],
+            hdv_desired_speed: [25.0, 35.0],
+        }
+    }
+}
+
+impl Default for Idm {
+    fn default() -> Self {
+        Idm {
+            accel: 3.0,
+            decel: 5.0,
+            min_gap: 5.0,
+            time_headway: 1.5,
+            delta: 4.0,
+            max_decel: 9.0,
+        }
+    }
+}
+
+impl Default for Mobil {
+    fn default() -> Self {
+        Mobil {
+            politeness: 0.0,
+            gain_threshold: 0.2,
+            safe_braking: 2.0,
+            decision_interval: 1.0,
+        }
+    }
+}
+
+impl Default for RampMerge {
+    fn default() -> Self {
+        RampMerge { exponent: 1.0 }
+    }
+}
+
+impl Config {
+    /// Reads a TOML file; missing fields keep the defaults.
+    pub fn from_file(path: &Path) -> Result<Self, ConfigError> {
+        let text = std::fs::read_to_string(path).map_err(|source| ConfigError::Read {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        let config: Config = toml::from_str(&text).map_err(|e| ConfigError::Parse {
+            path: path.to_path_buf(),
+            message: e.message().to_string()
+                + &e.span()
+                    .map(|s| format!(" (at byte {})", s.start))
+                    .unwrap_or_default(),
+        })?;
+        config.validate()?;
+        Ok(config)
+    }
+
+    /// The whole configuration as TOML, as `bkpbs config --print` shows it.
+    pub fn to_toml(&self) -> String {
+        toml::to_string_pretty(self).expect("config always serialises")
+    }
+
+    /// Rejects values no episode can run with.
+    pub fn validate(&self) -> Result<(), ConfigError> {
+        let s = &self.scenario;
+        check("scenario.alpha", s.alpha, (0.0..=1.0).contains(&s.alpha), "must lie in [0, 1]")?;
+        check("scenario.lambda", s.lambda, s.lambda > 0.0 && s.lambda.is_finite(), "must be a positive rate in veh/h")?;
+        check("scenario.steps", s.steps, s.steps > 0, "must be at least 1")?;
+        check("scenario.dt", s.dt, s.dt > 0.0 && s.dt <= 1.0, "must lie in (0, 1] s")?;
+        check("scenario.v_max", s.v_max, s.v_max > 0.0, "must be positive")?;
+        check("scenario.free_flow_accel", s.free_flow_accel, s.free_flow_accel > 0.0, "must be positive")?;
+        check("scenario.vehicle_length", s.vehicle_length, s.vehicle_length > 0.0, "must be positive")?;
+        check("scenario.vehicle_width", s.vehicle_width, s.vehicle_width > 0.0, "must be positive")?;
+        check("scenario.lane_change_duration", s.lane_change_duration, s.lane_change_duration >= s.dt, "must be at least one step")?;
+        let d = &self.demand;
+        check("demand.ramp_share", d.ramp_share, (0.0..=1.0).contains(&d.ramp_share), "must lie in [0, 1]")?;
+        for (field, r) in [
+            ("demand.insertion_speed", d.insertion_speed),
+            ("demand.hdv_desired_speed", d.hdv_desired_speed),
+        ] {
+            check(field, format!("{r:?}"), r[0] > 0.0 && r[0] <= r[1] && r[1] <= s.v_max, "must be [low, high] with 0 < low <= high <= v_max")?;
+        }
+        let i = &self.idm;
+        check("idm.accel", i.accel, i.accel > 0.0, "must be positive")?;
+        check("idm.decel", i.decel, i.decel > 0.0, "must be positive")?;
+        check("idm.min_gap", i.min_gap, i.min_gap >= 0.0, "must not be negative")?;
+        check("idm.time_headway", i.time_headway, i.time_headway >= 0.0, "must not be negative")?;
+        check("idm.delta", i.delta, i.delta > 0.0, "must be positive")?;
+        check("idm.max_decel", i.max_decel, i.max_decel >= i.decel, "must be at least idm.decel")?;
+        let m = &self.mobil;
+        check("mobil.politeness", m.politeness, m.politeness >= 0.0, "must not be negative")?;
+        check("mobil.safe_braking", m.safe_braking, m.safe_braking > 0.0, "must be positive")?;
+        check("mobil.decision_interval", m.decision_interval, m.decision_interval >= 0.0, "must not be negative")?;
+        check("ramp_merge.exponent", self.ramp_merge.exponent, self.ramp_merge.exponent > 0.0, "must be positive")?;
+        Ok(())
+    }
+}
+
+fn check(
+    field: &'static str,
+    value: impl std::fmt::Display,
+    ok: bool,
+    reason: &'static str,
+) -> Result<(), ConfigError> {
+    if ok {
+        Ok(())
+    } else {
+        Err(ConfigError::Invalid {
+            field,
+            value: value.to_string(),
+            reason,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn defaults_are_the_papers() {
+        let c = Config::default();
+        assert_eq!(c.scenario.steps, 400);
+        assert_eq!(c.scenario.dt, 0.2);
+        assert_eq!(c.scenario.v_max, 35.0);
+        assert_eq!(c.scenario.vehicle_length, 5.0);
+        assert_eq!(c.demand.insertion_speed, [25.0, 35.0]);
+        c.validate().unwrap();
+    }
+
+    #[test]
+    fn toml_round_trips() {
+        let c = Config::default();
+        let back: Config = toml::from_str(&c.to_toml()).unwrap();
+        assert_eq!(back, c);
+    }
+
+    #[test]
+    fn partial_file_keeps_defaults() {
+        let c: Config = toml::from_str("[scenario]\nalpha = 0.8\n").unwrap();
+        assert_eq!(c.scenario.alpha, 0.8);
+        assert_eq!(c.scenario.lambda, 3000.0);
+    }
+
+    #[test]
+    fn unknown_field_is_rejected() {
+        assert!(toml::from_str::<Config>("[scenario]\nalhpa = 0.8\n").is_err());
+    }
+
+    #[test]
+    fn alpha_outside_unit_interval_is_invalid() {
+        let mut c = Config::default();
+        c.scenario.alpha = 1.5;
+        let e = c.validate().unwrap_err().to_string();
+        assert!(e.contains("scenario.alpha"), "{e}");
+    }
+
+    #[test]
+    fn missing_and_malformed_files_name_the_file() {
+        let e = Config::from_file(Path::new("no/such/file.toml")).unwrap_err();
+        assert!(e.to_string().contains("no/such/file.toml"));
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("bad.toml");
+        std::fs::write(&p, "[scenario\nalpha = ").unwrap();
+        let e = Config::from_file(&p).unwrap_err().to_string();
+        assert!(e.contains("bad.toml") && e.starts_with("malformed"), "{e}");
+    }
+}

@@ -1,0 +1,99 @@
+//! The `idm-mobil` baseline: IDM + MOBIL computed in Rust for every CAV (desired speed v_max),
+//! with the HDV model's parameters, commanded through SUMO with SUMO's own checks off.
+
+use std::collections::HashMap;
+use std::sync::Arc;
+
+use super::{mobil, CavHandling, Command, Controller, LaneChange, Maneuver};
+use crate::config::{Config, Idm, Mobil};
+use crate::road::MERGE_LANE;
+use crate::scene::{Kind, Scene};
+
+/// Rule-based CAV controller.
+#[derive(Debug, Clone)]
+pub struct IdmMobil {
+    idm: Idm,
+    mobil: Mobil,
+    dt: f64,
+    v_max: f64,
+    /// Lateral offset (m) beyond which a vehicle counts as mid lane change.
+    settle: f64,
+    last_change: HashMap<Arc<str>, f64>,
+}
+
+impl IdmMobil {
+    pub fn new(config: &Config) -> Self {
+        IdmMobil {
+            idm: config.idm.clone(),
+            mobil: config.mobil.clone(),
+            dt: config.scenario.dt,
+            v_max: config.scenario.v_max,
+            settle: 0.1,
+            last_change: HashMap::new(),
+        }
+    }
+
+    fn lane_change(&self, scene: &Scene, i: usize) -> Option<LaneChange> {
+        let me = &scene.vehicles[i];
+        if me.on_ramp || me.lateral.abs() > self.settle {
+            return None;
+        }
+        if me.lane == MERGE_LANE {
+            // The merge is mandatory: only its safety matters.
+            return mobil::evaluate(&self.idm, &self.mobil, scene, i, me.lane + 1, true)
+                .map(|_| LaneChange::Left);
+        }
+        if let Some(t) = self.last_change.get(&me.id) {
+            if scene.time - t < self.mobil.decision_interval {
+                return None;
+            }
+        }
+        let mut best: Option<(f64, LaneChange)> = None;
+        for dir in [LaneChange::Left, LaneChange::Right] {
+            let target = me.lane + dir.offset();
+            if target == MERGE_LANE {
+                continue; // main-road vehicles never enter the acceleration lane
+            }
+            if let Some(g) = mobil::evaluate(&self.idm, &self.mobil, scene, i, target, false) {
+                if best.map_or(true, |(bg, _)| g > bg) {
+                    best = Some((g, dir));
+                }
+            }
+        }
+        best.map(|(_, d)| d)
+    }
+}
+
+impl Controller for IdmMobil {
+    fn name(&self) -> &'static str {
+        "idm-mobil"
+    }
+
+    fn handling(&self) -> CavHandling {
+        CavHandling::Commanded
+    }
+
+    fn plan(&mut self, scene: &Scene, out: &mut Vec<Command>) {
+        for (i, v) in scene.vehicles.iter().enumerate() {
+            if v.kind != Kind::Cav {
+                continue;
+            }
+            let a = mobil::idm_in_lane(&self.idm, scene, i, v.lane);
+            let lane_change = self.lane_change(scene, i);
+            if lane_change.is_some() {
+                self.last_change.insert(v.id.clone(), scene.time);
+            }
+            out.push(Command {
+                vehicle: i,
+                maneuver: Maneuver {
+                    speed: (v.speed + a * self.dt).clamp(0.0, self.v_max),
+                    lane_change,
+                },
+            });
+        }
+        if self.last_change.len() > 4 * scene.vehicles.len() + 64 {
+            let horizon = scene.time - self.mobil.decision_interval;
+            self.last_change.retain(|_, t| *t >= horizon);
+        }
+    }
+}

@@ -1,0 +1,100 @@
+//! Controllers: a scene in, one maneuver per CAV out.
+//!
+//! Every planner of the project implements [`Controller`]; the episode runner applies what it
+//! returns through SUMO's speed and lane-change calls. New planners appear by name in
+//! [`by_name`] and [`PLANNERS`].
+
+pub mod idm;
+pub mod idm_mobil;
+pub mod mobil;
+pub mod sumo_native;
+
+use crate::config::Config;
+use crate::scene::Scene;
+
+/// A lateral move to the neighbouring lane.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum LaneChange {
+    Left,
+    Right,
+}
+
+impl LaneChange {
+    /// Road-frame lane offset of the move.
+    pub fn offset(self) -> i32 {
+        match self {
+            LaneChange::Left => 1,
+            LaneChange::Right => -1,
+        }
+    }
+}
+
+/// What one CAV does during the next step.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Maneuver {
+    /// Speed at the end of the next step (m/s).
+    pub speed: f64,
+    /// Start a lane change now.
+    pub lane_change: Option<LaneChange>,
+}
+
+/// A maneuver for the vehicle at `vehicle` in the scene's vehicle list.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Command {
+    pub vehicle: usize,
+    pub maneuver: Maneuver,
+}
+
+/// Who drives the CAVs in SUMO.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CavHandling {
+    /// SUMO's own models with all of SUMO's safety checks (the `sumo` reference controller).
+    Sumo,
+    /// The controller's commands alone: SUMO's speed and lane-change checks are off for CAVs,
+    /// so the controller's quality decides collisions.
+    Commanded,
+}
+
+/// A CAV controller, called once per step.
+pub trait Controller {
+    /// The name used on the command line and in CSV files.
+    fn name(&self) -> &'static str;
+
+    /// How SUMO must treat CAVs for this controller.
+    fn handling(&self) -> CavHandling;
+
+    /// Appends one command per CAV it controls to `out` (which arrives empty).
+    fn plan(&mut self, scene: &Scene, out: &mut Vec<Command>);
+}
+
+/// Names accepted by [`by_name`].
+pub const PLANNERS: [&str; 2] = ["sumo", "idm-mobil"];
+
+/// An unknown planner name.
+#[derive(Debug, thiserror::Error)]
+#[error("unknown planner '{0}' (known: {known})", known = PLANNERS.join(", "))]
+pub struct UnknownPlanner(pub String);
+
+/// Builds the controller called `name`.
+pub fn by_name(name: &str, config: &Config) -> Result<Box<dyn Controller>, UnknownPlanner> {
+    match name {
+        "sumo" => Ok(Box::new(sumo_native::SumoNative)),
+        "idm-mobil" => Ok(Box::new(idm_mobil::IdmMobil::new(config))),
+        other => Err(UnknownPlanner(other.to_string())),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_listed_planner_builds_and_unknown_is_refused() {
+        let c = Config::default();
+        for p in PLANNERS {
+            assert_eq!(by_name(p, &c).unwrap().name(), p);
+        }
+        let e = by_name("bk-pbz", &c).err().unwrap().to_string();
+        assert!(e.contains("bk-pbz") && e.contains("idm-mobil"), "{e}");
+    }
+}

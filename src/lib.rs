@@ -1,0 +1,20 @@
+//! bkpbs: coordinating connected automated vehicles (CAVs) among human-driven vehicles (HDVs) at
+//! a highway on-ramp merge, co-simulated in-process with SUMO.
+//!
+//! The library does the work; the `bkpbs` binary only parses arguments and dispatches.
+//! Start at [`episode::run`]: it builds the demand ([`demand`]), starts SUMO ([`sumo`]) on the
+//! merge network ([`road`]), and lets a [`controller::Controller`] command the CAVs each step,
+//! recording [`metrics`].
+
+pub mod bench;
+pub mod config;
+pub mod controller;
+pub mod demand;
+pub mod episode;
+pub mod merge_rule;
+pub mod metrics;
+pub mod output;
+pub mod road;
+pub mod scene;
+pub mod sumo;
+pub mod sumo_files;

@@ -1,0 +1,74 @@
+//! Raw declarations of the C++ shim (`shim.cpp`). Only `sumo::Simulation` calls these.
+#![allow(dead_code)]
+
+use std::os::raw::c_char;
+
+/// Mirrors `BkVehicleState` in the shim.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Default)]
+pub struct RawVehicleState {
+    pub x: f64,
+    pub y: f64,
+    pub speed: f64,
+    pub acceleration: f64,
+    pub angle: f64,
+    pub lane_position: f64,
+    pub lateral_offset: f64,
+    pub lane_index: i32,
+    pub edge_code: i32,
+}
+
+/// Mirrors `BkCollision` in the shim.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Default)]
+pub struct RawCollision {
+    pub collider_speed: f64,
+    pub victim_speed: f64,
+    pub position: f64,
+}
+
+pub const LIST_VEHICLES: i32 = 0;
+pub const LIST_DEPARTED: i32 = 1;
+pub const LIST_ARRIVED: i32 = 2;
+pub const LIST_LANES: i32 = 3;
+pub const LIST_EDGES: i32 = 4;
+
+extern "C" {
+    pub fn bk_last_error() -> *const c_char;
+    pub fn bk_start(args: *const c_char, argc: usize) -> i32;
+    pub fn bk_close() -> i32;
+    pub fn bk_step() -> i32;
+    pub fn bk_time(out: *mut f64) -> i32;
+    pub fn bk_min_expected_number(out: *mut i32) -> i32;
+    pub fn bk_id_list(which: i32, buf: *mut *const c_char, len: *mut usize) -> i32;
+    pub fn bk_set_edge_names(names: *const c_char, count: usize) -> i32;
+    pub fn bk_vehicle_type(id: *const c_char, out: *mut *const c_char, len: *mut usize) -> i32;
+    pub fn bk_read_vehicles(
+        states: *mut *const RawVehicleState,
+        count: *mut usize,
+        strings: *mut *const c_char,
+        strings_len: *mut usize,
+    ) -> i32;
+    pub fn bk_collisions(
+        items: *mut *const RawCollision,
+        count: *mut usize,
+        strings: *mut *const c_char,
+        strings_len: *mut usize,
+    ) -> i32;
+    pub fn bk_set_speed(id: *const c_char, speed: f64) -> i32;
+    pub fn bk_set_max_speed(id: *const c_char, speed: f64) -> i32;
+    pub fn bk_set_speed_mode(id: *const c_char, mode: i32) -> i32;
+    pub fn bk_set_lane_change_mode(id: *const c_char, mode: i32) -> i32;
+    pub fn bk_change_lane(id: *const c_char, lane_index: i32, duration: f64) -> i32;
+    pub fn bk_vehicle_driving_distance(
+        id: *const c_char,
+        edge: *const c_char,
+        pos: f64,
+        out: *mut f64,
+    ) -> i32;
+    pub fn bk_lane_length(lane: *const c_char, out: *mut f64) -> i32;
+    pub fn bk_lane_width(lane: *const c_char, out: *mut f64) -> i32;
+    pub fn bk_lane_max_speed(lane: *const c_char, out: *mut f64) -> i32;
+    pub fn bk_edge_lane_count(edge: *const c_char, out: *mut i32) -> i32;
+    pub fn bk_lane_shape(lane: *const c_char, xy: *mut *const f64, count: *mut usize) -> i32;
+}

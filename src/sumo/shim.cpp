@@ -1,0 +1,265 @@
+// C ABI over Debian's libsumo (C++). Every exported function catches every C++ exception and turns
+// it into a status code plus a message kept in `g_error`, so no exception ever unwinds into Rust.
+// Strings and arrays handed back stay owned by this file and are valid until the next call of the
+// same function; the Rust side copies them at once.
+#include <libsumo/libsumo.h>
+
+#include <cstdint>
+#include <cstring>
+#include <exception>
+#include <string>
+#include <vector>
+
+namespace {
+
+std::string g_error;
+
+template <typename F>
+int guarded(F&& body) {
+    try {
+        body();
+        return 0;
+    } catch (const libsumo::TraCIException& e) {
+        g_error = e.what();
+    } catch (const libsumo::FatalTraCIError& e) {
+        g_error = e.what();
+    } catch (const std::exception& e) {
+        g_error = e.what();
+    } catch (...) {
+        g_error = "unknown C++ exception inside libsumo";
+    }
+    if (g_error.empty()) {
+        g_error = "libsumo failed without a message";
+    }
+    return -1;
+}
+
+// Joins strings into one NUL-separated buffer (each string followed by '\0').
+void join(const std::vector<std::string>& items, std::string& out) {
+    out.clear();
+    for (const auto& s : items) {
+        out += s;
+        out.push_back('\0');
+    }
+}
+
+std::string g_list;
+std::vector<std::string> g_edge_names;
+std::string g_vehicle_strings;
+std::string g_collision_strings;
+std::string g_scalar_string;
+
+}  // namespace
+
+extern "C" {
+
+// One vehicle's state as read in one batch; strings (id, type, edge) travel separately.
+struct BkVehicleState {
+    double x;
+    double y;
+    double speed;
+    double acceleration;
+    double angle;
+    double lane_position;
+    double lateral_offset;
+    int32_t lane_index;
+    // Index into the edge names registered with `bk_set_edge_names`, or -1 for any other edge.
+    int32_t edge_code;
+};
+
+struct BkCollision {
+    double collider_speed;
+    double victim_speed;
+    double position;
+};
+
+const char* bk_last_error() { return g_error.c_str(); }
+
+// `args` holds `argc` NUL-terminated strings back to back (argv[0] included; libsumo ignores it).
+int bk_start(const char* args, size_t argc) {
+    return guarded([&] {
+        std::vector<std::string> cmd;
+        const char* p = args;
+        for (size_t i = 0; i < argc; ++i) {
+            cmd.emplace_back(p);
+            p += std::strlen(p) + 1;
+        }
+        libsumo::Simulation::start(cmd);
+    });
+}
+
+int bk_close() {
+    return guarded([] { libsumo::Simulation::close(); });
+}
+
+int bk_step() {
+    return guarded([] { libsumo::Simulation::step(); });
+}
+
+int bk_time(double* out) {
+    return guarded([&] { *out = libsumo::Simulation::getTime(); });
+}
+
+int bk_min_expected_number(int32_t* out) {
+    return guarded([&] { *out = libsumo::Simulation::getMinExpectedNumber(); });
+}
+
+// Id lists: 0 = vehicles now in the net, 1 = departed in the last step, 2 = arrived in the last step,
+// 3 = lanes of the net, 4 = edges of the net.
+int bk_id_list(int32_t which, const char** buf, size_t* len) {
+    return guarded([&] {
+        std::vector<std::string> ids;
+        switch (which) {
+            case 0: ids = libsumo::Vehicle::getIDList(); break;
+            case 1: ids = libsumo::Simulation::getDepartedIDList(); break;
+            case 2: ids = libsumo::Simulation::getArrivedIDList(); break;
+            case 3: ids = libsumo::Lane::getIDList(); break;
+            case 4: ids = libsumo::Edge::getIDList(); break;
+            default: throw std::runtime_error("unknown id list selector");
+        }
+        join(ids, g_list);
+        *buf = g_list.data();
+        *len = g_list.size();
+    });
+}
+
+// Registers the edges whose vehicles `bk_read_vehicles` reports by index (NUL-separated names).
+int bk_set_edge_names(const char* names, size_t count) {
+    return guarded([&] {
+        g_edge_names.clear();
+        const char* p = names;
+        for (size_t i = 0; i < count; ++i) {
+            g_edge_names.emplace_back(p);
+            p += std::strlen(p) + 1;
+        }
+    });
+}
+
+int bk_vehicle_type(const char* id, const char** out, size_t* len) {
+    return guarded([&] {
+        g_scalar_string = libsumo::Vehicle::getTypeID(id);
+        *out = g_scalar_string.data();
+        *len = g_scalar_string.size();
+    });
+}
+
+// Reads every vehicle in the net: states into an internal array and the ids, NUL-separated, in
+// the same order. Vehicle types never change, so they are asked for once (`bk_vehicle_type`).
+int bk_read_vehicles(const BkVehicleState** states, size_t* count, const char** strings,
+                     size_t* strings_len) {
+    static std::vector<BkVehicleState> buffer;
+    return guarded([&] {
+        const std::vector<std::string> ids = libsumo::Vehicle::getIDList();
+        buffer.clear();
+        buffer.reserve(ids.size());
+        g_vehicle_strings.clear();
+        for (const auto& id : ids) {
+            const libsumo::TraCIPosition pos = libsumo::Vehicle::getPosition(id);
+            BkVehicleState s{};
+            s.x = pos.x;
+            s.y = pos.y;
+            s.speed = libsumo::Vehicle::getSpeed(id);
+            s.acceleration = libsumo::Vehicle::getAcceleration(id);
+            s.angle = libsumo::Vehicle::getAngle(id);
+            s.lane_position = libsumo::Vehicle::getLanePosition(id);
+            s.lateral_offset = libsumo::Vehicle::getLateralLanePosition(id);
+            s.lane_index = libsumo::Vehicle::getLaneIndex(id);
+            const std::string edge = libsumo::Vehicle::getRoadID(id);
+            s.edge_code = -1;
+            for (size_t e = 0; e < g_edge_names.size(); ++e) {
+                if (g_edge_names[e] == edge) {
+                    s.edge_code = static_cast<int32_t>(e);
+                    break;
+                }
+            }
+            buffer.push_back(s);
+            g_vehicle_strings += id;
+            g_vehicle_strings.push_back('\0');
+        }
+        *states = buffer.data();
+        *count = buffer.size();
+        *strings = g_vehicle_strings.data();
+        *strings_len = g_vehicle_strings.size();
+    });
+}
+
+// Collisions of the last step: numbers into an internal array, and
+// "collider\0victim\0colliderType\0victimType\0kind\0lane\0" per collision.
+int bk_collisions(const BkCollision** items, size_t* count, const char** strings,
+                  size_t* strings_len) {
+    static std::vector<BkCollision> buffer;
+    return guarded([&] {
+        const std::vector<libsumo::TraCICollision> cs = libsumo::Simulation::getCollisions();
+        buffer.clear();
+        g_collision_strings.clear();
+        for (const auto& c : cs) {
+            buffer.push_back(BkCollision{c.colliderSpeed, c.victimSpeed, c.pos});
+            for (const std::string* s : {&c.collider, &c.victim, &c.colliderType, &c.victimType,
+                                         &c.type, &c.lane}) {
+                g_collision_strings += *s;
+                g_collision_strings.push_back('\0');
+            }
+        }
+        *items = buffer.data();
+        *count = buffer.size();
+        *strings = g_collision_strings.data();
+        *strings_len = g_collision_strings.size();
+    });
+}
+
+int bk_set_speed(const char* id, double speed) {
+    return guarded([&] { libsumo::Vehicle::setSpeed(id, speed); });
+}
+
+int bk_set_max_speed(const char* id, double speed) {
+    return guarded([&] { libsumo::Vehicle::setMaxSpeed(id, speed); });
+}
+
+int bk_set_speed_mode(const char* id, int32_t mode) {
+    return guarded([&] { libsumo::Vehicle::setSpeedMode(id, mode); });
+}
+
+int bk_set_lane_change_mode(const char* id, int32_t mode) {
+    return guarded([&] { libsumo::Vehicle::setLaneChangeMode(id, mode); });
+}
+
+int bk_change_lane(const char* id, int32_t lane_index, double duration) {
+    return guarded([&] { libsumo::Vehicle::changeLane(id, lane_index, duration); });
+}
+
+int bk_vehicle_driving_distance(const char* id, const char* edge, double pos, double* out) {
+    return guarded([&] { *out = libsumo::Vehicle::getDrivingDistance(id, edge, pos); });
+}
+
+int bk_lane_length(const char* lane, double* out) {
+    return guarded([&] { *out = libsumo::Lane::getLength(lane); });
+}
+
+int bk_lane_width(const char* lane, double* out) {
+    return guarded([&] { *out = libsumo::Lane::getWidth(lane); });
+}
+
+int bk_lane_max_speed(const char* lane, double* out) {
+    return guarded([&] { *out = libsumo::Lane::getMaxSpeed(lane); });
+}
+
+int bk_edge_lane_count(const char* edge, int32_t* out) {
+    return guarded([&] { *out = libsumo::Edge::getLaneNumber(edge); });
+}
+
+// Lane shape as "x0 y0 x1 y1 ..." (flat doubles).
+int bk_lane_shape(const char* lane, const double** xy, size_t* count) {
+    static std::vector<double> buffer;
+    return guarded([&] {
+        const libsumo::TraCIPositionVector shape = libsumo::Lane::getShape(lane);
+        buffer.clear();
+        for (const auto& p : shape.value) {
+            buffer.push_back(p.x);
+            buffer.push_back(p.y);
+        }
+        *xy = buffer.data();
+        *count = buffer.size();
+    });
+}
+
+}  // extern "C"
