@@ -21,11 +21,29 @@ pub struct BenchRow {
     pub plan_ms_per_step: f64,
 }
 
-/// SUMO stepping the episode's demand with nobody reading or commanding: the floor.
+/// SUMO stepping the episode's demand (as a plain route file, inserted by SUMO itself) with
+/// nobody reading or commanding: the floor.
 pub fn sumo_alone_ms_per_step(config: &Config) -> Result<f64, EpisodeError> {
     let planned = demand::generate(config);
-    let input = EpisodeInput::write(config, &planned)?;
-    let mut sim = Simulation::start(&input.command_line(config)).map_err(EpisodeError::Start)?;
+    let input = EpisodeInput::write(config)?;
+    let demand_file = tempfile::Builder::new()
+        .suffix(".rou.xml")
+        .tempfile()
+        .and_then(|f| {
+            std::fs::write(f.path(), demand::route_file(&planned))?;
+            Ok(f)
+        })
+        .map_err(|source| crate::sumo_files::InputError::Write {
+            path: std::env::temp_dir(),
+            source,
+        })?;
+    let args = crate::sumo_files::command_line(
+        config,
+        &input.net,
+        &input.vehicle_types,
+        demand_file.path(),
+    );
+    let mut sim = Simulation::start(&args).map_err(EpisodeError::Start)?;
     let start = Instant::now();
     for step in 0..config.scenario.steps {
         sim.step().map_err(|source| EpisodeError::Step {

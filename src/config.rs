@@ -77,6 +77,8 @@ pub struct Demand {
     pub insertion_speed: [f64; 2],
     /// HDV desired speed range (m/s), uniform.
     pub hdv_desired_speed: [f64; 2],
+    /// Time gap τ a vehicle must have to its leader to enter (s): entry needs s0 + v·τ.
+    pub insertion_headway: f64,
 }
 
 /// Intelligent Driver Model parameters (highway-env's values, in bumper-to-bumper terms).
@@ -108,6 +110,11 @@ pub struct Mobil {
     pub gain_threshold: f64,
     /// Braking the change may impose on the new follower at most (m/s², positive).
     pub safe_braking: f64,
+    /// Mandatory merge from the acceleration lane: the hardest braking the kinematic gap
+    /// acceptance may ask of the merging vehicle or its new follower (m/s², positive).
+    pub merge_safe_braking: f64,
+    /// Mandatory merge: the smallest bumper-to-bumper gap accepted on either side (m).
+    pub merge_min_gap: f64,
     /// Minimum time between two lane-change decisions of one vehicle (s).
     pub decision_interval: f64,
 }
@@ -127,6 +134,8 @@ pub struct RampMerge {
 pub struct SumoSettings {
     /// Let SUMO print its warnings and step log.
     pub verbose: bool,
+    /// Additional SUMO files (detectors, extra vehicles, …) loaded with the vehicle types.
+    pub additional_files: Vec<PathBuf>,
     /// Extra SUMO command-line options, appended last.
     pub extra_args: Vec<String>,
 }
@@ -155,6 +164,7 @@ impl Default for Demand {
             ramp_share: 0.2,
             insertion_speed: [25.0, 35.0],
             hdv_desired_speed: [25.0, 35.0],
+            insertion_headway: 1.0,
         }
     }
 }
@@ -178,6 +188,8 @@ impl Default for Mobil {
             politeness: 0.0,
             gain_threshold: 0.2,
             safe_braking: 2.0,
+            merge_safe_braking: 3.0,
+            merge_min_gap: 2.5,
             decision_interval: 1.0,
         }
     }
@@ -232,6 +244,7 @@ impl Config {
         ] {
             check(field, format!("{r:?}"), r[0] > 0.0 && r[0] <= r[1] && r[1] <= s.v_max, "must be [low, high] with 0 < low <= high <= v_max")?;
         }
+        check("demand.insertion_headway", d.insertion_headway, d.insertion_headway >= 0.0, "must not be negative")?;
         let i = &self.idm;
         check("idm.accel", i.accel, i.accel > 0.0, "must be positive")?;
         check("idm.decel", i.decel, i.decel > 0.0, "must be positive")?;
@@ -242,6 +255,8 @@ impl Config {
         let m = &self.mobil;
         check("mobil.politeness", m.politeness, m.politeness >= 0.0, "must not be negative")?;
         check("mobil.safe_braking", m.safe_braking, m.safe_braking > 0.0, "must be positive")?;
+        check("mobil.merge_safe_braking", m.merge_safe_braking, m.merge_safe_braking > 0.0, "must be positive")?;
+        check("mobil.merge_min_gap", m.merge_min_gap, m.merge_min_gap >= 0.0, "must not be negative")?;
         check("mobil.decision_interval", m.decision_interval, m.decision_interval >= 0.0, "must not be negative")?;
         check("ramp_merge.exponent", self.ramp_merge.exponent, self.ramp_merge.exponent > 0.0, "must be positive")?;
         Ok(())

@@ -11,6 +11,7 @@ use std::time::Instant;
 use crate::config::{Config, ConfigError};
 use crate::controller::{CavHandling, Command, Controller};
 use crate::demand::{self, PlannedVehicle};
+use crate::entry::EntryControl;
 use crate::merge_rule::RampMergeRule;
 use crate::metrics::{
     free_flow_time, percentile, CollisionEvent, Outcome, Summary, SummaryInput, Timing,
@@ -18,7 +19,7 @@ use crate::metrics::{
 };
 use crate::road::{Road, RoadError, EDGES};
 use crate::scene::{Kind, Origin, Scene, VehicleState};
-use crate::sumo::{Simulation, SumoError, VehicleReadings};
+use crate::sumo::{Simulation, StderrCapture, SumoError, VehicleReadings};
 use crate::sumo_files::{EpisodeInput, InputError};
 
 /// SUMO speed mode for commanded CAVs: no checks at all, the commanded speed is the speed.
@@ -57,6 +58,8 @@ pub struct EpisodeResult {
     pub vehicles: Vec<VehicleRecord>,
     pub collisions: Vec<CollisionEvent>,
     pub timing: Timing,
+    /// What SUMO printed to stderr (captured unless `sumo.verbose`).
+    pub sumo_log: String,
 }
 
 /// Runs one episode with the demand drawn from the config's (λ, α, seed).
@@ -73,12 +76,16 @@ pub fn run_with_demand(
     planned: &[PlannedVehicle],
 ) -> Result<EpisodeResult, EpisodeError> {
     let wall = Instant::now();
-    let input = EpisodeInput::write(config, planned)?;
-    let sim = Simulation::start(&input.command_line(config)).map_err(EpisodeError::Start)?;
-    let road = Road::from_simulation(&sim)?;
-    let mut state = Episode::new(config, controller, planned, road);
-    let outcome = state.run(sim);
+    let input = EpisodeInput::write(config)?;
+    let capture = if config.sumo.verbose { None } else { StderrCapture::start() };
+    let outcome = (|| {
+        let sim = Simulation::start(&input.command_line(config)).map_err(EpisodeError::Start)?;
+        let road = Road::from_simulation(&sim)?;
+        Episode::new(config, controller, planned, road).run(sim)
+    })();
+    let sumo_log = capture.map(StderrCapture::finish).unwrap_or_default();
     let mut result = outcome?;
+    result.sumo_log = sumo_log;
     result.timing.wall_s = wall.elapsed().as_secs_f64();
     Ok(result)
 }
@@ -102,6 +109,7 @@ struct Episode<'a> {
     index: HashMap<Arc<str>, usize>,
     collisions: Vec<CollisionEvent>,
     merge_rule: RampMergeRule,
+    entry: EntryControl,
     readings: VehicleReadings,
     /// Tracked index of each reading, valid for `slots_generation`.
     slots: Vec<Option<usize>>,
@@ -139,6 +147,7 @@ impl<'a> Episode<'a> {
             index: HashMap::new(),
             collisions: Vec::new(),
             merge_rule: RampMergeRule::new(config),
+            entry: EntryControl::new(config, planned),
             readings: VehicleReadings::default(),
             slots: Vec::new(),
             slots_generation: u64::MAX,
@@ -164,11 +173,12 @@ impl<'a> Episode<'a> {
             self.step(&mut sim, step + 1 < steps).map_err(at)?;
         }
         let loop_s = loop_start.elapsed().as_secs_f64();
+        // Vehicles standing on the acceleration lane at the end: a jam indicator.
         let ramp_queue_end = self
             .scene
             .vehicles
             .iter()
-            .filter(|v| v.origin == Origin::Ramp && v.lane == crate::road::MERGE_LANE)
+            .filter(|v| !v.on_ramp && v.lane == crate::road::MERGE_LANE && v.speed < 1.0)
             .count();
         sim.close().map_err(|source| EpisodeError::Step {
             step: steps,
@@ -180,6 +190,10 @@ impl<'a> Episode<'a> {
 
     /// One SUMO step and, unless it is the last, one planning round.
     fn step(&mut self, sim: &mut Simulation, plan: bool) -> Result<(), SumoError> {
+        for a in self.entry.admit(self.scene.time, &self.scene) {
+            let v = &a.vehicle;
+            sim.add_vehicle(&v.id, v.origin.as_str(), v.kind.as_str(), v.depart_lane as i32, a.speed)?;
+        }
         let t0 = Instant::now();
         sim.step()?;
         self.sumo_s += t0.elapsed().as_secs_f64();
@@ -216,10 +230,7 @@ impl<'a> Episode<'a> {
             let origin = planned.map_or(Origin::Main, |p| p.origin);
             let desired = planned.map_or(self.config.scenario.v_max, |p| p.desired_speed);
             let speed = planned.map_or(0.0, |p| p.depart_speed);
-            let lane = planned.map_or(1, |p| match p.origin {
-                Origin::Main => 1 + p.depart_lane as i32,
-                Origin::Ramp => 0,
-            });
+            let scheduled_depart = planned.map_or(now, |p| p.depart);
             match kind {
                 Kind::Hdv => {
                     sim.set_max_speed(&id, desired)?;
@@ -239,9 +250,12 @@ impl<'a> Episode<'a> {
                 id: id.clone(),
                 kind,
                 origin,
-                insert_lane: lane,
+                scheduled_depart,
+                scheduled_speed: speed,
+                // Lane and speed are filled in from the first reading, in this same step.
+                insert_lane: -1,
                 insert_time: now,
-                insert_speed: speed,
+                insert_speed: f64::NAN,
                 desired_speed: desired,
                 distance,
                 t_star: free_flow_time(distance, speed, sc.free_flow_accel, sc.v_max),
@@ -339,6 +353,10 @@ impl<'a> Episode<'a> {
                 continue;
             };
             let t = &mut self.tracked[k];
+            if t.record.insert_lane < 0 {
+                t.record.insert_lane = lane;
+                t.record.insert_speed = raw.speed;
+            }
             t.last_time = now;
             t.last_front = front;
             t.last_speed = raw.speed;
@@ -411,6 +429,7 @@ impl<'a> Episode<'a> {
             vehicles,
             collisions: std::mem::take(&mut self.collisions),
             timing,
+            sumo_log: String::new(),
         }
     }
 }

@@ -10,6 +10,7 @@ pub mod bench;
 pub mod config;
 pub mod controller;
 pub mod demand;
+pub mod entry;
 pub mod episode;
 pub mod merge_rule;
 pub mod metrics;

@@ -7,7 +7,7 @@ use anyhow::{Context, Result};
 use clap::{Args, Parser, Subcommand};
 
 use bkpbs::config::Config;
-use bkpbs::{bench, controller, episode, sumo_files};
+use bkpbs::{bench, controller, demand, episode, output, sumo_files};
 
 #[derive(Parser)]
 #[command(name = "bkpbs", version, about = "BK-PBS merge coordination co-simulated with SUMO")]
@@ -24,6 +24,8 @@ enum Command {
     Config(ConfigArgs),
     /// Time SUMO alone against the same episode with controllers, side by side.
     Bench(BenchArgs),
+    /// Write an episode's demand as a SUMO route file (e.g. to watch it in sumo-gui).
+    Demand(DemandArgs),
 }
 
 /// Scenario flags shared by the subcommands that run SUMO; each overrides the config file.
@@ -118,6 +120,15 @@ struct BenchArgs {
     scenario: ScenarioArgs,
 }
 
+#[derive(Args)]
+struct DemandArgs {
+    #[command(flatten)]
+    scenario: ScenarioArgs,
+    /// Route file to write.
+    #[arg(long)]
+    out: PathBuf,
+}
+
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Episode(a) => {
@@ -156,6 +167,12 @@ fn run(cli: Cli) -> Result<()> {
             } else {
                 print!("{}", config.to_toml());
             }
+        }
+        Command::Demand(a) => {
+            let config = a.scenario.resolve()?;
+            let planned = demand::generate(&config);
+            output::write_atomic(&a.out, demand::route_file(&planned).as_bytes())?;
+            println!("{} vehicles written to {}", planned.len(), a.out.display());
         }
         Command::Bench(a) => {
             let config = a.scenario.resolve()?;

@@ -44,10 +44,15 @@ pub struct VehicleRecord {
     pub id: String,
     pub kind: Kind,
     pub origin: Origin,
+    /// Departure time the demand scheduled (s).
+    pub scheduled_depart: f64,
+    /// Insertion speed the demand drew (m/s); t* starts from it.
+    pub scheduled_speed: f64,
     /// Road-frame lane at insertion.
     pub insert_lane: i32,
     /// Time the vehicle was first seen in the network, at its insertion position (s).
     pub insert_time: f64,
+    /// Speed SUMO inserted it with: the drawn one, or less when traffic ahead forbade it.
     pub insert_speed: f64,
     pub desired_speed: f64,
     /// Route distance from the insertion position to the end of the section (m).
@@ -65,10 +70,16 @@ pub struct VehicleRecord {
 }
 
 impl VehicleRecord {
-    /// Travel delay t_f − t* of a vehicle that arrived without collision.
+    /// Travel delay t_f − t* of a vehicle that arrived without collision, with t_f counted
+    /// from its scheduled departure: time spent queueing at a congested entry is delay too.
     pub fn delay(&self) -> Option<f64> {
         self.arrival_time
-            .map(|t| t - self.insert_time - self.t_star)
+            .map(|t| t - self.scheduled_depart - self.t_star)
+    }
+
+    /// Time the vehicle waited at the entry for room (s).
+    pub fn entry_delay(&self) -> f64 {
+        (self.insert_time - self.scheduled_depart).max(0.0)
     }
 }
 
@@ -120,7 +131,7 @@ pub struct Summary {
     pub throughput_veh_h: f64,
     /// Mean speed over all vehicle-steps (m/s).
     pub mean_speed_mps: f64,
-    /// Ramp vehicles still on the ramp or acceleration lane at the end (a jam indicator).
+    /// Vehicles standing (< 1 m/s) on the acceleration lane at the end (a jam indicator).
     pub ramp_queue_end: usize,
 }
 
@@ -244,6 +255,8 @@ mod tests {
             id: "x".into(),
             kind,
             origin: Origin::Main,
+            scheduled_depart: 1.0,
+            scheduled_speed: 30.0,
             insert_lane: 1,
             insert_time: 1.0,
             insert_speed: 30.0,
@@ -261,7 +274,7 @@ mod tests {
     #[test]
     fn summary_counts_and_rates() {
         let vs = vec![
-            rec(Kind::Cav, Outcome::Arrived, false, Some(20.0)), // delay 6
+            rec(Kind::Cav, Outcome::Arrived, false, Some(20.0)), // delay 20 − 1 − 13 = 6
             rec(Kind::Hdv, Outcome::Arrived, false, Some(18.0)), // delay 4
             rec(Kind::Cav, Outcome::Crashed, true, None),
             rec(Kind::Hdv, Outcome::Crashed, true, None),

@@ -98,8 +98,9 @@ fn timing_row(t: &Timing) -> Vec<String> {
 }
 
 /// Columns of `vehicles.csv`.
-pub const VEHICLE_COLUMNS: [&str; 16] = [
-    "id", "type", "origin", "insert_lane", "insert_time_s", "insert_speed_mps",
+pub const VEHICLE_COLUMNS: [&str; 19] = [
+    "id", "type", "origin", "scheduled_depart_s", "scheduled_speed_mps", "insert_lane",
+    "insert_time_s", "entry_delay_s", "insert_speed_mps",
     "desired_speed_mps", "distance_m", "t_star_s", "outcome", "arrival_time_s", "travel_time_s",
     "delay_s", "crash_time_s", "crashed_with", "controllable_crash",
 ];
@@ -109,8 +110,11 @@ fn vehicle_row(r: &VehicleRecord) -> Vec<String> {
         r.id.clone(),
         r.kind.as_str().into(),
         r.origin.as_str().into(),
+        format!("{:.2}", r.scheduled_depart),
+        format!("{:.2}", r.scheduled_speed),
         r.insert_lane.to_string(),
         format!("{:.2}", r.insert_time),
+        format!("{:.2}", r.entry_delay()),
         format!("{:.2}", r.insert_speed),
         format!("{:.2}", r.desired_speed),
         format!("{:.3}", r.distance),
@@ -176,6 +180,11 @@ impl EpisodeResult {
             ("episode.csv", self.episode_csv()),
         ];
         let mut paths = Vec::new();
+        if !self.sumo_log.is_empty() {
+            let p = dir.join("sumo.log");
+            write_atomic(&p, self.sumo_log.as_bytes())?;
+            paths.push(p);
+        }
         for (name, bytes) in files {
             let p = dir.join(name);
             write_atomic(&p, &bytes)?;

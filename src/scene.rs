@@ -22,9 +22,9 @@ impl Kind {
         }
     }
 
-    /// Parses a SUMO type id.
+    /// Parses a SUMO type id; SUMO names a per-vehicle copy of a type `type@vehicle`.
     pub fn from_type_id(s: &str) -> Option<Kind> {
-        match s {
+        match s.split('@').next().unwrap_or(s) {
             "cav" => Some(Kind::Cav),
             "hdv" => Some(Kind::Hdv),
             _ => None,

@@ -3,7 +3,6 @@
 use std::path::{Path, PathBuf};
 
 use crate::config::Config;
-use crate::demand::PlannedVehicle;
 use crate::road::EMBEDDED_NET;
 
 /// Why the episode's SUMO input could not be prepared.
@@ -47,8 +46,8 @@ pub struct EpisodeInput {
 }
 
 impl EpisodeInput {
-    /// Writes the network (unless the config names one), vehicle types and demand.
-    pub fn write(config: &Config, vehicles: &[PlannedVehicle]) -> Result<Self, InputError> {
+    /// Writes the network (unless the config names one), vehicle types and routes.
+    pub fn write(config: &Config) -> Result<Self, InputError> {
         let dir = tempfile::Builder::new()
             .prefix("bkpbs-episode-")
             .tempdir()
@@ -70,7 +69,7 @@ impl EpisodeInput {
             None => put("merge.net.xml", EMBEDDED_NET)?,
         };
         let vehicle_types = put("vtypes.add.xml", &vehicle_types(config))?;
-        let routes = put("demand.rou.xml", &crate::demand::route_file(vehicles))?;
+        let routes = put("routes.rou.xml", crate::demand::ROUTES)?;
         Ok(EpisodeInput {
             _dir: dir,
             net,
@@ -97,7 +96,10 @@ pub fn command_line(config: &Config, net: &Path, vtypes: &Path, routes: &Path) -
         "--net-file".into(),
         net.display().to_string(),
         "--additional-files".into(),
-        vtypes.display().to_string(),
+        std::iter::once(vtypes.display().to_string())
+            .chain(config.sumo.additional_files.iter().map(|p| p.display().to_string()))
+            .collect::<Vec<_>>()
+            .join(","),
         "--route-files".into(),
         routes.display().to_string(),
         "--step-length".into(),
@@ -142,10 +144,17 @@ mod tests {
     }
 
     #[test]
+    fn shipped_demo_demand_matches_the_defaults() {
+        let shipped = include_str!("../sumo_net/demo.rou.xml");
+        let generated = crate::demand::route_file(&crate::demand::generate(&Config::default()));
+        assert_eq!(shipped, generated, "regenerate with `bkpbs demand --out sumo_net/demo.rou.xml`");
+    }
+
+    #[test]
     fn missing_net_file_is_named() {
         let mut c = Config::default();
         c.scenario.net_file = Some("nowhere/merge.net.xml".into());
-        let e = EpisodeInput::write(&c, &[]).err().unwrap().to_string();
+        let e = EpisodeInput::write(&c).err().unwrap().to_string();
         assert!(e.contains("nowhere/merge.net.xml"), "{e}");
     }
 }

@@ -4,7 +4,7 @@
 use std::collections::HashMap;
 use std::sync::Arc;
 
-use super::{mobil, CavHandling, Command, Controller, LaneChange, Maneuver};
+use super::{idm, mobil, CavHandling, Command, Controller, LaneChange, Maneuver};
 use crate::config::{Config, Idm, Mobil};
 use crate::road::MERGE_LANE;
 use crate::scene::{Kind, Scene};
@@ -40,8 +40,8 @@ impl IdmMobil {
         }
         if me.lane == MERGE_LANE {
             // The merge is mandatory: only its safety matters.
-            return mobil::evaluate(&self.idm, &self.mobil, scene, i, me.lane + 1, true)
-                .map(|_| LaneChange::Left);
+            return mobil::merge_is_safe(&self.mobil, scene, i, me.lane + 1)
+                .then_some(LaneChange::Left);
         }
         if let Some(t) = self.last_change.get(&me.id) {
             if scene.time - t < self.mobil.decision_interval {
@@ -54,7 +54,7 @@ impl IdmMobil {
             if target == MERGE_LANE {
                 continue; // main-road vehicles never enter the acceleration lane
             }
-            if let Some(g) = mobil::evaluate(&self.idm, &self.mobil, scene, i, target, false) {
+            if let Some(g) = mobil::evaluate(&self.idm, &self.mobil, scene, i, target) {
                 if best.map_or(true, |(bg, _)| g > bg) {
                     best = Some((g, dir));
                 }
@@ -78,7 +78,19 @@ impl Controller for IdmMobil {
             if v.kind != Kind::Cav {
                 continue;
             }
-            let a = mobil::idm_in_lane(&self.idm, scene, i, v.lane);
+            let mut a = mobil::idm_in_lane(&self.idm, scene, i, v.lane);
+            if v.lane == MERGE_LANE && !v.on_ramp {
+                // Gap seeking: on the acceleration lane also follow the nearest vehicle ahead on
+                // the main road, so the CAV lines up behind a gap instead of racing past it.
+                if let Some(j) = mobil::leader_index(scene, v.lane + 1, v.s, i) {
+                    let l = &scene.vehicles[j];
+                    let gap = l.rear() - v.front();
+                    if gap > 0.0 {
+                        let leader = idm::Leader { gap, speed: l.speed };
+                        a = a.min(idm::acceleration(&self.idm, v.speed, v.desired_speed, Some(leader)));
+                    }
+                }
+            }
             let lane_change = self.lane_change(scene, i);
             if lane_change.is_some() {
                 self.last_change.insert(v.id.clone(), scene.time);

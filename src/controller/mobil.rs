@@ -57,8 +57,13 @@ fn gap_to(follower: &VehicleState, leader: &VehicleState) -> Leader {
 }
 
 /// The binding constraint ahead of a vehicle with centre `s` in `lane`: the nearest leader, or,
-/// on the merge lane, the lane's end (a standing obstacle), whichever is closer.
+/// on the merge lane, the lane's end, whichever is closer.
+///
+/// The lane end is a standing obstacle seen without IDM's time-headway term (a wall needs no
+/// safety time gap, only a stopping distance): its gap is enlarged by v·T so that IDM's
+/// s* = s0 + v·T + v²/(2√(ab)) reduces to s0 + v²/(2√(ab)) against it.
 pub fn constraint_ahead(
+    time_headway: f64,
     scene: &Scene,
     me: &VehicleState,
     lane: i32,
@@ -69,7 +74,7 @@ pub fn constraint_ahead(
         .or_else(|| leader_index(scene, lane, me.s, skip))
         .map(|j| gap_to(me, &scene.vehicles[j]));
     let lane_end = (lane == MERGE_LANE && me.front() < scene.road.merge_end).then(|| Leader {
-        gap: scene.road.merge_end - me.front(),
+        gap: scene.road.merge_end - me.front() + me.speed * time_headway,
         speed: 0.0,
     });
     match (from_vehicle, lane_end) {
@@ -81,26 +86,40 @@ pub fn constraint_ahead(
 /// IDM acceleration of scene vehicle `i` in `lane` behind its natural constraint.
 pub fn idm_in_lane(p: &Idm, scene: &Scene, i: usize, lane: i32) -> f64 {
     let me = &scene.vehicles[i];
-    idm::acceleration(p, me.speed, me.desired_speed, constraint_ahead(scene, me, lane, i, None))
+    idm::acceleration(p, me.speed, me.desired_speed, constraint_ahead(p.time_headway, scene, me, lane, i, None))
 }
 
-/// The MOBIL verdict for vehicle `i` moving to `target` lane: `Some(gain)` if the change is safe
-/// and (unless `mandatory`) its incentive exceeds the threshold.
-pub fn evaluate(
-    idm_p: &Idm,
-    mobil: &Mobil,
-    scene: &Scene,
-    i: usize,
-    target: i32,
-    mandatory: bool,
-) -> Option<f64> {
+/// Gap acceptance for the mandatory merge from the acceleration lane: a kinematic check, since
+/// MOBIL's IDM-based safety criterion rejects every gap once the merging vehicle has had to slow
+/// down (it then reads a standing car as an emergency), which jams the lane for good.
+///
+/// Accepted when both gaps are at least `merge_min_gap` and neither the merging vehicle (behind
+/// its new leader) nor its new follower (behind it) needs to brake harder than
+/// `merge_safe_braking` to cancel the speed difference before the gap shrinks to `merge_min_gap`.
+pub fn merge_is_safe(mobil: &Mobil, scene: &Scene, i: usize, target: i32) -> bool {
+    let me = &scene.vehicles[i];
+    let ok = |back: &VehicleState, front: &VehicleState| {
+        let gap = front.rear() - back.front();
+        let room = gap - mobil.merge_min_gap;
+        let closing = (back.speed - front.speed).max(0.0);
+        room >= 0.0 && closing * closing <= 2.0 * mobil.merge_safe_braking * room
+    };
+    let leader_ok = leader_index(scene, target, me.s, i).map_or(true, |l| ok(me, &scene.vehicles[l]));
+    let follower_ok =
+        follower_index(scene, target, me.s, i).map_or(true, |f| ok(&scene.vehicles[f], me));
+    leader_ok && follower_ok
+}
+
+/// The MOBIL verdict for vehicle `i` moving to lane `target`: `Some(gain)` if the change is
+/// safe (the new follower brakes at most `safe_braking`, no body overlaps) and its incentive
+/// exceeds the threshold.
+pub fn evaluate(idm_p: &Idm, mobil: &Mobil, scene: &Scene, i: usize, target: i32) -> Option<f64> {
     let me = &scene.vehicles[i];
     if !scene.road.lanes_at(me.front()).contains(&target) {
         return None;
     }
     let new_leader = leader_index(scene, target, me.s, i);
     let new_follower = follower_index(scene, target, me.s, i);
-    // Safety: neither body may overlap, and the new follower must not brake harder than allowed.
     if let Some(l) = new_leader {
         if scene.vehicles[l].rear() <= me.front() {
             return None;
@@ -124,11 +143,8 @@ pub fn evaluate(
         idm_p,
         me.speed,
         me.desired_speed,
-        constraint_ahead(scene, me, target, i, new_leader),
+        constraint_ahead(idm_p.time_headway, scene, me, target, i, new_leader),
     );
-    if mandatory {
-        return Some(f64::INFINITY);
-    }
     let me_before = idm_in_lane(idm_p, scene, i, me.lane);
     let mut gain = me_after - me_before;
     if mobil.politeness > 0.0 {
@@ -190,7 +206,7 @@ mod tests {
         // After (free lane 2): a = 3·0.460225 = 1.380675. Gain = 10.380675 > 0.2.
         let sc = scene(vec![car(100.0, 1, 30.0, 35.0), car(140.0, 1, 25.0, 25.0)]);
         let p = Mobil::default();
-        let g = evaluate(&Idm::default(), &p, &sc, 0, 2, false).unwrap();
+        let g = evaluate(&Idm::default(), &p, &sc, 0, 2).unwrap();
         assert!((g - 10.380_675).abs() < 1e-4, "{g}");
         // Moving right, into the merge lane, is not allowed past its end and is not a main lane
         // choice here (s=100 is before the merge zone but lane 0 there is the ramp side).
@@ -204,21 +220,37 @@ mod tests {
             car(140.0, 1, 25.0, 25.0),
             car(87.0, 2, 35.0, 35.0),
         ]);
-        assert!(evaluate(&Idm::default(), &Mobil::default(), &sc, 0, 2, false).is_none());
+        assert!(evaluate(&Idm::default(), &Mobil::default(), &sc, 0, 2).is_none());
     }
 
     #[test]
-    fn overlapping_target_slot_is_refused_even_when_mandatory() {
+    fn overlapping_target_slot_is_refused_by_both_criteria() {
         let sc = scene(vec![car(200.0, 0, 25.0, 35.0), car(202.0, 1, 25.0, 35.0)]);
-        assert!(evaluate(&Idm::default(), &Mobil::default(), &sc, 0, 1, true).is_none());
+        assert!(evaluate(&Idm::default(), &Mobil::default(), &sc, 0, 1).is_none());
+        assert!(!merge_is_safe(&Mobil::default(), &sc, 0, 1));
+    }
+
+    #[test]
+    fn merge_gap_acceptance_hand_computed() {
+        // Standing merger at s=300 (front 302.5); follower on lane 1 at 20 m/s.
+        // Room needed: 20² / (2·3) = 66.67 m beyond the 2.5 m minimum gap.
+        let m = Mobil::default();
+        let far = scene(vec![car(300.0, 0, 0.0, 35.0), car(300.0 - 5.0 - 70.0, 1, 20.0, 35.0)]);
+        assert!(merge_is_safe(&m, &far, 0, 1)); // gap 70 -> room 67.5 >= 66.67
+        let near = scene(vec![car(300.0, 0, 0.0, 35.0), car(300.0 - 5.0 - 68.0, 1, 20.0, 35.0)]);
+        assert!(!merge_is_safe(&m, &near, 0, 1)); // room 65.5 < 66.67
+        // A slower leader ahead of a moving merger counts the same way.
+        let lead = scene(vec![car(200.0, 0, 25.0, 35.0), car(200.0 + 5.0 + 10.0, 1, 15.0, 35.0)]);
+        assert!(!merge_is_safe(&m, &lead, 0, 1)); // 10² / (2·3) = 16.7 > 7.5
     }
 
     #[test]
     fn lane_end_acts_as_standing_obstacle() {
         let sc = scene(vec![car(300.0, 0, 20.0, 35.0)]);
-        let c = constraint_ahead(&sc, &sc.vehicles[0], 0, 0, None).unwrap();
-        assert!((c.gap - 27.5).abs() < 1e-9 && c.speed == 0.0);
-        assert!(constraint_ahead(&sc, &sc.vehicles[0], 1, 0, None).is_none());
+        // Front at 302.5, end at 330: 27.5 m, plus v·T = 20·1.5 = 30 m.
+        let c = constraint_ahead(1.5, &sc, &sc.vehicles[0], 0, 0, None).unwrap();
+        assert!((c.gap - 57.5).abs() < 1e-9 && c.speed == 0.0);
+        assert!(constraint_ahead(1.5, &sc, &sc.vehicles[0], 1, 0, None).is_none());
     }
 
     #[test]

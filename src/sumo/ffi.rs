@@ -56,6 +56,13 @@ extern "C" {
         strings_len: *mut usize,
     ) -> i32;
     pub fn bk_set_speed(id: *const c_char, speed: f64) -> i32;
+    pub fn bk_vehicle_add(
+        id: *const c_char,
+        route: *const c_char,
+        type_id: *const c_char,
+        lane: i32,
+        speed: f64,
+    ) -> i32;
     pub fn bk_set_max_speed(id: *const c_char, speed: f64) -> i32;
     pub fn bk_set_speed_mode(id: *const c_char, mode: i32) -> i32;
     pub fn bk_set_lane_change_mode(id: *const c_char, mode: i32) -> i32;

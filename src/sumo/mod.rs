@@ -7,6 +7,7 @@
 //! [`SumoError`] carrying SUMO's own message and the call that failed.
 
 mod ffi;
+mod quiet;
 
 use std::ffi::{CStr, CString};
 use std::marker::PhantomData;
@@ -15,6 +16,7 @@ use std::sync::{Condvar, Mutex};
 use std::thread::{self, ThreadId};
 
 pub use ffi::RawVehicleState;
+pub use quiet::StderrCapture;
 
 /// What can go wrong when talking to SUMO.
 #[derive(Debug, thiserror::Error)]
@@ -317,6 +319,23 @@ impl Simulation {
         // SAFETY: valid C string.
         decode("vehicle.setSpeed", unsafe {
             ffi::bk_set_speed(cid.as_ptr(), speed)
+        })
+    }
+
+    /// Adds a vehicle departing now from the start of `route`, on lane `lane` of its first edge,
+    /// at `speed`; SUMO inserts it in the coming step if there is room, else retries.
+    pub fn add_vehicle(
+        &mut self,
+        id: &str,
+        route: &str,
+        type_id: &str,
+        lane: i32,
+        speed: f64,
+    ) -> Result<(), SumoError> {
+        let (cid, croute, ctype) = (c_string(id)?, c_string(route)?, c_string(type_id)?);
+        // SAFETY: valid C strings.
+        decode("vehicle.add", unsafe {
+            ffi::bk_vehicle_add(cid.as_ptr(), croute.as_ptr(), ctype.as_ptr(), lane, speed)
         })
     }
 

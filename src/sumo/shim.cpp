@@ -5,6 +5,7 @@
 #include <libsumo/libsumo.h>
 
 #include <cstdint>
+#include <cstdio>
 #include <cstring>
 #include <exception>
 #include <string>
@@ -209,6 +210,15 @@ int bk_collisions(const BkCollision** items, size_t* count, const char** strings
 
 int bk_set_speed(const char* id, double speed) {
     return guarded([&] { libsumo::Vehicle::setSpeed(id, speed); });
+}
+
+// Inserts a vehicle now (SUMO retries each step while its entry is blocked).
+int bk_vehicle_add(const char* id, const char* route, const char* type, int32_t lane, double speed) {
+    return guarded([&] {
+        char speed_text[64];
+        std::snprintf(speed_text, sizeof speed_text, "%.6f", speed);
+        libsumo::Vehicle::add(id, route, type, "now", std::to_string(lane), "base", speed_text);
+    });
 }
 
 int bk_set_max_speed(const char* id, double speed) {
