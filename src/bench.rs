@@ -58,7 +58,11 @@ pub fn sumo_alone_ms_per_step(config: &Config) -> Result<f64, EpisodeError> {
 }
 
 /// Runs SUMO alone and each planner `repeats` times, interleaved, and reports medians.
-pub fn run(config: &Config, planners: &[String], repeats: usize) -> Result<Vec<BenchRow>, EpisodeError> {
+pub fn run(
+    config: &Config,
+    planners: &[String],
+    repeats: usize,
+) -> Result<Vec<BenchRow>, EpisodeError> {
     let mut alone = Vec::new();
     let mut per_planner: Vec<(Vec<f64>, Vec<f64>)> = vec![(Vec::new(), Vec::new()); planners.len()];
     for _ in 0..repeats.max(1) {
@@ -67,7 +71,9 @@ pub fn run(config: &Config, planners: &[String], repeats: usize) -> Result<Vec<B
             let mut c = controller::by_name(name, config)?;
             let r = episode::run(config, c.as_mut())?;
             per_planner[k].0.push(r.timing.episode_ms_per_step);
-            per_planner[k].1.push(r.timing.plan_ms_total / config.scenario.steps as f64);
+            per_planner[k]
+                .1
+                .push(r.timing.plan_ms_total / config.scenario.steps as f64);
         }
     }
     let mut rows = vec![BenchRow {

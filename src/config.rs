@@ -77,8 +77,6 @@ pub struct Demand {
     pub insertion_speed: [f64; 2],
     /// HDV desired speed range (m/s), uniform.
     pub hdv_desired_speed: [f64; 2],
-    /// Time gap τ a vehicle must have to its leader to enter (s): entry needs s0 + v·τ.
-    pub insertion_headway: f64,
 }
 
 /// Intelligent Driver Model parameters (highway-env's values, in bumper-to-bumper terms).
@@ -164,7 +162,6 @@ impl Default for Demand {
             ramp_share: 0.2,
             insertion_speed: [25.0, 35.0],
             hdv_desired_speed: [25.0, 35.0],
-            insertion_headway: 1.0,
         }
     }
 }
@@ -227,38 +224,127 @@ impl Config {
     /// Rejects values no episode can run with.
     pub fn validate(&self) -> Result<(), ConfigError> {
         let s = &self.scenario;
-        check("scenario.alpha", s.alpha, (0.0..=1.0).contains(&s.alpha), "must lie in [0, 1]")?;
-        check("scenario.lambda", s.lambda, s.lambda > 0.0 && s.lambda.is_finite(), "must be a positive rate in veh/h")?;
+        check(
+            "scenario.alpha",
+            s.alpha,
+            (0.0..=1.0).contains(&s.alpha),
+            "must lie in [0, 1]",
+        )?;
+        check(
+            "scenario.lambda",
+            s.lambda,
+            s.lambda > 0.0 && s.lambda.is_finite(),
+            "must be a positive rate in veh/h",
+        )?;
         check("scenario.steps", s.steps, s.steps > 0, "must be at least 1")?;
-        check("scenario.dt", s.dt, s.dt > 0.0 && s.dt <= 1.0, "must lie in (0, 1] s")?;
+        check(
+            "scenario.dt",
+            s.dt,
+            s.dt > 0.0 && s.dt <= 1.0,
+            "must lie in (0, 1] s",
+        )?;
         check("scenario.v_max", s.v_max, s.v_max > 0.0, "must be positive")?;
-        check("scenario.free_flow_accel", s.free_flow_accel, s.free_flow_accel > 0.0, "must be positive")?;
-        check("scenario.vehicle_length", s.vehicle_length, s.vehicle_length > 0.0, "must be positive")?;
-        check("scenario.vehicle_width", s.vehicle_width, s.vehicle_width > 0.0, "must be positive")?;
-        check("scenario.lane_change_duration", s.lane_change_duration, s.lane_change_duration >= s.dt, "must be at least one step")?;
+        check(
+            "scenario.free_flow_accel",
+            s.free_flow_accel,
+            s.free_flow_accel > 0.0,
+            "must be positive",
+        )?;
+        check(
+            "scenario.vehicle_length",
+            s.vehicle_length,
+            s.vehicle_length > 0.0,
+            "must be positive",
+        )?;
+        check(
+            "scenario.vehicle_width",
+            s.vehicle_width,
+            s.vehicle_width > 0.0,
+            "must be positive",
+        )?;
+        check(
+            "scenario.lane_change_duration",
+            s.lane_change_duration,
+            s.lane_change_duration >= s.dt,
+            "must be at least one step",
+        )?;
         let d = &self.demand;
-        check("demand.ramp_share", d.ramp_share, (0.0..=1.0).contains(&d.ramp_share), "must lie in [0, 1]")?;
+        check(
+            "demand.ramp_share",
+            d.ramp_share,
+            (0.0..=1.0).contains(&d.ramp_share),
+            "must lie in [0, 1]",
+        )?;
         for (field, r) in [
             ("demand.insertion_speed", d.insertion_speed),
             ("demand.hdv_desired_speed", d.hdv_desired_speed),
         ] {
-            check(field, format!("{r:?}"), r[0] > 0.0 && r[0] <= r[1] && r[1] <= s.v_max, "must be [low, high] with 0 < low <= high <= v_max")?;
+            check(
+                field,
+                format!("{r:?}"),
+                r[0] > 0.0 && r[0] <= r[1] && r[1] <= s.v_max,
+                "must be [low, high] with 0 < low <= high <= v_max",
+            )?;
         }
-        check("demand.insertion_headway", d.insertion_headway, d.insertion_headway >= 0.0, "must not be negative")?;
         let i = &self.idm;
         check("idm.accel", i.accel, i.accel > 0.0, "must be positive")?;
         check("idm.decel", i.decel, i.decel > 0.0, "must be positive")?;
-        check("idm.min_gap", i.min_gap, i.min_gap >= 0.0, "must not be negative")?;
-        check("idm.time_headway", i.time_headway, i.time_headway >= 0.0, "must not be negative")?;
+        check(
+            "idm.min_gap",
+            i.min_gap,
+            i.min_gap >= 0.0,
+            "must not be negative",
+        )?;
+        check(
+            "idm.time_headway",
+            i.time_headway,
+            i.time_headway >= 0.0,
+            "must not be negative",
+        )?;
         check("idm.delta", i.delta, i.delta > 0.0, "must be positive")?;
-        check("idm.max_decel", i.max_decel, i.max_decel >= i.decel, "must be at least idm.decel")?;
+        check(
+            "idm.max_decel",
+            i.max_decel,
+            i.max_decel >= i.decel,
+            "must be at least idm.decel",
+        )?;
         let m = &self.mobil;
-        check("mobil.politeness", m.politeness, m.politeness >= 0.0, "must not be negative")?;
-        check("mobil.safe_braking", m.safe_braking, m.safe_braking > 0.0, "must be positive")?;
-        check("mobil.merge_safe_braking", m.merge_safe_braking, m.merge_safe_braking > 0.0, "must be positive")?;
-        check("mobil.merge_min_gap", m.merge_min_gap, m.merge_min_gap >= 0.0, "must not be negative")?;
-        check("mobil.decision_interval", m.decision_interval, m.decision_interval >= 0.0, "must not be negative")?;
-        check("ramp_merge.exponent", self.ramp_merge.exponent, self.ramp_merge.exponent > 0.0, "must be positive")?;
+        check(
+            "mobil.politeness",
+            m.politeness,
+            m.politeness >= 0.0,
+            "must not be negative",
+        )?;
+        check(
+            "mobil.safe_braking",
+            m.safe_braking,
+            m.safe_braking > 0.0,
+            "must be positive",
+        )?;
+        check(
+            "mobil.merge_safe_braking",
+            m.merge_safe_braking,
+            m.merge_safe_braking > 0.0,
+            "must be positive",
+        )?;
+        check(
+            "mobil.merge_min_gap",
+            m.merge_min_gap,
+            m.merge_min_gap >= 0.0,
+            "must not be negative",
+        )?;
+        check(
+            "mobil.decision_interval",
+            m.decision_interval,
+            m.decision_interval >= 0.0,
+            "must not be negative",
+        )?;
+        check(
+            "ramp_merge.exponent",
+            self.ramp_merge.exponent,
+            self.ramp_merge.exponent > 0.0,
+            "must be positive",
+        )?;
         Ok(())
     }
 }

@@ -53,7 +53,11 @@ pub fn generate(config: &Config) -> Vec<PlannedVehicle> {
         .into_iter()
         .enumerate()
         .map(|(n, (t, origin))| {
-            let kind = if rng.gen_bool(sc.alpha) { Kind::Cav } else { Kind::Hdv };
+            let kind = if rng.gen_bool(sc.alpha) {
+                Kind::Cav
+            } else {
+                Kind::Hdv
+            };
             let depart_lane = match origin {
                 Origin::Main => rng.gen_range(0..2),
                 Origin::Ramp => 0,
@@ -130,8 +134,14 @@ mod tests {
 
     #[test]
     fn same_seed_same_demand_other_seed_other_demand() {
-        assert_eq!(generate(&config(0.5, 3000.0, 7)), generate(&config(0.5, 3000.0, 7)));
-        assert_ne!(generate(&config(0.5, 3000.0, 7)), generate(&config(0.5, 3000.0, 8)));
+        assert_eq!(
+            generate(&config(0.5, 3000.0, 7)),
+            generate(&config(0.5, 3000.0, 7))
+        );
+        assert_ne!(
+            generate(&config(0.5, 3000.0, 7)),
+            generate(&config(0.5, 3000.0, 8))
+        );
     }
 
     #[test]
@@ -149,7 +159,10 @@ mod tests {
                 }
             }
             let rate = n as f64 / (seeds as f64 * horizon_h);
-            assert!((rate - lambda).abs() / lambda < 0.02, "rate {rate} vs {lambda}");
+            assert!(
+                (rate - lambda).abs() / lambda < 0.02,
+                "rate {rate} vs {lambda}"
+            );
             let a = cav as f64 / n as f64;
             assert!((a - alpha).abs() < 0.02, "alpha {a} vs {alpha}");
             let r = ramp as f64 / n as f64;
@@ -175,8 +188,12 @@ mod tests {
 
     #[test]
     fn alpha_extremes_give_one_kind() {
-        assert!(generate(&config(0.0, 3000.0, 1)).iter().all(|v| v.kind == Kind::Hdv));
-        assert!(generate(&config(1.0, 3000.0, 1)).iter().all(|v| v.kind == Kind::Cav));
+        assert!(generate(&config(0.0, 3000.0, 1))
+            .iter()
+            .all(|v| v.kind == Kind::Hdv));
+        assert!(generate(&config(1.0, 3000.0, 1))
+            .iter()
+            .all(|v| v.kind == Kind::Cav));
     }
 
     #[test]

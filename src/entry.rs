@@ -6,11 +6,12 @@
 //! road is congested, and `departSpeed="max"` inserts at any speed down to zero as soon as there
 //! is a car length free, leaving stopped cars at the entry. Instead each entry lane keeps a FIFO
 //! queue of its scheduled vehicles; its head is added (`Vehicle::add`, depart now) once its
-//! scheduled time has come and the nearest vehicle ahead in the same road-frame lane leaves room:
-//! the vehicle enters at its drawn speed, lowered if needed to the speed from which it can still
-//! brake at the comfortable deceleration b to its leader's speed, and only while the gap is at
-//! least s0 + v·τ (τ = `demand.insertion_headway`). A vehicle still queued at the end counts as
-//! undeparted; the time it waited is its entry delay.
+//! scheduled time has come and the nearest vehicle ahead in the same road-frame lane leaves room
+//! by SUMO's own IDM insertion rule: gap − s0 ≥ v·T + v·(v − v_l)/(2√(ab)). The vehicle enters
+//! at its drawn speed, or at the highest speed the rule allows if that is lower but still at
+//! least the leader's; otherwise it waits. The leader's speed is taken after one step of its
+//! current deceleration, since SUMO inserts at the end of the coming step. A vehicle still queued
+//! at the end counts as undeparted; the time it waited is its entry delay.
 
 use std::collections::VecDeque;
 
@@ -31,9 +32,8 @@ pub struct Admission {
 #[derive(Debug, Clone)]
 pub struct EntryControl {
     queues: [VecDeque<PlannedVehicle>; 3],
-    min_gap: f64,
-    headway: f64,
-    decel: f64,
+    idm: crate::config::Idm,
+    dt: f64,
     length: f64,
 }
 
@@ -46,9 +46,8 @@ impl EntryControl {
         }
         EntryControl {
             queues,
-            min_gap: config.idm.min_gap,
-            headway: config.demand.insertion_headway,
-            decel: config.idm.decel,
+            idm: config.idm.clone(),
+            dt: config.scenario.dt,
             length: config.scenario.vehicle_length,
         }
     }
@@ -97,22 +96,30 @@ impl EntryControl {
         let leader = scene
             .vehicles
             .iter()
-            .filter(|v| v.lane == lane || (v.lateral.abs() > 0.5 && (v.lane - lane).abs() == 1 && v.lateral.signum() as i32 == lane - v.lane))
+            .filter(|v| {
+                v.lane == lane
+                    || (v.lateral.abs() > 0.5
+                        && (v.lane - lane).abs() == 1
+                        && v.lateral.signum() as i32 == lane - v.lane)
+            })
             .filter(|v| v.front() > front - self.length)
             .min_by(|a, b| a.rear().total_cmp(&b.rear()));
         let Some(l) = leader else {
             return Some(wanted);
         };
-        let gap = l.rear() - front;
-        let room = gap - self.min_gap;
+        let room = l.rear() - front - self.idm.min_gap;
         if room <= 0.0 {
             return None;
         }
-        let brakeable = l.speed + (2.0 * self.decel * room).sqrt();
-        let by_headway = if self.headway > 0.0 { room / self.headway } else { f64::INFINITY };
-        let speed = wanted.min(brakeable).min(by_headway);
-        // Entering much slower than the leader's own speed would be a stopped car at the entry.
-        (speed >= wanted.min(l.speed) - 1e-9).then_some(speed)
+        let leader_speed = (l.speed + l.accel.min(0.0) * self.dt).max(0.0);
+        // Largest v with v·T + v·(v − v_l)/c ≤ room, c = 2√(ab): the positive root of
+        // v²/c + v·(T − v_l/c) − room = 0.
+        let c = 2.0 * (self.idm.accel * self.idm.decel).sqrt();
+        let p = self.idm.time_headway - leader_speed / c;
+        let allowed = 0.5 * c * (-p + (p * p + 4.0 * room / c).sqrt());
+        let speed = wanted.min(allowed);
+        // Entering slower than both its wish and its leader would put a crawling car at the entry.
+        (speed >= wanted.min(leader_speed) - 1e-9).then_some(speed)
     }
 }
 
@@ -154,13 +161,23 @@ mod tests {
     }
 
     fn scene(vehicles: Vec<VehicleState>) -> Scene {
-        Scene { time: 0.0, road: Road::paper_default(), vehicles }
+        Scene {
+            time: 0.0,
+            road: Road::paper_default(),
+            vehicles,
+        }
     }
 
     #[test]
     fn free_entry_admits_at_the_drawn_speed_in_order() {
         let c = Config::default();
-        let mut e = EntryControl::new(&c, &[planned("a", Origin::Main, 0, 0.0, 30.0), planned("b", Origin::Main, 0, 0.0, 28.0)]);
+        let mut e = EntryControl::new(
+            &c,
+            &[
+                planned("a", Origin::Main, 0, 0.0, 30.0),
+                planned("b", Origin::Main, 0, 0.0, 28.0),
+            ],
+        );
         let got = e.admit(0.0, &scene(vec![]));
         assert_eq!(got.len(), 1, "one per entry and step");
         assert_eq!((got[0].vehicle.id.as_str(), got[0].speed), ("a", 30.0));
@@ -177,15 +194,21 @@ mod tests {
 
     #[test]
     fn close_leader_blocks_and_slow_leader_lowers_speed() {
-        let c = Config::default(); // s0 = 5, b = 5, τ = 1
-        // Leader just ahead of the entry: 5 m gap -> no room.
+        let c = Config::default(); // s0 = 5, a = 3, b = 5, T = 1.5
+                                   // Leader just ahead of the entry: 5 m gap -> no room.
         let mut e = EntryControl::new(&c, &[planned("a", Origin::Main, 0, 0.0, 30.0)]);
         assert!(e.admit(0.0, &scene(vec![car(12.5, 1, 20.0)])).is_empty());
-        // Leader at 10 m/s with rear 40 m ahead of the entry front (5 m): room 35 m;
-        // brakeable 10 + √(2·5·35) = 28.708; headway 35/1 = 35 -> enters at 28.708.
-        let got = e.admit(0.0, &scene(vec![car(5.0 + 40.0 + 2.5, 1, 10.0)]));
+        // Leader at 20 m/s with rear 45 m ahead of the entry front (5 m): room 40 m.
+        // c = 2√15 = 7.745967; p = 1.5 − 20/c = −1.081989;
+        // v = c/2·(−p + √(p² + 4·40/c)) = 3.872983·(1.081989 + 4.671896) = 22.2847
+        let got = e.admit(0.0, &scene(vec![car(5.0 + 45.0 + 2.5, 1, 20.0)]));
         assert_eq!(got.len(), 1);
-        assert!((got[0].speed - 28.708_2).abs() < 1e-3, "{}", got[0].speed);
+        assert!((got[0].speed - 22.2847).abs() < 1e-3, "{}", got[0].speed);
+        // At 30 m/s wanted, a leader at 10 m/s that close means waiting.
+        let mut e = EntryControl::new(&c, &[planned("b", Origin::Main, 0, 0.0, 30.0)]);
+        assert!(e
+            .admit(0.0, &scene(vec![car(5.0 + 12.0 + 2.5, 1, 10.0)]))
+            .is_empty());
     }
 
     #[test]

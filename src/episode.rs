@@ -63,7 +63,10 @@ pub struct EpisodeResult {
 }
 
 /// Runs one episode with the demand drawn from the config's (λ, α, seed).
-pub fn run(config: &Config, controller: &mut dyn Controller) -> Result<EpisodeResult, EpisodeError> {
+pub fn run(
+    config: &Config,
+    controller: &mut dyn Controller,
+) -> Result<EpisodeResult, EpisodeError> {
     config.validate()?;
     let planned = demand::generate(config);
     run_with_demand(config, controller, &planned)
@@ -77,7 +80,11 @@ pub fn run_with_demand(
 ) -> Result<EpisodeResult, EpisodeError> {
     let wall = Instant::now();
     let input = EpisodeInput::write(config)?;
-    let capture = if config.sumo.verbose { None } else { StderrCapture::start() };
+    let capture = if config.sumo.verbose {
+        None
+    } else {
+        StderrCapture::start()
+    };
     let outcome = (|| {
         let sim = Simulation::start(&input.command_line(config)).map_err(EpisodeError::Start)?;
         let road = Road::from_simulation(&sim)?;
@@ -163,7 +170,11 @@ impl<'a> Episode<'a> {
         let loop_start = Instant::now();
         let steps = self.config.scenario.steps;
         sim.set_edge_codes(&EDGES)
-            .map_err(|source| EpisodeError::Step { step: 0, time: 0.0, source })?;
+            .map_err(|source| EpisodeError::Step {
+                step: 0,
+                time: 0.0,
+                source,
+            })?;
         for step in 0..steps {
             let at = |source| EpisodeError::Step {
                 step,
@@ -192,7 +203,13 @@ impl<'a> Episode<'a> {
     fn step(&mut self, sim: &mut Simulation, plan: bool) -> Result<(), SumoError> {
         for a in self.entry.admit(self.scene.time, &self.scene) {
             let v = &a.vehicle;
-            sim.add_vehicle(&v.id, v.origin.as_str(), v.kind.as_str(), v.depart_lane as i32, a.speed)?;
+            sim.add_vehicle(
+                &v.id,
+                v.origin.as_str(),
+                v.kind.as_str(),
+                v.depart_lane as i32,
+                a.speed,
+            )?;
         }
         let t0 = Instant::now();
         sim.step()?;
@@ -281,11 +298,8 @@ impl<'a> Episode<'a> {
     fn book_collisions(&mut self, sim: &Simulation, now: f64) -> Result<(), SumoError> {
         for c in sim.collisions()? {
             let kind_of = |id: &str, type_id: &str| {
-                Kind::from_type_id(type_id).or_else(|| {
-                    self.index
-                        .get(id)
-                        .map(|&k| self.tracked[k].record.kind)
-                })
+                Kind::from_type_id(type_id)
+                    .or_else(|| self.index.get(id).map(|&k| self.tracked[k].record.kind))
             };
             let event = CollisionEvent {
                 time: now,
@@ -297,7 +311,10 @@ impl<'a> Episode<'a> {
                 position: c.position,
             };
             let controllable = event.controllable();
-            for (me, other) in [(&event.collider, &event.victim), (&event.victim, &event.collider)] {
+            for (me, other) in [
+                (&event.collider, &event.victim),
+                (&event.victim, &event.collider),
+            ] {
                 if let Some(&k) = self.index.get(me.as_str()) {
                     let r = &mut self.tracked[k].record;
                     r.outcome = Outcome::Crashed;
@@ -337,8 +354,12 @@ impl<'a> Episode<'a> {
     fn build_scene(&mut self, now: f64) {
         if self.slots_generation != self.readings.generation {
             self.slots.clear();
-            self.slots
-                .extend(self.readings.ids.iter().map(|id| self.index.get(id.as_str()).copied()));
+            self.slots.extend(
+                self.readings
+                    .ids
+                    .iter()
+                    .map(|id| self.index.get(id.as_str()).copied()),
+            );
             self.slots_generation = self.readings.generation;
         }
         let sc = &self.config.scenario;
@@ -348,7 +369,8 @@ impl<'a> Episode<'a> {
         for (raw, slot) in self.readings.states.iter().zip(&self.slots) {
             let (Some(k), Some((front, lane))) = (
                 *slot,
-                self.road.to_frame(raw.edge_code, raw.lane_index, raw.lane_position),
+                self.road
+                    .to_frame(raw.edge_code, raw.lane_index, raw.lane_position),
             ) else {
                 continue;
             };

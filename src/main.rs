@@ -10,7 +10,11 @@ use bkpbs::config::Config;
 use bkpbs::{bench, controller, demand, episode, output, sumo_files};
 
 #[derive(Parser)]
-#[command(name = "bkpbs", version, about = "BK-PBS merge coordination co-simulated with SUMO")]
+#[command(
+    name = "bkpbs",
+    version,
+    about = "BK-PBS merge coordination co-simulated with SUMO"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -136,12 +140,18 @@ fn run(cli: Cli) -> Result<()> {
             let mut ctl = controller::by_name(&a.planner, &config)?;
             let s = &config.scenario;
             let out = a.out.unwrap_or_else(|| {
-                PathBuf::from(format!("out/{}_a{}_l{}_s{}", a.planner, s.alpha, s.lambda, s.seed))
+                PathBuf::from(format!(
+                    "out/{}_a{}_l{}_s{}",
+                    a.planner, s.alpha, s.lambda, s.seed
+                ))
             });
             let result = episode::run(&config, ctl.as_mut())?;
-            result
-                .write(&out)
-                .with_context(|| format!("episode finished but its results could not be saved in {}", out.display()))?;
+            result.write(&out).with_context(|| {
+                format!(
+                    "episode finished but its results could not be saved in {}",
+                    out.display()
+                )
+            })?;
             let m = &result.summary;
             println!(
                 "{} α={} λ={} seed={}: inserted {}, arrived {}, crashed {} (controllable rate {:.4}), mean delay {} s",

@@ -55,7 +55,8 @@ impl RampMergeRule {
         let zone = road.merge_end - road.merge_start;
         let mut out = Vec::new();
         for (i, v) in scene.vehicles.iter().enumerate() {
-            if v.kind != Kind::Hdv || v.origin != Origin::Ramp || v.on_ramp || v.lane != MERGE_LANE {
+            if v.kind != Kind::Hdv || v.origin != Origin::Ramp || v.on_ramp || v.lane != MERGE_LANE
+            {
                 continue;
             }
             if !self.decided.contains(&v.id) {
@@ -110,9 +111,17 @@ mod tests {
     fn at_the_zone_end_the_decision_is_certain_and_sticks() {
         let mut r = RampMergeRule::new(&Config::default());
         let road = Road::paper_default();
-        let scene = Scene { time: 0.0, road: road.clone(), vehicles: vec![ramp_hdv(road.merge_end - 2.5)] };
+        let scene = Scene {
+            time: 0.0,
+            road: road.clone(),
+            vehicles: vec![ramp_hdv(road.merge_end - 2.5)],
+        };
         assert_eq!(r.requests(&scene), vec![0]);
-        let back = Scene { time: 0.2, road, vehicles: vec![ramp_hdv(160.0)] };
+        let back = Scene {
+            time: 0.2,
+            road,
+            vehicles: vec![ramp_hdv(160.0)],
+        };
         assert_eq!(r.requests(&back), vec![0], "a decided vehicle keeps asking");
     }
 
@@ -127,7 +136,11 @@ mod tests {
             let mut r = RampMergeRule::new(&c);
             // front at 25 % of the zone
             let s = road.merge_start + 0.25 * 180.0 - 2.5;
-            let scene = Scene { time: 0.0, road: road.clone(), vehicles: vec![ramp_hdv(s)] };
+            let scene = Scene {
+                time: 0.0,
+                road: road.clone(),
+                vehicles: vec![ramp_hdv(s)],
+            };
             decided += (!r.requests(&scene).is_empty()) as usize;
         }
         let rate = decided as f64 / n as f64;

@@ -162,7 +162,8 @@ impl Summary {
         let count = |f: &dyn Fn(&VehicleRecord) -> bool| v.iter().filter(|r| f(r)).count();
         let inserted = v.len();
         let crashed = count(&|r| r.outcome == Outcome::Crashed);
-        let controllable_crashed = count(&|r| r.outcome == Outcome::Crashed && r.controllable_crash);
+        let controllable_crashed =
+            count(&|r| r.outcome == Outcome::Crashed && r.controllable_crash);
         let delays = |k: Option<Kind>| {
             mean(
                 v.iter()
@@ -245,12 +246,17 @@ mod tests {
         assert!((t - 13.476_190).abs() < 1e-5, "{t}");
         // Already at v_max: plain cruise.
         assert!((free_flow_time(350.0, 35.0, 3.0, 35.0) - 10.0).abs() < 1e-12);
-        // Short distance, still accelerating: 25t + 1.5t² = 50 -> t = 1.86141 s.
+        // Short distance, still accelerating: 25t + 1.5t² = 50 -> t = (−25 + √925)/3 = 1.804604 s.
         let t = free_flow_time(50.0, 25.0, 3.0, 35.0);
-        assert!((25.0 * t + 1.5 * t * t - 50.0).abs() < 1e-9 && (t - 1.861_41).abs() < 1e-4);
+        assert!((25.0 * t + 1.5 * t * t - 50.0).abs() < 1e-9 && (t - 1.804_604).abs() < 1e-5);
     }
 
-    fn rec(kind: Kind, outcome: Outcome, controllable: bool, arrival: Option<f64>) -> VehicleRecord {
+    fn rec(
+        kind: Kind,
+        outcome: Outcome,
+        controllable: bool,
+        arrival: Option<f64>,
+    ) -> VehicleRecord {
         VehicleRecord {
             id: "x".into(),
             kind,
@@ -295,7 +301,10 @@ mod tests {
             speed_samples: 4,
             ramp_queue_end: 0,
         });
-        assert_eq!((s.inserted, s.undeparted, s.arrived, s.crashed, s.present), (6, 2, 2, 3, 1));
+        assert_eq!(
+            (s.inserted, s.undeparted, s.arrived, s.crashed, s.present),
+            (6, 2, 2, 3, 1)
+        );
         assert_eq!(s.controllable_crashed, 2);
         assert!((s.controllable_collision_rate - 2.0 / 6.0).abs() < 1e-12);
         assert_eq!(s.mean_delay_s, Some(5.0));

@@ -21,7 +21,10 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), WriteError> {
         path: path.to_path_buf(),
         source,
     };
-    let dir = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    let dir = path
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
     std::fs::create_dir_all(dir).map_err(err)?;
     let mut tmp = tempfile::Builder::new()
         .prefix(".bkpbs-")
@@ -49,10 +52,27 @@ fn csv_bytes(header: &[&str], rows: impl Iterator<Item = Vec<String>>) -> Vec<u8
 
 /// Columns of `episode.csv`.
 pub const EPISODE_COLUMNS: [&str; 22] = [
-    "planner", "alpha", "lambda", "seed", "steps", "scheduled", "inserted", "undeparted",
-    "inserted_cav", "arrived", "crashed", "present", "controllable_crashed",
-    "controllable_collision_rate", "hdv_collisions", "hdv_crashed", "mean_delay_s",
-    "mean_delay_cav_s", "mean_delay_hdv_s", "throughput_veh_h", "mean_speed_mps",
+    "planner",
+    "alpha",
+    "lambda",
+    "seed",
+    "steps",
+    "scheduled",
+    "inserted",
+    "undeparted",
+    "inserted_cav",
+    "arrived",
+    "crashed",
+    "present",
+    "controllable_crashed",
+    "controllable_collision_rate",
+    "hdv_collisions",
+    "hdv_crashed",
+    "mean_delay_s",
+    "mean_delay_cav_s",
+    "mean_delay_hdv_s",
+    "throughput_veh_h",
+    "mean_speed_mps",
     "ramp_queue_end",
 ];
 
@@ -86,23 +106,49 @@ pub fn episode_row(s: &Summary) -> Vec<String> {
 
 /// Columns of `timing.csv`.
 pub const TIMING_COLUMNS: [&str; 6] = [
-    "plan_ms_median", "plan_ms_p99", "plan_ms_max", "sumo_ms_per_step", "episode_ms_per_step",
+    "plan_ms_median",
+    "plan_ms_p99",
+    "plan_ms_max",
+    "sumo_ms_per_step",
+    "episode_ms_per_step",
     "wall_s",
 ];
 
 fn timing_row(t: &Timing) -> Vec<String> {
-    [t.plan_ms_median, t.plan_ms_p99, t.plan_ms_max, t.sumo_ms_per_step, t.episode_ms_per_step, t.wall_s]
-        .iter()
-        .map(|x| format!("{x:.4}"))
-        .collect()
+    [
+        t.plan_ms_median,
+        t.plan_ms_p99,
+        t.plan_ms_max,
+        t.sumo_ms_per_step,
+        t.episode_ms_per_step,
+        t.wall_s,
+    ]
+    .iter()
+    .map(|x| format!("{x:.4}"))
+    .collect()
 }
 
 /// Columns of `vehicles.csv`.
 pub const VEHICLE_COLUMNS: [&str; 19] = [
-    "id", "type", "origin", "scheduled_depart_s", "scheduled_speed_mps", "insert_lane",
-    "insert_time_s", "entry_delay_s", "insert_speed_mps",
-    "desired_speed_mps", "distance_m", "t_star_s", "outcome", "arrival_time_s", "travel_time_s",
-    "delay_s", "crash_time_s", "crashed_with", "controllable_crash",
+    "id",
+    "type",
+    "origin",
+    "scheduled_depart_s",
+    "scheduled_speed_mps",
+    "insert_lane",
+    "insert_time_s",
+    "entry_delay_s",
+    "insert_speed_mps",
+    "desired_speed_mps",
+    "distance_m",
+    "t_star_s",
+    "outcome",
+    "arrival_time_s",
+    "travel_time_s",
+    "delay_s",
+    "crash_time_s",
+    "crashed_with",
+    "controllable_crash",
 ];
 
 fn vehicle_row(r: &VehicleRecord) -> Vec<String> {
@@ -131,7 +177,13 @@ fn vehicle_row(r: &VehicleRecord) -> Vec<String> {
 
 /// Columns of `collisions.csv`.
 pub const COLLISION_COLUMNS: [&str; 8] = [
-    "time_s", "collider", "collider_type", "victim", "victim_type", "lane", "position_m",
+    "time_s",
+    "collider",
+    "collider_type",
+    "victim",
+    "victim_type",
+    "lane",
+    "position_m",
     "controllable",
 ];
 
@@ -152,7 +204,10 @@ fn collision_row(c: &CollisionEvent) -> Vec<String> {
 impl EpisodeResult {
     /// `episode.csv` as bytes.
     pub fn episode_csv(&self) -> Vec<u8> {
-        csv_bytes(&EPISODE_COLUMNS, std::iter::once(episode_row(&self.summary)))
+        csv_bytes(
+            &EPISODE_COLUMNS,
+            std::iter::once(episode_row(&self.summary)),
+        )
     }
 
     /// `vehicles.csv` as bytes.
@@ -162,7 +217,10 @@ impl EpisodeResult {
 
     /// `collisions.csv` as bytes.
     pub fn collisions_csv(&self) -> Vec<u8> {
-        csv_bytes(&COLLISION_COLUMNS, self.collisions.iter().map(collision_row))
+        csv_bytes(
+            &COLLISION_COLUMNS,
+            self.collisions.iter().map(collision_row),
+        )
     }
 
     /// `timing.csv` as bytes.
@@ -221,8 +279,18 @@ mod tests {
     #[test]
     fn episode_row_has_one_cell_per_column() {
         let s = crate::metrics::Summary::compute(&crate::metrics::SummaryInput {
-            planner: "p", alpha: 0.5, lambda: 3000.0, seed: 0, steps: 1, dt: 0.2, scheduled: 0,
-            vehicles: &[], collisions: &[], speed_sum: 0.0, speed_samples: 0, ramp_queue_end: 0,
+            planner: "p",
+            alpha: 0.5,
+            lambda: 3000.0,
+            seed: 0,
+            steps: 1,
+            dt: 0.2,
+            scheduled: 0,
+            vehicles: &[],
+            collisions: &[],
+            speed_sum: 0.0,
+            speed_samples: 0,
+            ramp_queue_end: 0,
         });
         assert_eq!(episode_row(&s).len(), EPISODE_COLUMNS.len());
     }

@@ -111,7 +111,12 @@ impl Road {
     }
 
     /// Frame `s` and lane of a SUMO (edge code, lane index, lane position); `None` off the section.
-    pub fn to_frame(&self, edge_code: i32, lane_index: i32, lane_position: f64) -> Option<(f64, i32)> {
+    pub fn to_frame(
+        &self,
+        edge_code: i32,
+        lane_index: i32,
+        lane_position: f64,
+    ) -> Option<(f64, i32)> {
         let e = self.edges.get(usize::try_from(edge_code).ok()?)?;
         Some((e.s_start + lane_position, e.lane_offset + lane_index))
     }

@@ -97,7 +97,13 @@ pub fn command_line(config: &Config, net: &Path, vtypes: &Path, routes: &Path) -
         net.display().to_string(),
         "--additional-files".into(),
         std::iter::once(vtypes.display().to_string())
-            .chain(config.sumo.additional_files.iter().map(|p| p.display().to_string()))
+            .chain(
+                config
+                    .sumo
+                    .additional_files
+                    .iter()
+                    .map(|p| p.display().to_string()),
+            )
             .collect::<Vec<_>>()
             .join(","),
         "--route-files".into(),
@@ -147,7 +153,10 @@ mod tests {
     fn shipped_demo_demand_matches_the_defaults() {
         let shipped = include_str!("../sumo_net/demo.rou.xml");
         let generated = crate::demand::route_file(&crate::demand::generate(&Config::default()));
-        assert_eq!(shipped, generated, "regenerate with `bkpbs demand --out sumo_net/demo.rou.xml`");
+        assert_eq!(
+            shipped, generated,
+            "regenerate with `bkpbs demand --out sumo_net/demo.rou.xml`"
+        );
     }
 
     #[test]

@@ -51,13 +51,43 @@ mod tests {
         // v = 30, v0 = 35, leader at gap 50 m with speed 25:
         // s* = 5 + 30·1.5 + 30·5 / (2·√15) = 5 + 45 + 19.364917 = 69.364917
         // a = 3·(1 − (30/35)^4 − (69.364917/50)^2) = 3·(1 − 0.539775 − 1.924597) = −4.393115
-        let a = acceleration(&p(), 30.0, 35.0, Some(Leader { gap: 50.0, speed: 25.0 }));
+        let a = acceleration(
+            &p(),
+            30.0,
+            35.0,
+            Some(Leader {
+                gap: 50.0,
+                speed: 25.0,
+            }),
+        );
         assert!((a + 4.393_115).abs() < 1e-5, "{a}");
     }
 
     #[test]
     fn overlap_or_tiny_gap_brakes_at_the_limit() {
-        assert_eq!(acceleration(&p(), 10.0, 35.0, Some(Leader { gap: 0.0, speed: 0.0 })), -9.0);
-        assert_eq!(acceleration(&p(), 30.0, 35.0, Some(Leader { gap: 1.0, speed: 0.0 })), -9.0);
+        assert_eq!(
+            acceleration(
+                &p(),
+                10.0,
+                35.0,
+                Some(Leader {
+                    gap: 0.0,
+                    speed: 0.0
+                })
+            ),
+            -9.0
+        );
+        assert_eq!(
+            acceleration(
+                &p(),
+                30.0,
+                35.0,
+                Some(Leader {
+                    gap: 1.0,
+                    speed: 0.0
+                })
+            ),
+            -9.0
+        );
     }
 }

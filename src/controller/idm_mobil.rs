@@ -86,8 +86,16 @@ impl Controller for IdmMobil {
                     let l = &scene.vehicles[j];
                     let gap = l.rear() - v.front();
                     if gap > 0.0 {
-                        let leader = idm::Leader { gap, speed: l.speed };
-                        a = a.min(idm::acceleration(&self.idm, v.speed, v.desired_speed, Some(leader)));
+                        let leader = idm::Leader {
+                            gap,
+                            speed: l.speed,
+                        };
+                        a = a.min(idm::acceleration(
+                            &self.idm,
+                            v.speed,
+                            v.desired_speed,
+                            Some(leader),
+                        ));
                     }
                 }
             }

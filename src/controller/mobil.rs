@@ -86,7 +86,12 @@ pub fn constraint_ahead(
 /// IDM acceleration of scene vehicle `i` in `lane` behind its natural constraint.
 pub fn idm_in_lane(p: &Idm, scene: &Scene, i: usize, lane: i32) -> f64 {
     let me = &scene.vehicles[i];
-    idm::acceleration(p, me.speed, me.desired_speed, constraint_ahead(p.time_headway, scene, me, lane, i, None))
+    idm::acceleration(
+        p,
+        me.speed,
+        me.desired_speed,
+        constraint_ahead(p.time_headway, scene, me, lane, i, None),
+    )
 }
 
 /// Gap acceptance for the mandatory merge from the acceleration lane: a kinematic check, since
@@ -104,7 +109,8 @@ pub fn merge_is_safe(mobil: &Mobil, scene: &Scene, i: usize, target: i32) -> boo
         let closing = (back.speed - front.speed).max(0.0);
         room >= 0.0 && closing * closing <= 2.0 * mobil.merge_safe_braking * room
     };
-    let leader_ok = leader_index(scene, target, me.s, i).map_or(true, |l| ok(me, &scene.vehicles[l]));
+    let leader_ok =
+        leader_index(scene, target, me.s, i).map_or(true, |l| ok(me, &scene.vehicles[l]));
     let follower_ok =
         follower_index(scene, target, me.s, i).map_or(true, |f| ok(&scene.vehicles[f], me));
     leader_ok && follower_ok
@@ -235,12 +241,21 @@ mod tests {
         // Standing merger at s=300 (front 302.5); follower on lane 1 at 20 m/s.
         // Room needed: 20² / (2·3) = 66.67 m beyond the 2.5 m minimum gap.
         let m = Mobil::default();
-        let far = scene(vec![car(300.0, 0, 0.0, 35.0), car(300.0 - 5.0 - 70.0, 1, 20.0, 35.0)]);
+        let far = scene(vec![
+            car(300.0, 0, 0.0, 35.0),
+            car(300.0 - 5.0 - 70.0, 1, 20.0, 35.0),
+        ]);
         assert!(merge_is_safe(&m, &far, 0, 1)); // gap 70 -> room 67.5 >= 66.67
-        let near = scene(vec![car(300.0, 0, 0.0, 35.0), car(300.0 - 5.0 - 68.0, 1, 20.0, 35.0)]);
+        let near = scene(vec![
+            car(300.0, 0, 0.0, 35.0),
+            car(300.0 - 5.0 - 68.0, 1, 20.0, 35.0),
+        ]);
         assert!(!merge_is_safe(&m, &near, 0, 1)); // room 65.5 < 66.67
-        // A slower leader ahead of a moving merger counts the same way.
-        let lead = scene(vec![car(200.0, 0, 25.0, 35.0), car(200.0 + 5.0 + 10.0, 1, 15.0, 35.0)]);
+                                                  // A slower leader ahead of a moving merger counts the same way.
+        let lead = scene(vec![
+            car(200.0, 0, 25.0, 35.0),
+            car(200.0 + 5.0 + 10.0, 1, 15.0, 35.0),
+        ]);
         assert!(!merge_is_safe(&m, &lead, 0, 1)); // 10² / (2·3) = 16.7 > 7.5
     }
 

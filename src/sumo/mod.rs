@@ -368,7 +368,12 @@ impl Simulation {
 
     /// Asks the vehicle to move to `lane_index` of its current edge and stay there for
     /// `duration` seconds (the manoeuvre itself takes `--lanechange.duration`).
-    pub fn change_lane(&mut self, id: &str, lane_index: i32, duration: f64) -> Result<(), SumoError> {
+    pub fn change_lane(
+        &mut self,
+        id: &str,
+        lane_index: i32,
+        duration: f64,
+    ) -> Result<(), SumoError> {
         let cid = c_string(id)?;
         // SAFETY: valid C string.
         decode("vehicle.changeLane", unsafe {
