@@ -43,7 +43,10 @@ pub fn sumo_alone_ms_per_step(config: &Config) -> Result<f64, EpisodeError> {
         &input.vehicle_types,
         demand_file.path(),
     );
-    let mut sim = Simulation::start(&args).map_err(EpisodeError::Start)?;
+    let mut sim = Simulation::start(&args).map_err(|source| EpisodeError::Start {
+        net: input.net.clone(),
+        source,
+    })?;
     let start = Instant::now();
     for step in 0..config.scenario.steps {
         sim.step().map_err(|source| EpisodeError::Step {

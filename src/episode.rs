@@ -39,8 +39,11 @@ pub enum EpisodeError {
     Input(#[from] InputError),
     #[error(transparent)]
     Planner(#[from] crate::controller::UnknownPlanner),
-    #[error("cannot start SUMO: {0}")]
-    Start(SumoError),
+    #[error("cannot start SUMO on net {net}: {source}")]
+    Start {
+        net: std::path::PathBuf,
+        source: SumoError,
+    },
     #[error(transparent)]
     Road(#[from] RoadError),
     #[error("SUMO failed at step {step} (t = {time:.1} s): {source}")]
@@ -86,7 +89,16 @@ pub fn run_with_demand(
         StderrCapture::start()
     };
     let outcome = (|| {
-        let sim = Simulation::start(&input.command_line(config)).map_err(EpisodeError::Start)?;
+        let sim = Simulation::start(&input.command_line(config)).map_err(|source| {
+            EpisodeError::Start {
+                net: config
+                    .scenario
+                    .net_file
+                    .clone()
+                    .unwrap_or_else(|| "(embedded)".into()),
+                source,
+            }
+        })?;
         let road = Road::from_simulation(&sim)?;
         Episode::new(config, controller, planned, road).run(sim)
     })();

@@ -38,10 +38,9 @@ fn decode(call: &'static str, status: i32) -> Result<(), SumoError> {
         return Ok(());
     }
     // SAFETY: the shim always returns a valid NUL-terminated string it owns.
-    let message = unsafe { CStr::from_ptr(ffi::bk_last_error()) }
-        .to_string_lossy()
-        .trim()
-        .to_string();
+    let raw = unsafe { CStr::from_ptr(ffi::bk_last_error()) }.to_string_lossy();
+    // SUMO sometimes breaks its messages over lines; errors here are reported on one.
+    let message = raw.split_whitespace().collect::<Vec<_>>().join(" ");
     Err(SumoError::Sumo { call, message })
 }
 

@@ -1,0 +1,279 @@
+//! The `bkpbs` binary: results on disk, and one clear line plus a non-zero exit on bad input.
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn bkpbs(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_bkpbs"))
+        .args(args)
+        .output()
+        .expect("the binary runs")
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+/// Asserts failure with exactly one `error:` line naming `culprit`, and no CSV in `out`.
+fn assert_clear_failure(o: &Output, culprit: &str, out: &Path) {
+    let err = stderr(o);
+    assert!(!o.status.success(), "should fail: {err}");
+    let lines: Vec<&str> = err.lines().collect();
+    assert_eq!(lines.len(), 1, "one line expected, got: {err}");
+    assert!(lines[0].starts_with("error: "), "{err}");
+    assert!(
+        lines[0].contains(culprit),
+        "'{culprit}' not named in: {err}"
+    );
+    assert!(!err.contains("panicked"), "{err}");
+    assert!(!out.join("episode.csv").exists() && !out.join("vehicles.csv").exists());
+}
+
+fn tmp() -> tempfile::TempDir {
+    tempfile::tempdir().unwrap()
+}
+
+#[test]
+fn episode_writes_its_csv_files() {
+    let d = tmp();
+    let out = d.path().join("run");
+    let o = bkpbs(&[
+        "episode",
+        "--planner",
+        "idm-mobil",
+        "--seed",
+        "3",
+        "--steps",
+        "100",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stderr(&o).is_empty(),
+        "SUMO must stay quiet: {}",
+        stderr(&o)
+    );
+    for f in [
+        "episode.csv",
+        "vehicles.csv",
+        "collisions.csv",
+        "timing.csv",
+    ] {
+        assert!(out.join(f).is_file(), "{f}");
+    }
+    let episode = std::fs::read_to_string(out.join("episode.csv")).unwrap();
+    let header = episode.lines().next().unwrap();
+    for col in [
+        "planner",
+        "alpha",
+        "lambda",
+        "seed",
+        "steps",
+        "inserted",
+        "arrived",
+        "crashed",
+        "controllable_collision_rate",
+        "hdv_collisions",
+        "mean_delay_s",
+        "throughput_veh_h",
+    ] {
+        assert!(header.split(',').any(|h| h == col), "missing column {col}");
+    }
+    assert_eq!(episode.lines().count(), 2);
+    let timing = std::fs::read_to_string(out.join("timing.csv")).unwrap();
+    assert!(timing.starts_with("plan_ms_median,plan_ms_p99,plan_ms_max,sumo_ms_per_step"));
+}
+
+#[test]
+fn same_seed_twice_gives_byte_identical_csv_across_processes() {
+    let d = tmp();
+    let run = |name: &str| {
+        let out = d.path().join(name);
+        let o = bkpbs(&[
+            "episode",
+            "--planner",
+            "idm-mobil",
+            "--alpha",
+            "0.6",
+            "--lambda",
+            "3000",
+            "--seed",
+            "9",
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        out
+    };
+    let (a, b) = (run("a"), run("b"));
+    for f in ["episode.csv", "vehicles.csv", "collisions.csv"] {
+        assert_eq!(
+            std::fs::read(a.join(f)).unwrap(),
+            std::fs::read(b.join(f)).unwrap(),
+            "{f}"
+        );
+    }
+}
+
+#[test]
+fn unknown_planner_is_refused() {
+    let d = tmp();
+    let o = bkpbs(&[
+        "episode",
+        "--planner",
+        "bk-pbz",
+        "--out",
+        d.path().to_str().unwrap(),
+    ]);
+    assert_clear_failure(&o, "bk-pbz", d.path());
+}
+
+#[test]
+fn alpha_outside_the_unit_interval_is_refused() {
+    let d = tmp();
+    let o = bkpbs(&[
+        "episode",
+        "--alpha",
+        "1.5",
+        "--out",
+        d.path().to_str().unwrap(),
+    ]);
+    assert_clear_failure(&o, "scenario.alpha", d.path());
+}
+
+#[test]
+fn missing_config_file_is_refused() {
+    let d = tmp();
+    let o = bkpbs(&[
+        "episode",
+        "--config",
+        "no/such.toml",
+        "--out",
+        d.path().to_str().unwrap(),
+    ]);
+    assert_clear_failure(&o, "no/such.toml", d.path());
+}
+
+#[test]
+fn malformed_config_file_is_refused() {
+    let d = tmp();
+    let cfg = d.path().join("bad.toml");
+    std::fs::write(&cfg, "[scenario]\nalpha = \"lots\"\n").unwrap();
+    let out = d.path().join("out");
+    let o = bkpbs(&[
+        "episode",
+        "--config",
+        cfg.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_clear_failure(&o, "bad.toml", &out);
+}
+
+#[test]
+fn misspelt_config_key_is_refused() {
+    let d = tmp();
+    let cfg = d.path().join("typo.toml");
+    std::fs::write(&cfg, "[scenario]\nlamda = 2500\n").unwrap();
+    let out = d.path().join("out");
+    let o = bkpbs(&[
+        "episode",
+        "--config",
+        cfg.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_clear_failure(&o, "lamda", &out);
+}
+
+#[test]
+fn missing_net_file_is_refused() {
+    let d = tmp();
+    let o = bkpbs(&[
+        "episode",
+        "--net",
+        "nowhere/merge.net.xml",
+        "--out",
+        d.path().to_str().unwrap(),
+    ]);
+    assert_clear_failure(&o, "nowhere/merge.net.xml", d.path());
+}
+
+#[test]
+fn a_net_without_the_merge_layout_is_refused() {
+    let d = tmp();
+    let net = d.path().join("other.net.xml");
+    let text = bkpbs::road::EMBEDDED_NET.replace("\"acc\"", "\"acceleration\"");
+    std::fs::write(&net, text).unwrap();
+    let out = d.path().join("out");
+    let o = bkpbs(&[
+        "episode",
+        "--net",
+        net.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_clear_failure(&o, "other.net.xml", &out);
+    assert!(stderr(&o).contains("'acc'"), "{}", stderr(&o));
+}
+
+#[test]
+fn sumo_error_mid_episode_is_reported_and_keeps_earlier_results() {
+    let d = tmp();
+    let out = d.path().join("out");
+    // A finished episode first: its files must survive the failing run untouched.
+    let ok = bkpbs(&["episode", "--steps", "50", "--out", out.to_str().unwrap()]);
+    assert!(ok.status.success(), "{}", stderr(&ok));
+    let before = std::fs::read(out.join("vehicles.csv")).unwrap();
+    // A vehicle whose route is broken: SUMO fails when it is due to depart, at t = 3 s.
+    let bad = d.path().join("bad.rou.xml");
+    std::fs::write(
+        &bad,
+        "<routes>\n<route id=\"broken\" edges=\"main_in main_out\"/>\n<vehicle id=\"bad\" type=\"hdv\" route=\"broken\" depart=\"3\"/>\n</routes>\n",
+    )
+    .unwrap();
+    let cfg = d.path().join("cfg.toml");
+    std::fs::write(
+        &cfg,
+        format!("[sumo]\nadditional_files = [\"{}\"]\n", bad.display()),
+    )
+    .unwrap();
+    let o = bkpbs(&[
+        "episode",
+        "--config",
+        cfg.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let err = stderr(&o);
+    assert!(!o.status.success());
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(
+        err.contains("SUMO failed at step") && err.contains("'bad'"),
+        "{err}"
+    );
+    assert_eq!(std::fs::read(out.join("vehicles.csv")).unwrap(), before);
+    let leftovers: Vec<_> = std::fs::read_dir(&out)
+        .unwrap()
+        .filter_map(|e| e.ok())
+        .filter(|e| e.file_name().to_string_lossy().ends_with(".tmp"))
+        .collect();
+    assert!(leftovers.is_empty());
+}
+
+#[test]
+fn config_print_shows_the_defaults_and_round_trips() {
+    let o = bkpbs(&["config", "--print"]);
+    assert!(o.status.success());
+    let text = String::from_utf8(o.stdout).unwrap();
+    assert!(
+        text.contains("lambda = 3000.0") && text.contains("steps = 400"),
+        "{text}"
+    );
+    let d = tmp();
+    let p = d.path().join("c.toml");
+    std::fs::write(&p, &text).unwrap();
+    let again = bkpbs(&["config", "--print", "--config", p.to_str().unwrap()]);
+    assert_eq!(String::from_utf8(again.stdout).unwrap(), text);
+}
