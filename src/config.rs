@@ -37,6 +37,8 @@ pub struct Config {
     pub mobil: Mobil,
     /// Stochastic merge decision of HDVs on the ramp.
     pub ramp_merge: RampMerge,
+    /// Motion primitives and M-A* (BK-M-A*, BK-PBS).
+    pub planner: PlannerSettings,
     pub sumo: SumoSettings,
 }
 
@@ -124,6 +126,73 @@ pub struct Mobil {
 #[serde(default, deny_unknown_fields)]
 pub struct RampMerge {
     pub exponent: f64,
+}
+
+/// Motion primitives and the multi-phase A* (DESIGN §5, §10).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct PlannerSettings {
+    /// Planning horizon T in steps; a plan that survives it ends the search.
+    pub horizon: usize,
+    /// Phase-1 goal distance d (m).
+    pub goal_distance: f64,
+    /// Phase-2 goal distance d' (m).
+    pub fallback_goal_distance: f64,
+    /// Node expansions allowed in phase 1.
+    pub phase1_budget: usize,
+    /// Node expansions allowed in phase 2.
+    pub phase2_budget: usize,
+    /// Extra cost (in steps) of a lane change in phase 1: a tie-breaker, so the CAV does not
+    /// change lanes for nothing.
+    pub phase1_lane_change_penalty: f64,
+    /// Extra cost (in steps) of a lane change in phase 2, which prefers braking.
+    pub phase2_lane_change_penalty: f64,
+    /// Acceleration of the `accelerate` primitive (m/s²).
+    pub accel: f64,
+    /// Deceleration of the `decelerate` primitive (m/s², positive).
+    pub decel: f64,
+    /// Deceleration of the `emergency-brake` primitive (m/s², positive).
+    pub emergency_decel: f64,
+    /// Slowest speed from which a lane change is possible (m/s).
+    pub min_lane_change_speed: f64,
+    /// The planned CAV's box is inflated by this much along the road (m, each end), to absorb
+    /// the small differences between planned and executed motion.
+    pub margin_long: f64,
+    /// The same across the road (m, each side).
+    pub margin_lat: f64,
+    /// Smallest bumper gap the planner keeps to the vehicle in front in its lane, and to the one
+    /// behind after changing lanes (m), on top of the reaction and braking terms.
+    pub safe_gap: f64,
+    /// Reaction time in the safe-gap rule (s): one planning step.
+    pub reaction_time: f64,
+    /// Closed-set bin of M-A* in position (m).
+    pub s_bin: f64,
+    /// Closed-set bin of M-A* in speed (m/s).
+    pub v_bin: f64,
+}
+
+impl Default for PlannerSettings {
+    fn default() -> Self {
+        PlannerSettings {
+            horizon: 15,
+            goal_distance: 70.0,
+            fallback_goal_distance: 30.0,
+            phase1_budget: 2000,
+            phase2_budget: 1000,
+            phase1_lane_change_penalty: 0.1,
+            phase2_lane_change_penalty: 2.0,
+            accel: 2.0,
+            decel: 2.0,
+            emergency_decel: 6.0,
+            min_lane_change_speed: 10.0,
+            margin_long: 0.5,
+            margin_lat: 0.1,
+            safe_gap: 2.0,
+            reaction_time: 0.2,
+            s_bin: 1.0,
+            v_bin: 0.5,
+        }
+    }
 }
 
 /// How SUMO is run.
@@ -339,6 +408,53 @@ impl Config {
             m.decision_interval >= 0.0,
             "must not be negative",
         )?;
+        let p = &self.planner;
+        check(
+            "planner.horizon",
+            p.horizon,
+            p.horizon >= 1,
+            "must be at least 1",
+        )?;
+        check(
+            "planner.phase1_budget",
+            p.phase1_budget,
+            p.phase1_budget >= 1,
+            "must be at least 1",
+        )?;
+        check(
+            "planner.phase2_budget",
+            p.phase2_budget,
+            p.phase2_budget >= 1,
+            "must be at least 1",
+        )?;
+        for (f, v) in [
+            ("planner.goal_distance", p.goal_distance),
+            ("planner.fallback_goal_distance", p.fallback_goal_distance),
+            ("planner.accel", p.accel),
+            ("planner.decel", p.decel),
+            ("planner.emergency_decel", p.emergency_decel),
+            ("planner.s_bin", p.s_bin),
+            ("planner.v_bin", p.v_bin),
+        ] {
+            check(f, v, v > 0.0, "must be positive")?;
+        }
+        for (f, v) in [
+            (
+                "planner.phase1_lane_change_penalty",
+                p.phase1_lane_change_penalty,
+            ),
+            (
+                "planner.phase2_lane_change_penalty",
+                p.phase2_lane_change_penalty,
+            ),
+            ("planner.min_lane_change_speed", p.min_lane_change_speed),
+            ("planner.margin_long", p.margin_long),
+            ("planner.margin_lat", p.margin_lat),
+            ("planner.safe_gap", p.safe_gap),
+            ("planner.reaction_time", p.reaction_time),
+        ] {
+            check(f, v, v >= 0.0, "must not be negative")?;
+        }
         check(
             "ramp_merge.exponent",
             self.ramp_merge.exponent,

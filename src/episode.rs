@@ -9,7 +9,7 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use crate::config::{Config, ConfigError};
-use crate::controller::{CavHandling, Command, Controller};
+use crate::controller::{CavHandling, Command, Controller, PlanStats};
 use crate::demand::{self, PlannedVehicle};
 use crate::entry::EntryControl;
 use crate::merge_rule::RampMergeRule;
@@ -138,6 +138,7 @@ struct Episode<'a> {
     scene_edges: Vec<i32>,
     commands: Vec<Command>,
     plan_ms: Vec<f64>,
+    plan_stats: PlanStats,
     sumo_s: f64,
     speed_sum: f64,
     speed_samples: u64,
@@ -172,6 +173,7 @@ impl<'a> Episode<'a> {
             slots_generation: u64::MAX,
             commands: Vec::new(),
             plan_ms: Vec::with_capacity(config.scenario.steps as usize),
+            plan_stats: PlanStats::default(),
             sumo_s: 0.0,
             speed_sum: 0.0,
             speed_samples: 0,
@@ -243,6 +245,7 @@ impl<'a> Episode<'a> {
         let t1 = Instant::now();
         self.controller.plan(&self.scene, &mut self.commands);
         self.plan_ms.push(t1.elapsed().as_secs_f64() * 1e3);
+        self.plan_stats += self.controller.last_stats();
         if self.controller.handling() == CavHandling::Commanded {
             self.apply(sim)?;
         }
@@ -307,8 +310,18 @@ impl<'a> Episode<'a> {
         Ok(())
     }
 
-    fn book_collisions(&mut self, sim: &Simulation, now: f64) -> Result<(), SumoError> {
-        for c in sim.collisions()? {
+    fn book_collisions(&mut self, sim: &mut Simulation, now: f64) -> Result<(), SumoError> {
+        let collisions = sim.collisions()?;
+        let mut removed: Vec<&str> = Vec::new();
+        for c in &collisions {
+            for id in [c.collider.as_str(), c.victim.as_str()] {
+                if !removed.contains(&id) {
+                    sim.remove_vehicle(id)?;
+                    removed.push(id);
+                }
+            }
+        }
+        for c in collisions {
             let kind_of = |id: &str, type_id: &str| {
                 Kind::from_type_id(type_id)
                     .or_else(|| self.index.get(id).map(|&k| self.tracked[k].record.kind))
@@ -446,6 +459,7 @@ impl<'a> Episode<'a> {
             speed_sum: self.speed_sum,
             speed_samples: self.speed_samples,
             ramp_queue_end,
+            plan_stats: self.plan_stats,
         });
         let mut plan = std::mem::take(&mut self.plan_ms);
         let plan_ms_total = plan.iter().sum();

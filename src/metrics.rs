@@ -1,6 +1,7 @@
 //! Episode metrics (paper eq. 1 and section VI): per-vehicle records, travel delay against the
 //! free-flow time t*, collision attribution, and the one-row episode summary.
 
+use crate::controller::PlanStats;
 use crate::scene::{Kind, Origin};
 
 /// Free-flow travel time t* over `distance` from speed `v0`: accelerate at `accel` up to
@@ -133,6 +134,8 @@ pub struct Summary {
     pub mean_speed_mps: f64,
     /// Vehicles standing (< 1 m/s) on the acceleration lane at the end (a jam indicator).
     pub ramp_queue_end: usize,
+    /// Planner effort over the episode.
+    pub plan_stats: PlanStats,
 }
 
 fn mean(xs: impl Iterator<Item = f64>) -> Option<f64> {
@@ -154,6 +157,7 @@ pub struct SummaryInput<'a> {
     pub speed_sum: f64,
     pub speed_samples: u64,
     pub ramp_queue_end: usize,
+    pub plan_stats: PlanStats,
 }
 
 impl Summary {
@@ -204,6 +208,7 @@ impl Summary {
                 0.0
             },
             ramp_queue_end: inp.ramp_queue_end,
+            plan_stats: inp.plan_stats,
         }
     }
 }
@@ -300,6 +305,7 @@ mod tests {
             speed_sum: 10.0,
             speed_samples: 4,
             ramp_queue_end: 0,
+            plan_stats: PlanStats::default(),
         });
         assert_eq!(
             (s.inserted, s.undeparted, s.arrived, s.crashed, s.present),

@@ -51,7 +51,7 @@ fn csv_bytes(header: &[&str], rows: impl Iterator<Item = Vec<String>>) -> Vec<u8
 }
 
 /// Columns of `episode.csv`.
-pub const EPISODE_COLUMNS: [&str; 22] = [
+pub const EPISODE_COLUMNS: [&str; 26] = [
     "planner",
     "alpha",
     "lambda",
@@ -74,6 +74,10 @@ pub const EPISODE_COLUMNS: [&str; 22] = [
     "throughput_veh_h",
     "mean_speed_mps",
     "ramp_queue_end",
+    "plan_searches",
+    "plan_nodes_expanded",
+    "plan_phase2",
+    "plan_fallbacks",
 ];
 
 /// The summary as one `episode.csv` row.
@@ -101,6 +105,10 @@ pub fn episode_row(s: &Summary) -> Vec<String> {
         format!("{:.2}", s.throughput_veh_h),
         format!("{:.4}", s.mean_speed_mps),
         s.ramp_queue_end.to_string(),
+        s.plan_stats.searches.to_string(),
+        s.plan_stats.nodes_expanded.to_string(),
+        s.plan_stats.phase2_plans.to_string(),
+        s.plan_stats.fallbacks.to_string(),
     ]
 }
 
@@ -291,6 +299,7 @@ mod tests {
             speed_sum: 0.0,
             speed_samples: 0,
             ramp_queue_end: 0,
+            plan_stats: Default::default(),
         });
         assert_eq!(episode_row(&s).len(), EPISODE_COLUMNS.len());
     }

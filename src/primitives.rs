@@ -60,7 +60,8 @@ impl Primitive {
     }
 }
 
-/// Parameters of the library.
+/// Parameters of the library, and a table of lane-change rollouts by speed (see
+/// [`Library::rollout_settled`]).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Library {
     pub bicycle: Bicycle,
@@ -77,13 +78,19 @@ pub struct Library {
     pub min_lane_change_speed: f64,
     /// Control updates per step of the steering law.
     pub control_substeps: u32,
+    /// Left lane changes from a settled state at speeds `min_lane_change_speed + k·TABLE_DV`:
+    /// per step, the displacement, heading and path speed.
+    table: Vec<Vec<BicycleState>>,
 }
+
+/// Speed spacing of the lane-change table (m/s).
+const TABLE_DV: f64 = 0.25;
 
 impl Library {
     /// The library for a step `dt`, lanes `lane_width` wide and lane changes taking
     /// `lane_change_duration` seconds.
     pub fn new(dt: f64, lane_width: f64, lane_change_duration: f64, v_max: f64) -> Self {
-        Library {
+        let mut lib = Library {
             bicycle: Bicycle {
                 v_max,
                 substeps: 1,
@@ -97,6 +104,89 @@ impl Library {
             lane_width,
             min_lane_change_speed: 10.0,
             control_substeps: 10,
+            table: Vec::new(),
+        };
+        lib.build_table();
+        lib
+    }
+
+    /// The same library after its parameters were changed: the table is rebuilt.
+    pub fn rebuilt(mut self) -> Self {
+        self.build_table();
+        self
+    }
+
+    /// Tabulates left lane changes from settled states (origin, lane centre at y = 0).
+    fn build_table(&mut self) {
+        let v_max = self.bicycle.v_max;
+        let mut table = Vec::new();
+        let mut v = self.min_lane_change_speed;
+        while v <= v_max + 1e-9 {
+            let start = BicycleState {
+                pos: Point::new(0.0, 0.0),
+                heading: 0.0,
+                speed: v,
+            };
+            table.push(self.rollout(Primitive::LaneChangeLeft, &start, 0.0));
+            v += TABLE_DV;
+        }
+        self.table = table;
+    }
+
+    /// Like [`Library::rollout`], for a *settled* start (on its lane's centre line, heading along
+    /// the road), as every node inside a search is: longitudinal primitives in closed form, lane
+    /// changes from the table (linear in speed between entries, within millimetres of the full
+    /// rollout). The final state of a lane change is settled onto the new centre line, which the
+    /// vehicle reaches within 0.11 m under lane keeping.
+    pub fn rollout_settled(&self, p: Primitive, start: &BicycleState) -> Vec<BicycleState> {
+        if !p.is_lane_change() {
+            return vec![self.longitudinal(start, self.accel_of(p), self.dt)];
+        }
+        let v = start
+            .speed
+            .clamp(self.min_lane_change_speed, self.bicycle.v_max);
+        let f = (v - self.min_lane_change_speed) / TABLE_DV;
+        let k = (f.floor() as usize).min(self.table.len() - 1);
+        let k1 = (k + 1).min(self.table.len() - 1);
+        let w = (f - k as f64).clamp(0.0, 1.0);
+        let dir = p.lane_offset() as f64;
+        let mut out: Vec<BicycleState> = (0..self.lane_change_steps)
+            .map(|i| {
+                let (a, b) = (&self.table[k][i], &self.table[k1][i]);
+                let lerp = |x: f64, y: f64| x + w * (y - x);
+                BicycleState {
+                    pos: Point::new(
+                        start.pos.x + lerp(a.pos.x, b.pos.x),
+                        start.pos.y + dir * lerp(a.pos.y, b.pos.y),
+                    ),
+                    heading: dir * lerp(a.heading, b.heading),
+                    speed: lerp(a.speed, b.speed),
+                }
+            })
+            .collect();
+        let last = out
+            .last_mut()
+            .expect("a lane change spans at least one step");
+        last.pos.y = start.pos.y + dir * self.lane_width;
+        last.heading = 0.0;
+        last.speed = v;
+        out
+    }
+
+    /// Straight motion at acceleration `a` for `dt`, speed held within [0, v_max].
+    fn longitudinal(&self, s: &BicycleState, a: f64, dt: f64) -> BicycleState {
+        let v_max = self.bicycle.v_max;
+        let v_end = (s.speed + a * dt).clamp(0.0, v_max);
+        let t_free = if a != 0.0 {
+            ((v_end - s.speed) / a).clamp(0.0, dt)
+        } else {
+            dt
+        };
+        let dist = s.speed * t_free + 0.5 * a * t_free * t_free + v_end * (dt - t_free);
+        BicycleState {
+            pos: Point::new(s.pos.x + dist, s.pos.y),
+            heading: 0.0,
+            speed: v_end,
         }
     }
 
@@ -298,6 +388,35 @@ mod tests {
             }
             assert!(s.heading.abs() < 0.01, "{s:?}");
         }
+    }
+
+    #[test]
+    fn settled_rollouts_match_the_full_ones() {
+        let l = lib();
+        for v in [10.0, 13.37, 22.1, 29.9, 35.0] {
+            let s0 = on_lane(80.0, 1, 4.5, v);
+            for p in Primitive::ALL {
+                let full = l.rollout(p, &s0, 4.5);
+                let fast = l.rollout_settled(p, &s0);
+                assert_eq!(full.len(), fast.len());
+                let n = full.len();
+                for (k, (a, b)) in full.iter().zip(&fast).enumerate() {
+                    let tol = if k + 1 == n && p.is_lane_change() {
+                        0.15
+                    } else {
+                        0.005
+                    };
+                    assert!(
+                        (a.pos - b.pos).norm() < tol,
+                        "{p:?} v={v} step {k}: {a:?} vs {b:?}"
+                    );
+                }
+            }
+        }
+        // Braking to a stop within the step, in closed form: 0.5 m/s at 6 m/s² stops after
+        // 1/12 s having covered 0.5²/12 = 0.020833 m.
+        let s = l.rollout_settled(Primitive::EmergencyBrake, &on_lane(0.0, 1, 4.5, 0.5))[0];
+        assert!((s.pos.x - 0.5 * 0.5 / 12.0).abs() < 1e-12 && s.speed == 0.0);
     }
 
     #[test]

@@ -4,6 +4,7 @@
 //! returns through SUMO's speed and lane-change calls. New planners appear by name in
 //! [`by_name`] and [`PLANNERS`].
 
+pub mod bk_mastar;
 pub mod idm;
 pub mod idm_mobil;
 pub mod mobil;
@@ -55,6 +56,28 @@ pub enum CavHandling {
     Commanded,
 }
 
+/// Search effort of one planning round (deterministic counts, reported in `episode.csv`).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct PlanStats {
+    /// Single-CAV searches (M-A* calls).
+    pub searches: u64,
+    /// Nodes expanded over all searches.
+    pub nodes_expanded: u64,
+    /// Plans that needed phase 2.
+    pub phase2_plans: u64,
+    /// CAVs with no plan at all, which braked at the emergency deceleration.
+    pub fallbacks: u64,
+}
+
+impl std::ops::AddAssign for PlanStats {
+    fn add_assign(&mut self, o: Self) {
+        self.searches += o.searches;
+        self.nodes_expanded += o.nodes_expanded;
+        self.phase2_plans += o.phase2_plans;
+        self.fallbacks += o.fallbacks;
+    }
+}
+
 /// A CAV controller, called once per step.
 pub trait Controller {
     /// The name used on the command line and in CSV files.
@@ -65,10 +88,15 @@ pub trait Controller {
 
     /// Appends one command per CAV it controls to `out` (which arrives empty).
     fn plan(&mut self, scene: &Scene, out: &mut Vec<Command>);
+
+    /// The effort of the last `plan` call (none for rule-based controllers).
+    fn last_stats(&self) -> PlanStats {
+        PlanStats::default()
+    }
 }
 
 /// Names accepted by [`by_name`].
-pub const PLANNERS: [&str; 2] = ["sumo", "idm-mobil"];
+pub const PLANNERS: [&str; 3] = ["sumo", "idm-mobil", "bk-mastar"];
 
 /// An unknown planner name.
 #[derive(Debug, thiserror::Error)]
@@ -80,6 +108,10 @@ pub fn by_name(name: &str, config: &Config) -> Result<Box<dyn Controller>, Unkno
     match name {
         "sumo" => Ok(Box::new(sumo_native::SumoNative)),
         "idm-mobil" => Ok(Box::new(idm_mobil::IdmMobil::new(config))),
+        "bk-mastar" => Ok(Box::new(bk_mastar::BkMastar::new(
+            config,
+            Box::new(crate::predict::ConstantSpeed::new(config)),
+        ))),
         other => Err(UnknownPlanner(other.to_string())),
     }
 }

@@ -338,6 +338,15 @@ impl Simulation {
         })
     }
 
+    /// Takes a vehicle out of the simulation now.
+    pub fn remove_vehicle(&mut self, id: &str) -> Result<(), SumoError> {
+        let cid = c_string(id)?;
+        // SAFETY: valid C string.
+        decode("vehicle.remove", unsafe {
+            ffi::bk_vehicle_remove(cid.as_ptr())
+        })
+    }
+
     /// Sets the vehicle's own maximum speed, which IDM uses as its desired speed.
     pub fn set_max_speed(&mut self, id: &str, speed: f64) -> Result<(), SumoError> {
         let cid = c_string(id)?;

@@ -221,6 +221,11 @@ int bk_vehicle_add(const char* id, const char* route, const char* type, int32_t 
     });
 }
 
+// Takes a vehicle out of the simulation (as "vaporized").
+int bk_vehicle_remove(const char* id) {
+    return guarded([&] { libsumo::Vehicle::remove(id, libsumo::REMOVE_VAPORIZED); });
+}
+
 int bk_set_max_speed(const char* id, double speed) {
     return guarded([&] { libsumo::Vehicle::setMaxSpeed(id, speed); });
 }

@@ -1,0 +1,161 @@
+//! The constant-speed predictor: every vehicle keeps its speed and its lane, except that a ramp
+//! HDV on the acceleration lane merges when the scenario's stochastic rule makes it more likely
+//! than not to have decided, executing the lane change as SUMO does (constant lateral speed over
+//! the lane-change duration).
+
+use super::Predictor;
+use crate::config::Config;
+use crate::road::MERGE_LANE;
+use crate::scene::{Kind, Origin, Scene};
+use crate::trajectory::{Pose, Trajectory};
+
+/// Keeps speed and lane; ramp HDVs merge at their median decision time.
+#[derive(Debug, Clone)]
+pub struct ConstantSpeed {
+    dt: f64,
+    lane_change_steps: usize,
+    merge_exponent: f64,
+}
+
+impl ConstantSpeed {
+    pub fn new(config: &Config) -> Self {
+        let s = &config.scenario;
+        ConstantSpeed {
+            dt: s.dt,
+            lane_change_steps: (s.lane_change_duration / s.dt).round().max(1.0) as usize,
+            merge_exponent: config.ramp_merge.exponent,
+        }
+    }
+
+    /// Step at which a ramp HDV whose front is at `front`, driving `speed`, has decided to merge
+    /// with probability at least ½ under the per-step hazard ξ^k; `None` beyond `horizon`.
+    pub fn median_merge_step(
+        &self,
+        scene: &Scene,
+        front: f64,
+        speed: f64,
+        horizon: usize,
+    ) -> Option<usize> {
+        let road = &scene.road;
+        let zone = road.merge_end - road.merge_start;
+        let mut undecided = 1.0;
+        for k in 0..=horizon {
+            let xi =
+                ((front + speed * self.dt * k as f64 - road.merge_start) / zone).clamp(0.0, 1.0);
+            undecided *= 1.0 - xi.powf(self.merge_exponent);
+            if undecided <= 0.5 {
+                return Some(k);
+            }
+        }
+        None
+    }
+}
+
+impl Predictor for ConstantSpeed {
+    fn name(&self) -> &'static str {
+        "constant"
+    }
+
+    fn predict(
+        &self,
+        scene: &Scene,
+        i: usize,
+        _conditioned_on: &[&Trajectory],
+        horizon: usize,
+    ) -> Trajectory {
+        let v = &scene.vehicles[i];
+        let w = scene.road.lane_width;
+        let y0 = v.lane as f64 * w + v.lateral;
+        let forward = v.speed;
+        let merge_at =
+            (v.kind == Kind::Hdv && v.origin == Origin::Ramp && v.lane == MERGE_LANE && !v.on_ramp)
+                .then(|| self.median_merge_step(scene, v.front(), forward, horizon))
+                .flatten();
+        let lc = self.lane_change_steps as f64;
+        let poses = (0..=horizon)
+            .map(|k| {
+                let y = match merge_at {
+                    Some(m) if k > m => y0 + w * ((k - m) as f64 / lc).min(1.0),
+                    _ => y0,
+                };
+                Pose {
+                    s: v.s + forward * self.dt * k as f64,
+                    y,
+                    heading: 0.0,
+                    speed: forward,
+                }
+            })
+            .collect();
+        Trajectory {
+            poses,
+            length: v.length,
+            width: v.width,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::sync::Arc;
+
+    use super::*;
+    use crate::road::Road;
+    use crate::scene::VehicleState;
+
+    fn vehicle(kind: Kind, origin: Origin, s: f64, lane: i32, speed: f64) -> VehicleState {
+        VehicleState {
+            id: Arc::from("v"),
+            kind,
+            origin,
+            s,
+            lane,
+            lateral: 0.0,
+            speed,
+            accel: 0.0,
+            heading: 0.0,
+            desired_speed: speed,
+            length: 5.0,
+            width: 2.0,
+            on_ramp: false,
+        }
+    }
+
+    #[test]
+    fn keeps_speed_and_lane() {
+        let scene = Scene {
+            time: 0.0,
+            road: Road::paper_default(),
+            vehicles: vec![vehicle(Kind::Hdv, Origin::Main, 100.0, 2, 30.0)],
+        };
+        let t = ConstantSpeed::new(&Config::default()).predict(&scene, 0, &[], 15);
+        assert_eq!(t.poses.len(), 16);
+        assert!((t.poses[15].s - 190.0).abs() < 1e-9 && t.poses[15].y == 9.0);
+    }
+
+    #[test]
+    fn ramp_hdv_merges_at_its_median_decision_step() {
+        // Front at 40 % of the zone, 20 m/s: hazards 0.4, 0.422, … — after two steps the chance
+        // of still being undecided is 0.6·0.578 = 0.347 ≤ ½; k = 0 counts as the first draw.
+        let scene = Scene {
+            time: 0.0,
+            road: Road::paper_default(),
+            vehicles: vec![vehicle(
+                Kind::Hdv,
+                Origin::Ramp,
+                150.0 + 72.0 - 2.5,
+                0,
+                20.0,
+            )],
+        };
+        let p = ConstantSpeed::new(&Config::default());
+        assert_eq!(p.median_merge_step(&scene, 222.0, 20.0, 15), Some(1));
+        let t = p.predict(&scene, 0, &[], 15);
+        assert_eq!(t.poses[1].y, 0.0);
+        assert!((t.poses[2].y - 0.9).abs() < 1e-9);
+        assert!((t.poses[6].y - 4.5).abs() < 1e-9 && (t.poses[15].y - 4.5).abs() < 1e-9);
+        // A CAV on the same spot is not predicted to merge.
+        let mut cav = scene.clone();
+        cav.vehicles[0].kind = Kind::Cav;
+        assert!(p.predict(&cav, 0, &[], 15).poses.iter().all(|q| q.y == 0.0));
+    }
+}
