@@ -11,14 +11,18 @@ use crate::metrics::percentile;
 use crate::sumo::Simulation;
 use crate::sumo_files::EpisodeInput;
 
-/// One row of the benchmark table.
-#[derive(Debug, Clone)]
+/// One row of the benchmark table; each figure is the median over the repeats.
+#[derive(Debug, Clone, Default)]
 pub struct BenchRow {
     pub what: String,
-    /// Median over repeats of the stepping loop's wall time per step (ms).
+    /// Wall time of the stepping loop per step (ms).
     pub ms_per_step: f64,
-    /// Median over repeats of the time inside the planner per step (ms).
-    pub plan_ms_per_step: f64,
+    /// Planning time per step: median, 99th percentile and maximum over the episode's steps (ms).
+    pub plan_ms_median: f64,
+    pub plan_ms_p99: f64,
+    pub plan_ms_max: f64,
+    /// Nodes expanded per step, all CAVs together.
+    pub nodes_per_step: f64,
 }
 
 /// SUMO stepping the episode's demand (as a plain route file, inserted by SUMO itself) with
@@ -67,48 +71,62 @@ pub fn run(
     repeats: usize,
 ) -> Result<Vec<BenchRow>, EpisodeError> {
     let mut alone = Vec::new();
-    let mut per_planner: Vec<(Vec<f64>, Vec<f64>)> = vec![(Vec::new(), Vec::new()); planners.len()];
+    let mut samples: Vec<Vec<[f64; 5]>> = vec![Vec::new(); planners.len()];
     for _ in 0..repeats.max(1) {
         alone.push(sumo_alone_ms_per_step(config)?);
         for (k, name) in planners.iter().enumerate() {
             let mut c = controller::by_name(name, config)?;
             let r = episode::run(config, c.as_mut())?;
-            per_planner[k].0.push(r.timing.episode_ms_per_step);
-            per_planner[k]
-                .1
-                .push(r.timing.plan_ms_total / config.scenario.steps as f64);
+            let t = &r.timing;
+            let nodes = r.summary.plan_stats.nodes_expanded as f64 / config.scenario.steps as f64;
+            samples[k].push([
+                t.episode_ms_per_step,
+                t.plan_ms_median,
+                t.plan_ms_p99,
+                t.plan_ms_max,
+                nodes,
+            ]);
         }
     }
     let mut rows = vec![BenchRow {
         what: "sumo-alone".into(),
         ms_per_step: percentile(&mut alone, 50.0),
-        plan_ms_per_step: 0.0,
+        ..BenchRow::default()
     }];
-    for (name, (mut ep, mut plan)) in planners.iter().zip(per_planner) {
+    for (name, runs) in planners.iter().zip(samples) {
+        let median =
+            |i: usize| percentile(&mut runs.iter().map(|r| r[i]).collect::<Vec<_>>(), 50.0);
         rows.push(BenchRow {
             what: name.clone(),
-            ms_per_step: percentile(&mut ep, 50.0),
-            plan_ms_per_step: percentile(&mut plan, 50.0),
+            ms_per_step: median(0),
+            plan_ms_median: median(1),
+            plan_ms_p99: median(2),
+            plan_ms_max: median(3),
+            nodes_per_step: median(4),
         });
     }
     Ok(rows)
 }
 
-/// The table as text: one row per configuration, with its ratio to SUMO alone.
+/// The table as text: one row per run, with its ratio to SUMO alone.
 pub fn table(rows: &[BenchRow]) -> String {
     let base = rows.first().map_or(1.0, |r| r.ms_per_step);
     let mut out = format!(
-        "{:<14} {:>12} {:>12} {:>14}\n",
-        "run", "ms/step", "plan ms/step", "ratio to sumo"
+        "{:<12} {:>10} {:>8} {:>12} {:>10} {:>10} {:>11}\n",
+        "run", "ms/step", "ratio", "plan median", "plan p99", "plan max", "nodes/step"
     );
     for r in rows {
         out += &format!(
-            "{:<14} {:>12.4} {:>12.4} {:>13.2}x\n",
+            "{:<12} {:>10.4} {:>7.2}x {:>12.4} {:>10.4} {:>10.4} {:>11.1}\n",
             r.what,
             r.ms_per_step,
-            r.plan_ms_per_step,
-            r.ms_per_step / base
+            r.ms_per_step / base,
+            r.plan_ms_median,
+            r.plan_ms_p99,
+            r.plan_ms_max,
+            r.nodes_per_step
         );
     }
+    out += "(ms; planning figures are per step for all CAVs together, medians over the repeats)\n";
     out
 }

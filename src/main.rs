@@ -115,7 +115,11 @@ struct ConfigArgs {
 #[derive(Args)]
 struct BenchArgs {
     /// Controllers to time next to SUMO alone.
-    #[arg(long, value_delimiter = ',', default_value = "sumo,idm-mobil")]
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "sumo,idm-mobil,bk-mastar"
+    )]
     planners: Vec<String>,
     /// Repeats per row (medians are reported).
     #[arg(long, default_value_t = 5)]
