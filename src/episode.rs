@@ -75,11 +75,34 @@ pub fn run(
     run_with_demand(config, controller, &planned)
 }
 
+/// Sees the scene of every step, before the controller plans: for recording data (e.g. the
+/// predictor's training set) without touching the runner.
+pub trait Observer {
+    fn observe(&mut self, scene: &Scene);
+}
+
+/// An observer that looks away.
+pub struct NoObserver;
+
+impl Observer for NoObserver {
+    fn observe(&mut self, _scene: &Scene) {}
+}
+
 /// Runs one episode with a given demand (for staged scenes and tests).
 pub fn run_with_demand(
     config: &Config,
     controller: &mut dyn Controller,
     planned: &[PlannedVehicle],
+) -> Result<EpisodeResult, EpisodeError> {
+    run_observed(config, controller, planned, &mut NoObserver)
+}
+
+/// Runs one episode with a given demand, showing every step's scene to `observer`.
+pub fn run_observed(
+    config: &Config,
+    controller: &mut dyn Controller,
+    planned: &[PlannedVehicle],
+    observer: &mut dyn Observer,
 ) -> Result<EpisodeResult, EpisodeError> {
     let wall = Instant::now();
     let input = EpisodeInput::write(config)?;
@@ -100,7 +123,7 @@ pub fn run_with_demand(
             }
         })?;
         let road = Road::from_simulation(&sim)?;
-        Episode::new(config, controller, planned, road).run(sim)
+        Episode::new(config, controller, planned, road, observer).run(sim)
     })();
     let sumo_log = capture.map(StderrCapture::finish).unwrap_or_default();
     let mut result = outcome?;
@@ -121,6 +144,7 @@ struct Tracked {
 struct Episode<'a> {
     config: &'a Config,
     controller: &'a mut dyn Controller,
+    observer: &'a mut dyn Observer,
     planned: HashMap<&'a str, &'a PlannedVehicle>,
     scheduled: usize,
     road: Road,
@@ -150,10 +174,12 @@ impl<'a> Episode<'a> {
         controller: &'a mut dyn Controller,
         planned: &'a [PlannedVehicle],
         road: Road,
+        observer: &'a mut dyn Observer,
     ) -> Self {
         Episode {
             config,
             controller,
+            observer,
             planned: planned.iter().map(|p| (p.id.as_str(), p)).collect(),
             scheduled: planned.len(),
             scene: Scene {
@@ -234,6 +260,7 @@ impl<'a> Episode<'a> {
         self.book_arrivals(sim, now)?;
         sim.read_vehicles(&mut self.readings)?;
         self.build_scene(now);
+        self.observer.observe(&self.scene);
         if !plan {
             return Ok(());
         }
