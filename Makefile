@@ -11,10 +11,13 @@ deps:
 build: deps
 	$(CARGO) build --release --quiet
 
-# The main job: one episode of the default scenario (α = 0.5, λ = 3000 veh/h, seed 0).
+# The main job: a small campaign of every planner (α 0.4 / 0.8, λ 2500 / 3000, 2 seeds, 400
+# steps), started afresh, with its report tables printed.
 demo: build
-	./target/release/bkpbs episode --out $(DEMO_OUT)
-	@echo "demo: CSV files in $(DEMO_OUT)/ (episode.csv, vehicles.csv, collisions.csv, timing.csv)"
+	rm -rf $(DEMO_OUT)
+	./target/release/bkpbs campaign --alphas 0.4,0.8 --lambdas 2500,3000 --seeds 2 --steps 400 --out $(DEMO_OUT)
+	@echo "demo: CSV files in $(DEMO_OUT)/ (episodes.csv, vehicles.csv, timings.csv, failures.csv; one directory per episode under episodes/)"
+	@echo "demo: tables and figures in $(DEMO_OUT)/report/ (tables.md, *.csv, collision_heatmap.png/.svg, delay_vs_collision.png/.svg)"
 
 # The whole suite: formatting, lints, unit and integration tests (integration tests run real SUMO).
 test: deps

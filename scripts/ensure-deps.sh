@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Installs what bkpbs needs on a Debian machine, only if missing (idempotent):
 # SUMO with libsumo's C++ library and headers (Debian packages sumo, sumo-tools), a C++ compiler,
-# and a Rust toolchain check. Fails with one clear line when something cannot be had.
+# the DejaVu font for report figures (fonts-dejavu-core), and a Rust toolchain check. Fails with
+# one clear line when something cannot be had.
 set -euo pipefail
 
 say() { echo "setup: $*" >&2; }
@@ -14,6 +15,8 @@ command -v netconvert >/dev/null 2>&1 || need_apt+=(sumo)
 [ -d /usr/share/sumo/tools ] || need_apt+=(sumo-tools)
 command -v c++ >/dev/null 2>&1 || need_apt+=(g++)
 command -v make >/dev/null 2>&1 || need_apt+=(make)
+# The font of the campaign report's figures (read at run time; no fontconfig needed).
+[ -f /usr/share/fonts/truetype/dejavu/DejaVuSans.ttf ] || need_apt+=(fonts-dejavu-core)
 
 if [ ${#need_apt[@]} -gt 0 ]; then
     pkgs=$(printf '%s\n' "${need_apt[@]}" sumo sumo-tools | sort -u | tr '\n' ' ')

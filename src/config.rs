@@ -39,6 +39,8 @@ pub struct Config {
     pub ramp_merge: RampMerge,
     /// Motion primitives and M-A* (BK-M-A*, BK-PBS).
     pub planner: PlannerSettings,
+    /// The high-level search of BK-PBS.
+    pub pbs: PbsSettings,
     pub sumo: SumoSettings,
 }
 
@@ -191,6 +193,26 @@ impl Default for PlannerSettings {
             reaction_time: 0.2,
             s_bin: 1.0,
             v_bin: 0.5,
+        }
+    }
+}
+
+/// Bounds of one BK-PBS planning round.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct PbsSettings {
+    /// High-level nodes expanded at most per round (deterministic).
+    pub node_budget: usize,
+    /// Wall-time budget per round (ms); 0 = off, the default, since it would make results depend
+    /// on the machine's speed.
+    pub time_budget_ms: f64,
+}
+
+impl Default for PbsSettings {
+    fn default() -> Self {
+        PbsSettings {
+            node_budget: 200,
+            time_budget_ms: 0.0,
         }
     }
 }
@@ -407,6 +429,18 @@ impl Config {
             m.decision_interval,
             m.decision_interval >= 0.0,
             "must not be negative",
+        )?;
+        check(
+            "pbs.node_budget",
+            self.pbs.node_budget,
+            self.pbs.node_budget >= 1,
+            "must be at least 1",
+        )?;
+        check(
+            "pbs.time_budget_ms",
+            self.pbs.time_budget_ms,
+            self.pbs.time_budget_ms >= 0.0 && self.pbs.time_budget_ms.is_finite(),
+            "must be 0 (off) or a positive time in ms",
         )?;
         let p = &self.planner;
         check(

@@ -29,6 +29,9 @@ const LC_MODE_COMMANDED: i32 = 0;
 /// SUMO lane-change mode for ramp HDVs: no own changes (the merge rule decides when), requests
 /// executed only into safe gaps, adapting speed to find one.
 const LC_MODE_RAMP_HDV: i32 = 0b10_0000_0000;
+/// The same for a ramp HDV stuck at the lane end: requests executed avoiding only immediate
+/// collisions (see `merge_rule`).
+const LC_MODE_RAMP_HDV_FORCED: i32 = 0b01_0000_0000;
 
 /// Why an episode could not complete.
 #[derive(Debug, thiserror::Error)]
@@ -264,8 +267,11 @@ impl<'a> Episode<'a> {
         if !plan {
             return Ok(());
         }
-        for i in self.merge_rule.requests(&self.scene) {
-            let v = &self.scene.vehicles[i];
+        for m in self.merge_rule.requests(&self.scene) {
+            let v = &self.scene.vehicles[m.vehicle];
+            if m.forced {
+                sim.set_lane_change_mode(&v.id, LC_MODE_RAMP_HDV_FORCED)?;
+            }
             sim.change_lane(&v.id, 1, self.config.scenario.dt)?;
         }
         self.commands.clear();

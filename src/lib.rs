@@ -7,6 +7,7 @@
 //! recording [`metrics`].
 
 pub mod bench;
+pub mod campaign;
 pub mod config;
 pub mod controller;
 pub mod demand;
@@ -19,9 +20,14 @@ pub mod math;
 pub mod merge_rule;
 pub mod metrics;
 pub mod output;
+pub mod pbs;
+pub mod plot;
 pub mod predict;
 pub mod primitives;
+pub mod priority;
+pub mod report;
 pub mod road;
+pub mod safety;
 pub mod scene;
 pub mod search;
 pub mod sumo;

@@ -8,6 +8,7 @@ use clap::{Args, Parser, Subcommand};
 
 use bkpbs::config::Config;
 use bkpbs::{bench, controller, demand, episode, output, sumo_files};
+use bkpbs::{campaign, report};
 
 #[derive(Parser)]
 #[command(
@@ -30,6 +31,72 @@ enum Command {
     Bench(BenchArgs),
     /// Write an episode's demand as a SUMO route file (e.g. to watch it in sumo-gui).
     Demand(DemandArgs),
+    /// Run (or resume) the planners × α × λ × seeds grid in worker processes, then report.
+    Campaign(CampaignArgs),
+    /// Tables and figures from one or more campaign directories (several: shards, merged).
+    Report(ReportArgs),
+    /// Internal: run episodes sent by a campaign on stdin (one JSON line each).
+    #[command(hide = true)]
+    Worker,
+}
+
+#[derive(Args)]
+struct CampaignArgs {
+    /// TOML file with a [campaign] table and optionally scenario settings.
+    #[arg(long)]
+    config: Option<PathBuf>,
+    /// Results directory; re-running the same command resumes it.
+    #[arg(long)]
+    out: PathBuf,
+    /// Planners, comma-separated [default: all].
+    #[arg(long)]
+    planners: Option<String>,
+    /// CAV penetrations α, comma-separated [default: 0.4,0.5,0.6,0.7,0.8].
+    #[arg(long, allow_hyphen_values = true)]
+    alphas: Option<String>,
+    /// Arrival rates λ (veh/h), comma-separated [default: 2500,3000].
+    #[arg(long, allow_hyphen_values = true)]
+    lambdas: Option<String>,
+    /// Seeds per cell [default: 5].
+    #[arg(long)]
+    seeds: Option<u64>,
+    /// First seed [default: 0].
+    #[arg(long)]
+    seed_base: Option<u64>,
+    /// Episode length in steps [default: 400].
+    #[arg(long)]
+    steps: Option<u32>,
+    /// Worker processes [default: number of cores].
+    #[arg(long)]
+    workers: Option<usize>,
+    /// Run only slice k of n (1-based; cell i of the grid belongs to slice i mod n + 1).
+    #[arg(long, value_name = "K/N")]
+    shard: Option<String>,
+}
+
+#[derive(Args)]
+struct ReportArgs {
+    /// Campaign directories (several are merged).
+    #[arg(required = true)]
+    dirs: Vec<PathBuf>,
+    /// Where to write [default: the first directory].
+    #[arg(long)]
+    out: Option<PathBuf>,
+}
+
+/// Writes a report and prints its tables and where the files are.
+fn print_report(dirs: &[PathBuf], out: Option<&std::path::Path>) -> Result<()> {
+    let r = report::run(dirs, out)?;
+    print!("{}", r.markdown);
+    println!(
+        "results in {}: episodes.csv, vehicles.csv, timings.csv, failures.csv",
+        r.out.display()
+    );
+    println!("tables and figures:");
+    for p in report::highlights(&r) {
+        println!("  {}", p.display());
+    }
+    Ok(())
 }
 
 /// Scenario flags shared by the subcommands that run SUMO; each overrides the config file.
@@ -89,8 +156,8 @@ impl ScenarioArgs {
 
 #[derive(Args)]
 struct EpisodeArgs {
-    /// Controller of the CAVs (one of: sumo, idm-mobil).
-    #[arg(long, default_value = "idm-mobil")]
+    /// Controller of the CAVs: sumo, idm-mobil, bk-mastar or bk-pbs.
+    #[arg(long, default_value = "bk-pbs")]
     planner: String,
     #[command(flatten)]
     scenario: ScenarioArgs,
@@ -118,7 +185,7 @@ struct BenchArgs {
     #[arg(
         long,
         value_delimiter = ',',
-        default_value = "sumo,idm-mobil,bk-mastar"
+        default_value = "sumo,idm-mobil,bk-mastar,bk-pbs"
     )]
     planners: Vec<String>,
     /// Repeats per row (medians are reported).
@@ -201,11 +268,46 @@ fn run(cli: Cli) -> Result<()> {
             let rows = bench::run(&config, &a.planners, a.repeats)?;
             print!("{}", bench::table(&rows));
         }
+        Command::Campaign(a) => {
+            let settings = campaign::Settings::resolve(
+                a.config.as_deref(),
+                &campaign::Overrides {
+                    planners: a.planners,
+                    alphas: a.alphas,
+                    lambdas: a.lambdas,
+                    seeds: a.seeds,
+                    seed_base: a.seed_base,
+                    steps: a.steps,
+                    workers: a.workers,
+                    shard: a.shard,
+                },
+            )?;
+            let exe = std::env::current_exe().context("cannot locate the bkpbs binary")?;
+            let done = campaign::run(&settings, &a.out, &exe)?;
+            if done.collected > 0 {
+                print_report(std::slice::from_ref(&a.out), None)?;
+            }
+            if done.failed > 0 {
+                anyhow::bail!(
+                    "{} of {} episodes failed (see {})",
+                    done.failed,
+                    done.shard,
+                    a.out.join("failures.csv").display()
+                );
+            }
+        }
+        Command::Report(a) => print_report(&a.dirs, a.out.as_deref())?,
+        Command::Worker => campaign::worker::serve_stdio()?,
     }
     Ok(())
 }
 
 fn main() -> ExitCode {
+    // Die quietly on a closed pipe (`bkpbs … | head`), as command-line tools do.
+    // SAFETY: restoring the default disposition of SIGPIPE before any thread starts.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
     let cli = Cli::parse();
     match run(cli) {
         Ok(()) => ExitCode::SUCCESS,

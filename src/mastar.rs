@@ -16,12 +16,12 @@
 //! d ahead on a main-road lane; a ramp CAV must reach a main-road lane (within the merge zone).
 
 use crate::config::PlannerSettings;
-use crate::geometry::{intersection_test_obb_obb, OrientedBox};
 use crate::kinematics::BicycleState;
 use crate::math::Point;
 use crate::metrics::free_flow_time;
 use crate::primitives::{Library, Primitive, Throttle};
 use crate::road::{Road, MAIN_LANES, MERGE_LANE};
+use crate::safety::{Body, SafetyRule};
 use crate::search::{astar, Stop};
 use crate::trajectory::{Pose, Trajectory};
 
@@ -107,6 +107,8 @@ struct Node {
     /// States at each step of that move.
     segment: Vec<BicycleState>,
     terminal: bool,
+    /// The goal is reached here and coasting on from here stays safe to the check horizon.
+    goal: bool,
 }
 
 /// The single-CAV planner: primitives, settings and the road.
@@ -116,6 +118,7 @@ pub struct Mastar {
     pub settings: PlannerSettings,
     pub road: Road,
     pub v_max: f64,
+    pub rule: SafetyRule,
 }
 
 impl Mastar {
@@ -133,11 +136,13 @@ impl Mastar {
         library.emergency_decel = settings.emergency_decel;
         library.min_lane_change_speed = settings.min_lane_change_speed;
         let library = Library::rebuilt(library);
+        let rule = SafetyRule::new(settings, road.lane_width);
         Mastar {
             library,
             settings: settings.clone(),
             road,
             v_max,
+            rule,
         }
     }
 
@@ -151,10 +156,7 @@ impl Mastar {
             .obstacles
             .iter()
             .copied()
-            .filter(|t| {
-                let p = t.poses[0];
-                (p.s - req.start.pos.x).abs() < 200.0
-            })
+            .filter(|t| (t.poses[0].s - req.start.pos.x).abs() < 200.0)
             .collect();
         let mut expanded = 0;
         for phase in [Phase::Forward, Phase::Fallback] {
@@ -208,6 +210,21 @@ impl Mastar {
         let steps_for = |remaining: f64, v: f64| -> f64 {
             free_flow_time(remaining, v, self.library.accel, self.v_max) / dt
         };
+        let check_horizon = horizon + self.library.lane_change_steps;
+        // Coasting on at constant speed from a goal or horizon node must stay safe up to the
+        // horizon other vehicles are predicted (and BK-PBS checks conflicts) over, so a plan
+        // never ends right behind a slower vehicle.
+        let tail_safe = |st: &BicycleState, step: usize| -> bool {
+            (step + 1..=check_horizon).all(|k| {
+                let t = (k - step) as f64 * dt;
+                let coast = BicycleState {
+                    pos: Point::new(st.pos.x + st.speed * t, st.pos.y),
+                    heading: 0.0,
+                    speed: st.speed,
+                };
+                self.on_road(&coast, req) && self.safe(&coast, k, req, obstacles)
+            })
+        };
         let reached = |n: &Node| -> bool {
             if req.must_merge {
                 MAIN_LANES.contains(&n.lane) && n.step > 0
@@ -217,7 +234,7 @@ impl Mastar {
         };
         // Remaining cost, estimated from below.
         let heuristic = |n: &Node| -> f64 {
-            if n.terminal || reached(n) {
+            if n.terminal || n.goal {
                 return 0.0;
             }
             let to_horizon = horizon.saturating_sub(n.step) as f64;
@@ -252,6 +269,7 @@ impl Mastar {
             via: None,
             segment: Vec::new(),
             terminal: false,
+            goal: false,
         };
         let successors = |n: &Node| -> Vec<(Node, f64)> {
             let mut out = Vec::new();
@@ -323,14 +341,22 @@ impl Mastar {
                     via: Some(mv),
                     segment: seg,
                     terminal: false,
+                    goal: false,
                 };
-                if reached(&next) && !req.must_merge {
-                    // Charge the time the goal distance was actually passed, not the whole step.
-                    let over = next.state.pos.x - s0 - goal_distance;
-                    if state.speed > 0.0 {
+                let ends = reached(&next) || step >= horizon;
+                let tail_ok = ends && tail_safe(&next.state, step);
+                if reached(&next) && tail_ok {
+                    next.goal = true;
+                    if !req.must_merge && state.speed > 0.0 {
+                        // Charge the time the goal distance was actually passed, not the whole
+                        // step.
+                        let over = next.state.pos.x - s0 - goal_distance;
                         cost -= (over / (state.speed * dt)).clamp(0.0, 1.0 - 1e-9);
                     }
                 } else if step >= horizon {
+                    if !tail_ok {
+                        continue;
+                    }
                     next.terminal = true;
                     cost += terminal_cost(&next);
                 }
@@ -352,7 +378,7 @@ impl Mastar {
             root,
             successors,
             heuristic,
-            |n| n.terminal || reached(n),
+            |n| n.terminal || n.goal,
             key,
             budget,
         );
@@ -383,16 +409,6 @@ impl Mastar {
             expanded: result.expanded,
             cost: result.cost,
         })
-    }
-
-    /// The CAV's (inflated) body at a state.
-    fn body(&self, st: &BicycleState, req: &Request) -> OrientedBox {
-        OrientedBox::vehicle(
-            st.pos,
-            st.heading,
-            req.length + 2.0 * self.settings.margin_long,
-            req.width + 2.0 * self.settings.margin_lat,
-        )
     }
 
     /// Whether the (un-inflated) body stays on drivable road.
@@ -428,10 +444,7 @@ impl Mastar {
         true
     }
 
-    /// Whether the CAV at `st` at `step` keeps clear of every obstacle: no body overlap, and a
-    /// safe gap in its lane, ahead always and behind after it changed lanes (a cut-in), so that
-    /// either vehicle can still stop if the one in front brakes at the emergency deceleration:
-    /// gap ≥ `safe_gap` + v_back·`reaction_time` + (v_back² − v_front²)⁺ / (2·b).
+    /// Whether the CAV at `st` at `step` is clear of every obstacle (see [`SafetyRule`]).
     fn safe(
         &self,
         st: &BicycleState,
@@ -440,39 +453,16 @@ impl Mastar {
         obstacles: &[&Trajectory],
     ) -> bool {
         let dt = self.library.dt;
-        let me = self.body(st, req);
-        let w = self.road.lane_width;
-        let changed_lane = (st.pos.y - req.start.pos.y).abs() > 0.5 * w;
-        let b2 = 2.0 * self.library.emergency_decel;
-        let v = st.speed * st.heading.cos();
+        let body = |st: &BicycleState| Body {
+            pose: pose(st),
+            length: req.length,
+            width: req.width,
+        };
+        let (me, me_now) = (body(st), body(&req.start));
         obstacles.iter().all(|t| {
-            let o = t.at(step, dt);
-            if (o.s - st.pos.x).abs() > 120.0 {
-                return true;
-            }
-            if intersection_test_obb_obb(&me, &t.body(step, dt)) {
-                return false;
-            }
-            let same_lane =
-                (o.y - st.pos.y).abs() < 0.5 * (t.width + req.width) + self.settings.margin_lat;
-            if !same_lane {
-                return true;
-            }
-            let vo = o.speed * o.heading.cos();
-            let need = |v_back: f64, v_front: f64| {
-                self.settings.safe_gap
-                    + v_back * self.settings.reaction_time
-                    + (v_back * v_back - v_front * v_front).max(0.0) / b2
-            };
-            if o.s > st.pos.x {
-                let gap = (o.s - 0.5 * t.length) - (st.pos.x + 0.5 * req.length);
-                gap >= need(v, vo)
-            } else if changed_lane {
-                let gap = (st.pos.x - 0.5 * req.length) - (o.s + 0.5 * t.length);
-                gap >= need(vo, v)
-            } else {
-                true
-            }
+            let (other, other_now) = (Body::of(t, step, dt), Body::of(t, 0, dt));
+            self.rule
+                .clear(&me, &me_now, &other, &other_now, step as f64 * dt)
         })
     }
 }

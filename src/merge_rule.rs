@@ -6,6 +6,12 @@
 //! Once decided, it asks SUMO every step to move to the main road's right lane; SUMO executes the
 //! request only into a gap it deems safe (the vehicle adapts its speed to find one). Decisions use
 //! their own random stream, so they are reproducible for a seed and independent of the demand.
+//!
+//! A decided HDV standing at the very end of the acceleration lane forces its way in (SUMO then
+//! only avoids immediate collisions), as a stuck human driver does. Without it SUMO deadlocks:
+//! its main-lane follower stops to let the merger in (LC2013's cooperation) while the merger,
+//! standing, waits for a safe gap that never opens (seen with bk-mastar, α = 0.4, λ = 2500,
+//! seed 4: the right lane stood still for the last 50 s).
 
 use std::collections::HashSet;
 use std::sync::Arc;
@@ -19,6 +25,20 @@ use crate::scene::{Kind, Origin, Scene};
 
 /// Random stream of the merge decisions.
 pub const MERGE_STREAM: u64 = 2;
+
+/// Slower than this (m/s) a ramp HDV counts as standing.
+const STANDING: f64 = 0.5;
+/// Within this distance (m) of the acceleration lane's end a standing HDV forces its way in.
+const END_ZONE: f64 = 10.0;
+
+/// A merge request of one ramp HDV this step.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct MergeRequest {
+    /// Scene index of the HDV.
+    pub vehicle: usize,
+    /// Stuck at the lane end: merge ignoring safe gaps (avoiding only immediate collisions).
+    pub forced: bool,
+}
 
 /// Per-episode state of the ramp HDVs' merge decisions.
 #[derive(Debug, Clone)]
@@ -49,8 +69,8 @@ impl RampMergeRule {
         self.decided.contains(id)
     }
 
-    /// Draws this step's decisions; returns the scene indices of HDVs that want to merge now.
-    pub fn requests(&mut self, scene: &Scene) -> Vec<usize> {
+    /// Draws this step's decisions; returns the HDVs that want to merge now.
+    pub fn requests(&mut self, scene: &Scene) -> Vec<MergeRequest> {
         let road = &scene.road;
         let zone = road.merge_end - road.merge_start;
         let mut out = Vec::new();
@@ -67,7 +87,8 @@ impl RampMergeRule {
                 }
             }
             if self.decided.contains(&v.id) {
-                out.push(i);
+                let forced = v.speed < STANDING && v.front() > road.merge_end - END_ZONE;
+                out.push(MergeRequest { vehicle: i, forced });
             }
         }
         out
@@ -116,13 +137,40 @@ mod tests {
             road: road.clone(),
             vehicles: vec![ramp_hdv(road.merge_end - 2.5)],
         };
-        assert_eq!(r.requests(&scene), vec![0]);
+        assert_eq!(
+            r.requests(&scene)
+                .iter()
+                .map(|m| m.vehicle)
+                .collect::<Vec<_>>(),
+            vec![0]
+        );
         let back = Scene {
             time: 0.2,
             road,
             vehicles: vec![ramp_hdv(160.0)],
         };
-        assert_eq!(r.requests(&back), vec![0], "a decided vehicle keeps asking");
+        assert_eq!(r.requests(&back).len(), 1, "a decided vehicle keeps asking");
+    }
+
+    #[test]
+    fn standing_at_the_lane_end_forces_the_merge() {
+        let mut r = RampMergeRule::new(&Config::default());
+        let road = Road::paper_default();
+        let mut v = ramp_hdv(road.merge_end - 2.5 - 1.0);
+        v.speed = 0.1;
+        let scene = Scene {
+            time: 0.0,
+            road: road.clone(),
+            vehicles: vec![v.clone()],
+        };
+        assert!(r.requests(&scene)[0].forced);
+        v.speed = 5.0;
+        let scene = Scene {
+            time: 0.2,
+            road,
+            vehicles: vec![v],
+        };
+        assert!(!r.requests(&scene)[0].forced);
     }
 
     #[test]

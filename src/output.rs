@@ -51,7 +51,7 @@ fn csv_bytes(header: &[&str], rows: impl Iterator<Item = Vec<String>>) -> Vec<u8
 }
 
 /// Columns of `episode.csv`.
-pub const EPISODE_COLUMNS: [&str; 26] = [
+pub const EPISODE_COLUMNS: [&str; 31] = [
     "planner",
     "alpha",
     "lambda",
@@ -78,6 +78,11 @@ pub const EPISODE_COLUMNS: [&str; 26] = [
     "plan_nodes_expanded",
     "plan_phase2",
     "plan_fallbacks",
+    "pbs_nodes",
+    "pbs_depth_sum",
+    "predictions",
+    "pbs_fallbacks",
+    "time_budget_hits",
 ];
 
 /// The summary as one `episode.csv` row.
@@ -109,6 +114,11 @@ pub fn episode_row(s: &Summary) -> Vec<String> {
         s.plan_stats.nodes_expanded.to_string(),
         s.plan_stats.phase2_plans.to_string(),
         s.plan_stats.fallbacks.to_string(),
+        s.plan_stats.pbs_nodes.to_string(),
+        s.plan_stats.pbs_depth.to_string(),
+        s.plan_stats.predictions.to_string(),
+        s.plan_stats.pbs_fallbacks.to_string(),
+        s.plan_stats.time_budget_hits.to_string(),
     ]
 }
 

@@ -4,17 +4,12 @@
 //! executed; a CAV without a plan in either phase brakes at the emergency deceleration, and the
 //! step records a fallback.
 
-use std::collections::HashMap;
-use std::sync::Arc;
-
+use super::lane_changes::LaneChanges;
 use super::{CavHandling, Command, Controller, LaneChange, Maneuver, PlanStats};
 use crate::config::Config;
-use crate::kinematics::BicycleState;
-use crate::mastar::{FirstMove, Mastar, OngoingLaneChange, Phase, Request};
-use crate::math::Point;
+use crate::mastar::{FirstMove, Mastar, Phase};
 use crate::predict::{ConstantSpeed, Predictor};
-use crate::road::MERGE_LANE;
-use crate::scene::{Kind, Origin, Scene};
+use crate::scene::{Kind, Scene};
 use crate::trajectory::Trajectory;
 
 /// Decentralised M-A* planner.
@@ -23,8 +18,7 @@ pub struct BkMastar {
     predictor: Box<dyn Predictor>,
     others: ConstantSpeed,
     planner: Option<Mastar>,
-    /// Lane changes commanded and not yet finished: (time they end, target lane).
-    ongoing: HashMap<Arc<str>, (f64, i32)>,
+    lane_changes: LaneChanges,
     stats: PlanStats,
 }
 
@@ -36,7 +30,7 @@ impl BkMastar {
             predictor,
             others: ConstantSpeed::new(config),
             planner: None,
-            ongoing: HashMap::new(),
+            lane_changes: LaneChanges::default(),
             stats: PlanStats::default(),
         }
     }
@@ -44,40 +38,6 @@ impl BkMastar {
     fn lane_change_steps(&self) -> usize {
         let s = &self.config.scenario;
         (s.lane_change_duration / s.dt).round().max(1.0) as usize
-    }
-}
-
-/// The M-A* request of scene vehicle `i`, given the lane change it is executing, if any.
-pub fn request_for<'a>(
-    scene: &Scene,
-    i: usize,
-    ongoing: Option<(f64, i32)>,
-    dt: f64,
-    obstacles: &'a [&'a Trajectory],
-) -> Request<'a> {
-    let v = &scene.vehicles[i];
-    let w = scene.road.lane_width;
-    let ongoing = ongoing.and_then(|(end, target)| {
-        let steps_left = ((end - scene.time) / dt).round();
-        (steps_left >= 1.0).then_some(OngoingLaneChange {
-            target_lane: target,
-            steps_left: steps_left as usize,
-        })
-    });
-    let lane = ongoing.map_or(v.lane, |o| o.target_lane);
-    let cos = v.heading.cos().max(0.5);
-    Request {
-        start: BicycleState {
-            pos: Point::new(v.s, v.lane as f64 * w + v.lateral),
-            heading: v.heading,
-            speed: v.speed / cos,
-        },
-        lane,
-        ongoing,
-        must_merge: v.origin == Origin::Ramp && lane == MERGE_LANE,
-        length: v.length,
-        width: v.width,
-        obstacles,
     }
 }
 
@@ -114,7 +74,7 @@ impl Controller for BkMastar {
             })
             .collect();
         let now = scene.time;
-        self.ongoing.retain(|_, (end, _)| *end > now + 1e-6);
+        self.lane_changes.forget_finished(now);
         let mut stats = PlanStats::default();
         for (i, v) in scene.vehicles.iter().enumerate() {
             if v.kind != Kind::Cav {
@@ -126,7 +86,7 @@ impl Controller for BkMastar {
                 .filter(|(j, _)| *j != i)
                 .map(|(_, t)| t)
                 .collect();
-            let req = request_for(scene, i, self.ongoing.get(&v.id).copied(), dt, &obstacles);
+            let req = self.lane_changes.request(scene, i, dt, &obstacles);
             stats.searches += 1;
             let maneuver = match planner.plan(&req) {
                 Ok(plan) => {
@@ -135,8 +95,8 @@ impl Controller for BkMastar {
                     let lane_change = match plan.first {
                         FirstMove::Start(p) if p.is_lane_change() => {
                             let target = req.lane + p.lane_offset();
-                            self.ongoing
-                                .insert(v.id.clone(), (now + lc_steps as f64 * dt, target));
+                            self.lane_changes
+                                .start(&v.id, now, lc_steps as f64 * dt, target);
                             Some(if p.lane_offset() > 0 {
                                 LaneChange::Left
                             } else {

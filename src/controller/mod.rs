@@ -5,8 +5,10 @@
 //! [`by_name`] and [`PLANNERS`].
 
 pub mod bk_mastar;
+pub mod bk_pbs;
 pub mod idm;
 pub mod idm_mobil;
+pub mod lane_changes;
 pub mod mobil;
 pub mod sumo_native;
 
@@ -67,6 +69,16 @@ pub struct PlanStats {
     pub phase2_plans: u64,
     /// CAVs with no plan at all, which braked at the emergency deceleration.
     pub fallbacks: u64,
+    /// BK-PBS: high-level nodes expanded.
+    pub pbs_nodes: u64,
+    /// BK-PBS: depth of the chosen node (summed over steps in episode totals).
+    pub pbs_depth: u64,
+    /// HDV predictions made (BK-PBS: root and conditioned re-predictions).
+    pub predictions: u64,
+    /// BK-PBS rounds that ended without a conflict-free node (best node used).
+    pub pbs_fallbacks: u64,
+    /// BK-PBS rounds stopped by the optional wall-time budget.
+    pub time_budget_hits: u64,
 }
 
 impl std::ops::AddAssign for PlanStats {
@@ -75,6 +87,11 @@ impl std::ops::AddAssign for PlanStats {
         self.nodes_expanded += o.nodes_expanded;
         self.phase2_plans += o.phase2_plans;
         self.fallbacks += o.fallbacks;
+        self.pbs_nodes += o.pbs_nodes;
+        self.pbs_depth += o.pbs_depth;
+        self.predictions += o.predictions;
+        self.pbs_fallbacks += o.pbs_fallbacks;
+        self.time_budget_hits += o.time_budget_hits;
     }
 }
 
@@ -96,7 +113,7 @@ pub trait Controller {
 }
 
 /// Names accepted by [`by_name`].
-pub const PLANNERS: [&str; 3] = ["sumo", "idm-mobil", "bk-mastar"];
+pub const PLANNERS: [&str; 4] = ["sumo", "idm-mobil", "bk-mastar", "bk-pbs"];
 
 /// An unknown planner name.
 #[derive(Debug, thiserror::Error)]
@@ -109,6 +126,10 @@ pub fn by_name(name: &str, config: &Config) -> Result<Box<dyn Controller>, Unkno
         "sumo" => Ok(Box::new(sumo_native::SumoNative)),
         "idm-mobil" => Ok(Box::new(idm_mobil::IdmMobil::new(config))),
         "bk-mastar" => Ok(Box::new(bk_mastar::BkMastar::new(
+            config,
+            Box::new(crate::predict::ConstantSpeed::new(config)),
+        ))),
+        "bk-pbs" => Ok(Box::new(bk_pbs::BkPbs::new(
             config,
             Box::new(crate::predict::ConstantSpeed::new(config)),
         ))),

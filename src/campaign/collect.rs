@@ -1,0 +1,90 @@
+//! Resume state and collection: which cells of a campaign directory are finished, and the
+//! gathering of their per-episode files into the directory's collected [`Results`].
+//!
+//! A cell is finished exactly when its `episode.csv` exists (the worker writes it last, through
+//! a rename), so a killed campaign never counts a half-written cell as done, and a re-run never
+//! runs a finished one again.
+
+use std::path::{Path, PathBuf};
+
+use super::grid::{Cell, Grid, Shard};
+use super::results::{self, episodes_header, key, Results, ResultsError, Row, CELL_COLUMNS};
+use super::worker::{DONE_FILE, ERROR_FILE};
+use crate::output::{TIMING_COLUMNS, VEHICLE_COLUMNS};
+
+/// Directory of the per-episode files below a campaign directory.
+pub const EPISODES_DIR: &str = "episodes";
+
+/// A cell's directory: `<out>/episodes/<planner>/a<α>_l<λ>_s<seed>`.
+pub fn cell_dir(out: &Path, cell: &Cell) -> PathBuf {
+    out.join(EPISODES_DIR).join(cell.dir_name())
+}
+
+/// Has this cell's episode finished (its `episode.csv` exists)?
+pub fn is_done(out: &Path, cell: &Cell) -> bool {
+    cell_dir(out, cell).join(DONE_FILE).is_file()
+}
+
+fn strings(cols: &[&str]) -> Vec<String> {
+    cols.iter().map(|s| s.to_string()).collect()
+}
+
+/// Gathers every finished cell of `grid` found in `out` (whichever shard ran it) in grid order,
+/// and lists as failures the unfinished cells of `shard`, with the message of their
+/// `error.txt`.
+pub fn collect(out: &Path, grid: &Grid, shard: Shard) -> Result<Results, ResultsError> {
+    let mut res = Results {
+        planners: grid.planners.clone(),
+        ..Results::default()
+    };
+    for (position, cell) in grid.cells().into_iter().enumerate() {
+        let dir = cell_dir(out, &cell);
+        if dir.join(DONE_FILE).is_file() {
+            let path = dir.join(DONE_FILE);
+            let rows = results::read_records(&path, &episodes_header())?;
+            let [row] = rows.as_slice() else {
+                return Err(ResultsError::Mismatch {
+                    path,
+                    cell: cell.to_string(),
+                });
+            };
+            if results::cell_of(row).map(|c| key(&c)) != Ok(key(&cell)) {
+                return Err(ResultsError::Mismatch {
+                    path,
+                    cell: cell.to_string(),
+                });
+            }
+            // The cell columns exactly as the episode wrote them.
+            let lead: Vec<&str> = row.iter().take(CELL_COLUMNS.len()).collect();
+            res.episodes.rows.push(Row {
+                cell: cell.clone(),
+                fields: row.clone(),
+            });
+            for (name, cols, table) in [
+                ("vehicles.csv", &VEHICLE_COLUMNS[..], &mut res.vehicles),
+                ("timing.csv", &TIMING_COLUMNS[..], &mut res.timings),
+            ] {
+                for rec in results::read_records(&dir.join(name), &strings(cols))? {
+                    let mut fields = csv::StringRecord::from(lead.clone());
+                    fields.extend(rec.iter());
+                    table.rows.push(Row {
+                        cell: cell.clone(),
+                        fields,
+                    });
+                }
+            }
+        } else if shard.contains(position) {
+            let error = std::fs::read_to_string(dir.join(ERROR_FILE))
+                .map(|s| s.trim().to_string())
+                .unwrap_or_else(|_| "not run".into());
+            let mut fields = csv::StringRecord::new();
+            fields.push_field(&cell.planner);
+            fields.push_field(&cell.alpha.to_string());
+            fields.push_field(&cell.lambda.to_string());
+            fields.push_field(&cell.seed.to_string());
+            fields.push_field(&error);
+            res.failures.rows.push(Row { cell, fields });
+        }
+    }
+    Ok(res)
+}

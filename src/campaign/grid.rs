@@ -1,0 +1,164 @@
+//! The experiment grid: planners × α × λ × seeds, its fixed order, and how it splits into shards.
+//!
+//! Grid order is planner (in the order given), then α, λ and seed, each ascending. Every output
+//! of a campaign follows it, so results never depend on which worker ran which episode.
+
+use std::fmt;
+use std::path::PathBuf;
+use std::str::FromStr;
+
+/// One episode of the grid.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Cell {
+    pub planner: String,
+    pub alpha: f64,
+    pub lambda: f64,
+    pub seed: u64,
+}
+
+impl Cell {
+    /// The cell's directory below `<out>/episodes/`: `<planner>/a<α>_l<λ>_s<seed>`.
+    ///
+    /// α and λ use Rust's shortest round-trip formatting, the same as `episode.csv`, so the name
+    /// is stable and reads like the values (`a0.4_l2500_s3`).
+    pub fn dir_name(&self) -> PathBuf {
+        PathBuf::from(&self.planner)
+            .join(format!("a{}_l{}_s{}", self.alpha, self.lambda, self.seed))
+    }
+}
+
+impl fmt::Display for Cell {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "{} α={} λ={} seed={}",
+            self.planner, self.alpha, self.lambda, self.seed
+        )
+    }
+}
+
+/// The four axes of a campaign, normalised: planners keep their order (duplicates dropped),
+/// α and λ are sorted ascending without duplicates, seeds are `seed_base .. seed_base + seeds`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Grid {
+    pub planners: Vec<String>,
+    pub alphas: Vec<f64>,
+    pub lambdas: Vec<f64>,
+    pub seeds: Vec<u64>,
+}
+
+fn sorted_unique(mut xs: Vec<f64>) -> Vec<f64> {
+    xs.sort_by(f64::total_cmp);
+    xs.dedup_by(|a, b| a == b);
+    xs
+}
+
+impl Grid {
+    /// Builds the normalised grid (validation of the values is the caller's job).
+    pub fn new(
+        planners: &[String],
+        alphas: &[f64],
+        lambdas: &[f64],
+        seed_base: u64,
+        seeds: u64,
+    ) -> Grid {
+        let mut ps: Vec<String> = Vec::new();
+        for p in planners {
+            if !ps.contains(p) {
+                ps.push(p.clone());
+            }
+        }
+        Grid {
+            planners: ps,
+            alphas: sorted_unique(alphas.to_vec()),
+            lambdas: sorted_unique(lambdas.to_vec()),
+            seeds: (0..seeds).map(|i| seed_base.saturating_add(i)).collect(),
+        }
+    }
+
+    /// Number of episodes.
+    pub fn len(&self) -> usize {
+        self.planners.len() * self.alphas.len() * self.lambdas.len() * self.seeds.len()
+    }
+
+    /// True for a grid without episodes.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// All cells in grid order: planner, α, λ, seed.
+    pub fn cells(&self) -> Vec<Cell> {
+        let mut out = Vec::with_capacity(self.len());
+        for p in &self.planners {
+            for &alpha in &self.alphas {
+                for &lambda in &self.lambdas {
+                    for &seed in &self.seeds {
+                        out.push(Cell {
+                            planner: p.clone(),
+                            alpha,
+                            lambda,
+                            seed,
+                        });
+                    }
+                }
+            }
+        }
+        out
+    }
+}
+
+/// The k-th of n disjoint slices of a grid (k is 1-based).
+///
+/// Slices are interleaved: the cell at grid position i (0-based) belongs to slice
+/// `i mod n + 1`. Interleaving gives every slice a similar mix of planners and traffic levels,
+/// so slices take about the same time.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Shard {
+    pub index: usize,
+    pub count: usize,
+}
+
+/// A `--shard` value that is not `k/n` with 1 ≤ k ≤ n.
+#[derive(Debug, thiserror::Error)]
+#[error("invalid shard '{spec}': {reason} (expected k/n with 1 <= k <= n, e.g. 2/4)")]
+pub struct ShardError {
+    pub spec: String,
+    pub reason: &'static str,
+}
+
+impl Shard {
+    /// The whole grid.
+    pub const ALL: Shard = Shard { index: 1, count: 1 };
+
+    /// Does the cell at grid position `position` (0-based) belong to this slice?
+    pub fn contains(&self, position: usize) -> bool {
+        position % self.count == self.index - 1
+    }
+}
+
+impl FromStr for Shard {
+    type Err = ShardError;
+
+    fn from_str(spec: &str) -> Result<Self, Self::Err> {
+        let err = |reason| ShardError {
+            spec: spec.to_string(),
+            reason,
+        };
+        let (k, n) = spec.split_once('/').ok_or_else(|| err("no '/'"))?;
+        let k: usize = k.trim().parse().map_err(|_| err("k is not a number"))?;
+        let n: usize = n.trim().parse().map_err(|_| err("n is not a number"))?;
+        if n == 0 {
+            return Err(err("n must be at least 1"));
+        }
+        if k == 0 || k > n {
+            return Err(err("k must lie in 1..=n"));
+        }
+        Ok(Shard { index: k, count: n })
+    }
+}
+
+impl fmt::Display for Shard {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}/{}", self.index, self.count)
+    }
+}

@@ -1,0 +1,183 @@
+//! Experiment campaigns: every episode of a planners × α × λ × seeds grid, run in parallel
+//! worker processes, resumable after any interruption, collected into one set of CSV files.
+//!
+//! Layout of a campaign directory `<out>`:
+//!
+//! ```text
+//! campaign.toml                      the settings (grid and scenario); a re-run must agree
+//! episodes/<planner>/a<α>_l<λ>_s<seed>/
+//!     episode.csv vehicles.csv collisions.csv timing.csv [sumo.log]   a finished cell
+//!     error.txt                                                       a failed one
+//! episodes.csv vehicles.csv timings.csv failures.csv                  collected, grid order
+//! report/                                                             tables and figures
+//! ```
+//!
+//! Modules: [`grid`] (cells, order, shards), [`settings`] (file and flags), [`worker`] and
+//! [`pool`] (the two ends of the worker processes), [`collect`] (resume state, gathering),
+//! [`results`] (the collected files).
+
+pub mod collect;
+pub mod grid;
+pub mod pool;
+pub mod results;
+pub mod settings;
+pub mod worker;
+
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+
+use crate::output::{self, WriteError};
+use collect::cell_dir;
+use results::ResultsError;
+pub use settings::{Overrides, Settings, SettingsError};
+use worker::{Outcome, Request};
+
+/// Name of the settings file in a campaign directory.
+pub const SETTINGS_FILE: &str = "campaign.toml";
+
+/// Why a campaign could not run (failed episodes are not errors: see [`RunSummary`]).
+#[derive(Debug, thiserror::Error)]
+pub enum CampaignError {
+    #[error(transparent)]
+    Settings(#[from] SettingsError),
+    #[error(
+        "{dir} holds a campaign with other settings ({key} differs); use another --out or remove it"
+    )]
+    OtherSettings { dir: PathBuf, key: String },
+    #[error(transparent)]
+    Write(#[from] WriteError),
+    #[error(transparent)]
+    Collect(#[from] ResultsError),
+}
+
+/// What a campaign run did.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RunSummary {
+    /// Episodes in the whole grid.
+    pub grid: usize,
+    /// Episodes in this run's shard.
+    pub shard: usize,
+    /// Episodes of the shard found finished before this run.
+    pub already_done: usize,
+    /// Episodes run now.
+    pub ran: usize,
+    /// Episodes of the shard without result at the end (failed now, or not run).
+    pub failed: usize,
+    /// Rows of the collected `episodes.csv`.
+    pub collected: usize,
+    pub wall_s: f64,
+}
+
+/// Runs (or resumes) a campaign in `out` with worker processes of `exe` (the `bkpbs` binary),
+/// then collects the results. Prints one status line before and one after; draws a progress
+/// bar on stderr only when stderr is a terminal.
+pub fn run(settings: &Settings, out: &Path, exe: &Path) -> Result<RunSummary, CampaignError> {
+    let start = Instant::now();
+    let settings_path = out.join(SETTINGS_FILE);
+    if settings_path.exists() {
+        let earlier = Settings::from_campaign_file(&settings_path)?;
+        if let Some(key) = settings.scenario_difference(&earlier) {
+            return Err(CampaignError::OtherSettings {
+                dir: out.to_path_buf(),
+                key,
+            });
+        }
+    }
+    output::write_atomic(&settings_path, settings.to_toml().as_bytes())?;
+    // Left by a campaign killed while collecting.
+    worker::remove_stale_temporaries(out);
+
+    let cells = settings.grid.cells();
+    let mut shard_size = 0;
+    let mut requests = Vec::new();
+    for (position, cell) in cells.iter().enumerate() {
+        if !settings.shard.contains(position) {
+            continue;
+        }
+        shard_size += 1;
+        if !collect::is_done(out, cell) {
+            requests.push(Request {
+                position,
+                planner: cell.planner.clone(),
+                dir: cell_dir(out, cell),
+                config: settings.episode_config(cell),
+            });
+        }
+    }
+    let g = &settings.grid;
+    let already_done = shard_size - requests.len();
+    println!(
+        "campaign: {} planners × {} α × {} λ × {} seeds = {} episodes; shard {}: {}; already done: {}; to run: {}; workers: {}",
+        g.planners.len(),
+        g.alphas.len(),
+        g.lambdas.len(),
+        g.seeds.len(),
+        g.len(),
+        settings.shard,
+        shard_size,
+        already_done,
+        requests.len(),
+        settings.workers.min(requests.len()),
+    );
+
+    let bar = progress_bar(requests.len() as u64);
+    let mut failed_now = 0;
+    let ran = requests.len();
+    pool::run(exe, requests, settings.workers, |reply| {
+        if let Outcome::Failed { error } = &reply.outcome {
+            failed_now += 1;
+            let line = format!(
+                "campaign: episode {} failed: {error}",
+                cells[reply.position]
+            );
+            if bar.is_hidden() {
+                eprintln!("{line}");
+            } else {
+                bar.println(line);
+            }
+            bar.set_message(format!("{failed_now} failed"));
+        }
+        bar.inc(1);
+    });
+    bar.finish_and_clear();
+
+    let results = collect::collect(out, &settings.grid, settings.shard)?;
+    results.write(out)?;
+    let summary = RunSummary {
+        grid: g.len(),
+        shard: shard_size,
+        already_done,
+        ran,
+        failed: results.failures.rows.len(),
+        collected: results.episodes.rows.len(),
+        wall_s: start.elapsed().as_secs_f64(),
+    };
+    println!(
+        "campaign: ran {} episodes ({} failed) in {:.1} s; {} episodes collected in {}",
+        summary.ran,
+        failed_now,
+        summary.wall_s,
+        summary.collected,
+        out.join("episodes.csv").display()
+    );
+    Ok(summary)
+}
+
+fn progress_bar(len: u64) -> ProgressBar {
+    if !std::io::stderr().is_terminal() {
+        return ProgressBar::hidden();
+    }
+    let bar = ProgressBar::with_draw_target(Some(len), ProgressDrawTarget::stderr());
+    bar.set_style(
+        ProgressStyle::with_template(
+            "{elapsed_precise} [{bar:30}] {pos}/{len} episodes, {msg}, ETA {eta}",
+        )
+        .expect("valid template")
+        .progress_chars("=> "),
+    );
+    bar.set_message("0 failed");
+    bar
+}

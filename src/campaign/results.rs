@@ -1,0 +1,339 @@
+//! The collected results of a campaign directory: `episodes.csv`, `vehicles.csv`,
+//! `timings.csv` and `failures.csv`, each row led by its cell (planner, alpha, lambda, seed),
+//! in grid order. Read, merged across shard directories, and written atomically here.
+
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+
+use super::grid::Cell;
+use crate::output::{self, WriteError, EPISODE_COLUMNS, TIMING_COLUMNS, VEHICLE_COLUMNS};
+
+/// The columns that name a cell; every collected file starts with them.
+pub const CELL_COLUMNS: [&str; 4] = ["planner", "alpha", "lambda", "seed"];
+
+/// The collected files of a campaign directory.
+pub const FILES: [&str; 4] = [
+    "episodes.csv",
+    "vehicles.csv",
+    "timings.csv",
+    "failures.csv",
+];
+
+/// Why collected results cannot be read or merged.
+#[derive(Debug, thiserror::Error)]
+pub enum ResultsError {
+    #[error("cannot read {path}: {message}")]
+    Read { path: PathBuf, message: String },
+    #[error("{path}: unexpected columns (written by another version of bkpbs?): {header}")]
+    Columns { path: PathBuf, header: String },
+    #[error("{path}, line {line}: bad cell value '{value}'")]
+    Cell {
+        path: PathBuf,
+        line: u64,
+        value: String,
+    },
+    #[error("{path} does not hold the results of cell {cell}")]
+    Mismatch { path: PathBuf, cell: String },
+    #[error("cell {cell} has different results in {first} and {second}")]
+    Conflict {
+        cell: String,
+        first: PathBuf,
+        second: PathBuf,
+    },
+    #[error(transparent)]
+    Write(#[from] WriteError),
+}
+
+/// One CSV row and the cell it belongs to.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Row {
+    pub cell: Cell,
+    /// The whole row, cell columns included.
+    pub fields: csv::StringRecord,
+}
+
+/// One collected file: its header and rows.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Table {
+    pub header: Vec<String>,
+    pub rows: Vec<Row>,
+}
+
+impl Table {
+    /// An empty table with `header`.
+    pub fn new(header: Vec<String>) -> Table {
+        Table {
+            header,
+            rows: Vec::new(),
+        }
+    }
+
+    /// Index of a column, if present.
+    pub fn column(&self, name: &str) -> Option<usize> {
+        self.header.iter().position(|h| h == name)
+    }
+
+    fn to_csv(&self) -> Vec<u8> {
+        let mut w = csv::Writer::from_writer(Vec::new());
+        w.write_record(&self.header).expect("writing to memory");
+        for r in &self.rows {
+            w.write_record(&r.fields).expect("writing to memory");
+        }
+        w.into_inner().expect("writing to memory")
+    }
+}
+
+fn with_cell_columns(rest: &[&str]) -> Vec<String> {
+    CELL_COLUMNS
+        .iter()
+        .chain(rest)
+        .map(|s| s.to_string())
+        .collect()
+}
+
+/// Header of `episodes.csv` (the episode columns already start with the cell).
+pub fn episodes_header() -> Vec<String> {
+    EPISODE_COLUMNS.iter().map(|s| s.to_string()).collect()
+}
+/// Header of `vehicles.csv`.
+pub fn vehicles_header() -> Vec<String> {
+    with_cell_columns(&VEHICLE_COLUMNS)
+}
+/// Header of `timings.csv`.
+pub fn timings_header() -> Vec<String> {
+    with_cell_columns(&TIMING_COLUMNS)
+}
+/// Header of `failures.csv`.
+pub fn failures_header() -> Vec<String> {
+    with_cell_columns(&["error"])
+}
+
+/// The four collected files of one directory (or of several, merged).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Results {
+    /// Planner order of the grid (rows are sorted by it, then α, λ, seed).
+    pub planners: Vec<String>,
+    pub episodes: Table,
+    pub vehicles: Table,
+    pub timings: Table,
+    pub failures: Table,
+}
+
+impl Default for Results {
+    fn default() -> Self {
+        Results {
+            planners: Vec::new(),
+            episodes: Table::new(episodes_header()),
+            vehicles: Table::new(vehicles_header()),
+            timings: Table::new(timings_header()),
+            failures: Table::new(failures_header()),
+        }
+    }
+}
+
+/// The cell columns of a row as a [`Cell`]; the offending text if a value does not parse.
+pub fn cell_of(fields: &csv::StringRecord) -> Result<Cell, String> {
+    let get = |i: usize| fields.get(i).unwrap_or("");
+    let num = |i: usize| get(i).parse::<f64>().map_err(|_| get(i).to_string());
+    Ok(Cell {
+        planner: get(0).to_string(),
+        alpha: num(1)?,
+        lambda: num(2)?,
+        seed: get(3).parse().map_err(|_| get(3).to_string())?,
+    })
+}
+
+/// Reads the records of a CSV file that must have exactly `header`.
+pub fn read_records(
+    path: &Path,
+    header: &[String],
+) -> Result<Vec<csv::StringRecord>, ResultsError> {
+    let read_err = |e: csv::Error| ResultsError::Read {
+        path: path.to_path_buf(),
+        message: e.to_string(),
+    };
+    let mut r = csv::Reader::from_path(path).map_err(read_err)?;
+    let found: Vec<String> = r
+        .headers()
+        .map_err(read_err)?
+        .iter()
+        .map(String::from)
+        .collect();
+    if found != header {
+        return Err(ResultsError::Columns {
+            path: path.to_path_buf(),
+            header: found.join(","),
+        });
+    }
+    r.records().map(|rec| rec.map_err(read_err)).collect()
+}
+
+/// Reads a collected CSV file that must have exactly `header` (starting with the cell columns).
+pub fn read_table(path: &Path, header: &[String]) -> Result<Table, ResultsError> {
+    let mut table = Table::new(header.to_vec());
+    for fields in read_records(path, header)? {
+        let cell = cell_of(&fields).map_err(|value| ResultsError::Cell {
+            path: path.to_path_buf(),
+            line: fields.position().map_or(0, |p| p.line()),
+            value,
+        })?;
+        table.rows.push(Row { cell, fields });
+    }
+    Ok(table)
+}
+
+/// Identity of a cell for lookups (α and λ by value).
+pub fn key(c: &Cell) -> (String, u64, u64, u64) {
+    (
+        c.planner.clone(),
+        c.alpha.to_bits(),
+        c.lambda.to_bits(),
+        c.seed,
+    )
+}
+
+impl Results {
+    /// Reads a campaign directory's collected files; `failures.csv` and `timings.csv` may be
+    /// missing. `planners` gives the grid's planner order (planners seen only in the rows follow
+    /// in order of appearance).
+    pub fn read(dir: &Path, planners: &[String]) -> Result<Results, ResultsError> {
+        let mut res = Results {
+            planners: planners.to_vec(),
+            episodes: read_table(&dir.join("episodes.csv"), &episodes_header())?,
+            vehicles: read_table(&dir.join("vehicles.csv"), &vehicles_header())?,
+            ..Results::default()
+        };
+        for (name, table, header) in [
+            ("timings.csv", &mut res.timings, timings_header()),
+            ("failures.csv", &mut res.failures, failures_header()),
+        ] {
+            let p = dir.join(name);
+            if p.exists() {
+                *table = read_table(&p, &header)?;
+            }
+        }
+        for r in &res.episodes.rows {
+            if !res.planners.contains(&r.cell.planner) {
+                res.planners.push(r.cell.planner.clone());
+            }
+        }
+        Ok(res)
+    }
+
+    /// Sorts every table into grid order; rows of one cell keep their order.
+    pub fn sort(&mut self) {
+        let planners = &mut self.planners;
+        for t in [
+            &self.episodes,
+            &self.vehicles,
+            &self.timings,
+            &self.failures,
+        ] {
+            for r in &t.rows {
+                if !planners.contains(&r.cell.planner) {
+                    planners.push(r.cell.planner.clone());
+                }
+            }
+        }
+        let rank: HashMap<&str, usize> = self
+            .planners
+            .iter()
+            .enumerate()
+            .map(|(i, p)| (p.as_str(), i))
+            .collect();
+        let order = |a: &Row, b: &Row| {
+            rank[a.cell.planner.as_str()]
+                .cmp(&rank[b.cell.planner.as_str()])
+                .then(a.cell.alpha.total_cmp(&b.cell.alpha))
+                .then(a.cell.lambda.total_cmp(&b.cell.lambda))
+                .then(a.cell.seed.cmp(&b.cell.seed))
+        };
+        for t in [
+            &mut self.episodes,
+            &mut self.vehicles,
+            &mut self.timings,
+            &mut self.failures,
+        ] {
+            t.rows.sort_by(order);
+        }
+    }
+
+    /// Merges the results of several directories (shards). A cell present in more than one must
+    /// have identical `episodes.csv` rows (it is then taken once, from the first directory);
+    /// differing rows are an error. A failure is kept only for cells nobody finished.
+    pub fn merge(parts: &[(PathBuf, Results)]) -> Result<Results, ResultsError> {
+        let mut merged = Results::default();
+        // Which part supplies each cell.
+        let mut owner: HashMap<(String, u64, u64, u64), usize> = HashMap::new();
+        for (i, (dir, part)) in parts.iter().enumerate() {
+            for p in &part.planners {
+                if !merged.planners.contains(p) {
+                    merged.planners.push(p.clone());
+                }
+            }
+            for row in &part.episodes.rows {
+                let k = key(&row.cell);
+                match owner.get(&k) {
+                    None => {
+                        owner.insert(k, i);
+                        merged.episodes.rows.push(row.clone());
+                    }
+                    Some(&j) => {
+                        let first = parts[j]
+                            .1
+                            .episodes
+                            .rows
+                            .iter()
+                            .find(|r| key(&r.cell) == k)
+                            .expect("owner holds the cell");
+                        if first.fields != row.fields {
+                            return Err(ResultsError::Conflict {
+                                cell: row.cell.to_string(),
+                                first: parts[j].0.join("episodes.csv"),
+                                second: dir.join("episodes.csv"),
+                            });
+                        }
+                    }
+                }
+            }
+        }
+        for (i, (_, part)) in parts.iter().enumerate() {
+            for (mine, theirs) in [
+                (&mut merged.vehicles, &part.vehicles),
+                (&mut merged.timings, &part.timings),
+            ] {
+                mine.rows.extend(
+                    theirs
+                        .rows
+                        .iter()
+                        .filter(|r| owner.get(&key(&r.cell)) == Some(&i))
+                        .cloned(),
+                );
+            }
+            for r in &part.failures.rows {
+                if let std::collections::hash_map::Entry::Vacant(v) = owner.entry(key(&r.cell)) {
+                    v.insert(usize::MAX);
+                    merged.failures.rows.push(r.clone());
+                }
+            }
+        }
+        merged.sort();
+        Ok(merged)
+    }
+
+    /// Writes the four files into `dir`, each atomically.
+    pub fn write(&self, dir: &Path) -> Result<Vec<PathBuf>, ResultsError> {
+        let mut paths = Vec::new();
+        for (name, table) in FILES.iter().zip([
+            &self.episodes,
+            &self.vehicles,
+            &self.timings,
+            &self.failures,
+        ]) {
+            let p = dir.join(name);
+            output::write_atomic(&p, &table.to_csv())?;
+            paths.push(p);
+        }
+        Ok(paths)
+    }
+}

@@ -1,0 +1,453 @@
+//! Campaign settings: the `[campaign]` table of a TOML file (next to any scenario settings of
+//! [`Config`]), overridden by command-line flags, validated up front.
+//!
+//! A campaign file looks like `bkpbs config --print` plus one table:
+//!
+//! ```toml
+//! [campaign]
+//! planners = ["sumo", "idm-mobil"]
+//! alphas = [0.4, 0.5, 0.6, 0.7, 0.8]
+//! lambdas = [2500.0, 3000.0]
+//! seeds = 5
+//! seed_base = 0
+//! steps = 400
+//! workers = 2
+//!
+//! [idm]
+//! time_headway = 1.2
+//! ```
+//!
+//! `scenario.alpha`, `lambda`, `seed` and `steps` vary per cell or come from the campaign table,
+//! so a campaign file must not set them.
+
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+
+use super::grid::{Cell, Grid, Shard, ShardError};
+use crate::config::{Config, ConfigError};
+use crate::controller::{UnknownPlanner, PLANNERS};
+
+/// Scenario keys a campaign sets itself.
+const PER_CELL_KEYS: [&str; 4] = ["alpha", "lambda", "seed", "steps"];
+
+/// Why campaign settings cannot be used.
+#[derive(Debug, thiserror::Error)]
+pub enum SettingsError {
+    #[error("cannot read campaign file {path}: {error}")]
+    Read {
+        path: PathBuf,
+        error: std::io::Error,
+    },
+    #[error("malformed campaign file {path}: {message}")]
+    Parse { path: PathBuf, message: String },
+    #[error("scenario.{key} in {path} is set by the campaign (use campaign.{replacement})")]
+    PerCellKey {
+        path: PathBuf,
+        key: String,
+        replacement: &'static str,
+    },
+    #[error(transparent)]
+    Config(#[from] ConfigError),
+    #[error("{origin}: {planner}")]
+    Planner {
+        origin: String,
+        planner: UnknownPlanner,
+    },
+    #[error("{origin}: '{value}' is not a number")]
+    NotANumber { origin: String, value: String },
+    #[error("{origin}: {what} {value} {reason}")]
+    OutOfRange {
+        origin: String,
+        what: &'static str,
+        value: String,
+        reason: &'static str,
+    },
+    #[error("{origin}: the list is empty")]
+    Empty { origin: String },
+    #[error(transparent)]
+    Shard(#[from] ShardError),
+}
+
+/// The `[campaign]` table: the grid and how to run it.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct CampaignTable {
+    /// Controllers to compare; default: every name in [`PLANNERS`].
+    pub planners: Vec<String>,
+    /// CAV penetrations α.
+    pub alphas: Vec<f64>,
+    /// Arrival rates λ (veh/h).
+    pub lambdas: Vec<f64>,
+    /// Seeds per (planner, α, λ).
+    pub seeds: u64,
+    /// First seed; seeds run `seed_base .. seed_base + seeds`.
+    pub seed_base: u64,
+    /// Episode length in steps.
+    pub steps: u32,
+    /// Worker processes; default: the number of cores. Does not change results.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub workers: Option<usize>,
+}
+
+impl Default for CampaignTable {
+    fn default() -> Self {
+        CampaignTable {
+            planners: PLANNERS.iter().map(|p| p.to_string()).collect(),
+            alphas: vec![0.4, 0.5, 0.6, 0.7, 0.8],
+            lambdas: vec![2500.0, 3000.0],
+            seeds: 5,
+            seed_base: 0,
+            steps: 400,
+            workers: None,
+        }
+    }
+}
+
+/// Command-line flags; each set one replaces the file's value. Lists arrive as the
+/// comma-separated text of the flag so that a bad entry gets a clear error naming the flag.
+#[derive(Debug, Clone, Default)]
+pub struct Overrides {
+    pub planners: Option<String>,
+    pub alphas: Option<String>,
+    pub lambdas: Option<String>,
+    pub seeds: Option<u64>,
+    pub seed_base: Option<u64>,
+    pub steps: Option<u32>,
+    pub workers: Option<usize>,
+    pub shard: Option<String>,
+}
+
+/// Validated settings of one campaign run.
+#[derive(Debug, Clone)]
+pub struct Settings {
+    /// The `[campaign]` table as resolved (file, then flags).
+    pub table: CampaignTable,
+    pub grid: Grid,
+    pub shard: Shard,
+    pub workers: usize,
+    /// Scenario settings shared by all cells; `scenario.steps` already set.
+    pub config: Config,
+}
+
+/// A campaign file split into its two parts.
+struct FileParts {
+    table: CampaignTable,
+    config: Config,
+}
+
+fn parse_error(path: &Path, message: impl Into<String>) -> SettingsError {
+    SettingsError::Parse {
+        path: path.to_path_buf(),
+        message: message.into(),
+    }
+}
+
+fn read_file(path: &Path) -> Result<FileParts, SettingsError> {
+    let text = std::fs::read_to_string(path).map_err(|error| SettingsError::Read {
+        path: path.to_path_buf(),
+        error,
+    })?;
+    let mut doc: toml::Table = toml::from_str(&text).map_err(|e| {
+        parse_error(
+            path,
+            e.message().to_string()
+                + &e.span()
+                    .map(|s| format!(" (at byte {})", s.start))
+                    .unwrap_or_default(),
+        )
+    })?;
+    let table = match doc.remove("campaign") {
+        Some(v) => v
+            .try_into::<CampaignTable>()
+            .map_err(|e| parse_error(path, format!("[campaign]: {}", e.message())))?,
+        None => CampaignTable::default(),
+    };
+    if let Some(toml::Value::Table(s)) = doc.get("scenario") {
+        for key in PER_CELL_KEYS {
+            if s.contains_key(key) {
+                return Err(SettingsError::PerCellKey {
+                    path: path.to_path_buf(),
+                    key: key.to_string(),
+                    replacement: match key {
+                        "alpha" => "alphas",
+                        "lambda" => "lambdas",
+                        "seed" => "seed_base",
+                        _ => "steps",
+                    },
+                });
+            }
+        }
+    }
+    let config = toml::Value::Table(doc)
+        .try_into::<Config>()
+        .map_err(|e| parse_error(path, e.message().to_string()))?;
+    Ok(FileParts { table, config })
+}
+
+fn parse_list<T: std::str::FromStr>(origin: &str, text: &str) -> Result<Vec<T>, SettingsError> {
+    text.split(',')
+        .map(str::trim)
+        .filter(|s| !s.is_empty())
+        .map(|s| {
+            s.parse().map_err(|_| SettingsError::NotANumber {
+                origin: origin.to_string(),
+                value: s.to_string(),
+            })
+        })
+        .collect()
+}
+
+/// Where a value came from, for error messages: the flag, or the key and its file.
+fn origin(flag_set: bool, flag: &str, key: &str, file: Option<&Path>) -> String {
+    match (flag_set, file) {
+        (true, _) => flag.to_string(),
+        (false, Some(p)) => format!("campaign.{key} in {}", p.display()),
+        (false, None) => format!("campaign.{key} (default)"),
+    }
+}
+
+impl Settings {
+    /// Reads the optional campaign file, applies the flags and validates everything.
+    pub fn resolve(file: Option<&Path>, o: &Overrides) -> Result<Settings, SettingsError> {
+        let FileParts { mut table, config } = match file {
+            Some(p) => read_file(p)?,
+            None => FileParts {
+                table: CampaignTable::default(),
+                config: Config::default(),
+            },
+        };
+        let from = |set: bool, flag: &str, key: &str| origin(set, flag, key, file);
+        if let Some(p) = &o.planners {
+            table.planners = p
+                .split(',')
+                .map(str::trim)
+                .filter(|s| !s.is_empty())
+                .map(String::from)
+                .collect();
+        }
+        if let Some(a) = &o.alphas {
+            table.alphas = parse_list("--alphas", a)?;
+        }
+        if let Some(l) = &o.lambdas {
+            table.lambdas = parse_list("--lambdas", l)?;
+        }
+        if let Some(n) = o.seeds {
+            table.seeds = n;
+        }
+        if let Some(b) = o.seed_base {
+            table.seed_base = b;
+        }
+        if let Some(s) = o.steps {
+            table.steps = s;
+        }
+        if let Some(w) = o.workers {
+            table.workers = Some(w);
+        }
+        let shard = match &o.shard {
+            Some(s) => s.parse()?,
+            None => Shard::ALL,
+        };
+
+        let planners_from = from(o.planners.is_some(), "--planners", "planners");
+        if table.planners.is_empty() {
+            return Err(SettingsError::Empty {
+                origin: planners_from,
+            });
+        }
+        for p in &table.planners {
+            if !PLANNERS.contains(&p.as_str()) {
+                return Err(SettingsError::Planner {
+                    origin: planners_from,
+                    planner: UnknownPlanner(p.clone()),
+                });
+            }
+        }
+        let alphas_from = from(o.alphas.is_some(), "--alphas", "alphas");
+        check_values(
+            &alphas_from,
+            "α",
+            &table.alphas,
+            |a| (0.0..=1.0).contains(&a),
+            "must lie in [0, 1]",
+        )?;
+        let lambdas_from = from(o.lambdas.is_some(), "--lambdas", "lambdas");
+        check_values(
+            &lambdas_from,
+            "λ",
+            &table.lambdas,
+            |l| l > 0.0 && l.is_finite(),
+            "must be a positive rate in veh/h",
+        )?;
+        let positive = |set, flag: &str, key: &str, what, v: u64| {
+            if v == 0 {
+                Err(SettingsError::OutOfRange {
+                    origin: from(set, flag, key),
+                    what,
+                    value: "0".into(),
+                    reason: "must be at least 1",
+                })
+            } else {
+                Ok(())
+            }
+        };
+        positive(
+            o.seeds.is_some(),
+            "--seeds",
+            "seeds",
+            "seed count",
+            table.seeds,
+        )?;
+        positive(
+            o.steps.is_some(),
+            "--steps",
+            "steps",
+            "steps",
+            table.steps.into(),
+        )?;
+        let workers = match table.workers {
+            Some(w) => {
+                positive(
+                    o.workers.is_some(),
+                    "--workers",
+                    "workers",
+                    "workers",
+                    w as u64,
+                )?;
+                w
+            }
+            None => std::thread::available_parallelism().map_or(1, |n| n.get()),
+        };
+
+        let mut config = config;
+        config.scenario.steps = table.steps;
+        let grid = Grid::new(
+            &table.planners,
+            &table.alphas,
+            &table.lambdas,
+            table.seed_base,
+            table.seeds,
+        );
+        // Every (α, λ) must make a valid episode configuration.
+        for &a in &grid.alphas {
+            for &l in &grid.lambdas {
+                let mut c = config.clone();
+                c.scenario.alpha = a;
+                c.scenario.lambda = l;
+                c.validate()?;
+            }
+        }
+        Ok(Settings {
+            table,
+            grid,
+            shard,
+            workers,
+            config,
+        })
+    }
+
+    /// The configuration of one cell's episode.
+    pub fn episode_config(&self, cell: &Cell) -> Config {
+        let mut c = self.config.clone();
+        c.scenario.alpha = cell.alpha;
+        c.scenario.lambda = cell.lambda;
+        c.scenario.seed = cell.seed;
+        c
+    }
+
+    /// The settings as a campaign file (`<out>/campaign.toml`): the grid and the scenario, not
+    /// the worker count or shard, which do not change results. Feeding it back with `--config`
+    /// reproduces the campaign.
+    pub fn to_toml(&self) -> String {
+        let mut table = self.table.clone();
+        table.workers = None;
+        let mut doc = scenario_table(&self.config);
+        doc.insert(
+            "campaign".into(),
+            toml::Value::try_from(&table).expect("campaign table serialises"),
+        );
+        format!(
+            "# bkpbs campaign settings; rerun with: bkpbs campaign --config campaign.toml --out DIR\n{}",
+            toml::to_string_pretty(&doc).expect("campaign file serialises")
+        )
+    }
+
+    /// Reads the settings a campaign directory was made with (its `campaign.toml`).
+    pub fn from_campaign_file(path: &Path) -> Result<Settings, SettingsError> {
+        Settings::resolve(Some(path), &Overrides::default())
+    }
+
+    /// The first scenario setting (dotted key) in which two campaigns' episodes differ, if any:
+    /// campaigns that agree here may share a results directory.
+    pub fn scenario_difference(&self, other: &Settings) -> Option<String> {
+        let mut a = self.config.clone();
+        let mut b = other.config.clone();
+        a.sumo.verbose = false;
+        b.sumo.verbose = false;
+        first_difference(
+            &toml::Value::Table(scenario_table(&a)),
+            &toml::Value::Table(scenario_table(&b)),
+            "",
+        )
+        .or_else(|| (self.table.steps != other.table.steps).then(|| "campaign.steps".into()))
+    }
+}
+
+fn check_values(
+    origin: &str,
+    what: &'static str,
+    values: &[f64],
+    ok: impl Fn(f64) -> bool,
+    reason: &'static str,
+) -> Result<(), SettingsError> {
+    if values.is_empty() {
+        return Err(SettingsError::Empty {
+            origin: origin.to_string(),
+        });
+    }
+    match values.iter().find(|&&v| !ok(v)) {
+        Some(v) => Err(SettingsError::OutOfRange {
+            origin: origin.to_string(),
+            what,
+            value: v.to_string(),
+            reason,
+        }),
+        None => Ok(()),
+    }
+}
+
+/// The configuration as a TOML table without the per-cell scenario keys.
+fn scenario_table(config: &Config) -> toml::Table {
+    let mut doc = match toml::Value::try_from(config).expect("config serialises") {
+        toml::Value::Table(t) => t,
+        _ => unreachable!("a struct serialises to a table"),
+    };
+    if let Some(toml::Value::Table(s)) = doc.get_mut("scenario") {
+        for key in PER_CELL_KEYS {
+            s.remove(key);
+        }
+    }
+    doc
+}
+
+fn first_difference(a: &toml::Value, b: &toml::Value, path: &str) -> Option<String> {
+    match (a, b) {
+        (toml::Value::Table(x), toml::Value::Table(y)) => {
+            let mut keys: Vec<&String> = x.keys().chain(y.keys()).collect();
+            keys.sort();
+            keys.dedup();
+            keys.into_iter().find_map(|k| {
+                let p = if path.is_empty() {
+                    k.clone()
+                } else {
+                    format!("{path}.{k}")
+                };
+                match (x.get(k), y.get(k)) {
+                    (Some(u), Some(v)) => first_difference(u, v, &p),
+                    _ => Some(p),
+                }
+            })
+        }
+        _ => (a != b).then(|| path.to_string()),
+    }
+}

@@ -1,0 +1,229 @@
+//! The worker side of a campaign: a long-lived child process (`bkpbs worker`) that runs
+//! episodes one after another in-process, because libsumo allows one simulation per process.
+//!
+//! Protocol: one JSON [`Request`] per line on stdin, one JSON [`Reply`] per line back on the
+//! protocol channel (the process's original stdout; anything else printing to stdout, SUMO
+//! included, is sent to stderr so it cannot corrupt the channel). End of stdin ends the worker.
+//!
+//! The worker writes the episode's files into the cell directory itself, atomically, with
+//! `episode.csv` last: its presence marks a finished cell. A failed episode (SUMO error, planner
+//! panic) leaves `error.txt` with the message instead. Either way the worker goes on with the
+//! next request.
+
+use std::io::{BufRead, Write};
+use std::panic::{self, AssertUnwindSafe};
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Mutex;
+
+use serde::{Deserialize, Serialize};
+
+use crate::config::Config;
+use crate::{controller, episode, output};
+
+/// Name of the file that records why a cell's episode failed.
+pub const ERROR_FILE: &str = "error.txt";
+/// Name of the file whose presence marks a finished cell.
+pub const DONE_FILE: &str = "episode.csv";
+
+/// Test hook: `BKPBS_WORKER_FAULT=panic:<seed>` makes the planner "panic" in every episode
+/// with that seed, `exit:<seed>` makes the worker process die there. Used by the test suite to
+/// exercise failure handling; unset in normal use.
+pub const FAULT_ENV: &str = "BKPBS_WORKER_FAULT";
+
+/// One episode to run.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct Request {
+    /// The cell's position in the grid, echoed in the reply.
+    pub position: usize,
+    pub planner: String,
+    /// The cell directory to write the results into.
+    pub dir: PathBuf,
+    /// The episode's full configuration (α, λ, seed and steps set).
+    pub config: Config,
+}
+
+/// How the episode went.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub enum Outcome {
+    Done,
+    Failed { error: String },
+}
+
+/// The answer to one [`Request`].
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct Reply {
+    pub position: usize,
+    pub outcome: Outcome,
+}
+
+/// Why the worker loop itself stopped (not an episode failure: those are replies).
+#[derive(Debug, thiserror::Error)]
+pub enum WorkerError {
+    #[error("worker: cannot read requests: {0}")]
+    Read(std::io::Error),
+    #[error("worker: malformed request: {0}")]
+    Request(serde_json::Error),
+    #[error("worker: cannot send reply: {0}")]
+    Reply(std::io::Error),
+    #[error("worker: cannot set up the protocol channel: {0}")]
+    Channel(std::io::Error),
+}
+
+/// The last panic's message and location, recorded by the hook instead of printed.
+static LAST_PANIC: Mutex<Option<String>> = Mutex::new(None);
+/// Set while an episode runs: its panics become failed replies, others are printed.
+static IN_EPISODE: AtomicBool = AtomicBool::new(false);
+
+/// Runs the worker on the process's stdin/stdout until stdin closes.
+pub fn serve_stdio() -> Result<(), WorkerError> {
+    die_with_parent();
+    let channel = protocol_channel().map_err(WorkerError::Channel)?;
+    panic::set_hook(Box::new(|info| {
+        if IN_EPISODE.load(Ordering::SeqCst) {
+            *LAST_PANIC.lock().unwrap_or_else(|e| e.into_inner()) = Some(info.to_string());
+        } else {
+            eprintln!("bkpbs worker: {info}");
+        }
+    }));
+    serve(std::io::stdin().lock(), channel)
+}
+
+/// Answers requests from `input` on `output` until `input` ends.
+pub fn serve(mut input: impl BufRead, mut output: impl Write) -> Result<(), WorkerError> {
+    let mut line = String::new();
+    loop {
+        line.clear();
+        if input.read_line(&mut line).map_err(WorkerError::Read)? == 0 {
+            return Ok(());
+        }
+        if line.trim().is_empty() {
+            continue;
+        }
+        let req: Request = serde_json::from_str(&line).map_err(WorkerError::Request)?;
+        let outcome = match run_cell(&req) {
+            Ok(()) => Outcome::Done,
+            Err(error) => {
+                record_failure(&req.dir, &error);
+                Outcome::Failed { error }
+            }
+        };
+        let reply = Reply {
+            position: req.position,
+            outcome,
+        };
+        let mut text = serde_json::to_string(&reply).expect("reply serialises");
+        text.push('\n');
+        output
+            .write_all(text.as_bytes())
+            .and_then(|()| output.flush())
+            .map_err(WorkerError::Reply)?;
+    }
+}
+
+/// Writes `error.txt` into a cell directory (best effort: the reply carries the message too).
+pub fn record_failure(dir: &Path, error: &str) {
+    let _ = output::write_atomic(&dir.join(ERROR_FILE), format!("{error}\n").as_bytes());
+}
+
+fn injected_fault(req: &Request) {
+    let Ok(spec) = std::env::var(FAULT_ENV) else {
+        return;
+    };
+    let seed = req.config.scenario.seed.to_string();
+    match spec.split_once(':') {
+        Some(("panic", s)) if s == seed => panic!("injected planner fault ({FAULT_ENV})"),
+        Some(("exit", s)) if s == seed => std::process::exit(101),
+        _ => {}
+    }
+}
+
+/// Runs one episode and writes its files; the error text on failure.
+fn run_cell(req: &Request) -> Result<(), String> {
+    // A retried cell: the old failure note goes first. A kill from here on leaves neither the
+    // note nor episode.csv, and the cell simply runs again next time.
+    match std::fs::remove_file(req.dir.join(ERROR_FILE)) {
+        Ok(()) => {}
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
+        Err(e) => {
+            return Err(format!(
+                "cannot clear {}: {e}",
+                req.dir.join(ERROR_FILE).display()
+            ))
+        }
+    }
+    remove_stale_temporaries(&req.dir);
+    IN_EPISODE.store(true, Ordering::SeqCst);
+    let run = panic::catch_unwind(AssertUnwindSafe(|| {
+        injected_fault(req);
+        let mut ctl = controller::by_name(&req.planner, &req.config).map_err(|e| e.to_string())?;
+        episode::run(&req.config, ctl.as_mut()).map_err(|e| e.to_string())
+    }));
+    IN_EPISODE.store(false, Ordering::SeqCst);
+    let result = match run {
+        Ok(r) => r?,
+        Err(payload) => {
+            let recorded = LAST_PANIC.lock().unwrap_or_else(|e| e.into_inner()).take();
+            let message = recorded.unwrap_or_else(|| {
+                payload
+                    .downcast_ref::<&str>()
+                    .map(|s| s.to_string())
+                    .or_else(|| payload.downcast_ref::<String>().cloned())
+                    .unwrap_or_else(|| "unknown panic payload".into())
+            });
+            return Err(format!("planner {} panicked: {message}", req.planner));
+        }
+    };
+    result.write(&req.dir).map_err(|e| e.to_string())?;
+    Ok(())
+}
+
+/// Removes the temporary files an earlier, killed write may have left in `dir`.
+pub(crate) fn remove_stale_temporaries(dir: &Path) {
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return;
+    };
+    for e in entries.flatten() {
+        let name = e.file_name();
+        let name = name.to_string_lossy();
+        if name.starts_with(".bkpbs-") && name.ends_with(".tmp") {
+            let _ = std::fs::remove_file(e.path());
+        }
+    }
+}
+
+/// The reply channel: a duplicate of the original stdout, with fd 1 itself pointed at stderr,
+/// so that stray prints (SUMO's, a planner's `println!`) never mix into replies.
+fn protocol_channel() -> std::io::Result<std::fs::File> {
+    use std::os::fd::FromRawFd;
+    std::io::stdout().flush()?;
+    // SAFETY: plain fd calls; the duplicate is owned by the returned File alone.
+    unsafe {
+        let fd = libc::dup(1);
+        if fd < 0 {
+            return Err(std::io::Error::last_os_error());
+        }
+        if libc::dup2(2, 1) < 0 {
+            let e = std::io::Error::last_os_error();
+            libc::close(fd);
+            return Err(e);
+        }
+        Ok(std::fs::File::from_raw_fd(fd))
+    }
+}
+
+/// On Linux, asks the kernel to kill this worker when the campaign process dies, so a killed
+/// campaign leaves no orphan finishing an episode behind it. Elsewhere the worker ends when
+/// its stdin closes.
+fn die_with_parent() {
+    #[cfg(target_os = "linux")]
+    // SAFETY: prctl with PR_SET_PDEATHSIG and a signal number has no memory effects.
+    unsafe {
+        let parent = libc::getppid();
+        libc::prctl(libc::PR_SET_PDEATHSIG, libc::SIGKILL);
+        // The parent may have died before the call: then nobody will signal us.
+        if libc::getppid() != parent {
+            std::process::exit(1);
+        }
+    }
+}

@@ -1,0 +1,246 @@
+//! `bk-pbs`: all CAVs planned jointly each step by BK-PBS (see [`crate::pbs`]); each CAV then
+//! executes the first primitive of its plan. A CAV the chosen node leaves without a plan (no
+//! plan even alone), or still in conflict after a fallback, is repaired: planned alone against
+//! every other trajectory of that node, and if that fails too, it brakes at the emergency
+//! deceleration. Every CAV always gets a maneuver.
+
+use std::sync::Arc;
+
+use super::lane_changes::LaneChanges;
+use super::{CavHandling, Command, Controller, LaneChange, Maneuver, PlanStats};
+use crate::config::Config;
+use crate::mastar::{FirstMove, Mastar, NoPlan, Phase, Plan};
+use crate::pbs::{Budget, Problem, RequestFor};
+use crate::predict::Predictor;
+use crate::safety::SafetyRule;
+use crate::scene::{Kind, Scene};
+use crate::trajectory::Trajectory;
+
+/// Centralised priority-based planner.
+pub struct BkPbs {
+    config: Config,
+    predictor: Box<dyn Predictor>,
+    planner: Option<(Mastar, SafetyRule)>,
+    lane_changes: LaneChanges,
+    stats: PlanStats,
+}
+
+impl BkPbs {
+    /// With `predictor` for HDVs (conditioned on higher-priority CAVs when it can be).
+    pub fn new(config: &Config, predictor: Box<dyn Predictor>) -> Self {
+        BkPbs {
+            config: config.clone(),
+            predictor,
+            planner: None,
+            lane_changes: LaneChanges::default(),
+            stats: PlanStats::default(),
+        }
+    }
+}
+
+/// M-A* requests built from the scene and the lane changes under way.
+struct Requests<'a> {
+    scene: &'a Scene,
+    lane_changes: &'a LaneChanges,
+    dt: f64,
+}
+
+impl RequestFor for Requests<'_> {
+    fn plan(
+        &self,
+        planner: &Mastar,
+        agent: usize,
+        obstacles: &[&Trajectory],
+    ) -> Result<Plan, NoPlan> {
+        planner.plan(
+            &self
+                .lane_changes
+                .request(self.scene, agent, self.dt, obstacles),
+        )
+    }
+}
+
+impl Controller for BkPbs {
+    fn name(&self) -> &'static str {
+        "bk-pbs"
+    }
+
+    fn handling(&self) -> CavHandling {
+        CavHandling::Commanded
+    }
+
+    fn plan(&mut self, scene: &Scene, out: &mut Vec<Command>) {
+        let sc = &self.config.scenario;
+        let (dt, v_max) = (sc.dt, sc.v_max);
+        let lc_steps = (sc.lane_change_duration / dt).round().max(1.0) as usize;
+        let (planner, rule) = self.planner.get_or_insert_with(|| {
+            let m = Mastar::new(
+                &self.config.planner,
+                scene.road.clone(),
+                dt,
+                sc.lane_change_duration,
+                v_max,
+            );
+            let r = SafetyRule::new(&self.config.planner, scene.road.lane_width);
+            (m, r)
+        });
+        let now = scene.time;
+        self.lane_changes.forget_finished(now);
+        let requests = Requests {
+            scene,
+            lane_changes: &self.lane_changes,
+            dt,
+        };
+        let pbs = &self.config.pbs;
+        let problem = Problem {
+            scene,
+            planner,
+            predictor: self.predictor.as_ref(),
+            requests: &requests,
+            rule,
+            horizon: self.config.planner.horizon + lc_steps,
+            dt,
+            budget: Budget {
+                nodes: pbs.node_budget,
+                time_ms: (pbs.time_budget_ms > 0.0).then_some(pbs.time_budget_ms),
+            },
+        };
+        let solution = problem.solve();
+        let s = solution.stats;
+        let mut stats = PlanStats {
+            searches: s.mastar_calls,
+            nodes_expanded: s.mastar_nodes,
+            pbs_nodes: s.nodes,
+            pbs_depth: s.depth,
+            predictions: s.predictions,
+            pbs_fallbacks: u64::from(s.fallback),
+            time_budget_hits: u64::from(s.timed_out),
+            ..PlanStats::default()
+        };
+        let mut starts = Vec::new();
+        for (i, v) in scene.vehicles.iter().enumerate() {
+            if v.kind != Kind::Cav {
+                continue;
+            }
+            // Repair: after a fallback, a CAV still in conflict plans alone against everyone.
+            let in_conflict = s.fallback
+                && (0..scene.vehicles.len())
+                    .any(|j| j != i && problem.conflict_between(i, j, &solution.trajectories));
+            let plan: Option<Arc<Plan>> = if in_conflict || solution.plans[i].is_none() {
+                let others: Vec<&Trajectory> = solution
+                    .trajectories
+                    .iter()
+                    .enumerate()
+                    .filter(|(j, _)| *j != i)
+                    .map(|(_, t)| &**t)
+                    .collect();
+                stats.searches += 1;
+                match requests.plan(planner, i, &others) {
+                    Ok(p) => {
+                        stats.nodes_expanded += p.expanded as u64;
+                        Some(Arc::new(p))
+                    }
+                    Err(e) => {
+                        stats.nodes_expanded += e.expanded as u64;
+                        None
+                    }
+                }
+            } else {
+                solution.plans[i].clone()
+            };
+            let maneuver = match plan {
+                Some(plan) => {
+                    stats.phase2_plans += u64::from(plan.phase == Phase::Fallback);
+                    let lane_change = match plan.first {
+                        FirstMove::Start(p) if p.is_lane_change() => {
+                            let lane = self.lane_changes.request(scene, i, dt, &[]).lane;
+                            starts.push((v.id.clone(), lane + p.lane_offset()));
+                            Some(if p.lane_offset() > 0 {
+                                LaneChange::Left
+                            } else {
+                                LaneChange::Right
+                            })
+                        }
+                        _ => None,
+                    };
+                    Maneuver {
+                        speed: plan.next_speed().clamp(0.0, v_max),
+                        lane_change,
+                    }
+                }
+                None => {
+                    stats.fallbacks += 1;
+                    let brake = self.config.planner.emergency_decel * dt;
+                    Maneuver {
+                        speed: (v.speed - brake).max(0.0),
+                        lane_change: None,
+                    }
+                }
+            };
+            out.push(Command {
+                vehicle: i,
+                maneuver,
+            });
+        }
+        for (id, target) in starts {
+            self.lane_changes
+                .start(&id, now, lc_steps as f64 * dt, target);
+        }
+        self.stats = stats;
+    }
+
+    fn last_stats(&self) -> PlanStats {
+        self.stats
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::sync::Arc;
+
+    use super::*;
+    use crate::predict::ConstantSpeed;
+    use crate::road::Road;
+    use crate::scene::{Origin, VehicleState};
+
+    #[test]
+    fn every_cav_gets_a_maneuver_even_when_nothing_is_safe() {
+        let config = Config::default();
+        let v = |id: &str, kind, s, lane, speed| VehicleState {
+            id: Arc::from(id),
+            kind,
+            origin: Origin::Main,
+            s,
+            lane,
+            lateral: 0.0,
+            speed,
+            accel: 0.0,
+            heading: 0.0,
+            desired_speed: 35.0,
+            length: 5.0,
+            width: 2.0,
+            on_ramp: false,
+        };
+        let scene = Scene {
+            time: 3.0,
+            road: Road::paper_default(),
+            vehicles: vec![
+                v("main.1", Kind::Cav, 100.0, 1, 35.0),
+                v("main.2", Kind::Hdv, 106.0, 1, 0.0),
+                v("main.3", Kind::Hdv, 106.0, 2, 0.0),
+                v("main.4", Kind::Cav, 300.0, 2, 30.0),
+            ],
+        };
+        let mut ctl = BkPbs::new(&config, Box::new(ConstantSpeed::new(&config)));
+        let mut out = Vec::new();
+        ctl.plan(&scene, &mut out);
+        let cavs: Vec<usize> = out.iter().map(|c| c.vehicle).collect();
+        assert_eq!(cavs, vec![0, 3]);
+        let stuck = out[0].maneuver;
+        assert!(
+            stuck.speed < 35.0 - 1.0,
+            "the doomed CAV brakes hard: {stuck:?}"
+        );
+        assert!(ctl.last_stats().pbs_fallbacks == 1);
+    }
+}

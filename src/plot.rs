@@ -1,0 +1,464 @@
+//! Figures of the report, as PNG and SVG: heat maps with one panel per planner and a shared
+//! colour scale (the paper's fig. 3), and a scatter of points coloured by series.
+//!
+//! Text is laid out with `ab_glyph` from a TrueType file read at run time (Debian's
+//! `fonts-dejavu-core`, or the file named by `BKPBS_FONT`), so no system font library is
+//! needed. PNGs are drawn into memory and encoded here, so both files are written atomically
+//! by the caller.
+
+use std::sync::OnceLock;
+
+use plotters::coord::Shift;
+use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
+
+/// Environment variable naming a TrueType font file to use instead of DejaVu Sans.
+pub const FONT_ENV: &str = "BKPBS_FONT";
+
+/// Where distributions put DejaVu Sans (Debian first).
+const FONT_CANDIDATES: [&str; 3] = [
+    "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf",
+    "/usr/share/fonts/TTF/DejaVuSans.ttf",
+    "/usr/share/fonts/dejavu/DejaVuSans.ttf",
+];
+
+const FONT: &str = "sans-serif";
+
+/// Why a figure could not be made.
+#[derive(Debug, thiserror::Error)]
+pub enum PlotError {
+    #[error("no font for figures: {0} (install Debian's fonts-dejavu-core or set {FONT_ENV} to a .ttf file)")]
+    Font(String),
+    #[error("drawing {figure}: {message}")]
+    Draw {
+        figure: &'static str,
+        message: String,
+    },
+}
+
+/// A rendered figure.
+pub struct Figure {
+    pub png: Vec<u8>,
+    pub svg: String,
+}
+
+/// Loads and registers the font once per process.
+fn ensure_font() -> Result<(), PlotError> {
+    static LOADED: OnceLock<Result<(), String>> = OnceLock::new();
+    LOADED
+        .get_or_init(|| {
+            let candidates: Vec<String> = match std::env::var(FONT_ENV) {
+                Ok(p) if !p.is_empty() => vec![p],
+                _ => FONT_CANDIDATES.iter().map(|s| s.to_string()).collect(),
+            };
+            for path in &candidates {
+                if let Ok(bytes) = std::fs::read(path) {
+                    // Plotters keeps fonts for the process's lifetime.
+                    let bytes: &'static [u8] = Box::leak(bytes.into_boxed_slice());
+                    return plotters::style::register_font(FONT, FontStyle::Normal, bytes)
+                        .map_err(|_| format!("{path} is not a usable TrueType font"));
+                }
+            }
+            Err(format!("none of {} found", candidates.join(", ")))
+        })
+        .clone()
+        .map_err(PlotError::Font)
+}
+
+/// Something drawable on any plotters backend.
+trait Painter {
+    fn size(&self) -> (u32, u32);
+    fn paint<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<(), String>
+    where
+        DB::ErrorType: 'static;
+}
+
+fn render(p: &impl Painter, figure: &'static str) -> Result<Figure, PlotError> {
+    ensure_font()?;
+    let err = |message: String| PlotError::Draw { figure, message };
+    let (w, h) = p.size();
+    let mut buf = vec![0u8; (w * h * 3) as usize];
+    {
+        let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
+        p.paint(&root).map_err(err)?;
+        root.present().map_err(|e| err(e.to_string()))?;
+    }
+    let png = encode_png(&buf, w, h).map_err(err)?;
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, (w, h)).into_drawing_area();
+        p.paint(&root).map_err(err)?;
+        root.present().map_err(|e| err(e.to_string()))?;
+    }
+    Ok(Figure { png, svg })
+}
+
+fn encode_png(rgb: &[u8], w: u32, h: u32) -> Result<Vec<u8>, String> {
+    let mut out = Vec::new();
+    let mut enc = png::Encoder::new(&mut out, w, h);
+    enc.set_color(png::ColorType::Rgb);
+    enc.set_depth(png::BitDepth::Eight);
+    let mut writer = enc.write_header().map_err(|e| e.to_string())?;
+    writer.write_image_data(rgb).map_err(|e| e.to_string())?;
+    writer.finish().map_err(|e| e.to_string())?;
+    Ok(out)
+}
+
+/// Viridis (perceptually uniform, colour-blind safe), sampled at nine stops.
+const VIRIDIS: [(u8, u8, u8); 9] = [
+    (68, 1, 84),
+    (71, 44, 122),
+    (59, 81, 139),
+    (44, 113, 142),
+    (33, 144, 141),
+    (39, 173, 129),
+    (92, 200, 99),
+    (170, 220, 50),
+    (253, 231, 37),
+];
+
+/// The colour of `t` ∈ [0, 1] on the viridis scale.
+pub fn viridis(t: f64) -> RGBColor {
+    let t = if t.is_finite() {
+        t.clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    let x = t * (VIRIDIS.len() - 1) as f64;
+    let i = (x.floor() as usize).min(VIRIDIS.len() - 2);
+    let f = x - i as f64;
+    let (a, b) = (VIRIDIS[i], VIRIDIS[i + 1]);
+    let mix = |p: u8, q: u8| (p as f64 + f * (q as f64 - p as f64)).round() as u8;
+    RGBColor(mix(a.0, b.0), mix(a.1, b.1), mix(a.2, b.2))
+}
+
+/// Black on light colours, white on dark ones.
+fn text_colour_on(c: RGBColor) -> RGBColor {
+    let luma = 0.299 * c.0 as f64 + 0.587 * c.1 as f64 + 0.114 * c.2 as f64;
+    if luma > 140.0 {
+        BLACK
+    } else {
+        WHITE
+    }
+}
+
+/// One panel of a heat map: `values[row][column]`, `None` for a cell without data.
+pub struct HeatPanel {
+    pub title: String,
+    pub values: Vec<Vec<Option<f64>>>,
+}
+
+/// Heat maps sharing axes and one colour scale from 0 to the largest value.
+pub struct Heatmap {
+    pub panels: Vec<HeatPanel>,
+    /// Labels of the rows, top to bottom.
+    pub row_labels: Vec<String>,
+    pub col_labels: Vec<String>,
+    pub row_axis: String,
+    pub col_axis: String,
+    /// Label of the colour bar.
+    pub scale_label: String,
+    /// Decimals of the numbers printed in the cells.
+    pub decimals: usize,
+    /// Upper end of the scale when every value is 0 (or missing).
+    pub min_scale_max: f64,
+}
+
+const PANEL_W: u32 = 400;
+const PANEL_H: u32 = 300;
+const BAR_W: u32 = 150;
+const PANELS_PER_ROW: usize = 3;
+
+impl Heatmap {
+    fn layout(&self) -> (usize, usize) {
+        let n = self.panels.len().max(1);
+        let cols = n.min(PANELS_PER_ROW);
+        (n.div_ceil(cols), cols)
+    }
+
+    fn scale_max(&self) -> f64 {
+        let max = self
+            .panels
+            .iter()
+            .flat_map(|p| p.values.iter().flatten().flatten())
+            .copied()
+            .fold(0.0_f64, f64::max);
+        if max > 0.0 {
+            max
+        } else {
+            self.min_scale_max
+        }
+    }
+
+    /// Renders the figure.
+    pub fn render(&self) -> Result<Figure, PlotError> {
+        render(self, "heat map")
+    }
+}
+
+impl Painter for Heatmap {
+    fn size(&self) -> (u32, u32) {
+        let (rows, cols) = self.layout();
+        (cols as u32 * PANEL_W + BAR_W, rows as u32 * PANEL_H)
+    }
+
+    fn paint<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<(), String>
+    where
+        DB::ErrorType: 'static,
+    {
+        let e = |x: DrawingAreaErrorKind<DB::ErrorType>| x.to_string();
+        root.fill(&WHITE).map_err(e)?;
+        let (w, _) = self.size();
+        let (main, bar) = root.split_horizontally(w - BAR_W);
+        let (rows, cols) = self.layout();
+        let vmax = self.scale_max();
+        let nx = self.col_labels.len();
+        let ny = self.row_labels.len();
+        // Integer coordinates, cell i spanning [2i, 2i + 2]: labels sit at the odd centres.
+        let centres = |n: usize| (0..n as i32).map(|i| 2 * i + 1).collect::<Vec<i32>>();
+        let index = |v: &i32| (v.max(&0) / 2) as usize;
+        let col_label = |x: &i32| self.col_labels.get(index(x)).cloned().unwrap_or_default();
+        // Row 0 at the top.
+        let row_label = |y: &i32| {
+            ny.checked_sub(index(y) + 1)
+                .and_then(|r| self.row_labels.get(r))
+                .cloned()
+                .unwrap_or_default()
+        };
+        for (panel, area) in self.panels.iter().zip(main.split_evenly((rows, cols))) {
+            let mut chart = ChartBuilder::on(&area)
+                .caption(&panel.title, (FONT, 22))
+                .margin(10)
+                .x_label_area_size(48)
+                .y_label_area_size(72)
+                .build_cartesian_2d(
+                    (0..2 * nx as i32).with_key_points(centres(nx)),
+                    (0..2 * ny as i32).with_key_points(centres(ny)),
+                )
+                .map_err(e)?;
+            chart
+                .configure_mesh()
+                .disable_mesh()
+                .x_desc(&self.col_axis)
+                .y_desc(&self.row_axis)
+                .x_label_formatter(&col_label)
+                .y_label_formatter(&row_label)
+                .label_style((FONT, 16))
+                .axis_desc_style((FONT, 17))
+                .draw()
+                .map_err(e)?;
+            for (r, row) in panel.values.iter().enumerate() {
+                let y = 2 * (ny - 1 - r) as i32;
+                for (c, v) in row.iter().enumerate() {
+                    let x = 2 * c as i32;
+                    let (fill, text) = match v {
+                        Some(v) => (
+                            viridis(v / vmax),
+                            format!("{v:.prec$}", prec = self.decimals),
+                        ),
+                        None => (RGBColor(220, 220, 220), "–".to_string()),
+                    };
+                    chart
+                        .draw_series(std::iter::once(Rectangle::new(
+                            [(x, y), (x + 2, y + 2)],
+                            fill.filled(),
+                        )))
+                        .map_err(e)?;
+                    let ink = text_colour_on(fill);
+                    let style = TextStyle::from((FONT, 18).into_font())
+                        .color(&ink)
+                        .pos(Pos::new(HPos::Center, VPos::Center));
+                    chart
+                        .draw_series(std::iter::once(Text::new(text, (x + 1, y + 1), style)))
+                        .map_err(e)?;
+                }
+            }
+        }
+        // The shared colour bar.
+        let mut scale = ChartBuilder::on(&bar)
+            .margin_top(40)
+            .margin_bottom(58)
+            .margin_left(10)
+            .margin_right(10)
+            .right_y_label_area_size(84)
+            .build_cartesian_2d(0.0..1.0, 0.0..vmax)
+            .map_err(e)?;
+        scale
+            .configure_mesh()
+            .disable_mesh()
+            .disable_x_axis()
+            .y_desc(&self.scale_label)
+            .y_labels(6)
+            .y_label_formatter(&|v| format!("{v:.prec$}", prec = self.decimals))
+            .label_style((FONT, 15))
+            .axis_desc_style((FONT, 16))
+            .draw()
+            .map_err(e)?;
+        const STEPS: usize = 100;
+        scale
+            .draw_series((0..STEPS).map(|i| {
+                let lo = vmax * i as f64 / STEPS as f64;
+                let hi = vmax * (i + 1) as f64 / STEPS as f64;
+                Rectangle::new(
+                    [(0.0, lo), (1.0, hi)],
+                    viridis((i as f64 + 0.5) / STEPS as f64).filled(),
+                )
+            }))
+            .map_err(e)?;
+        Ok(())
+    }
+}
+
+/// One series of a scatter: points (x, y, marker), drawn in one colour. The marker indexes
+/// [`Scatter::markers`].
+pub struct ScatterSeries {
+    pub name: String,
+    pub points: Vec<(f64, f64, usize)>,
+}
+
+/// A scatter plot with a legend of series (colours) and markers (shapes).
+pub struct Scatter {
+    pub title: String,
+    pub x_label: String,
+    pub y_label: String,
+    pub series: Vec<ScatterSeries>,
+    /// Legend names of the marker shapes (circle, triangle, square, cross, in this order).
+    pub markers: Vec<String>,
+    /// Smallest upper end of the x axis (so an all-zero x still gives a readable axis).
+    pub min_x_max: f64,
+}
+
+/// Tableau's ten categorical colours.
+const PALETTE: [RGBColor; 10] = [
+    RGBColor(31, 119, 180),
+    RGBColor(255, 127, 14),
+    RGBColor(44, 160, 44),
+    RGBColor(214, 39, 40),
+    RGBColor(148, 103, 189),
+    RGBColor(140, 86, 75),
+    RGBColor(227, 119, 194),
+    RGBColor(127, 127, 127),
+    RGBColor(188, 189, 34),
+    RGBColor(23, 190, 207),
+];
+
+/// The colour of series `i`.
+pub fn series_colour(i: usize) -> RGBColor {
+    PALETTE[i % PALETTE.len()]
+}
+
+/// Marker shapes: circle, triangle, square, cross.
+const MARKER_KINDS: usize = 4;
+const LEGEND_W: u32 = 190;
+
+/// Draws marker shape `kind` at each of `points` (in the coordinates of `area`).
+fn draw_markers<DB, CT>(
+    area: &DrawingArea<DB, CT>,
+    kind: usize,
+    points: &[CT::From],
+    colour: RGBColor,
+) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>>
+where
+    DB: DrawingBackend,
+    CT: CoordTranslate,
+    CT::From: Clone,
+{
+    let style = colour.filled();
+    for p in points.iter().cloned() {
+        match kind % MARKER_KINDS {
+            0 => area.draw(&Circle::new(p, 6, style))?,
+            1 => area.draw(&TriangleMarker::new(p, 7, style))?,
+            2 => area.draw(&(EmptyElement::at(p) + Rectangle::new([(-5, -5), (5, 5)], style)))?,
+            _ => area.draw(&Cross::new(p, 6, colour.stroke_width(2)))?,
+        }
+    }
+    Ok(())
+}
+
+impl Scatter {
+    /// Renders the figure.
+    pub fn render(&self) -> Result<Figure, PlotError> {
+        render(self, "scatter")
+    }
+}
+
+impl Painter for Scatter {
+    fn size(&self) -> (u32, u32) {
+        (900 + LEGEND_W, 600)
+    }
+
+    fn paint<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<(), String>
+    where
+        DB::ErrorType: 'static,
+    {
+        let e = |x: DrawingAreaErrorKind<DB::ErrorType>| x.to_string();
+        root.fill(&WHITE).map_err(e)?;
+        let (w, _) = self.size();
+        let (main, legend) = root.split_horizontally(w - LEGEND_W);
+        let pts = || self.series.iter().flat_map(|s| s.points.iter());
+        let x_max = pts()
+            .map(|p| p.0)
+            .fold(0.0_f64, f64::max)
+            .max(self.min_x_max)
+            * 1.1;
+        let (y_lo, y_hi) = pts().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| {
+            (lo.min(p.1), hi.max(p.1))
+        });
+        let (y_lo, y_hi) = if y_lo.is_finite() {
+            let pad = ((y_hi - y_lo) * 0.1).max(0.5);
+            ((y_lo - pad).max(0.0_f64.min(y_lo)), y_hi + pad)
+        } else {
+            (0.0, 1.0)
+        };
+        let mut chart = ChartBuilder::on(&main)
+            .caption(&self.title, (FONT, 24))
+            .margin(16)
+            .x_label_area_size(56)
+            .y_label_area_size(72)
+            // A little room left of 0, so points without collisions stay off the axis.
+            .build_cartesian_2d(-0.03 * x_max..x_max, y_lo..y_hi)
+            .map_err(e)?;
+        chart
+            .configure_mesh()
+            .x_desc(&self.x_label)
+            .y_desc(&self.y_label)
+            .label_style((FONT, 16))
+            .axis_desc_style((FONT, 18))
+            .max_light_lines(1)
+            .light_line_style(RGBColor(240, 240, 240))
+            .bold_line_style(RGBColor(215, 215, 215))
+            .draw()
+            .map_err(e)?;
+        let plot = chart.plotting_area();
+        for (i, s) in self.series.iter().enumerate() {
+            for kind in 0..MARKER_KINDS {
+                let at: Vec<(f64, f64)> = s
+                    .points
+                    .iter()
+                    .filter(|p| p.2 % MARKER_KINDS == kind)
+                    .map(|p| (p.0, p.1))
+                    .collect();
+                draw_markers(plot, kind, &at, series_colour(i)).map_err(e)?;
+            }
+        }
+        // Legend beside the plot, never over a point: series colours, then marker shapes.
+        let text = TextStyle::from((FONT, 16).into_font()).pos(Pos::new(HPos::Left, VPos::Center));
+        let mut y = 70;
+        for (i, s) in self.series.iter().enumerate() {
+            draw_markers(&legend, 0, &[(14, y)], series_colour(i)).map_err(e)?;
+            legend
+                .draw(&Text::new(s.name.clone(), (30, y), text.clone()))
+                .map_err(e)?;
+            y += 26;
+        }
+        y += 12;
+        for (m, name) in self.markers.iter().enumerate() {
+            draw_markers(&legend, m, &[(14, y)], BLACK).map_err(e)?;
+            legend
+                .draw(&Text::new(name.clone(), (30, y), text.clone()))
+                .map_err(e)?;
+            y += 26;
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,216 @@
+//! Reports of campaigns: tables (CSV and Markdown) and figures from the collected results of one
+//! or more campaign directories.
+//!
+//! Several directories are shards of one campaign (or campaigns to compare): their results are
+//! merged first (see [`Results::merge`]) and the merged `episodes.csv`, `vehicles.csv`,
+//! `timings.csv` and `failures.csv` are written to the output directory. Tables and figures go
+//! to `<out>/report/`.
+
+pub mod stats;
+pub mod summary;
+pub mod tables;
+
+use std::path::{Path, PathBuf};
+
+use crate::campaign::results::{Results, ResultsError};
+use crate::campaign::SETTINGS_FILE;
+use crate::output::{self, WriteError};
+use crate::plot::{HeatPanel, Heatmap, PlotError, Scatter, ScatterSeries};
+pub use summary::{Summary, SummaryError};
+
+/// Directory of the tables and figures inside the output directory.
+pub const REPORT_DIR: &str = "report";
+
+/// Why a report could not be made.
+#[derive(Debug, thiserror::Error)]
+pub enum ReportError {
+    #[error("report: no campaign directory given")]
+    NoDirs,
+    #[error("{dir} is not a campaign directory (no episodes.csv; run `bkpbs campaign --out {dir}` first)")]
+    NotACampaign { dir: PathBuf },
+    #[error("malformed {path}: {message}")]
+    Settings { path: PathBuf, message: String },
+    #[error(transparent)]
+    Results(#[from] ResultsError),
+    #[error(transparent)]
+    Summary(#[from] SummaryError),
+    #[error(transparent)]
+    Write(#[from] WriteError),
+    #[error(transparent)]
+    Plot(#[from] PlotError),
+}
+
+/// What a report produced.
+pub struct Report {
+    /// The Markdown tables (also in `report/tables.md`).
+    pub markdown: String,
+    /// Every file written, in order.
+    pub files: Vec<PathBuf>,
+    /// The directory the report went into.
+    pub out: PathBuf,
+}
+
+/// The planner order a campaign directory was run with (from its `campaign.toml`), or none.
+fn planner_order(dir: &Path) -> Result<Vec<String>, ReportError> {
+    let path = dir.join(SETTINGS_FILE);
+    let Ok(text) = std::fs::read_to_string(&path) else {
+        return Ok(Vec::new());
+    };
+    let bad = |message: String| ReportError::Settings {
+        path: path.clone(),
+        message,
+    };
+    let doc: toml::Table = toml::from_str(&text).map_err(|e| bad(e.message().to_string()))?;
+    let planners = doc
+        .get("campaign")
+        .and_then(|c| c.get("planners"))
+        .and_then(|p| p.as_array())
+        .map(|a| {
+            a.iter()
+                .filter_map(|v| v.as_str().map(String::from))
+                .collect()
+        })
+        .unwrap_or_default();
+    Ok(planners)
+}
+
+/// Reads (and merges) the campaign directories, writes tables and figures into
+/// `out` (default: the first directory), and returns the Markdown tables.
+pub fn run(dirs: &[PathBuf], out: Option<&Path>) -> Result<Report, ReportError> {
+    let first = dirs.first().ok_or(ReportError::NoDirs)?;
+    let out = out.unwrap_or(first).to_path_buf();
+    let mut parts = Vec::new();
+    for dir in dirs {
+        if !dir.join("episodes.csv").is_file() {
+            return Err(ReportError::NotACampaign { dir: dir.clone() });
+        }
+        let planners = planner_order(dir)?;
+        parts.push((dir.clone(), Results::read(dir, &planners)?));
+    }
+    let mut files = Vec::new();
+    let results = if parts.len() == 1 {
+        let (_, mut r) = parts.pop().expect("one part");
+        r.sort();
+        if !same_dir(&out, first) {
+            files.extend(r.write(&out)?);
+        }
+        r
+    } else {
+        let merged = Results::merge(&parts)?;
+        files.extend(merged.write(&out)?);
+        merged
+    };
+    let summary = Summary::from_results(&results, &out.join("episodes.csv"))?;
+    let dir = out.join(REPORT_DIR);
+    let markdown = tables::markdown(&summary);
+    for f in tables::csv_files(&summary) {
+        let p = dir.join(&f.name);
+        output::write_atomic(&p, &f.bytes)?;
+        files.push(p);
+    }
+    let p = dir.join("tables.md");
+    output::write_atomic(&p, markdown.as_bytes())?;
+    files.push(p);
+    for (name, fig) in [
+        ("collision_heatmap", heatmap(&summary).render()?),
+        ("delay_vs_collision", scatter(&summary).render()?),
+    ] {
+        for (ext, bytes) in [("png", fig.png.as_slice()), ("svg", fig.svg.as_bytes())] {
+            let p = dir.join(format!("{name}.{ext}"));
+            output::write_atomic(&p, bytes)?;
+            files.push(p);
+        }
+    }
+    Ok(Report {
+        markdown,
+        files,
+        out,
+    })
+}
+
+fn same_dir(a: &Path, b: &Path) -> bool {
+    match (a.canonicalize(), b.canonicalize()) {
+        (Ok(x), Ok(y)) => x == y,
+        _ => a == b,
+    }
+}
+
+/// The paper's fig. 3: per planner, mean controllable collision rate (%) over λ × α.
+pub fn heatmap(s: &Summary) -> Heatmap {
+    Heatmap {
+        panels: s
+            .planners
+            .iter()
+            .map(|p| HeatPanel {
+                title: p.clone(),
+                values: s
+                    .lambdas
+                    .iter()
+                    .map(|&l| {
+                        s.alphas
+                            .iter()
+                            .map(|&a| {
+                                s.get(p, a, l)
+                                    .and_then(|g| g.collision_rate)
+                                    .map(|e| e.mean * 100.0)
+                            })
+                            .collect()
+                    })
+                    .collect(),
+            })
+            .collect(),
+        row_labels: s.lambdas.iter().map(|&l| tables::lambda_label(l)).collect(),
+        col_labels: s.alphas.iter().map(|a| format!("{a}")).collect(),
+        row_axis: "λ (veh/h)".into(),
+        col_axis: "CAV penetration α".into(),
+        scale_label: "controllable collision rate (%)".into(),
+        decimals: 2,
+        min_scale_max: 1.0,
+    }
+}
+
+/// Mean delay against mean controllable collision rate, one point per (planner, α, λ),
+/// coloured by planner, shaped by λ.
+pub fn scatter(s: &Summary) -> Scatter {
+    Scatter {
+        title: "Delay vs. controllable collision rate (mean over seeds)".into(),
+        x_label: "controllable collision rate (%)".into(),
+        y_label: "mean travel delay (s)".into(),
+        series: s
+            .planners
+            .iter()
+            .map(|p| ScatterSeries {
+                name: p.clone(),
+                points: s
+                    .groups
+                    .iter()
+                    .filter(|g| &g.planner == p)
+                    .filter_map(|g| {
+                        let d = g.delay?;
+                        let r = g.collision_rate?;
+                        let m = s.lambdas.iter().position(|&l| l == g.lambda)?;
+                        Some((r.mean * 100.0, d.mean, m))
+                    })
+                    .collect(),
+            })
+            .collect(),
+        markers: s
+            .lambdas
+            .iter()
+            .map(|&l| format!("λ = {}", tables::lambda_label(l)))
+            .collect(),
+        min_x_max: 1.0,
+    }
+}
+
+/// The files of a report worth pointing a reader to (tables and figures).
+pub fn highlights(r: &Report) -> Vec<&Path> {
+    r.files
+        .iter()
+        .filter(|p| {
+            p.extension()
+                .is_some_and(|e| e == "md" || e == "png" || e == "svg")
+        })
+        .map(|p| p.as_path())
+        .collect()
+}

@@ -1,0 +1,145 @@
+//! Per-(planner, α, λ) statistics over seeds, computed from a campaign's `episodes.csv` rows.
+
+use std::path::{Path, PathBuf};
+
+use super::stats::Estimate;
+use crate::campaign::results::{Results, Table};
+
+/// A column missing from, or a value unreadable in, `episodes.csv`.
+#[derive(Debug, thiserror::Error)]
+pub enum SummaryError {
+    #[error("{path}: no column '{column}'")]
+    Column { path: PathBuf, column: &'static str },
+    #[error("{path}: cell {cell}: '{value}' in column {column} is not a number")]
+    Value {
+        path: PathBuf,
+        cell: String,
+        column: &'static str,
+        value: String,
+    },
+}
+
+/// Statistics of the seeds of one (planner, α, λ).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Group {
+    pub planner: String,
+    pub alpha: f64,
+    pub lambda: f64,
+    /// Episodes (seeds) found.
+    pub episodes: usize,
+    /// Mean travel delay (s) over the episodes that had arrivals.
+    pub delay: Option<Estimate>,
+    /// Controllable collision rate (a fraction of inserted vehicles).
+    pub collision_rate: Option<Estimate>,
+    /// Throughput (veh/h).
+    pub throughput: Option<Estimate>,
+}
+
+/// All groups of a campaign, in grid order, with the axes they span.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Summary {
+    pub planners: Vec<String>,
+    pub alphas: Vec<f64>,
+    pub lambdas: Vec<f64>,
+    pub groups: Vec<Group>,
+    /// The largest number of seeds of any group: what a complete group has.
+    pub seeds: usize,
+}
+
+fn column(t: &Table, path: &Path, name: &'static str) -> Result<usize, SummaryError> {
+    t.column(name).ok_or_else(|| SummaryError::Column {
+        path: path.to_path_buf(),
+        column: name,
+    })
+}
+
+impl Summary {
+    /// Groups the (sorted) episode rows; `path` names the file in errors.
+    pub fn from_results(res: &Results, path: &Path) -> Result<Summary, SummaryError> {
+        let t = &res.episodes;
+        let delay_col = column(t, path, "mean_delay_s")?;
+        let rate_col = column(t, path, "controllable_collision_rate")?;
+        let tp_col = column(t, path, "throughput_veh_h")?;
+        let mut groups: Vec<(Group, [Vec<f64>; 3])> = Vec::new();
+        let mut alphas: Vec<f64> = Vec::new();
+        let mut lambdas: Vec<f64> = Vec::new();
+        for row in &t.rows {
+            let c = &row.cell;
+            let value = |i: usize, name: &'static str| -> Result<Option<f64>, SummaryError> {
+                let text = row.fields.get(i).unwrap_or("");
+                if text.is_empty() {
+                    return Ok(None);
+                }
+                text.parse().map(Some).map_err(|_| SummaryError::Value {
+                    path: path.to_path_buf(),
+                    cell: c.to_string(),
+                    column: name,
+                    value: text.to_string(),
+                })
+            };
+            let vals = [
+                value(delay_col, "mean_delay_s")?,
+                value(rate_col, "controllable_collision_rate")?,
+                value(tp_col, "throughput_veh_h")?,
+            ];
+            let same =
+                |g: &Group| g.planner == c.planner && g.alpha == c.alpha && g.lambda == c.lambda;
+            if !groups.last().is_some_and(|(g, _)| same(g)) {
+                groups.push((
+                    Group {
+                        planner: c.planner.clone(),
+                        alpha: c.alpha,
+                        lambda: c.lambda,
+                        episodes: 0,
+                        delay: None,
+                        collision_rate: None,
+                        throughput: None,
+                    },
+                    Default::default(),
+                ));
+            }
+            let (g, samples) = groups.last_mut().expect("just pushed");
+            g.episodes += 1;
+            for (s, v) in samples.iter_mut().zip(vals) {
+                s.extend(v);
+            }
+            if !alphas.contains(&c.alpha) {
+                alphas.push(c.alpha);
+            }
+            if !lambdas.contains(&c.lambda) {
+                lambdas.push(c.lambda);
+            }
+        }
+        alphas.sort_by(f64::total_cmp);
+        lambdas.sort_by(f64::total_cmp);
+        let groups: Vec<Group> = groups
+            .into_iter()
+            .map(|(mut g, [d, r, tp])| {
+                g.delay = Estimate::of(&d);
+                g.collision_rate = Estimate::of(&r);
+                g.throughput = Estimate::of(&tp);
+                g
+            })
+            .collect();
+        let planners = res
+            .planners
+            .iter()
+            .filter(|p| groups.iter().any(|g| &g.planner == *p))
+            .cloned()
+            .collect();
+        Ok(Summary {
+            planners,
+            alphas,
+            lambdas,
+            seeds: groups.iter().map(|g| g.episodes).max().unwrap_or(0),
+            groups,
+        })
+    }
+
+    /// The group of (planner, α, λ), if any episode of it finished.
+    pub fn get(&self, planner: &str, alpha: f64, lambda: f64) -> Option<&Group> {
+        self.groups
+            .iter()
+            .find(|g| g.planner == planner && g.alpha == alpha && g.lambda == lambda)
+    }
+}

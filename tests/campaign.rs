@@ -1,0 +1,536 @@
+//! Campaigns: statistics and grid logic, then whole campaigns of short episodes on real SUMO
+//! through the binary (parallel = serial, resume after SIGKILL, shards merged, failures).
+
+use std::collections::{BTreeMap, HashSet};
+use std::os::unix::process::CommandExt;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
+use std::sync::OnceLock;
+use std::time::{Duration, Instant, SystemTime};
+
+use bkpbs::campaign::grid::{Cell, Grid, Shard};
+use bkpbs::report::stats::{mean, sample_std, t_975, Estimate};
+
+// ---------------------------------------------------------------- statistics, grid, shards
+
+#[test]
+fn mean_and_student_ci_match_hand_computed_values() {
+    assert_eq!(mean(&[]), None);
+    assert_eq!(mean(&[4.0]), Some(4.0));
+    // 1..5: mean 3, s² = (4+1+0+1+4)/4 = 2.5, s/√n = √0.5 = 0.707107,
+    // half-width = t(0.975, 4) · 0.707107 = 2.776445 · 0.707107 = 1.963243.
+    let e = Estimate::of(&[1.0, 2.0, 3.0, 4.0, 5.0]).unwrap();
+    assert_eq!((e.n, e.mean), (5, 3.0));
+    assert!((sample_std(&[1.0, 2.0, 3.0, 4.0, 5.0]).unwrap() - 2.5f64.sqrt()).abs() < 1e-12);
+    assert!((e.ci95.unwrap() - 1.963_243).abs() < 1e-6, "{e:?}");
+    // Two values 2 and 4: s = √2, s/√2 = 1, half-width = t(0.975, 1) = 12.706205.
+    let e = Estimate::of(&[2.0, 4.0]).unwrap();
+    assert!((e.ci95.unwrap() - 12.706_205).abs() < 1e-6, "{e:?}");
+    // One value: a mean without interval; none: nothing.
+    assert_eq!(Estimate::of(&[7.5]).unwrap().ci95, None);
+    assert_eq!(Estimate::of(&[]), None);
+    // Identical values: zero width.
+    assert_eq!(Estimate::of(&[0.0, 0.0, 0.0]).unwrap().ci95, Some(0.0));
+}
+
+#[test]
+fn student_t_quantiles_small_and_large_samples() {
+    for (df, t) in [
+        (1, 12.706_205),
+        (2, 4.302_653),
+        (4, 2.776_445),
+        (9, 2.262_157),
+        (30, 2.042_272),
+        // Beyond the table (reference values of t(0.975, df)).
+        (31, 2.039_513),
+        (40, 2.021_075),
+        (60, 2.000_298),
+        (120, 1.979_930),
+    ] {
+        assert!(
+            (t_975(df) - t).abs() < 2e-6,
+            "df {df}: {} vs {t}",
+            t_975(df)
+        );
+    }
+    assert!((t_975(100_000) - 1.959_964).abs() < 1e-4);
+}
+
+fn names(ps: &[&str]) -> Vec<String> {
+    ps.iter().map(|p| p.to_string()).collect()
+}
+
+#[test]
+fn grid_order_is_planner_alpha_lambda_seed_with_sorted_unique_values() {
+    let g = Grid::new(
+        &names(&["idm-mobil", "sumo", "idm-mobil"]),
+        &[0.8, 0.4, 0.8],
+        &[3000.0, 2500.0],
+        10,
+        2,
+    );
+    assert_eq!(g.planners, names(&["idm-mobil", "sumo"]));
+    assert_eq!(
+        (g.alphas.clone(), g.lambdas.clone()),
+        (vec![0.4, 0.8], vec![2500.0, 3000.0])
+    );
+    assert_eq!(g.seeds, vec![10, 11]);
+    let cells = g.cells();
+    assert_eq!(cells.len(), g.len());
+    assert_eq!(g.len(), 2 * 2 * 2 * 2);
+    let c = |p: &str, alpha, lambda, seed| Cell {
+        planner: p.into(),
+        alpha,
+        lambda,
+        seed,
+    };
+    assert_eq!(cells[0], c("idm-mobil", 0.4, 2500.0, 10));
+    assert_eq!(cells[1], c("idm-mobil", 0.4, 2500.0, 11));
+    assert_eq!(cells[2], c("idm-mobil", 0.4, 3000.0, 10));
+    assert_eq!(cells[4], c("idm-mobil", 0.8, 2500.0, 10));
+    assert_eq!(cells[8], c("sumo", 0.4, 2500.0, 10));
+    assert_eq!(cells[15], c("sumo", 0.8, 3000.0, 11));
+    assert_eq!(
+        cells[0].dir_name(),
+        PathBuf::from("idm-mobil").join("a0.4_l2500_s10")
+    );
+}
+
+#[test]
+fn shards_split_the_grid_into_disjoint_interleaved_slices() {
+    let n = 3;
+    let shards: Vec<Shard> = (1..=n)
+        .map(|k| format!("{k}/{n}").parse().unwrap())
+        .collect();
+    for position in 0..10 {
+        let owners: Vec<usize> = shards
+            .iter()
+            .filter(|s| s.contains(position))
+            .map(|s| s.index)
+            .collect();
+        assert_eq!(owners, vec![position % n + 1], "cell {position}");
+    }
+    assert!(Shard::ALL.contains(0) && Shard::ALL.contains(7));
+    let s: Shard = " 2 / 4 ".parse().unwrap();
+    assert_eq!((s.index, s.count), (2, 4));
+    for bad in ["0/2", "3/2", "1/0", "2", "a/b", "1/2/3", ""] {
+        let e = bad.parse::<Shard>().unwrap_err().to_string();
+        assert!(e.contains(&format!("'{bad}'")), "{bad}: {e}");
+    }
+}
+
+// ---------------------------------------------------------------- campaigns on real SUMO
+
+const BIN: &str = env!("CARGO_BIN_EXE_bkpbs");
+
+/// The tiny grid of the tests: 2 planners × 2 α × 1 λ × 2 seeds, 60 steps.
+const TINY: [&str; 10] = [
+    "--planners",
+    "sumo,idm-mobil",
+    "--alphas",
+    "0.4,0.8",
+    "--lambdas",
+    "3000",
+    "--seeds",
+    "2",
+    "--steps",
+    "60",
+];
+
+fn campaign(out: &Path, extra: &[&str]) -> Output {
+    Command::new(BIN)
+        .arg("campaign")
+        .arg("--out")
+        .arg(out)
+        .args(extra)
+        .env_remove(bkpbs::campaign::worker::FAULT_ENV)
+        .output()
+        .expect("the binary runs")
+}
+
+fn text(b: &[u8]) -> String {
+    String::from_utf8_lossy(b).into_owned()
+}
+
+fn assert_ok(o: &Output) {
+    assert!(
+        o.status.success(),
+        "stdout:\n{}\nstderr:\n{}",
+        text(&o.stdout),
+        text(&o.stderr)
+    );
+}
+
+fn read(p: &Path) -> String {
+    std::fs::read_to_string(p).unwrap_or_else(|e| panic!("{}: {e}", p.display()))
+}
+
+/// The "already done: N" count of a campaign's first status line.
+fn already_done(o: &Output) -> usize {
+    let out = text(&o.stdout);
+    let at = out.find("already done: ").expect("status line") + "already done: ".len();
+    out[at..].split(';').next().unwrap().trim().parse().unwrap()
+}
+
+/// The unsharded tiny campaign with 2 workers, shared by the tests that compare against it.
+fn reference() -> &'static Path {
+    static DIR: OnceLock<tempfile::TempDir> = OnceLock::new();
+    DIR.get_or_init(|| {
+        let d = tempfile::tempdir().unwrap();
+        let o = campaign(d.path(), &[&TINY[..], &["--workers", "2"]].concat());
+        assert_ok(&o);
+        d
+    })
+    .path()
+}
+
+#[test]
+fn one_and_two_workers_give_byte_identical_results() {
+    let two = reference();
+    let d = tempfile::tempdir().unwrap();
+    let o = campaign(d.path(), &[&TINY[..], &["--workers", "1"]].concat());
+    assert_ok(&o);
+    for f in ["episodes.csv", "vehicles.csv"] {
+        assert_eq!(read(&two.join(f)), read(&d.path().join(f)), "{f}");
+    }
+    let episodes = read(&two.join("episodes.csv"));
+    let lines: Vec<&str> = episodes.lines().collect();
+    assert_eq!(lines.len(), 1 + 8);
+    assert!(lines[1].starts_with("sumo,0.4,3000,0,60,"), "{}", lines[1]);
+    assert!(
+        lines[8].starts_with("idm-mobil,0.8,3000,1,60,"),
+        "{}",
+        lines[8]
+    );
+    assert!(read(&two.join("vehicles.csv")).starts_with("planner,alpha,lambda,seed,id,"));
+    assert_eq!(read(&two.join("timings.csv")).lines().count(), 1 + 8);
+    assert_eq!(read(&two.join("failures.csv")).lines().count(), 1);
+    // The report ran at the end and printed its tables.
+    let stdout = text(&o.stdout);
+    assert!(
+        stdout.contains("## Mean travel delay (s), λ = 3000 veh/h"),
+        "{stdout}"
+    );
+    assert!(
+        stdout.contains("## Controllable collision rate (%), idm-mobil"),
+        "{stdout}"
+    );
+    for f in [
+        "tables.md",
+        "delay_l3000.csv",
+        "collision_rate_sumo.csv",
+        "collision_rate_idm-mobil.csv",
+        "summary.csv",
+        "collision_heatmap.png",
+        "collision_heatmap.svg",
+        "delay_vs_collision.png",
+        "delay_vs_collision.svg",
+    ] {
+        assert!(d.path().join("report").join(f).is_file(), "{f}");
+    }
+    let png = std::fs::read(d.path().join("report/collision_heatmap.png")).unwrap();
+    assert!(png.starts_with(b"\x89PNG"));
+    // Quiet without a terminal: no progress bar on stderr.
+    assert!(text(&o.stderr).is_empty(), "{}", text(&o.stderr));
+}
+
+#[test]
+fn shards_merged_by_report_equal_the_unsharded_run() {
+    let whole = reference();
+    let d = tempfile::tempdir().unwrap();
+    let (a, b, merged) = (d.path().join("a"), d.path().join("b"), d.path().join("m"));
+    for (dir, k) in [(&a, "1/2"), (&b, "2/2")] {
+        let o = campaign(
+            dir,
+            &[&TINY[..], &["--workers", "1", "--shard", k]].concat(),
+        );
+        assert_ok(&o);
+        assert!(
+            text(&o.stdout).contains(&format!("shard {k}: 4;")),
+            "{}",
+            text(&o.stdout)
+        );
+    }
+    let shard_rows = |p: &Path| read(&p.join("episodes.csv")).lines().count() - 1;
+    assert_eq!((shard_rows(&a), shard_rows(&b)), (4, 4));
+    let o = Command::new(BIN)
+        .args(["report", a.to_str().unwrap(), b.to_str().unwrap(), "--out"])
+        .arg(&merged)
+        .output()
+        .unwrap();
+    assert_ok(&o);
+    for f in ["episodes.csv", "vehicles.csv"] {
+        assert_eq!(read(&whole.join(f)), read(&merged.join(f)), "{f}");
+    }
+    assert_eq!(
+        read(&whole.join("report/tables.md")),
+        read(&merged.join("report/tables.md"))
+    );
+    // The same shard twice is deduplicated; the merge still equals the whole.
+    let o = Command::new(BIN)
+        .args(["report", a.to_str().unwrap(), a.to_str().unwrap()])
+        .arg(b.to_str().unwrap())
+        .arg("--out")
+        .arg(&merged)
+        .output()
+        .unwrap();
+    assert_ok(&o);
+    assert_eq!(
+        read(&whole.join("episodes.csv")),
+        read(&merged.join("episodes.csv"))
+    );
+}
+
+/// Finished cells (their episode.csv) and modification times.
+fn finished(out: &Path) -> BTreeMap<PathBuf, SystemTime> {
+    let mut m = BTreeMap::new();
+    let Ok(planners) = std::fs::read_dir(out.join("episodes")) else {
+        return m;
+    };
+    for p in planners.flatten() {
+        for c in std::fs::read_dir(p.path()).unwrap().flatten() {
+            let f = c.path().join("episode.csv");
+            if let Ok(meta) = std::fs::metadata(&f) {
+                m.insert(f, meta.modified().unwrap());
+            }
+        }
+    }
+    m
+}
+
+#[test]
+fn killed_campaign_resumes_without_losing_or_duplicating_episodes() {
+    let d = tempfile::tempdir().unwrap();
+    let out = d.path().join("c");
+    let args = [
+        "--planners",
+        "sumo,idm-mobil",
+        "--alphas",
+        "0.4,0.8",
+        "--lambdas",
+        "3000",
+        "--seeds",
+        "6",
+        "--steps",
+        "150",
+    ];
+    let total = 2 * 2 * 6;
+    // The campaign and its workers in a process group of their own, killed together.
+    let mut child = Command::new(BIN)
+        .arg("campaign")
+        .arg("--out")
+        .arg(&out)
+        .args(args)
+        .args(["--workers", "1"])
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .process_group(0)
+        .spawn()
+        .unwrap();
+    let start = Instant::now();
+    while finished(&out).len() < 3 {
+        assert!(start.elapsed() < Duration::from_secs(60), "no progress");
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    // SAFETY: signalling the process group we created.
+    unsafe {
+        libc::kill(-(child.id() as i32), libc::SIGKILL);
+    }
+    child.wait().unwrap();
+    let before = finished(&out);
+    assert!(
+        before.len() >= 3 && before.len() < total,
+        "killed after {} of {total}",
+        before.len()
+    );
+    assert!(
+        !out.join("episodes.csv").exists(),
+        "killed before collecting"
+    );
+
+    let o = campaign(&out, &[&args[..], &["--workers", "2"]].concat());
+    assert_ok(&o);
+    assert_eq!(already_done(&o), before.len(), "{}", text(&o.stdout));
+    let after = finished(&out);
+    assert_eq!(after.len(), total);
+    for (f, t) in &before {
+        assert_eq!(after[f], *t, "{} was run again", f.display());
+    }
+    // Exactly one row per episode, in grid order, and every vehicle row once.
+    let episodes = read(&out.join("episodes.csv"));
+    let rows: Vec<&str> = episodes.lines().skip(1).collect();
+    assert_eq!(rows.len(), total);
+    let keys: Vec<String> = rows
+        .iter()
+        .map(|r| r.split(',').take(4).collect::<Vec<_>>().join(","))
+        .collect();
+    assert_eq!(keys.iter().collect::<HashSet<_>>().len(), total);
+    assert_eq!(keys[0], "sumo,0.4,3000,0");
+    assert_eq!(keys[total - 1], "idm-mobil,0.8,3000,5");
+    let inserted: usize = rows
+        .iter()
+        .map(|r| r.split(',').nth(6).unwrap().parse::<usize>().unwrap())
+        .sum();
+    assert_eq!(
+        read(&out.join("vehicles.csv")).lines().count() - 1,
+        inserted
+    );
+    // A third run finds everything done and runs nothing.
+    let o = campaign(&out, &[&args[..], &["--workers", "2"]].concat());
+    assert_ok(&o);
+    assert_eq!(already_done(&o), total);
+    assert_eq!(read(&out.join("episodes.csv")), episodes);
+}
+
+#[test]
+fn failed_episodes_are_recorded_others_go_on_and_a_rerun_repairs_them() {
+    let d = tempfile::tempdir().unwrap();
+    let out = d.path();
+    let args = [
+        "--planners",
+        "idm-mobil",
+        "--alphas",
+        "0.5",
+        "--lambdas",
+        "3000",
+        "--seeds",
+        "4",
+        "--steps",
+        "40",
+        "--workers",
+        "1",
+    ];
+    let with_fault = |fault: &str| {
+        Command::new(BIN)
+            .arg("campaign")
+            .arg("--out")
+            .arg(out)
+            .args(args)
+            .env(bkpbs::campaign::worker::FAULT_ENV, fault)
+            .output()
+            .unwrap()
+    };
+    let cell = out.join("episodes/idm-mobil/a0.5_l3000_s1");
+    // The worker process dies on seed 1: that episode fails, a new worker runs seeds 2 and 3.
+    let o = with_fault("exit:1");
+    assert!(!o.status.success());
+    let err = text(&o.stderr);
+    assert_eq!(
+        err.lines().last().unwrap(),
+        format!(
+            "error: 1 of 4 episodes failed (see {})",
+            out.join("failures.csv").display()
+        ),
+        "{err}"
+    );
+    assert_eq!(finished(out).len(), 3);
+    assert!(read(&cell.join("error.txt")).contains("worker process died"));
+    let failures = read(&out.join("failures.csv"));
+    assert_eq!(failures.lines().count(), 2, "{failures}");
+    assert!(failures
+        .lines()
+        .nth(1)
+        .unwrap()
+        .starts_with("idm-mobil,0.5,3000,1,"));
+    assert_eq!(read(&out.join("episodes.csv")).lines().count(), 1 + 3);
+
+    // A planner panic is caught in the worker and recorded; only the failed cell is retried.
+    let o = with_fault("panic:1");
+    assert!(!o.status.success());
+    assert_eq!(already_done(&o), 3);
+    let note = read(&cell.join("error.txt"));
+    assert!(
+        note.contains("panicked") && note.contains("injected planner fault"),
+        "{note}"
+    );
+
+    // Without the fault the rerun completes the grid.
+    let o = campaign(out, &args);
+    assert_ok(&o);
+    assert_eq!(already_done(&o), 3);
+    assert!(!cell.join("error.txt").exists());
+    assert_eq!(read(&out.join("failures.csv")).lines().count(), 1);
+    assert_eq!(read(&out.join("episodes.csv")).lines().count(), 1 + 4);
+}
+
+/// Runs the binary and checks for one `error:` line naming `culprit` and a non-zero exit.
+fn assert_clear_failure(args: &[&str], culprit: &str) {
+    let o = Command::new(BIN).args(args).output().unwrap();
+    let err = text(&o.stderr);
+    assert!(!o.status.success(), "{args:?} should fail");
+    let lines: Vec<&str> = err.lines().collect();
+    assert_eq!(lines.len(), 1, "{args:?}: one line expected, got:\n{err}");
+    assert!(lines[0].starts_with("error: "), "{err}");
+    assert!(
+        lines[0].contains(culprit),
+        "{args:?}: '{culprit}' not in: {err}"
+    );
+}
+
+#[test]
+fn bad_input_ends_with_one_error_line_and_nothing_written() {
+    let d = tempfile::tempdir().unwrap();
+    let out = d.path().join("c");
+    let o = out.to_str().unwrap();
+    let run = |extra: &[&str], culprit: &str| {
+        assert_clear_failure(&[&["campaign", "--out", o][..], extra].concat(), culprit);
+        assert!(!out.exists(), "{extra:?} wrote {}", out.display());
+    };
+    run(&["--planners", "sumo,bk-pbz"], "bk-pbz");
+    run(&["--planners", "sumo,bk-pbz"], "--planners");
+    run(&["--alphas", "0.4,1.5"], "1.5");
+    run(&["--alphas", "0.4,1.5"], "[0, 1]");
+    run(&["--alphas", "0.4,abc"], "abc");
+    run(&["--lambdas=-5"], "-5");
+    run(&["--lambdas", "2500,-5"], "λ -5");
+    run(&["--shard", "3/2"], "3/2");
+    run(&["--shard", "1-2"], "1-2");
+    run(&["--seeds", "0"], "--seeds");
+    run(&["--workers", "0"], "--workers");
+    let cfg = d.path().join("c.toml");
+    std::fs::write(&cfg, "[campaign]\nalphas = [0.2, 2.0]\n").unwrap();
+    run(&["--config", cfg.to_str().unwrap()], "campaign.alphas in");
+    std::fs::write(&cfg, "[campaign]\nalhpas = [0.2]\n").unwrap();
+    run(&["--config", cfg.to_str().unwrap()], "alhpas");
+    std::fs::write(&cfg, "[scenario]\nalpha = 0.3\n").unwrap();
+    run(&["--config", cfg.to_str().unwrap()], "campaign.alphas");
+    std::fs::write(&cfg, "[idm]\naccel = -1.0\n").unwrap();
+    run(&["--config", cfg.to_str().unwrap()], "idm.accel");
+    assert_clear_failure(&["report", d.path().join("none").to_str().unwrap()], "none");
+}
+
+#[test]
+fn a_campaign_file_sets_the_grid_and_scenario_and_a_changed_scenario_is_refused() {
+    let d = tempfile::tempdir().unwrap();
+    let out = d.path().join("c");
+    let cfg = d.path().join("c.toml");
+    std::fs::write(
+        &cfg,
+        "[campaign]\nplanners = [\"idm-mobil\"]\nalphas = [0.5]\nlambdas = [2500.0]\nseeds = 1\n\
+         seed_base = 7\nsteps = 30\nworkers = 1\n\n[idm]\ntime_headway = 1.2\n",
+    )
+    .unwrap();
+    let o = campaign(&out, &["--config", cfg.to_str().unwrap()]);
+    assert_ok(&o);
+    let episodes = read(&out.join("episodes.csv"));
+    assert!(episodes
+        .lines()
+        .nth(1)
+        .unwrap()
+        .starts_with("idm-mobil,0.5,2500,7,30,"));
+    // The saved settings reproduce the campaign.
+    let saved = read(&out.join("campaign.toml"));
+    assert!(
+        saved.contains("time_headway = 1.2") && !saved.contains("workers"),
+        "{saved}"
+    );
+    // Same out, different scenario: refused, nothing touched.
+    std::fs::write(&cfg, "[idm]\ntime_headway = 1.0\n").unwrap();
+    let o = campaign(&out, &["--config", cfg.to_str().unwrap()]);
+    let err = text(&o.stderr);
+    assert!(
+        !o.status.success() && err.contains("idm.time_headway"),
+        "{err}"
+    );
+    assert_eq!(read(&out.join("campaign.toml")), saved);
+}
