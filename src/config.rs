@@ -229,6 +229,13 @@ pub struct SumoSettings {
     pub extra_args: Vec<String>,
 }
 
+impl Scenario {
+    /// Steps a lane change takes (SUMO's `--lanechange.duration` on the step grid).
+    pub fn lane_change_steps(&self) -> usize {
+        (self.lane_change_duration / self.dt).round().max(1.0) as usize
+    }
+}
+
 impl Default for Scenario {
     fn default() -> Self {
         Scenario {

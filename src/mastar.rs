@@ -122,6 +122,12 @@ pub struct Mastar {
 }
 
 impl Mastar {
+    /// The planner of a configuration on `road`.
+    pub fn from_config(config: &crate::config::Config, road: Road) -> Self {
+        let s = &config.scenario;
+        Mastar::new(&config.planner, road, s.dt, s.lane_change_duration, s.v_max)
+    }
+
     /// A planner for steps of `dt` on `road`, lane changes taking `lane_change_duration`.
     pub fn new(
         settings: &PlannerSettings,

@@ -5,9 +5,9 @@
 //! step records a fallback.
 
 use super::lane_changes::LaneChanges;
-use super::{CavHandling, Command, Controller, LaneChange, Maneuver, PlanStats};
+use super::{execute, CavHandling, Command, Controller, PlanStats};
 use crate::config::Config;
-use crate::mastar::{FirstMove, Mastar, Phase};
+use crate::mastar::{Mastar, Phase};
 use crate::predict::{ConstantSpeed, Predictor};
 use crate::scene::{Kind, Scene};
 use crate::trajectory::Trajectory;
@@ -34,11 +34,6 @@ impl BkMastar {
             stats: PlanStats::default(),
         }
     }
-
-    fn lane_change_steps(&self) -> usize {
-        let s = &self.config.scenario;
-        (s.lane_change_duration / s.dt).round().max(1.0) as usize
-    }
 }
 
 impl Controller for BkMastar {
@@ -53,17 +48,11 @@ impl Controller for BkMastar {
     fn plan(&mut self, scene: &Scene, out: &mut Vec<Command>) {
         let sc = &self.config.scenario;
         let (dt, v_max) = (sc.dt, sc.v_max);
-        let lc_steps = self.lane_change_steps();
+        let lc_steps = sc.lane_change_steps();
         let horizon = self.config.planner.horizon + lc_steps;
-        let planner = self.planner.get_or_insert_with(|| {
-            Mastar::new(
-                &self.config.planner,
-                scene.road.clone(),
-                dt,
-                sc.lane_change_duration,
-                v_max,
-            )
-        });
+        let planner = self
+            .planner
+            .get_or_insert_with(|| Mastar::from_config(&self.config, scene.road.clone()));
         let predictions: Vec<Trajectory> = scene
             .vehicles
             .iter()
@@ -91,33 +80,18 @@ impl Controller for BkMastar {
             let maneuver = match planner.plan(&req) {
                 Ok(plan) => {
                     stats.nodes_expanded += plan.expanded as u64;
-                    stats.phase2_plans += (plan.phase == Phase::Fallback) as u64;
-                    let lane_change = match plan.first {
-                        FirstMove::Start(p) if p.is_lane_change() => {
-                            let target = req.lane + p.lane_offset();
-                            self.lane_changes
-                                .start(&v.id, now, lc_steps as f64 * dt, target);
-                            Some(if p.lane_offset() > 0 {
-                                LaneChange::Left
-                            } else {
-                                LaneChange::Right
-                            })
-                        }
-                        _ => None,
-                    };
-                    Maneuver {
-                        speed: plan.next_speed().clamp(0.0, v_max),
-                        lane_change,
+                    stats.phase2_plans += u64::from(plan.phase == Phase::Fallback);
+                    let (maneuver, target) = execute::first_move(&plan, req.lane, v_max);
+                    if let Some(target) = target {
+                        self.lane_changes
+                            .start(&v.id, now, lc_steps as f64 * dt, target);
                     }
+                    maneuver
                 }
                 Err(e) => {
                     stats.nodes_expanded += e.expanded as u64;
                     stats.fallbacks += 1;
-                    let brake = self.config.planner.emergency_decel * dt;
-                    Maneuver {
-                        speed: (v.speed - brake).max(0.0),
-                        lane_change: None,
-                    }
+                    execute::emergency_brake(v, self.config.planner.emergency_decel, dt)
                 }
             };
             out.push(Command {

@@ -7,9 +7,9 @@
 use std::sync::Arc;
 
 use super::lane_changes::LaneChanges;
-use super::{CavHandling, Command, Controller, LaneChange, Maneuver, PlanStats};
+use super::{execute, CavHandling, Command, Controller, PlanStats};
 use crate::config::Config;
-use crate::mastar::{FirstMove, Mastar, NoPlan, Phase, Plan};
+use crate::mastar::{Mastar, NoPlan, Phase, Plan};
 use crate::pbs::{Budget, Problem, RequestFor};
 use crate::predict::Predictor;
 use crate::safety::SafetyRule;
@@ -72,17 +72,10 @@ impl Controller for BkPbs {
     fn plan(&mut self, scene: &Scene, out: &mut Vec<Command>) {
         let sc = &self.config.scenario;
         let (dt, v_max) = (sc.dt, sc.v_max);
-        let lc_steps = (sc.lane_change_duration / dt).round().max(1.0) as usize;
+        let lc_steps = sc.lane_change_steps();
         let (planner, rule) = self.planner.get_or_insert_with(|| {
-            let m = Mastar::new(
-                &self.config.planner,
-                scene.road.clone(),
-                dt,
-                sc.lane_change_duration,
-                v_max,
-            );
-            let r = SafetyRule::new(&self.config.planner, scene.road.lane_width);
-            (m, r)
+            let rule = SafetyRule::new(&self.config.planner, scene.road.lane_width);
+            (Mastar::from_config(&self.config, scene.road.clone()), rule)
         });
         let now = scene.time;
         self.lane_changes.forget_finished(now);
@@ -151,30 +144,16 @@ impl Controller for BkPbs {
             let maneuver = match plan {
                 Some(plan) => {
                     stats.phase2_plans += u64::from(plan.phase == Phase::Fallback);
-                    let lane_change = match plan.first {
-                        FirstMove::Start(p) if p.is_lane_change() => {
-                            let lane = self.lane_changes.request(scene, i, dt, &[]).lane;
-                            starts.push((v.id.clone(), lane + p.lane_offset()));
-                            Some(if p.lane_offset() > 0 {
-                                LaneChange::Left
-                            } else {
-                                LaneChange::Right
-                            })
-                        }
-                        _ => None,
-                    };
-                    Maneuver {
-                        speed: plan.next_speed().clamp(0.0, v_max),
-                        lane_change,
+                    let lane = self.lane_changes.request(scene, i, dt, &[]).lane;
+                    let (maneuver, target) = execute::first_move(&plan, lane, v_max);
+                    if let Some(target) = target {
+                        starts.push((v.id.clone(), target));
                     }
+                    maneuver
                 }
                 None => {
                     stats.fallbacks += 1;
-                    let brake = self.config.planner.emergency_decel * dt;
-                    Maneuver {
-                        speed: (v.speed - brake).max(0.0),
-                        lane_change: None,
-                    }
+                    execute::emergency_brake(v, self.config.planner.emergency_decel, dt)
                 }
             };
             out.push(Command {

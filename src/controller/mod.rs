@@ -6,6 +6,7 @@
 
 pub mod bk_mastar;
 pub mod bk_pbs;
+pub mod execute;
 pub mod idm;
 pub mod idm_mobil;
 pub mod lane_changes;

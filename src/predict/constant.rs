@@ -22,7 +22,7 @@ impl ConstantSpeed {
         let s = &config.scenario;
         ConstantSpeed {
             dt: s.dt,
-            lane_change_steps: (s.lane_change_duration / s.dt).round().max(1.0) as usize,
+            lane_change_steps: s.lane_change_steps(),
             merge_exponent: config.ramp_merge.exponent,
         }
     }
