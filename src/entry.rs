@@ -125,7 +125,6 @@ impl EntryControl {
 
 #[cfg(test)]
 mod tests {
-    use std::sync::Arc;
 
     use super::*;
     use crate::scene::{Kind, VehicleState};
@@ -144,19 +143,8 @@ mod tests {
 
     fn car(s: f64, lane: i32, speed: f64) -> VehicleState {
         VehicleState {
-            id: Arc::from("x"),
-            kind: Kind::Hdv,
-            origin: Origin::Main,
-            s,
-            lane,
-            lateral: 0.0,
-            speed,
-            accel: 0.0,
-            heading: 0.0,
             desired_speed: 30.0,
-            length: 5.0,
-            width: 2.0,
-            on_ramp: false,
+            ..VehicleState::on_lane("x", Kind::Hdv, Origin::Main, s, lane, speed)
         }
     }
 

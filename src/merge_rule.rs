@@ -103,19 +103,8 @@ mod tests {
 
     fn ramp_hdv(s: f64) -> VehicleState {
         VehicleState {
-            id: Arc::from("ramp.1"),
-            kind: Kind::Hdv,
-            origin: Origin::Ramp,
-            s,
-            lane: 0,
-            lateral: 0.0,
-            speed: 20.0,
-            accel: 0.0,
-            heading: 0.0,
             desired_speed: 30.0,
-            length: 5.0,
-            width: 2.0,
-            on_ramp: false,
+            ..VehicleState::on_lane("ramp.1", Kind::Hdv, Origin::Ramp, s, 0, 20.0)
         }
     }
 

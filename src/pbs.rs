@@ -464,29 +464,8 @@ mod tests {
     use crate::road::Road;
     use crate::scene::{Origin, VehicleState};
 
-    fn vehicle(
-        id: &str,
-        kind: Kind,
-        origin: Origin,
-        s: f64,
-        lane: i32,
-        speed: f64,
-    ) -> VehicleState {
-        VehicleState {
-            id: Arc::from(id),
-            kind,
-            origin,
-            s,
-            lane,
-            lateral: 0.0,
-            speed,
-            accel: 0.0,
-            heading: 0.0,
-            desired_speed: 35.0,
-            length: 5.0,
-            width: 2.0,
-            on_ramp: false,
-        }
+    fn vehicle(id: &str, kind: Kind, origin: Origin, s: f64, lane: i32, v: f64) -> VehicleState {
+        VehicleState::on_lane(id, kind, origin, s, lane, v)
     }
 
     /// The constant-speed predictor, counting the calls conditioned on CAV plans.

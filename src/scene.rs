@@ -75,6 +75,26 @@ pub struct VehicleState {
 }
 
 impl VehicleState {
+    /// A 5 m × 2 m vehicle on the centre of `lane`, driving straight at `speed` and wanting
+    /// 35 m/s: for scenes built by hand (tests, the Python bindings).
+    pub fn on_lane(id: &str, kind: Kind, origin: Origin, s: f64, lane: i32, speed: f64) -> Self {
+        VehicleState {
+            id: Arc::from(id),
+            kind,
+            origin,
+            s,
+            lane,
+            lateral: 0.0,
+            speed,
+            accel: 0.0,
+            heading: 0.0,
+            desired_speed: 35.0,
+            length: 5.0,
+            width: 2.0,
+            on_ramp: false,
+        }
+    }
+
     /// Position of the front bumper (m).
     pub fn front(&self) -> f64 {
         self.s + 0.5 * self.length

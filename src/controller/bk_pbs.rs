@@ -175,7 +175,6 @@ impl Controller for BkPbs {
 
 #[cfg(test)]
 mod tests {
-    use std::sync::Arc;
 
     use super::*;
     use crate::predict::ConstantSpeed;
@@ -185,20 +184,8 @@ mod tests {
     #[test]
     fn every_cav_gets_a_maneuver_even_when_nothing_is_safe() {
         let config = Config::default();
-        let v = |id: &str, kind, s, lane, speed| VehicleState {
-            id: Arc::from(id),
-            kind,
-            origin: Origin::Main,
-            s,
-            lane,
-            lateral: 0.0,
-            speed,
-            accel: 0.0,
-            heading: 0.0,
-            desired_speed: 35.0,
-            length: 5.0,
-            width: 2.0,
-            on_ramp: false,
+        let v = |id: &str, kind, s, lane, speed| {
+            VehicleState::on_lane(id, kind, Origin::Main, s, lane, speed)
         };
         let scene = Scene {
             time: 3.0,

@@ -172,27 +172,16 @@ pub fn evaluate(idm_p: &Idm, mobil: &Mobil, scene: &Scene, i: usize, target: i32
 
 #[cfg(test)]
 mod tests {
-    use std::sync::Arc;
 
     use super::*;
     use crate::road::Road;
     use crate::scene::{Kind, Origin};
 
     fn car(s: f64, lane: i32, speed: f64, desired: f64) -> VehicleState {
+        let id = format!("v{s}-{lane}");
         VehicleState {
-            id: Arc::from(format!("v{s}-{lane}")),
-            kind: Kind::Hdv,
-            origin: Origin::Main,
-            s,
-            lane,
-            lateral: 0.0,
-            speed,
-            accel: 0.0,
-            heading: 0.0,
             desired_speed: desired,
-            length: 5.0,
-            width: 2.0,
-            on_ramp: false,
+            ..VehicleState::on_lane(&id, Kind::Hdv, Origin::Main, s, lane, speed)
         }
     }
 

@@ -96,7 +96,6 @@ impl Predictor for ConstantSpeed {
 
 #[cfg(test)]
 mod tests {
-    use std::sync::Arc;
 
     use super::*;
     use crate::road::Road;
@@ -104,19 +103,8 @@ mod tests {
 
     fn vehicle(kind: Kind, origin: Origin, s: f64, lane: i32, speed: f64) -> VehicleState {
         VehicleState {
-            id: Arc::from("v"),
-            kind,
-            origin,
-            s,
-            lane,
-            lateral: 0.0,
-            speed,
-            accel: 0.0,
-            heading: 0.0,
             desired_speed: speed,
-            length: 5.0,
-            width: 2.0,
-            on_ramp: false,
+            ..VehicleState::on_lane("v", kind, origin, s, lane, speed)
         }
     }
 
