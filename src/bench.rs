@@ -37,9 +37,9 @@ pub fn sumo_alone_ms_per_step(config: &Config) -> Result<f64, EpisodeError> {
             std::fs::write(f.path(), demand::route_file(&planned))?;
             Ok(f)
         })
-        .map_err(|source| crate::sumo_files::InputError::Write {
+        .map_err(|cause| crate::sumo_files::InputError::Write {
             path: std::env::temp_dir(),
-            source,
+            cause,
         })?;
     let args = crate::sumo_files::command_line(
         config,
@@ -47,16 +47,16 @@ pub fn sumo_alone_ms_per_step(config: &Config) -> Result<f64, EpisodeError> {
         &input.vehicle_types,
         demand_file.path(),
     );
-    let mut sim = Simulation::start(&args).map_err(|source| EpisodeError::Start {
+    let mut sim = Simulation::start(&args).map_err(|cause| EpisodeError::Start {
         net: input.net.clone(),
-        source,
+        cause,
     })?;
     let start = Instant::now();
     for step in 0..config.scenario.steps {
-        sim.step().map_err(|source| EpisodeError::Step {
+        sim.step().map_err(|cause| EpisodeError::Step {
             step,
             time: step as f64 * config.scenario.dt,
-            source,
+            cause,
         })?;
     }
     let ms = start.elapsed().as_secs_f64() * 1e3 / config.scenario.steps as f64;

@@ -18,9 +18,10 @@ use crate::metrics::{
     VehicleRecord,
 };
 use crate::road::{Road, RoadError, EDGES};
-use crate::scene::{Kind, Origin, Scene, VehicleState};
+use crate::scene::{Kind, Origin, Scene};
 use crate::sumo::{Simulation, StderrCapture, SumoError, VehicleReadings};
 use crate::sumo_files::{EpisodeInput, InputError};
+use crate::sumo_scene;
 
 /// SUMO speed mode for commanded CAVs: no checks at all, the commanded speed is the speed.
 const SPEED_MODE_COMMANDED: i32 = 0;
@@ -42,18 +43,18 @@ pub enum EpisodeError {
     Input(#[from] InputError),
     #[error(transparent)]
     Planner(#[from] crate::controller::UnknownPlanner),
-    #[error("cannot start SUMO on net {net}: {source}")]
+    #[error("cannot start SUMO on net {net}: {cause}")]
     Start {
         net: std::path::PathBuf,
-        source: SumoError,
+        cause: SumoError,
     },
     #[error(transparent)]
     Road(#[from] RoadError),
-    #[error("SUMO failed at step {step} (t = {time:.1} s): {source}")]
+    #[error("SUMO failed at step {step} (t = {time:.1} s): {cause}")]
     Step {
         step: u32,
         time: f64,
-        source: SumoError,
+        cause: SumoError,
     },
 }
 
@@ -115,14 +116,14 @@ pub fn run_observed(
         StderrCapture::start()
     };
     let outcome = (|| {
-        let sim = Simulation::start(&input.command_line(config)).map_err(|source| {
+        let sim = Simulation::start(&input.command_line(config)).map_err(|cause| {
             EpisodeError::Start {
                 net: config
                     .scenario
                     .net_file
                     .clone()
                     .unwrap_or_else(|| "(embedded)".into()),
-                source,
+                cause,
             }
         })?;
         let road = Road::from_simulation(&sim)?;
@@ -213,16 +214,16 @@ impl<'a> Episode<'a> {
         let loop_start = Instant::now();
         let steps = self.config.scenario.steps;
         sim.set_edge_codes(&EDGES)
-            .map_err(|source| EpisodeError::Step {
+            .map_err(|cause| EpisodeError::Step {
                 step: 0,
                 time: 0.0,
-                source,
+                cause,
             })?;
         for step in 0..steps {
-            let at = |source| EpisodeError::Step {
+            let at = |cause| EpisodeError::Step {
                 step,
                 time: step as f64 * self.config.scenario.dt,
-                source,
+                cause,
             };
             self.step(&mut sim, step + 1 < steps).map_err(at)?;
         }
@@ -234,10 +235,10 @@ impl<'a> Episode<'a> {
             .iter()
             .filter(|v| !v.on_ramp && v.lane == crate::road::MERGE_LANE && v.speed < 1.0)
             .count();
-        sim.close().map_err(|source| EpisodeError::Step {
+        sim.close().map_err(|cause| EpisodeError::Step {
             step: steps,
             time: steps as f64 * self.config.scenario.dt,
-            source,
+            cause,
         })?;
         Ok(self.finish(loop_s, ramp_queue_end))
     }
@@ -425,11 +426,9 @@ impl<'a> Episode<'a> {
         self.scene.vehicles.clear();
         self.scene_edges.clear();
         for (raw, slot) in self.readings.states.iter().zip(&self.slots) {
-            let (Some(k), Some((front, lane))) = (
-                *slot,
-                self.road
-                    .to_frame(raw.edge_code, raw.lane_index, raw.lane_position),
-            ) else {
+            let (Some(k), Some((front, lane))) =
+                (*slot, sumo_scene::frame_position(&self.road, raw))
+            else {
                 continue;
             };
             let t = &mut self.tracked[k];
@@ -443,21 +442,15 @@ impl<'a> Episode<'a> {
             self.speed_sum += raw.speed;
             self.speed_samples += 1;
             self.scene_edges.push(raw.edge_code);
-            self.scene.vehicles.push(VehicleState {
+            let who = sumo_scene::Identity {
                 id: t.id.clone(),
                 kind: t.record.kind,
                 origin: t.record.origin,
-                s: front - 0.5 * sc.vehicle_length,
-                lane,
-                lateral: raw.lateral_offset,
-                speed: raw.speed,
-                accel: raw.acceleration,
-                heading: (90.0 - raw.angle).to_radians(),
                 desired_speed: t.record.desired_speed,
-                length: sc.vehicle_length,
-                width: sc.vehicle_width,
-                on_ramp: self.road.is_on_ramp(raw.edge_code),
-            });
+            };
+            self.scene
+                .vehicles
+                .push(sumo_scene::state_at(&self.road, sc, who, raw, front, lane));
         }
     }
 

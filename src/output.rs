@@ -9,17 +9,17 @@ use crate::metrics::{CollisionEvent, Summary, Timing, VehicleRecord};
 
 /// Why results could not be written.
 #[derive(Debug, thiserror::Error)]
-#[error("cannot write {path}: {source}")]
+#[error("cannot write {path}: {cause}")]
 pub struct WriteError {
     pub path: PathBuf,
-    pub source: std::io::Error,
+    pub cause: std::io::Error,
 }
 
 /// Writes `bytes` to `path` through a temporary file in the same directory and a rename.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), WriteError> {
-    let err = |source| WriteError {
+    let err = |cause| WriteError {
         path: path.to_path_buf(),
-        source,
+        cause,
     };
     let dir = path
         .parent()

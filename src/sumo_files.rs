@@ -10,10 +10,10 @@ use crate::road::EMBEDDED_NET;
 pub enum InputError {
     #[error("net file {0} does not exist")]
     MissingNet(PathBuf),
-    #[error("cannot write SUMO input {path}: {source}")]
+    #[error("cannot write SUMO input {path}: {cause}")]
     Write {
         path: PathBuf,
-        source: std::io::Error,
+        cause: std::io::Error,
     },
 }
 
@@ -51,15 +51,15 @@ impl EpisodeInput {
         let dir = tempfile::Builder::new()
             .prefix("bkpbs-episode-")
             .tempdir()
-            .map_err(|source| InputError::Write {
+            .map_err(|cause| InputError::Write {
                 path: std::env::temp_dir(),
-                source,
+                cause,
             })?;
         let put = |name: &str, text: &str| -> Result<PathBuf, InputError> {
             let path = dir.path().join(name);
-            std::fs::write(&path, text).map_err(|source| InputError::Write {
+            std::fs::write(&path, text).map_err(|cause| InputError::Write {
                 path: path.clone(),
-                source,
+                cause,
             })?;
             Ok(path)
         };
