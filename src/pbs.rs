@@ -506,6 +506,17 @@ mod tests {
     }
 
     fn solve(vehicles: Vec<VehicleState>, spy: &Spy) -> (Solution, Scene) {
+        solve_within(
+            vehicles,
+            spy,
+            Budget {
+                nodes: 200,
+                time_ms: None,
+            },
+        )
+    }
+
+    fn solve_within(vehicles: Vec<VehicleState>, spy: &Spy, budget: Budget) -> (Solution, Scene) {
         let config = Config::default();
         let scene = Scene {
             time: 0.0,
@@ -523,10 +534,7 @@ mod tests {
             rule: &rule,
             horizon: 20,
             dt: 0.2,
-            budget: Budget {
-                nodes: 200,
-                time_ms: None,
-            },
+            budget,
         };
         let solution = problem.solve();
         // Whatever the outcome, report whether any CAV-involved pair still conflicts.
@@ -612,6 +620,41 @@ mod tests {
         assert!(sol.stats.fallback, "{:?}", sol.stats);
         assert!(sol.stats.conflicts_left >= 1);
         assert_eq!(sol.trajectories.len(), 3);
+    }
+
+    #[test]
+    fn an_exhausted_budget_returns_the_best_node_and_says_why() {
+        let cross = || {
+            vec![
+                vehicle("ramp.1", Kind::Cav, Origin::Ramp, 250.0, 0, 25.0),
+                vehicle("main.2", Kind::Cav, Origin::Main, 247.0, 1, 25.0),
+            ]
+        };
+        // No time at all: the root is all there is.
+        let (sol, _) = solve_within(
+            cross(),
+            &spy(),
+            Budget {
+                nodes: 200,
+                time_ms: Some(0.0),
+            },
+        );
+        assert!(
+            sol.stats.timed_out && sol.stats.fallback && sol.stats.nodes == 0,
+            "{:?}",
+            sol.stats
+        );
+        assert!(sol.plans.iter().all(Option::is_some), "root plans are kept");
+        // No nodes at all: the same, without the time-out flag.
+        let (sol, _) = solve_within(
+            cross(),
+            &spy(),
+            Budget {
+                nodes: 0,
+                time_ms: None,
+            },
+        );
+        assert!(!sol.stats.timed_out && sol.stats.fallback && sol.stats.nodes == 0);
     }
 
     #[test]
