@@ -32,4 +32,5 @@ pub mod scene;
 pub mod search;
 pub mod sumo;
 pub mod sumo_files;
+pub mod sumo_scene;
 pub mod trajectory;
