@@ -154,7 +154,12 @@ fn missing_config_file_is_refused() {
     ]);
     assert_clear_failure(&o, "no/such.toml", d.path());
     // Regression: the OS error was printed twice (once in the message, once as its source).
-    assert_eq!(stderr(&o).matches("No such file").count(), 1, "{}", stderr(&o));
+    assert_eq!(
+        stderr(&o).matches("No such file").count(),
+        1,
+        "{}",
+        stderr(&o)
+    );
 }
 
 #[test]
