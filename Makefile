@@ -3,7 +3,7 @@ SHELL := /bin/bash
 CARGO ?= cargo
 DEMO_OUT ?= out/demo
 
-.PHONY: deps demo test build net
+.PHONY: deps demo test build net pytest
 
 deps:
 	@bash scripts/ensure-deps.sh
@@ -24,6 +24,20 @@ test: deps
 	@if $(CARGO) fmt --version >/dev/null 2>&1; then $(CARGO) fmt --all -- --check; else echo "test: rustfmt not installed, format check skipped"; fi
 	@if $(CARGO) clippy --version >/dev/null 2>&1; then $(CARGO) clippy --quiet --all-targets -- -D warnings; else echo "test: clippy not installed, lint skipped"; fi
 	$(CARGO) test --quiet
+	@$(MAKE) --no-print-directory pytest
+
+# The Python bindings (bindings/): a virtualenv $(VENV) with maturin, pytest and ray
+# (scripts/ensure-python.sh), the wheel built with maturin and installed into it, then the Python
+# tests (real SUMO, a local Ray), which compare against the CLI binary `cargo test` builds.
+VENV ?= .venv
+TARGET_DIR := $(abspath $(or $(CARGO_TARGET_DIR),target))
+pytest: deps
+	@VENV=$(VENV) bash scripts/ensure-python.sh
+	$(CARGO) build --quiet --profile test --bin bkpbs
+	rm -rf $(TARGET_DIR)/wheels
+	$(VENV)/bin/maturin build --quiet -m bindings/Cargo.toml --profile dev --out $(TARGET_DIR)/wheels
+	$(VENV)/bin/python -m pip install --quiet --disable-pip-version-check --force-reinstall --no-deps $(TARGET_DIR)/wheels/bkpbs-*.whl
+	BKPBS_BIN=$(TARGET_DIR)/debug/bkpbs $(VENV)/bin/python -m pytest -q -p no:cacheprovider bindings/tests
 
 # Regenerates sumo_net/merge.net.xml from its plain XML sources.
 net: deps

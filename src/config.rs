@@ -23,6 +23,12 @@ pub enum ConfigError {
         value: String,
         reason: &'static str,
     },
+    /// A predictor model file the configuration names cannot be used.
+    #[error("{field}: {cause}")]
+    Model {
+        field: &'static str,
+        cause: crate::predict::ModelError,
+    },
 }
 
 /// Everything an episode needs besides the controller.
@@ -41,6 +47,8 @@ pub struct Config {
     pub planner: PlannerSettings,
     /// The high-level search of BK-PBS.
     pub pbs: PbsSettings,
+    /// How the planners predict HDVs (BK-M-A*, BK-PBS).
+    pub predictor: PredictorSettings,
     pub sumo: SumoSettings,
 }
 
@@ -213,6 +221,45 @@ impl Default for PbsSettings {
         PbsSettings {
             node_budget: 200,
             time_budget_ms: 0.0,
+        }
+    }
+}
+
+/// The HDV predictor of the planners (the learned b_θ or constant speed).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct PredictorSettings {
+    /// `learned`: the GCN lane-change model b_θ; `constant`: constant speed in lane, ramp HDVs
+    /// merging at their median decision step.
+    pub kind: PredictorKind,
+    /// Model file of the conditioned b_θ (used when higher-priority CAV plans are given);
+    /// unset: the model embedded in the binary (`models/gcn-conditioned.json`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub conditioned_model: Option<PathBuf>,
+    /// Model file of the unconditioned b_θ (BK-M-A*, the PBS root); unset: the embedded
+    /// `models/gcn-unconditioned.json`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub unconditioned_model: Option<PathBuf>,
+    /// A lane change is predicted to start at the first step at which the probability that it
+    /// has started (from the per-step probabilities along the rollout) reaches this value.
+    pub decision_probability: f64,
+}
+
+/// Which predictor [`PredictorSettings`] selects.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum PredictorKind {
+    Learned,
+    Constant,
+}
+
+impl Default for PredictorSettings {
+    fn default() -> Self {
+        PredictorSettings {
+            kind: PredictorKind::Learned,
+            conditioned_model: None,
+            unconditioned_model: None,
+            decision_probability: 0.5,
         }
     }
 }
@@ -502,6 +549,27 @@ impl Config {
             self.ramp_merge.exponent > 0.0,
             "must be positive",
         )?;
+        let q = self.predictor.decision_probability;
+        check(
+            "predictor.decision_probability",
+            q,
+            q > 0.0 && q < 1.0,
+            "must lie in (0, 1)",
+        )?;
+        for (field, path) in [
+            (
+                "predictor.conditioned_model",
+                &self.predictor.conditioned_model,
+            ),
+            (
+                "predictor.unconditioned_model",
+                &self.predictor.unconditioned_model,
+            ),
+        ] {
+            if let Some(p) = path {
+                check(field, p.display(), p.is_file(), "no such model file")?;
+            }
+        }
         Ok(())
     }
 }

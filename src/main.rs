@@ -6,9 +6,9 @@ use std::process::ExitCode;
 use anyhow::{Context, Result};
 use clap::{Args, Parser, Subcommand};
 
-use bkpbs::config::Config;
+use bkpbs::config::{Config, PredictorKind};
 use bkpbs::{bench, controller, demand, episode, output, sumo_files};
-use bkpbs::{campaign, report};
+use bkpbs::{campaign, predict, report};
 
 #[derive(Parser)]
 #[command(
@@ -35,6 +35,14 @@ enum Command {
     Campaign(CampaignArgs),
     /// Tables and figures from one or more campaign directories (several: shards, merged).
     Report(ReportArgs),
+    /// Collect lane-change data for the predictor b_θ from SUMO episodes.
+    Collect(CollectArgs),
+    /// Train b_θ (and its logistic-regression baseline) on collected data.
+    Train(TrainArgs),
+    /// Evaluate b_θ like the paper's tables I–II, next to two baselines.
+    EvalPredictor(EvalPredictorArgs),
+    /// Time b_θ: one prediction, and all HDVs of a dense scene per step.
+    BenchPredictor(BenchPredictorArgs),
     /// Internal: run episodes sent by a campaign on stdin (one JSON line each).
     #[command(hide = true)]
     Worker,
@@ -164,6 +172,96 @@ struct EpisodeArgs {
     /// Directory for the CSV files [default: out/<planner>_a<α>_l<λ>_s<seed>].
     #[arg(long)]
     out: Option<PathBuf>,
+    /// HDV predictor of the planners (overrides predictor.kind of the config).
+    #[arg(long, value_parser = ["learned", "constant"])]
+    predictor: Option<String>,
+}
+
+#[derive(Args)]
+struct CollectArgs {
+    /// Episodes to run.
+    #[arg(long)]
+    episodes: usize,
+    /// Data file to write (e.g. data/train.bin).
+    #[arg(long)]
+    out: PathBuf,
+    /// First seed [default: 10000].
+    #[arg(long)]
+    seed_base: Option<u64>,
+    /// CAV rollout policies, cycled over the episodes [default: idm-mobil,bk-mastar].
+    #[arg(long, value_delimiter = ',')]
+    planners: Option<Vec<String>>,
+    /// CAV penetrations α, cycled [default: 0.2,0.4,0.6,0.8].
+    #[arg(long, value_delimiter = ',')]
+    alphas: Option<Vec<f64>>,
+    /// Arrival rates λ (veh/h), cycled [default: 2500,3000].
+    #[arg(long = "lambdas", value_delimiter = ',')]
+    lambdas: Option<Vec<f64>>,
+    /// Episode length in steps [default: 400].
+    #[arg(long)]
+    steps: Option<u32>,
+    /// Probability of keeping a main-road sample without a lane change [default: 0.1].
+    #[arg(long)]
+    main_negative_keep: Option<f64>,
+    /// TOML file with scenario settings (α, λ, seed and steps are set per episode).
+    #[arg(long)]
+    config: Option<PathBuf>,
+}
+
+#[derive(Args)]
+struct TrainArgs {
+    /// Data file from `bkpbs collect`.
+    #[arg(long)]
+    data: PathBuf,
+    /// Model file to write (JSON).
+    #[arg(long)]
+    out: PathBuf,
+    /// Train the conditioned model (with the CAV-trajectory input); the default.
+    #[arg(long, conflicts_with = "unconditioned")]
+    conditioned: bool,
+    /// Train the unconditioned model (BK-M-A*, the PBS root).
+    #[arg(long)]
+    unconditioned: bool,
+    /// Most epochs (early stopping on the validation split usually ends sooner).
+    #[arg(long, default_value_t = 40)]
+    epochs: usize,
+    /// Seed of the initialisation and the shuffling.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Worker threads (results do not depend on it).
+    #[arg(long, default_value_t = 2)]
+    threads: usize,
+    /// Epochs without a better validation loss before stopping.
+    #[arg(long, default_value_t = 5)]
+    patience: usize,
+}
+
+#[derive(Args)]
+struct EvalPredictorArgs {
+    /// Model file [default: the embedded conditioned model].
+    #[arg(long)]
+    model: Option<PathBuf>,
+    /// Without --model: evaluate the embedded unconditioned model instead.
+    #[arg(long, conflicts_with = "model")]
+    unconditioned: bool,
+    /// Data file from `bkpbs collect` [default: collect fresh episodes].
+    #[arg(long)]
+    data: Option<PathBuf>,
+    /// First seed of fresh evaluation episodes [default: 90000, never used in training].
+    #[arg(long, conflicts_with = "data")]
+    seed_base: Option<u64>,
+    /// Fresh evaluation episodes to collect.
+    #[arg(long, default_value_t = 500, conflicts_with = "data")]
+    episodes: usize,
+    /// Seed of the draw of the 4000 + 4000 samples.
+    #[arg(long, default_value_t = 1)]
+    draw_seed: u64,
+}
+
+#[derive(Args)]
+struct BenchPredictorArgs {
+    #[command(flatten)]
+    scenario: ScenarioArgs,
 }
 
 #[derive(Args)]
@@ -207,7 +305,13 @@ struct DemandArgs {
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Episode(a) => {
-            let config = a.scenario.resolve()?;
+            let mut config = a.scenario.resolve()?;
+            if let Some(p) = &a.predictor {
+                config.predictor.kind = match p.as_str() {
+                    "learned" => PredictorKind::Learned,
+                    _ => PredictorKind::Constant,
+                };
+            }
             let mut ctl = controller::by_name(&a.planner, &config)?;
             let s = &config.scenario;
             let out = a.out.unwrap_or_else(|| {
@@ -297,6 +401,55 @@ fn run(cli: Cli) -> Result<()> {
             }
         }
         Command::Report(a) => print_report(&a.dirs, a.out.as_deref())?,
+        Command::Collect(a) => {
+            let base = match &a.config {
+                Some(p) => Config::from_file(p)?,
+                None => Config::default(),
+            };
+            let d = predict::collect::CollectPlan::default();
+            let plan = predict::collect::CollectPlan {
+                episodes: a.episodes,
+                seed_base: a.seed_base.unwrap_or(d.seed_base),
+                planners: a.planners.unwrap_or(d.planners),
+                alphas: a.alphas.unwrap_or(d.alphas),
+                lambdas: a.lambdas.unwrap_or(d.lambdas),
+                steps: a.steps.unwrap_or(d.steps),
+                main_negative_keep: a.main_negative_keep.unwrap_or(d.main_negative_keep),
+            };
+            print!("{}", predict::commands::run_collect(&base, &plan, &a.out)?);
+        }
+        Command::Train(a) => {
+            let opts = predict::train::TrainOptions {
+                epochs: a.epochs,
+                seed: a.seed,
+                threads: a.threads,
+                patience: a.patience,
+                ..Default::default()
+            };
+            let conditioned = !a.unconditioned;
+            print!(
+                "{}",
+                predict::commands::run_train(&a.data, &a.out, conditioned, &opts)?
+            );
+        }
+        Command::EvalPredictor(a) => {
+            let data = match a.data {
+                Some(p) => predict::commands::EvalData::File(p),
+                None => predict::commands::EvalData::fresh(a.episodes, a.seed_base),
+            };
+            let r = predict::commands::run_eval(
+                &Config::default(),
+                a.model.as_deref(),
+                a.unconditioned,
+                &data,
+                a.draw_seed,
+            )?;
+            print!("{}", r.to_text());
+        }
+        Command::BenchPredictor(a) => {
+            let config = a.scenario.resolve()?;
+            print!("{}", predict::commands::run_bench(&config)?);
+        }
         Command::Worker => campaign::worker::serve_stdio()?,
     }
     Ok(())

@@ -14,13 +14,14 @@
 //!
 //! Modules: [`grid`] (cells, order, shards), [`settings`] (file and flags), [`worker`] and
 //! [`pool`] (the two ends of the worker processes), [`collect`] (resume state, gathering),
-//! [`results`] (the collected files).
+//! [`results`] (the collected files), [`tasks`] (the same run for other schedulers).
 
 pub mod collect;
 pub mod grid;
 pub mod pool;
 pub mod results;
 pub mod settings;
+pub mod tasks;
 pub mod worker;
 
 use std::io::IsTerminal;
@@ -29,11 +30,10 @@ use std::time::Instant;
 
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
-use crate::output::{self, WriteError};
-use collect::cell_dir;
+use crate::output::WriteError;
 use results::ResultsError;
 pub use settings::{Overrides, Settings, SettingsError};
-use worker::{Outcome, Request};
+use worker::Outcome;
 
 /// Name of the settings file in a campaign directory.
 pub const SETTINGS_FILE: &str = "campaign.toml";
@@ -76,39 +76,13 @@ pub struct RunSummary {
 /// bar on stderr only when stderr is a terminal.
 pub fn run(settings: &Settings, out: &Path, exe: &Path) -> Result<RunSummary, CampaignError> {
     let start = Instant::now();
-    let settings_path = out.join(SETTINGS_FILE);
-    if settings_path.exists() {
-        let earlier = Settings::from_campaign_file(&settings_path)?;
-        if let Some(key) = settings.scenario_difference(&earlier) {
-            return Err(CampaignError::OtherSettings {
-                dir: out.to_path_buf(),
-                key,
-            });
-        }
-    }
-    output::write_atomic(&settings_path, settings.to_toml().as_bytes())?;
-    // Left by a campaign killed while collecting.
-    worker::remove_stale_temporaries(out);
-
+    let tasks::Plan {
+        requests,
+        shard_size,
+        already_done,
+    } = tasks::prepare(settings, out)?;
     let cells = settings.grid.cells();
-    let mut shard_size = 0;
-    let mut requests = Vec::new();
-    for (position, cell) in cells.iter().enumerate() {
-        if !settings.shard.contains(position) {
-            continue;
-        }
-        shard_size += 1;
-        if !collect::is_done(out, cell) {
-            requests.push(Request {
-                position,
-                planner: cell.planner.clone(),
-                dir: cell_dir(out, cell),
-                config: settings.episode_config(cell),
-            });
-        }
-    }
     let g = &settings.grid;
-    let already_done = shard_size - requests.len();
     println!(
         "campaign: {} planners × {} α × {} λ × {} seeds = {} episodes; shard {}: {}; already done: {}; to run: {}; workers: {}",
         g.planners.len(),
@@ -144,8 +118,7 @@ pub fn run(settings: &Settings, out: &Path, exe: &Path) -> Result<RunSummary, Ca
     });
     bar.finish_and_clear();
 
-    let results = collect::collect(out, &settings.grid, settings.shard)?;
-    results.write(out)?;
+    let results = tasks::collect(settings, out)?;
     let summary = RunSummary {
         grid: g.len(),
         shard: shard_size,

@@ -139,7 +139,7 @@ fn injected_fault(req: &Request) {
 }
 
 /// Runs one episode and writes its files; the error text on failure.
-fn run_cell(req: &Request) -> Result<(), String> {
+pub(crate) fn run_cell(req: &Request) -> Result<(), String> {
     // A retried cell: the old failure note goes first. A kill from here on leaves neither the
     // note nor episode.csv, and the cell simply runs again next time.
     match std::fs::remove_file(req.dir.join(ERROR_FILE)) {

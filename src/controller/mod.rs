@@ -121,20 +121,40 @@ pub const PLANNERS: [&str; 4] = ["sumo", "idm-mobil", "bk-mastar", "bk-pbs"];
 #[error("unknown planner '{0}' (known: {known})", known = PLANNERS.join(", "))]
 pub struct UnknownPlanner(pub String);
 
-/// Builds the controller called `name`.
-pub fn by_name(name: &str, config: &Config) -> Result<Box<dyn Controller>, UnknownPlanner> {
+/// Why [`by_name`] could not build a controller: an unknown name, or a predictor model file
+/// the configuration names that cannot be used.
+#[derive(Debug, thiserror::Error)]
+pub enum BuildError {
+    #[error(transparent)]
+    Unknown(#[from] UnknownPlanner),
+    #[error(transparent)]
+    Config(#[from] crate::config::ConfigError),
+}
+
+impl From<BuildError> for crate::episode::EpisodeError {
+    fn from(e: BuildError) -> Self {
+        match e {
+            BuildError::Unknown(u) => u.into(),
+            BuildError::Config(c) => c.into(),
+        }
+    }
+}
+
+/// Builds the controller called `name`; planners predict HDVs with the predictor
+/// `config.predictor` selects ([`crate::predict::configured`]).
+pub fn by_name(name: &str, config: &Config) -> Result<Box<dyn Controller>, BuildError> {
     match name {
         "sumo" => Ok(Box::new(sumo_native::SumoNative)),
         "idm-mobil" => Ok(Box::new(idm_mobil::IdmMobil::new(config))),
         "bk-mastar" => Ok(Box::new(bk_mastar::BkMastar::new(
             config,
-            Box::new(crate::predict::ConstantSpeed::new(config)),
+            crate::predict::configured(config)?,
         ))),
         "bk-pbs" => Ok(Box::new(bk_pbs::BkPbs::new(
             config,
-            Box::new(crate::predict::ConstantSpeed::new(config)),
+            crate::predict::configured(config)?,
         ))),
-        other => Err(UnknownPlanner(other.to_string())),
+        other => Err(UnknownPlanner(other.to_string()).into()),
     }
 }
 

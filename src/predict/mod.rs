@@ -6,7 +6,25 @@
 
 mod constant;
 
+// The learned lane-change model b_θ: features, data, network, training, evaluation, predictor.
+pub mod adam;
+pub mod bench;
+pub mod collect;
+pub mod commands;
+pub mod dataset;
+pub mod eval;
+pub mod features;
+pub mod fit;
+pub mod gcn;
+pub mod infer;
+pub mod learned;
+pub mod logistic;
+pub mod model_file;
+pub mod train;
+
 pub use constant::ConstantSpeed;
+pub use learned::{configured, Learned};
+pub use model_file::{LaneChangeModel, ModelError};
 
 use crate::scene::Scene;
 use crate::trajectory::Trajectory;

@@ -1,0 +1,193 @@
+"""Type stubs of the native module ``bkpbs._bkpbs`` (Rust, pyo3).
+
+Kept in step with the module by ``tests/test_stubs.py``.
+"""
+
+import os
+from pathlib import Path
+from typing import Any, Dict, Iterable, List, Mapping, Optional, Sequence, Tuple, Union
+
+_ConfigSource = Union[Mapping[str, Any], str, "os.PathLike[str]", None]
+_PathArg = Union[str, "os.PathLike[str]"]
+
+__version__: str
+#: The planner names ``Controller`` and ``run_episode`` accept.
+PLANNERS: List[str]
+
+class BkpbsError(ValueError):
+    """Bad input: unknown planner, α outside [0, 1], unknown or invalid configuration key,
+    malformed vehicle, bad campaign grid."""
+
+class SumoError(RuntimeError):
+    """SUMO failed to start or failed during an episode; the message is SUMO's."""
+
+class SimulationBusyError(SumoError):
+    """An episode is already running in this process (libsumo: one simulation per process)."""
+
+class Maneuver:
+    """What one CAV does during the next step."""
+
+    #: Speed to command with ``setSpeed`` (m/s), already clamped to [0, v_max].
+    @property
+    def speed(self) -> float: ...
+    #: ``None``, ``"left"`` or ``"right"``: start a lane change now.
+    @property
+    def lane_change(self) -> Optional[str]: ...
+    #: Target lane index on the vehicle's current SUMO edge (its current lane without a lane
+    #: change); ``None`` when that edge has no such lane.
+    @property
+    def sumo_lane_index(self) -> Optional[int]: ...
+
+class Controller:
+    """A core planner driven one step at a time by the caller's TraCI or libsumo loop."""
+
+    def __init__(
+        self,
+        planner: str = "bk-pbs",
+        config: _ConfigSource = None,
+        model: Optional[_PathArg] = None,
+        **overrides: Any,
+    ) -> None: ...
+    def plan(
+        self, vehicles: Iterable[Union[Mapping[str, Any], Any]], time: Optional[float] = None
+    ) -> Dict[str, Maneuver]:
+        """One ``Maneuver`` per CAV on the merge section, keyed by vehicle id.
+
+        ``vehicles``: dicts (or objects such as ``bkpbs.Vehicle``) with ``id, type, angle,
+        speed, acceleration, lane_index, lane_position, road_id`` and optionally ``x, y,
+        lateral_offset, origin, desired_speed``, in SUMO's units as TraCI reports them.
+        """
+    @property
+    def planner(self) -> str: ...
+    @property
+    def commands_cavs(self) -> bool: ...
+    @property
+    def dt(self) -> float: ...
+    @property
+    def v_max(self) -> float: ...
+    def last_stats(self) -> Dict[str, int]: ...
+
+_Pose = Tuple[float, float, float, float]
+
+class Predictor:
+    """An HDV predictor over the merge network's road frame (b_θ or constant speed)."""
+
+    @property
+    def name(self) -> str: ...
+    def predict(
+        self,
+        vehicles: Iterable[Union[Mapping[str, Any], Any]],
+        vehicle_id: str,
+        horizon: Optional[int] = None,
+        plans: Optional[Sequence[Sequence[_Pose]]] = None,
+    ) -> List[float]:
+        """Per-step probabilities (hazards) that HDV ``vehicle_id`` starts a lane change, from
+        now until the change is predicted to start or the horizon ends. ``plans``: the
+        ``(s, y, heading, speed)`` trajectories of higher-priority CAVs (conditioned model)."""
+    def trajectory(
+        self,
+        vehicles: Iterable[Union[Mapping[str, Any], Any]],
+        vehicle_id: str,
+        horizon: Optional[int] = None,
+        plans: Optional[Sequence[Sequence[_Pose]]] = None,
+    ) -> List[_Pose]:
+        """Predicted ``(s, y, heading, speed)`` at steps 0 … horizon."""
+
+class CampaignTask:
+    """One unfinished episode of a campaign; picklable."""
+
+    @staticmethod
+    def from_json(text: str) -> "CampaignTask": ...
+    def to_json(self) -> str: ...
+    @property
+    def position(self) -> int: ...
+    @property
+    def planner(self) -> str: ...
+    @property
+    def alpha(self) -> float: ...
+    @property
+    def lam(self) -> float: ...
+    @property
+    def seed(self) -> int: ...
+    @property
+    def dir(self) -> Path: ...
+    def run(self) -> Optional[str]:
+        """Runs the episode in this process; ``None`` when done, else the error message."""
+    def record_failure(self, message: str) -> None: ...
+
+class Campaign:
+    """A planners × α × λ × seeds campaign in directory ``out`` (``bkpbs campaign``'s layout)."""
+
+    def __init__(
+        self,
+        out: _PathArg,
+        *,
+        config: Optional[_PathArg] = None,
+        planners: Union[str, Sequence[str], None] = None,
+        alphas: Union[str, Sequence[float], None] = None,
+        lambdas: Union[str, Sequence[float], None] = None,
+        seeds: Optional[int] = None,
+        seed_base: Optional[int] = None,
+        steps: Optional[int] = None,
+        shard: Optional[str] = None,
+    ) -> None: ...
+    @property
+    def out(self) -> Path: ...
+    @property
+    def grid_size(self) -> int: ...
+    @property
+    def shard(self) -> str: ...
+    def settings_toml(self) -> str: ...
+    def cells(self) -> List[Dict[str, Any]]:
+        """Every cell in grid order: position, planner, alpha, lambda, seed, dir."""
+    def prepare(self) -> List[CampaignTask]:
+        """Writes ``campaign.toml`` and returns the unfinished episodes of the shard."""
+    def collect(self) -> Dict[str, Any]:
+        """Writes the collected CSV files; returns grid, collected, failed, episodes_csv."""
+
+def run_episode(
+    planner: str,
+    alpha: float,
+    lam: float,
+    seed: int,
+    *,
+    config: _ConfigSource = None,
+    out: Optional[_PathArg] = None,
+    **overrides: Any,
+) -> Dict[str, Any]:
+    """Runs one episode in the core's loop; returns the ``episode.csv`` row as a dict."""
+
+def write_demand(
+    out: _PathArg,
+    alpha: float = 0.5,
+    lam: float = 3000.0,
+    seed: int = 0,
+    *,
+    config: _ConfigSource = None,
+    **overrides: Any,
+) -> int:
+    """Writes the episode's demand as a SUMO route file; returns the number of vehicles."""
+
+def write_scenario(
+    dir: _PathArg,
+    alpha: float = 0.5,
+    lam: float = 3000.0,
+    seed: int = 0,
+    *,
+    config: _ConfigSource = None,
+    **overrides: Any,
+) -> Dict[str, Any]:
+    """Writes net, vehicle types and demand; returns their paths, ``sumo_args``, ``dt``,
+    ``steps`` and ``vehicles``."""
+
+def config_toml(config: _ConfigSource = None, **overrides: Any) -> str:
+    """The whole configuration as TOML after ``config`` and overrides."""
+
+def report(dirs: Sequence[_PathArg], out: Optional[_PathArg] = None) -> str:
+    """Tables and figures of campaign directories (``bkpbs report``); returns the Markdown."""
+
+def load_predictor(
+    path: Optional[_PathArg] = None, *, config: _ConfigSource = None, **overrides: Any
+) -> Predictor:
+    """The planners' HDV predictor: ``path`` is a b_θ model file (JSON); without it, the one
+    the configuration's ``predictor.kind`` selects (``"learned"`` or ``"constant"``)."""

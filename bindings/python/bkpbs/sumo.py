@@ -1,0 +1,127 @@
+"""Glue between a user's TraCI or libsumo loop and :class:`bkpbs.Controller`.
+
+Everything here is plain TraCI I/O through the module the caller passes (``traci``, ``libsumo``
+or a ``traci`` connection): reading the vehicles the controller needs, and issuing the speed and
+lane-change commands of its maneuvers. What to do is decided in Rust.
+"""
+
+from __future__ import annotations
+
+import weakref
+from dataclasses import dataclass
+from typing import Any, Dict, List, Mapping, MutableSet, Optional
+
+from ._bkpbs import Maneuver
+
+
+@dataclass
+class Vehicle:
+    """One vehicle as TraCI reports it (SUMO's units: m, degrees with 0 = north clockwise, m/s).
+
+    ``Controller.plan`` accepts these or dicts with the same keys.
+    """
+
+    id: str
+    type: str
+    angle: float
+    speed: float
+    acceleration: float
+    lane_index: int
+    lane_position: float
+    road_id: str
+    x: Optional[float] = None
+    y: Optional[float] = None
+    #: ``getLateralLanePosition`` (m, positive left); non-zero during a lane change.
+    lateral_offset: Optional[float] = None
+    #: ``"main"`` or ``"ramp"``; default: from the id (``main.N``/``ramp.N``) or the first road.
+    origin: Optional[str] = None
+    #: Default: v_max for CAVs, the current speed for HDVs.
+    desired_speed: Optional[float] = None
+
+
+def _variables(traci_module: Any) -> Dict[str, int]:
+    tc = traci_module.constants
+    return {
+        "type": tc.VAR_TYPE,
+        "position": tc.VAR_POSITION,
+        "angle": tc.VAR_ANGLE,
+        "speed": tc.VAR_SPEED,
+        "acceleration": tc.VAR_ACCELERATION,
+        "lane_index": tc.VAR_LANE_INDEX,
+        "lane_position": tc.VAR_LANEPOSITION,
+        "road_id": tc.VAR_ROAD_ID,
+        "lateral_offset": tc.VAR_LANEPOSITION_LAT,
+    }
+
+
+def read_vehicles(traci_module: Any) -> List[Dict[str, Any]]:
+    """The vehicles in the network as :meth:`bkpbs.Controller.plan` takes them.
+
+    Call once per step, after ``simulationStep``: vehicles that departed in the step get a
+    subscription to the variables the controller needs, so all are read in one exchange.
+    """
+    codes = _variables(traci_module)
+    wanted = list(codes.values())
+    vehicle = traci_module.vehicle
+    for vid in traci_module.simulation.getDepartedIDList():
+        vehicle.subscribe(vid, wanted)
+    out = []
+    for vid, r in vehicle.getAllSubscriptionResults().items():
+        x, y = r[codes["position"]]
+        out.append(
+            {
+                "id": vid,
+                "type": r[codes["type"]],
+                "x": x,
+                "y": y,
+                "angle": r[codes["angle"]],
+                "speed": r[codes["speed"]],
+                "acceleration": r[codes["acceleration"]],
+                "lane_index": r[codes["lane_index"]],
+                "lane_position": r[codes["lane_position"]],
+                "road_id": r[codes["road_id"]],
+                "lateral_offset": r[codes["lateral_offset"]],
+            }
+        )
+    return out
+
+
+#: CAVs already switched to commanded mode, per TraCI module or connection (by identity for
+#: objects that take no weak reference).
+_COMMANDED: "weakref.WeakKeyDictionary[Any, set]" = weakref.WeakKeyDictionary()
+_COMMANDED_BY_ID: Dict[int, set] = {}
+
+
+def _commanded(traci_module: Any) -> MutableSet[str]:
+    try:
+        return _COMMANDED.setdefault(traci_module, set())
+    except TypeError:
+        return _COMMANDED_BY_ID.setdefault(id(traci_module), set())
+
+
+def apply(
+    maneuvers: Mapping[str, Maneuver],
+    traci_module: Any,
+    dt: float = 0.2,
+    commanded: Optional[MutableSet[str]] = None,
+) -> None:
+    """Sends maneuvers to SUMO as the episode runner does.
+
+    Each CAV is first switched to commanded mode (``setSpeedMode 0``, ``setLaneChangeMode 0``:
+    SUMO's own checks off, the controller alone decides), then gets ``setSpeed`` every step and
+    ``changeLane(id, sumo_lane_index, dt)`` when its maneuver starts a lane change.
+    ``commanded`` is the set of vehicles already switched (default: one per ``traci_module``);
+    vehicles absent from ``maneuvers`` are dropped from it, so a reused id is switched again.
+    """
+    seen = commanded if commanded is not None else _commanded(traci_module)
+    vehicle = traci_module.vehicle
+    for vid, m in maneuvers.items():
+        if vid not in seen:
+            vehicle.setSpeedMode(vid, 0)
+            vehicle.setLaneChangeMode(vid, 0)
+            seen.add(vid)
+        vehicle.setSpeed(vid, m.speed)
+        if m.lane_change is not None and m.sumo_lane_index is not None:
+            vehicle.changeLane(vid, m.sumo_lane_index, dt)
+    for vid in [v for v in seen if v not in maneuvers]:
+        seen.discard(vid)

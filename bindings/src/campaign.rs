@@ -1,0 +1,261 @@
+//! Campaigns for other schedulers (Ray, `python -m bkpbs.campaign`): `Campaign` lists the grid
+//! and its unfinished episodes and collects the directory; a `CampaignTask` runs one episode in
+//! the calling process. All of it is the core's `campaign::tasks`, so the directory is the
+//! one `bkpbs campaign` writes and `bkpbs report` reads.
+
+use std::path::PathBuf;
+
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList, PyString, PyTuple};
+
+use bkpbs::campaign::collect::cell_dir;
+use bkpbs::campaign::worker::{self, Outcome, Request};
+use bkpbs::campaign::{tasks, CampaignError, Overrides, Settings, SettingsError};
+use bkpbs::report::{self as core_report, ReportError};
+
+use crate::episode::Slot;
+use crate::errors::bad_input;
+
+fn campaign_error(e: CampaignError) -> PyErr {
+    match e {
+        CampaignError::Write(_) => pyo3::exceptions::PyOSError::new_err(e.to_string()),
+        _ => bad_input(e),
+    }
+}
+
+fn settings_error(e: SettingsError) -> PyErr {
+    bad_input(e)
+}
+
+/// A grid axis given as a list (or a comma-separated string), as the flag's text.
+fn axis(v: Option<&Bound<'_, PyAny>>) -> PyResult<Option<String>> {
+    let Some(v) = v.filter(|v| !v.is_none()) else {
+        return Ok(None);
+    };
+    if let Ok(s) = v.cast::<PyString>() {
+        return Ok(Some(s.to_cow()?.to_string()));
+    }
+    let mut parts = Vec::new();
+    for item in v.try_iter()? {
+        let item = item?;
+        if let Ok(s) = item.cast::<PyString>() {
+            parts.push(s.to_cow()?.to_string());
+        } else if let Ok(x) = item.extract::<f64>() {
+            parts.push(format!("{x}"));
+        } else {
+            return Err(bad_input(format!(
+                "grid values must be strings or numbers, got {}",
+                item.repr()?
+            )));
+        }
+    }
+    Ok(Some(parts.join(",")))
+}
+
+/// A planners × α × λ × seeds campaign in directory `out`.
+#[pyclass(name = "Campaign", module = "bkpbs", frozen)]
+pub struct PyCampaign {
+    settings: Settings,
+    out: PathBuf,
+}
+
+#[pymethods]
+impl PyCampaign {
+    /// The settings of `bkpbs campaign`: `config` is a campaign TOML file, the keywords its
+    /// flags (lists or comma-separated strings; `shard` is `"k/n"`). Everything is checked now.
+    #[new]
+    #[pyo3(signature = (out, *, config = None, planners = None, alphas = None, lambdas = None, seeds = None, seed_base = None, steps = None, shard = None))]
+    #[allow(clippy::too_many_arguments)]
+    fn new(
+        out: PathBuf,
+        config: Option<PathBuf>,
+        planners: Option<&Bound<'_, PyAny>>,
+        alphas: Option<&Bound<'_, PyAny>>,
+        lambdas: Option<&Bound<'_, PyAny>>,
+        seeds: Option<u64>,
+        seed_base: Option<u64>,
+        steps: Option<u32>,
+        shard: Option<String>,
+    ) -> PyResult<Self> {
+        let overrides = Overrides {
+            planners: axis(planners)?,
+            alphas: axis(alphas)?,
+            lambdas: axis(lambdas)?,
+            seeds,
+            seed_base,
+            steps,
+            workers: None,
+            shard,
+        };
+        let settings = Settings::resolve(config.as_deref(), &overrides).map_err(settings_error)?;
+        Ok(PyCampaign { settings, out })
+    }
+
+    /// The campaign directory.
+    #[getter]
+    fn out(&self) -> PathBuf {
+        self.out.clone()
+    }
+
+    /// Episodes in the whole grid.
+    #[getter]
+    fn grid_size(&self) -> usize {
+        self.settings.grid.len()
+    }
+
+    /// This run's shard, `"k/n"`.
+    #[getter]
+    fn shard(&self) -> String {
+        self.settings.shard.to_string()
+    }
+
+    /// The settings as `campaign.toml` holds them.
+    fn settings_toml(&self) -> String {
+        self.settings.to_toml()
+    }
+
+    /// Every cell of the grid in grid order (planner, then α, λ, seed ascending), each with
+    /// its directory.
+    fn cells<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyList>> {
+        let out = PyList::empty(py);
+        for (position, c) in self.settings.grid.cells().iter().enumerate() {
+            let d = PyDict::new(py);
+            d.set_item("position", position)?;
+            d.set_item("planner", &c.planner)?;
+            d.set_item("alpha", c.alpha)?;
+            d.set_item("lambda", c.lambda)?;
+            d.set_item("seed", c.seed)?;
+            d.set_item("dir", cell_dir(&self.out, c))?;
+            out.append(d)?;
+        }
+        Ok(out)
+    }
+
+    /// Readies the directory (checks an earlier run's settings, writes `campaign.toml`) and
+    /// returns the unfinished episodes of this shard as tasks, in grid order.
+    fn prepare(&self) -> PyResult<Vec<PyCampaignTask>> {
+        let plan = tasks::prepare(&self.settings, &self.out).map_err(campaign_error)?;
+        Ok(plan
+            .requests
+            .into_iter()
+            .map(|request| PyCampaignTask { request })
+            .collect())
+    }
+
+    /// Gathers every finished episode into `episodes.csv`, `vehicles.csv`, `timings.csv` and
+    /// `failures.csv` (grid order) and says how many there are.
+    fn collect<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let r = tasks::collect(&self.settings, &self.out).map_err(campaign_error)?;
+        let d = PyDict::new(py);
+        d.set_item("grid", self.settings.grid.len())?;
+        d.set_item("collected", r.episodes.rows.len())?;
+        d.set_item("failed", r.failures.rows.len())?;
+        d.set_item("episodes_csv", self.out.join("episodes.csv"))?;
+        Ok(d)
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "Campaign(out='{}', episodes={}, shard='{}')",
+            self.out.display(),
+            self.settings.grid.len(),
+            self.settings.shard
+        )
+    }
+}
+
+/// One unfinished episode of a campaign; picklable, so it can travel to another process.
+#[pyclass(name = "CampaignTask", module = "bkpbs", frozen)]
+pub struct PyCampaignTask {
+    request: Request,
+}
+
+#[pymethods]
+impl PyCampaignTask {
+    /// The task from its `to_json()` text.
+    #[staticmethod]
+    fn from_json(text: &str) -> PyResult<Self> {
+        let request = serde_json::from_str(text)
+            .map_err(|e| bad_input(format!("malformed campaign task: {e}")))?;
+        Ok(PyCampaignTask { request })
+    }
+
+    /// The task as JSON (the request a `bkpbs worker` reads).
+    fn to_json(&self) -> String {
+        serde_json::to_string(&self.request).expect("request serialises")
+    }
+
+    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyTuple>> {
+        let ctor = py.get_type::<PyCampaignTask>().getattr("from_json")?;
+        PyTuple::new(py, [ctor, PyTuple::new(py, [self.to_json()])?.into_any()])
+    }
+
+    /// The cell's position in grid order.
+    #[getter]
+    fn position(&self) -> usize {
+        self.request.position
+    }
+
+    #[getter]
+    fn planner(&self) -> &str {
+        &self.request.planner
+    }
+
+    #[getter]
+    fn alpha(&self) -> f64 {
+        self.request.config.scenario.alpha
+    }
+
+    /// The arrival rate λ (veh/h).
+    #[getter]
+    fn lam(&self) -> f64 {
+        self.request.config.scenario.lambda
+    }
+
+    #[getter]
+    fn seed(&self) -> u64 {
+        self.request.config.scenario.seed
+    }
+
+    /// The cell directory the episode's files go to.
+    #[getter]
+    fn dir(&self) -> PathBuf {
+        self.request.dir.clone()
+    }
+
+    /// Runs the episode in this process (GIL released) as a campaign worker does: its files
+    /// in the cell directory, or `error.txt`. Returns `None` when done, else the error message.
+    fn run(&self, py: Python<'_>) -> PyResult<Option<String>> {
+        let _slot = Slot::claim()?;
+        Ok(match py.detach(|| tasks::run_request(&self.request)) {
+            Outcome::Done => None,
+            Outcome::Failed { error } => Some(error),
+        })
+    }
+
+    /// Records that the episode failed outside this process (e.g. its worker died): writes
+    /// `error.txt` in the cell directory.
+    fn record_failure(&self, message: &str) {
+        worker::record_failure(&self.request.dir, message);
+    }
+
+    fn __repr__(&self) -> String {
+        let s = &self.request.config.scenario;
+        format!(
+            "CampaignTask({} α={} λ={} seed={})",
+            self.request.planner, s.alpha, s.lambda, s.seed
+        )
+    }
+}
+
+/// Tables and figures of one or more campaign directories (several are merged), as
+/// `bkpbs report`; returns the Markdown tables. `out` defaults to the first directory.
+#[pyfunction]
+#[pyo3(signature = (dirs, out = None))]
+pub fn report(dirs: Vec<PathBuf>, out: Option<PathBuf>) -> PyResult<String> {
+    let r = core_report::run(&dirs, out.as_deref()).map_err(|e| match e {
+        ReportError::Write(_) => pyo3::exceptions::PyOSError::new_err(e.to_string()),
+        _ => bad_input(e),
+    })?;
+    Ok(r.markdown)
+}

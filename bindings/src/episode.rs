@@ -1,0 +1,233 @@
+//! `bkpbs.run_episode` (the core's episode loop, GIL released) and the scenario files a Python
+//! TraCI loop needs (`write_scenario`, `write_demand`).
+
+use std::panic::{self, AssertUnwindSafe};
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+
+use bkpbs::config::Config;
+use bkpbs::controller::{self, UnknownPlanner, PLANNERS};
+use bkpbs::episode::{self, EpisodeError, EpisodeResult};
+use bkpbs::output::{self, episode_row, EPISODE_COLUMNS};
+use bkpbs::road::EMBEDDED_NET;
+use bkpbs::{demand, sumo_files};
+
+use crate::errors::{bad_input, episode_error, SimulationBusyError, SumoError};
+
+/// Set while an episode runs in this process: libsumo holds one simulation per process.
+static RUNNING: AtomicBool = AtomicBool::new(false);
+
+/// Holds [`RUNNING`] until dropped.
+pub struct Slot(());
+
+impl Slot {
+    /// Claims the process's simulation slot.
+    ///
+    /// # Errors
+    /// [`SimulationBusyError`] while another episode runs in this process.
+    pub fn claim() -> PyResult<Slot> {
+        RUNNING
+            .compare_exchange(false, true, Ordering::SeqCst, Ordering::SeqCst)
+            .map(|_| Slot(()))
+            .map_err(|_| {
+                SimulationBusyError::new_err(
+                    "an episode is already running in this process (libsumo allows one \
+                     simulation per process): run episodes one after another, or in separate \
+                     processes (python -m bkpbs.campaign)",
+                )
+            })
+    }
+}
+
+impl Drop for Slot {
+    fn drop(&mut self) {
+        RUNNING.store(false, Ordering::SeqCst);
+    }
+}
+
+/// The message of a caught panic.
+fn panic_message(payload: &(dyn std::any::Any + Send)) -> String {
+    payload
+        .downcast_ref::<&str>()
+        .map(|s| s.to_string())
+        .or_else(|| payload.downcast_ref::<String>().cloned())
+        .unwrap_or_else(|| "unknown panic payload".into())
+}
+
+/// The α, λ and seed of an episode as a `scenario` table.
+fn cell_table(alpha: f64, lam: f64, seed: i64) -> PyResult<toml::Table> {
+    if seed < 0 {
+        return Err(bad_input(format!(
+            "invalid setting scenario.seed = {seed}: must not be negative"
+        )));
+    }
+    Ok(toml::Table::from_iter([
+        ("alpha".to_string(), toml::Value::Float(alpha)),
+        ("lambda".to_string(), toml::Value::Float(lam)),
+        ("seed".to_string(), toml::Value::Integer(seed)),
+    ]))
+}
+
+/// Columns of `episode.csv` that hold decimals (the others are counts, or the planner).
+const FLOAT_COLUMNS: [&str; 8] = [
+    "alpha",
+    "lambda",
+    "controllable_collision_rate",
+    "mean_delay_s",
+    "mean_delay_cav_s",
+    "mean_delay_hdv_s",
+    "throughput_veh_h",
+    "mean_speed_mps",
+];
+
+/// The `episode.csv` row as a dict: the same numbers, typed (empty cells are `None`).
+fn summary_dict<'py>(py: Python<'py>, r: &EpisodeResult) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    for (col, cell) in EPISODE_COLUMNS.iter().zip(episode_row(&r.summary)) {
+        if cell.is_empty() {
+            d.set_item(col, py.None())?;
+        } else if FLOAT_COLUMNS.contains(col) {
+            d.set_item(col, cell.parse::<f64>().unwrap_or(f64::NAN))?;
+        } else if let Ok(i) = cell.parse::<i64>() {
+            d.set_item(col, i)?;
+        } else if let Ok(x) = cell.parse::<f64>() {
+            d.set_item(col, x)?;
+        } else {
+            d.set_item(col, cell)?;
+        }
+    }
+    Ok(d)
+}
+
+/// Runs one episode in this thread with the GIL released; `Err` carries the Python exception.
+fn run_detached(py: Python<'_>, planner: &str, config: &Config) -> PyResult<EpisodeResult> {
+    let _slot = Slot::claim()?;
+    let outcome = py.detach(|| {
+        panic::catch_unwind(AssertUnwindSafe(
+            || -> Result<EpisodeResult, EpisodeError> {
+                let mut ctl = controller::by_name(planner, config)?;
+                episode::run(config, ctl.as_mut())
+            },
+        ))
+    });
+    match outcome {
+        Ok(Ok(result)) => Ok(result),
+        Ok(Err(e)) => Err(episode_error(&e)),
+        Err(payload) => Err(SumoError::new_err(format!(
+            "planner {planner} panicked: {}",
+            panic_message(payload.as_ref())
+        ))),
+    }
+}
+
+/// Runs one episode of `planner` at penetration `alpha`, arrival rate `lam` (veh/h) and
+/// `seed` in the core's episode loop (SUMO in-process) and returns its summary: the numbers of
+/// `episode.csv`. `config` (dict, TOML text or file) and keyword overrides (`steps=100`,
+/// `idm={"accel": 2.0}`) set the rest; `out` also writes the episode's CSV files there.
+#[pyfunction]
+#[pyo3(signature = (planner, alpha, lam, seed, *, config = None, out = None, **overrides))]
+#[allow(clippy::too_many_arguments)]
+pub fn run_episode<'py>(
+    py: Python<'py>,
+    planner: &str,
+    alpha: f64,
+    lam: f64,
+    seed: i64,
+    config: Option<&Bound<'py, PyAny>>,
+    out: Option<PathBuf>,
+    overrides: Option<&Bound<'py, PyDict>>,
+) -> PyResult<Bound<'py, PyDict>> {
+    if !PLANNERS.contains(&planner) {
+        return Err(bad_input(UnknownPlanner(planner.to_string())));
+    }
+    let config = crate::config::resolve(config, overrides, cell_table(alpha, lam, seed)?)?;
+    let result = run_detached(py, planner, &config)?;
+    if let Some(dir) = out {
+        result
+            .write(&dir)
+            .map_err(|e| pyo3::exceptions::PyOSError::new_err(e.to_string()))?;
+    }
+    summary_dict(py, &result)
+}
+
+fn write(path: &Path, text: &str) -> PyResult<()> {
+    output::write_atomic(path, text.as_bytes())
+        .map_err(|e| pyo3::exceptions::PyOSError::new_err(e.to_string()))
+}
+
+/// Writes an episode's demand (α, λ, seed and the configuration) as a SUMO route file, the
+/// same as `bkpbs demand --out`, and returns the number of vehicles.
+#[pyfunction]
+#[pyo3(signature = (out, alpha = 0.5, lam = 3000.0, seed = 0, *, config = None, **overrides))]
+pub fn write_demand(
+    out: PathBuf,
+    alpha: f64,
+    lam: f64,
+    seed: i64,
+    config: Option<&Bound<'_, PyAny>>,
+    overrides: Option<&Bound<'_, PyDict>>,
+) -> PyResult<usize> {
+    let config = crate::config::resolve(config, overrides, cell_table(alpha, lam, seed)?)?;
+    let planned = demand::generate(&config);
+    write(&out, &demand::route_file(&planned))?;
+    Ok(planned.len())
+}
+
+/// Writes what SUMO needs to run an episode from a TraCI or libsumo loop into `dir`: the merge
+/// network (unless the configuration names one), the vehicle types and the demand as a route
+/// file. Returns their paths, the SUMO command line the episode runner uses (`sumo_args`:
+/// step length, collision options, lane-change duration, …; collisions are only reported, so
+/// the loop removes the vehicles involved), the step length `dt`, `steps` and the number of
+/// vehicles.
+#[pyfunction]
+#[pyo3(signature = (dir, alpha = 0.5, lam = 3000.0, seed = 0, *, config = None, **overrides))]
+pub fn write_scenario<'py>(
+    py: Python<'py>,
+    dir: PathBuf,
+    alpha: f64,
+    lam: f64,
+    seed: i64,
+    config: Option<&Bound<'py, PyAny>>,
+    overrides: Option<&Bound<'py, PyDict>>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let config = crate::config::resolve(config, overrides, cell_table(alpha, lam, seed)?)?;
+    let net = match &config.scenario.net_file {
+        Some(p) => p.clone(),
+        None => {
+            let p = dir.join("merge.net.xml");
+            write(&p, EMBEDDED_NET)?;
+            p
+        }
+    };
+    let vtypes = dir.join("vtypes.add.xml");
+    write(&vtypes, &sumo_files::vehicle_types(&config))?;
+    let routes = dir.join("demand.rou.xml");
+    let planned = demand::generate(&config);
+    write(&routes, &demand::route_file(&planned))?;
+    let d = PyDict::new(py);
+    d.set_item(
+        "sumo_args",
+        sumo_files::command_line(&config, &net, &vtypes, &routes),
+    )?;
+    d.set_item("net", net)?;
+    d.set_item("vtypes", vtypes)?;
+    d.set_item("routes", routes)?;
+    d.set_item("dt", config.scenario.dt)?;
+    d.set_item("steps", config.scenario.steps)?;
+    d.set_item("vehicles", planned.len())?;
+    Ok(d)
+}
+
+/// The whole configuration as TOML (as `bkpbs config --print` shows it), after `config` and
+/// keyword overrides.
+#[pyfunction]
+#[pyo3(signature = (config = None, **overrides))]
+pub fn config_toml(
+    config: Option<&Bound<'_, PyAny>>,
+    overrides: Option<&Bound<'_, PyDict>>,
+) -> PyResult<String> {
+    Ok(crate::config::resolve(config, overrides, toml::Table::new())?.to_toml())
+}

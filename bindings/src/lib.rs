@@ -1,0 +1,31 @@
+//! Python bindings of bkpbs: the native module `bkpbs._bkpbs`, re-exported by the `bkpbs`
+//! package. Thin wrappers, one module per core concept; the logic stays in the core crate.
+
+mod campaign;
+mod config;
+mod controller;
+mod episode;
+mod errors;
+mod predict;
+mod scene;
+
+use pyo3::prelude::*;
+
+#[pymodule]
+fn _bkpbs(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    errors::register(m)?;
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    m.add("PLANNERS", controller::planners(m.py())?)?;
+    m.add_class::<controller::PyController>()?;
+    m.add_class::<controller::PyManeuver>()?;
+    m.add_class::<campaign::PyCampaign>()?;
+    m.add_class::<campaign::PyCampaignTask>()?;
+    m.add_class::<predict::PyPredictor>()?;
+    m.add_function(wrap_pyfunction!(episode::run_episode, m)?)?;
+    m.add_function(wrap_pyfunction!(episode::write_demand, m)?)?;
+    m.add_function(wrap_pyfunction!(episode::write_scenario, m)?)?;
+    m.add_function(wrap_pyfunction!(episode::config_toml, m)?)?;
+    m.add_function(wrap_pyfunction!(campaign::report, m)?)?;
+    m.add_function(wrap_pyfunction!(predict::load_predictor, m)?)?;
+    Ok(())
+}

@@ -1,0 +1,92 @@
+//! A campaign as independent tasks, for schedulers other than the worker pool (Ray through the
+//! Python bindings, a batch system): prepare the directory and list the unfinished episodes,
+//! run any one of them in the calling process, collect.
+//!
+//! [`super::run`] is these three steps with [`super::pool`] in the middle; another scheduler
+//! replaces only the middle and produces the same directory, byte for byte.
+
+use std::path::Path;
+
+use super::collect::{self, cell_dir};
+use super::results::Results;
+use super::worker::{self, Outcome, Request};
+use super::{CampaignError, Settings, SETTINGS_FILE};
+use crate::output;
+
+/// The episodes of a campaign run that still need running.
+#[derive(Debug, Clone)]
+pub struct Plan {
+    /// Unfinished cells of the shard, in grid order.
+    pub requests: Vec<Request>,
+    /// Cells in this run's shard.
+    pub shard_size: usize,
+    /// Cells of the shard found finished.
+    pub already_done: usize,
+}
+
+/// Readies `out` for a run of `settings` and lists its unfinished episodes.
+///
+/// # Errors
+/// `out` holds a campaign with other scenario settings, or `campaign.toml` cannot be written.
+pub fn prepare(settings: &Settings, out: &Path) -> Result<Plan, CampaignError> {
+    let settings_path = out.join(SETTINGS_FILE);
+    if settings_path.exists() {
+        let earlier = Settings::from_campaign_file(&settings_path)?;
+        if let Some(key) = settings.scenario_difference(&earlier) {
+            return Err(CampaignError::OtherSettings {
+                dir: out.to_path_buf(),
+                key,
+            });
+        }
+    }
+    output::write_atomic(&settings_path, settings.to_toml().as_bytes())?;
+    // Left by a campaign killed while collecting.
+    worker::remove_stale_temporaries(out);
+
+    let mut shard_size = 0;
+    let mut requests = Vec::new();
+    for (position, cell) in settings.grid.cells().iter().enumerate() {
+        if !settings.shard.contains(position) {
+            continue;
+        }
+        shard_size += 1;
+        if !collect::is_done(out, cell) {
+            requests.push(Request {
+                position,
+                planner: cell.planner.clone(),
+                dir: cell_dir(out, cell),
+                config: settings.episode_config(cell),
+            });
+        }
+    }
+    Ok(Plan {
+        already_done: shard_size - requests.len(),
+        requests,
+        shard_size,
+    })
+}
+
+/// Runs one episode in this process as a worker does: its files in the cell directory, or
+/// `error.txt` with the message (also returned). libsumo allows one simulation per process, so
+/// callers run one at a time per process.
+pub fn run_request(req: &Request) -> Outcome {
+    match worker::run_cell(req) {
+        Ok(()) => Outcome::Done,
+        Err(error) => {
+            worker::record_failure(&req.dir, &error);
+            Outcome::Failed { error }
+        }
+    }
+}
+
+/// Gathers the finished cells found in `out` into its collected files (grid order) and
+/// returns them.
+///
+/// # Errors
+/// A cell's files are unreadable or belong to another cell, or the collected files cannot be
+/// written.
+pub fn collect(settings: &Settings, out: &Path) -> Result<Results, CampaignError> {
+    let results = collect::collect(out, &settings.grid, settings.shard)?;
+    results.write(out)?;
+    Ok(results)
+}

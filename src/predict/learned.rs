@@ -1,0 +1,346 @@
+//! The learned predictor: b_θ's lane-change decisions rolled out over the horizon.
+//!
+//! Longitudinally every vehicle keeps its speed (paper IV.D). Laterally, the HDV's state is
+//! rolled forward step by step, and at each step k the model is evaluated on the rolled-out
+//! scene: graph (a) from the other vehicles at constant speed in their lanes (CAVs whose plans
+//! are given: at their planned poses), sequence (b) from the given plans over the 15 steps after
+//! k. The per-step probabilities p_k are hazards: the HDV is predicted to start its lane change
+//! at the first step at which the probability that it has started, 1 − Π_{j≤k}(1 − p_j),
+//! reaches `predictor.decision_probability` (default ½: the median start, as the
+//! constant-speed predictor does for ramp merges). The change is then executed as SUMO does it:
+//! one lane at constant lateral speed over the lane-change duration (5 steps of 0.9 m), towards
+//! the only lane the HDV can go to (acceleration lane and right main lane: left; left main lane:
+//! right). At most one lane change is predicted per horizon. A vehicle already changing lanes
+//! finishes its manoeuvre in the direction of its heading, and nothing more is predicted.
+//!
+//! With plans of higher-priority CAVs given, the conditioned model is used, otherwise the
+//! unconditioned one (BK-M-A*, the PBS root).
+
+use std::cell::RefCell;
+use std::sync::Arc;
+
+use super::features::{
+    cav_node, ego_of, lane_change_direction, neighbours, select_cavs, Agent, Observation,
+    LATERAL_AT_REST, PREVIEW,
+};
+use super::infer::Workspace;
+use super::model_file::{LaneChangeModel, ModelError};
+use super::Predictor;
+use crate::config::{Config, ConfigError, PredictorKind};
+use crate::road::MERGE_LANE;
+use crate::scene::{Kind, Scene};
+use crate::trajectory::{Pose, Trajectory};
+
+/// b_θ as a [`Predictor`].
+#[derive(Debug, Clone)]
+pub struct Learned {
+    conditioned: Arc<LaneChangeModel>,
+    unconditioned: Arc<LaneChangeModel>,
+    dt: f64,
+    lane_change_steps: usize,
+    decision_probability: f64,
+}
+
+/// Per-thread buffers, so predicting allocates nothing but the trajectory it returns.
+#[derive(Default)]
+struct Buffers {
+    ws: Workspace,
+    /// Scene vehicles other than the HDV (now), and whether a given plan replaces each.
+    others: Vec<(Agent, bool)>,
+    /// Everyone else at the rollout step.
+    moved: Vec<Agent>,
+    /// Plan agents at the rollout step (candidates of sequence (b)).
+    plan_agents: Vec<(usize, Agent)>,
+    chosen: Vec<usize>,
+}
+
+thread_local! {
+    static BUFFERS: RefCell<Buffers> = RefCell::new(Buffers::default());
+}
+
+/// What the rollout decided for one HDV.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Rollout {
+    /// The model's probability at each rollout step evaluated (step 0 = now); empty when the
+    /// rollout was run for a trajectory only.
+    pub probabilities: Vec<f64>,
+    /// The step at which the lane change is predicted to start (lateral motion from the next
+    /// step on), if within the horizon.
+    pub start: Option<usize>,
+    /// Lateral direction: +1 left, −1 right.
+    pub direction: i32,
+}
+
+impl Learned {
+    /// With given models.
+    pub fn with_models(
+        config: &Config,
+        conditioned: Arc<LaneChangeModel>,
+        unconditioned: Arc<LaneChangeModel>,
+    ) -> Learned {
+        let s = &config.scenario;
+        Learned {
+            conditioned,
+            unconditioned,
+            dt: s.dt,
+            lane_change_steps: (s.lane_change_duration / s.dt).round().max(1.0) as usize,
+            decision_probability: config.predictor.decision_probability,
+        }
+    }
+
+    /// The model used with (`true`) or without plans to condition on.
+    pub fn model(&self, conditioned: bool) -> &LaneChangeModel {
+        if conditioned {
+            &self.conditioned
+        } else {
+            &self.unconditioned
+        }
+    }
+
+    /// Rolls the lane-change decision of HDV `i` out over `horizon` steps.
+    pub fn rollout(
+        &self,
+        scene: &Scene,
+        i: usize,
+        conditioned_on: &[&Trajectory],
+        horizon: usize,
+    ) -> Rollout {
+        BUFFERS.with(|b| {
+            self.rollout_with(&mut b.borrow_mut(), scene, i, conditioned_on, horizon, true)
+        })
+    }
+
+    fn rollout_with(
+        &self,
+        buf: &mut Buffers,
+        scene: &Scene,
+        i: usize,
+        plans: &[&Trajectory],
+        horizon: usize,
+        record: bool,
+    ) -> Rollout {
+        let road = &scene.road;
+        let w = road.lane_width;
+        let v = &scene.vehicles[i];
+        let direction = lane_change_direction(v.lane);
+        let mut out = Rollout {
+            probabilities: Vec::new(),
+            start: None,
+            direction,
+        };
+        let conditioned = !plans.is_empty();
+        let model = self.model(conditioned);
+        let ego0 = Agent::of(v, w);
+        // Everyone else now; a scene vehicle at a plan's first pose is that plan's CAV.
+        buf.others.clear();
+        for (j, o) in scene.vehicles.iter().enumerate() {
+            if j == i {
+                continue;
+            }
+            let a = Agent::of(o, w);
+            let planned = plans.iter().any(|t| {
+                let p = t.at(0, self.dt);
+                (p.s - a.s).abs() < 0.5 && (p.y - a.y).abs() < 0.5
+            });
+            buf.others.push((a, planned));
+        }
+        let lane_of = |y: f64| ((y / w).round() as i32).clamp(0, 2);
+        let plan_agent = |t: &Trajectory, k: usize| {
+            let p = t.at(k, self.dt);
+            Agent {
+                s: p.s,
+                y: p.y,
+                lane: lane_of(p.y),
+                speed: p.speed,
+                is_cav: true,
+            }
+        };
+        let mut obs = Observation {
+            ego: ego_of(v, road),
+            ..Observation::default()
+        };
+        obs.ego.lateral = 0.0;
+        let mut undecided = 1.0;
+        for k in 0..horizon {
+            let dk = v.speed * self.dt * k as f64;
+            let ego = Agent {
+                s: ego0.s + dk,
+                ..ego0
+            };
+            // On the single-lane ramp edge no lane change is possible.
+            if v.lane == MERGE_LANE && v.front() + dk < road.merge_start {
+                if record {
+                    out.probabilities.push(0.0);
+                }
+                continue;
+            }
+            buf.moved.clear();
+            buf.moved.extend(
+                buf.others
+                    .iter()
+                    .filter(|(_, planned)| !planned)
+                    .map(|(a, _)| Agent {
+                        s: a.s + a.speed * self.dt * k as f64,
+                        ..*a
+                    }),
+            );
+            buf.plan_agents.clear();
+            for (n, t) in plans.iter().enumerate() {
+                let a = plan_agent(t, k);
+                buf.moved.push(a);
+                buf.plan_agents.push((n, a));
+            }
+            obs.ego.to_merge_end = (road.merge_end - v.front() - dk) as f32;
+            obs.neighbours = neighbours(&ego, buf.moved.iter());
+            if conditioned {
+                select_cavs(&ego, buf.plan_agents.iter().copied(), &mut buf.chosen);
+                obs.cavs = Default::default();
+                for (slot, &n) in buf.chosen.iter().enumerate() {
+                    for j in 1..=PREVIEW {
+                        let a = plan_agent(plans[n], k + j);
+                        obs.cavs[j - 1][slot] = cav_node(&ego, j, self.dt, a.s, a.y, a.speed);
+                    }
+                }
+            }
+            let p = model.probability(&obs, &mut buf.ws);
+            if record {
+                out.probabilities.push(p);
+            }
+            undecided *= 1.0 - p;
+            if 1.0 - undecided >= self.decision_probability {
+                out.start = Some(k);
+                break;
+            }
+        }
+        out
+    }
+
+    fn trajectory(
+        &self,
+        scene: &Scene,
+        i: usize,
+        lateral: impl Fn(usize) -> f64,
+        horizon: usize,
+    ) -> Trajectory {
+        let v = &scene.vehicles[i];
+        let poses = (0..=horizon)
+            .map(|k| Pose {
+                s: v.s + v.speed * self.dt * k as f64,
+                y: lateral(k),
+                heading: 0.0,
+                speed: v.speed,
+            })
+            .collect();
+        Trajectory {
+            poses,
+            length: v.length,
+            width: v.width,
+        }
+    }
+}
+
+impl Predictor for Learned {
+    fn name(&self) -> &'static str {
+        "learned"
+    }
+
+    fn predict(
+        &self,
+        scene: &Scene,
+        i: usize,
+        conditioned_on: &[&Trajectory],
+        horizon: usize,
+    ) -> Trajectory {
+        let v = &scene.vehicles[i];
+        let w = scene.road.lane_width;
+        let y0 = v.lane as f64 * w + v.lateral;
+        let step = w / self.lane_change_steps as f64;
+        if v.kind != Kind::Hdv {
+            return self.trajectory(scene, i, |_| y0, horizon);
+        }
+        if v.lateral.abs() >= LATERAL_AT_REST {
+            // Mid-manoeuvre: SUMO finishes it at constant lateral speed.
+            let dir = if v.heading.abs() > 1e-6 {
+                v.heading.signum()
+            } else {
+                -v.lateral.signum()
+            };
+            let target = if dir > 0.0 {
+                (y0 / w).ceil() * w
+            } else {
+                (y0 / w).floor() * w
+            };
+            return self.trajectory(
+                scene,
+                i,
+                |k| {
+                    let y = y0 + dir * step * k as f64;
+                    if dir > 0.0 {
+                        y.min(target)
+                    } else {
+                        y.max(target)
+                    }
+                },
+                horizon,
+            );
+        }
+        let r = BUFFERS.with(|b| {
+            self.rollout_with(
+                &mut b.borrow_mut(),
+                scene,
+                i,
+                conditioned_on,
+                horizon,
+                false,
+            )
+        });
+        let lc = self.lane_change_steps as f64;
+        self.trajectory(
+            scene,
+            i,
+            |k| match r.start {
+                Some(m) if k > m => y0 + r.direction as f64 * w * ((k - m) as f64 / lc).min(1.0),
+                _ => y0,
+            },
+            horizon,
+        )
+    }
+}
+
+/// The HDV predictor `config.predictor` selects: b_θ (with the configured or the embedded
+/// models) or constant speed. A model file that cannot be used is a [`ConfigError::Model`]
+/// naming the setting and the file.
+pub fn configured(config: &Config) -> Result<Box<dyn Predictor>, ConfigError> {
+    match config.predictor.kind {
+        PredictorKind::Constant => Ok(Box::new(super::ConstantSpeed::new(config))),
+        PredictorKind::Learned => {
+            let p = &config.predictor;
+            let load = |path: &Option<std::path::PathBuf>, field, conditioned| match path {
+                Some(path) => LaneChangeModel::load(path)
+                    .map(Arc::new)
+                    .map_err(|cause| ConfigError::Model { field, cause }),
+                None => Ok(LaneChangeModel::embedded(conditioned)),
+            };
+            let c = load(&p.conditioned_model, "predictor.conditioned_model", true)?;
+            let u = load(
+                &p.unconditioned_model,
+                "predictor.unconditioned_model",
+                false,
+            )?;
+            if !c.conditioned() || u.conditioned() {
+                return Err(ConfigError::Model {
+                    field: "predictor",
+                    cause: ModelError::Shape {
+                        path: if c.conditioned() {
+                            u.source.clone().into()
+                        } else {
+                            c.source.clone().into()
+                        },
+                        what: "conditioned_model must be a conditioned model and unconditioned_model an unconditioned one".into(),
+                    },
+                });
+            }
+            Ok(Box::new(Learned::with_models(config, c, u)))
+        }
+    }
+}

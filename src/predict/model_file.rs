@@ -1,0 +1,296 @@
+//! Model files of b_θ: JSON (serde_json) with a format name and version, the feature layout,
+//! the architecture, the trained parameters, the calibration, the logistic-regression baseline
+//! trained on the same data, and how the model was trained.
+//!
+//! Loading checks everything against this build: a truncated file, another format version,
+//! another feature layout or parameter vectors of the wrong length are errors naming the file.
+
+use std::path::{Path, PathBuf};
+use std::sync::{Arc, OnceLock};
+
+use serde::{Deserialize, Serialize};
+
+use super::features::{encode_a, encode_b, FeatureLayout, Observation, Subset};
+use super::gcn::Architecture;
+use super::infer::{Network, Workspace};
+use super::logistic::Logistic;
+use super::train::{Calibration, EpochLog, TrainOptions};
+
+/// The `format` field of every model file.
+pub const MODEL_FORMAT: &str = "bkpbs-lane-change-model";
+/// Bumped whenever the file's meaning changes.
+pub const MODEL_VERSION: u32 = 1;
+
+/// The committed conditioned model, embedded so the default works from any directory.
+pub const EMBEDDED_CONDITIONED: &str = include_str!("../../models/gcn-conditioned.json");
+/// The committed unconditioned model.
+pub const EMBEDDED_UNCONDITIONED: &str = include_str!("../../models/gcn-unconditioned.json");
+
+/// The logistic-regression baseline stored next to the network.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Baseline {
+    pub params: Vec<f32>,
+    pub calibration: Calibration,
+}
+
+/// How a model was trained (documentation; not used for prediction).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TrainingInfo {
+    /// File name of the training data (no directory).
+    pub data: String,
+    pub train_samples: usize,
+    pub validation_samples: usize,
+    pub options: TrainOptions,
+    pub best_epoch: usize,
+    pub wall_s: f64,
+    pub baseline_wall_s: f64,
+    pub log: Vec<EpochLog>,
+}
+
+/// The whole file.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ModelFile {
+    pub format: String,
+    pub version: u32,
+    pub conditioned: bool,
+    pub layout: FeatureLayout,
+    pub architecture: Architecture,
+    pub params: Vec<f32>,
+    pub calibration: Calibration,
+    pub baseline: Baseline,
+    pub training: TrainingInfo,
+}
+
+/// Why a model file cannot be used.
+#[derive(Debug, thiserror::Error)]
+pub enum ModelError {
+    #[error("cannot read model file {path}: {cause}")]
+    Read {
+        path: PathBuf,
+        cause: std::io::Error,
+    },
+    #[error("model file {path} is not valid model JSON (truncated or corrupt?): {message}")]
+    Json { path: PathBuf, message: String },
+    #[error("{path} is not a bkpbs lane-change model (format '{found}')")]
+    Format { path: PathBuf, found: String },
+    #[error("model file {path} has format version {found}; this build reads version {expected}")]
+    Version {
+        path: PathBuf,
+        found: u32,
+        expected: u32,
+    },
+    #[error("model file {path} was trained on another feature layout: {what}")]
+    Layout { path: PathBuf, what: String },
+    #[error("model file {path} has the wrong shapes: {what}")]
+    Shape { path: PathBuf, what: String },
+    #[error(transparent)]
+    Write(#[from] crate::output::WriteError),
+}
+
+impl ModelFile {
+    /// Parses and checks model JSON; `path` only names the file in errors.
+    pub fn from_json(path: &Path, text: &str) -> Result<ModelFile, ModelError> {
+        let p = || path.to_path_buf();
+        // Read the version first, so an old or new file says so rather than failing on a field.
+        #[derive(Deserialize)]
+        struct Head {
+            format: Option<String>,
+            version: Option<u32>,
+        }
+        let head: Head = serde_json::from_str(text).map_err(|e| ModelError::Json {
+            path: p(),
+            message: e.to_string(),
+        })?;
+        let format = head.format.unwrap_or_default();
+        if format != MODEL_FORMAT {
+            return Err(ModelError::Format {
+                path: p(),
+                found: format,
+            });
+        }
+        let version = head.version.unwrap_or(0);
+        if version != MODEL_VERSION {
+            return Err(ModelError::Version {
+                path: p(),
+                found: version,
+                expected: MODEL_VERSION,
+            });
+        }
+        let m: ModelFile = serde_json::from_str(text).map_err(|e| ModelError::Json {
+            path: p(),
+            message: e.to_string(),
+        })?;
+        m.check(path)?;
+        Ok(m)
+    }
+
+    fn check(&self, path: &Path) -> Result<(), ModelError> {
+        let shape = |what: String| ModelError::Shape {
+            path: path.to_path_buf(),
+            what,
+        };
+        let current = FeatureLayout::current();
+        if self.layout != current {
+            return Err(ModelError::Layout {
+                path: path.to_path_buf(),
+                what: format!(
+                    "file has {} × {} node features (a) and {} × {} × {} (b), this build {} × {} and {} × {} × {}",
+                    self.layout.nodes_a,
+                    self.layout.features_a,
+                    self.layout.preview,
+                    self.layout.cav_nodes,
+                    self.layout.features_b,
+                    current.nodes_a,
+                    current.features_a,
+                    current.preview,
+                    current.cav_nodes,
+                    current.features_b
+                ),
+            });
+        }
+        let arch = Architecture::new(self.conditioned);
+        if self.architecture != arch {
+            return Err(shape(format!(
+                "its layers differ from this build's {} network",
+                if self.conditioned {
+                    "conditioned"
+                } else {
+                    "unconditioned"
+                }
+            )));
+        }
+        if self.params.len() != arch.n_params {
+            return Err(shape(format!(
+                "{} network parameters, the architecture needs {}",
+                self.params.len(),
+                arch.n_params
+            )));
+        }
+        let lr = Logistic {
+            conditioned: self.conditioned,
+        };
+        use super::train::Learner;
+        if self.baseline.params.len() != lr.n_params() {
+            return Err(shape(format!(
+                "{} baseline parameters, the logistic regression needs {}",
+                self.baseline.params.len(),
+                lr.n_params()
+            )));
+        }
+        if self
+            .params
+            .iter()
+            .chain(&self.baseline.params)
+            .any(|x| !x.is_finite())
+        {
+            return Err(shape("a parameter is not a finite number".into()));
+        }
+        for c in [&self.calibration, &self.baseline.calibration] {
+            let ok = |t: f64| t > 0.0 && t <= 1.0;
+            if !ok(c.threshold_ramp)
+                || !ok(c.threshold_main)
+                || !c.logit_offset_ramp.is_finite()
+                || !c.logit_offset_main.is_finite()
+            {
+                return Err(shape(format!("calibration out of range: {c:?}")));
+            }
+        }
+        Ok(())
+    }
+
+    /// Reads and checks a model file.
+    pub fn read(path: &Path) -> Result<ModelFile, ModelError> {
+        let text = std::fs::read_to_string(path).map_err(|cause| ModelError::Read {
+            path: path.to_path_buf(),
+            cause,
+        })?;
+        ModelFile::from_json(path, &text)
+    }
+
+    /// Writes the file atomically.
+    pub fn write(&self, path: &Path) -> Result<(), ModelError> {
+        let text = serde_json::to_string(self).expect("a model serialises");
+        crate::output::write_atomic(path, text.as_bytes())?;
+        Ok(())
+    }
+}
+
+/// A loaded model ready to predict: the network in f32 and its calibration.
+#[derive(Debug, Clone)]
+pub struct LaneChangeModel {
+    /// Where it came from (a path, or `embedded:<name>`).
+    pub source: String,
+    pub file: ModelFile,
+    network: Network,
+}
+
+impl LaneChangeModel {
+    pub fn new(source: String, file: ModelFile) -> LaneChangeModel {
+        let network = Network::new(&file.architecture, &file.params);
+        LaneChangeModel {
+            source,
+            file,
+            network,
+        }
+    }
+
+    /// Loads a model file.
+    pub fn load(path: &Path) -> Result<LaneChangeModel, ModelError> {
+        Ok(LaneChangeModel::new(
+            path.display().to_string(),
+            ModelFile::read(path)?,
+        ))
+    }
+
+    /// The committed model embedded in the binary (parsed once per process).
+    pub fn embedded(conditioned: bool) -> Arc<LaneChangeModel> {
+        static COND: OnceLock<Arc<LaneChangeModel>> = OnceLock::new();
+        static UNCOND: OnceLock<Arc<LaneChangeModel>> = OnceLock::new();
+        let (cell, text, name) = if conditioned {
+            (&COND, EMBEDDED_CONDITIONED, "gcn-conditioned.json")
+        } else {
+            (&UNCOND, EMBEDDED_UNCONDITIONED, "gcn-unconditioned.json")
+        };
+        cell.get_or_init(|| {
+            let path = PathBuf::from(format!("models/{name}"));
+            let file = ModelFile::from_json(&path, text)
+                .expect("the embedded model passed its checks when it was committed");
+            Arc::new(LaneChangeModel::new(format!("embedded:{name}"), file))
+        })
+        .clone()
+    }
+
+    pub fn conditioned(&self) -> bool {
+        self.file.conditioned
+    }
+
+    /// The raw logit of `obs` (encodes it into `ws`).
+    pub fn logit(&self, obs: &Observation, ws: &mut Workspace) -> f32 {
+        encode_a(obs, ws.xa.as_mut_slice());
+        if self.file.conditioned {
+            encode_b(obs, ws.xb.as_mut_slice());
+        }
+        self.network.logit(ws)
+    }
+
+    /// P(lane change at the next step), calibrated to the natural frequency of lane changes.
+    pub fn probability(&self, obs: &Observation, ws: &mut Workspace) -> f64 {
+        let subset = Subset::of_lane(obs.ego.lane as i32);
+        self.file
+            .calibration
+            .probability(self.logit(obs, ws) as f64, subset)
+    }
+
+    /// The baseline's raw logit of `obs` (`x` is a buffer of the baseline's input length).
+    pub fn baseline_logit(&self, obs: &Observation, x: &mut Vec<f32>) -> f32 {
+        let lr = Logistic {
+            conditioned: self.file.conditioned,
+        };
+        x.resize(lr.inputs(), 0.0);
+        lr.encode(obs, x);
+        Logistic::logit(&self.file.baseline.params, x)
+    }
+}
