@@ -157,15 +157,19 @@ where
 mod tests {
     use super::*;
 
-    /// Grid world 0..w × 0..h with walls; 4-neighbour moves of cost 1.
+    type Cell = (i32, i32);
+
+    /// Grid world 0..w × 0..h with walls, from (0, 0) to `goal`, 4-neighbour moves of cost 1;
+    /// with the Manhattan heuristic (A*) or none (Dijkstra).
     fn grid(
-        walls: &[(i32, i32)],
+        walls: &[Cell],
         w: i32,
         h: i32,
-        goal: (i32, i32),
+        goal: Cell,
         budget: usize,
-    ) -> Search<(i32, i32)> {
-        let walls: HashSet<(i32, i32)> = walls.iter().copied().collect();
+        informed: bool,
+    ) -> Search<Cell> {
+        let walls: HashSet<Cell> = walls.iter().copied().collect();
         astar(
             (0, 0),
             |&(x, y)| {
@@ -178,42 +182,25 @@ mod tests {
                     .map(|n| (n, 1.0))
                     .collect::<Vec<_>>()
             },
-            |&(x, y)| ((goal.0 - x).abs() + (goal.1 - y).abs()) as f64,
+            |&(x, y)| {
+                if informed {
+                    ((goal.0 - x).abs() + (goal.1 - y).abs()) as f64
+                } else {
+                    0.0
+                }
+            },
             |&n| n == goal,
             |&n| n,
             budget,
         )
     }
 
-    /// Dijkstra (A* with a zero heuristic) on the same problem, for comparison.
-    fn dijkstra(walls: &[(i32, i32)], w: i32, h: i32, goal: (i32, i32)) -> f64 {
-        let walls: HashSet<(i32, i32)> = walls.iter().copied().collect();
-        astar(
-            (0, 0),
-            |&(x, y)| {
-                [(1, 0), (-1, 0), (0, 1), (0, -1)]
-                    .into_iter()
-                    .map(move |(dx, dy)| (x + dx, y + dy))
-                    .filter(|&(a, b)| {
-                        a >= 0 && b >= 0 && a < w && b < h && !walls.contains(&(a, b))
-                    })
-                    .map(|n| (n, 1.0))
-                    .collect::<Vec<_>>()
-            },
-            |_| 0.0,
-            |&n| n == goal,
-            |&n| n,
-            usize::MAX,
-        )
-        .cost
-    }
-
     #[test]
     fn agrees_with_dijkstra_around_a_wall() {
         let walls: Vec<(i32, i32)> = (0..4).map(|y| (2, y)).collect();
-        let r = grid(&walls, 6, 5, (5, 0), 1000);
+        let r = grid(&walls, 6, 5, (5, 0), 1000, true);
         assert_eq!(r.stop, Stop::Found);
-        assert_eq!(r.cost, dijkstra(&walls, 6, 5, (5, 0)));
+        assert_eq!(r.cost, grid(&walls, 6, 5, (5, 0), usize::MAX, false).cost);
         assert_eq!(r.cost, 13.0);
         assert_eq!(r.path.first(), Some(&(0, 0)));
         assert_eq!(r.path.last(), Some(&(5, 0)));
@@ -222,16 +209,16 @@ mod tests {
     #[test]
     fn exhausted_when_unreachable_and_budget_respected() {
         let walls: Vec<(i32, i32)> = (0..5).map(|y| (2, y)).collect();
-        assert_eq!(grid(&walls, 6, 5, (5, 0), 1000).stop, Stop::Exhausted);
-        let r = grid(&[], 50, 50, (49, 49), 10);
+        assert_eq!(grid(&walls, 6, 5, (5, 0), 1000, true).stop, Stop::Exhausted);
+        let r = grid(&[], 50, 50, (49, 49), 10, true);
         assert_eq!((r.stop, r.expanded), (Stop::Budget, 10));
     }
 
     #[test]
     fn deterministic_path_among_equal_costs() {
-        let a = grid(&[], 5, 5, (3, 3), 1000).path;
+        let a = grid(&[], 5, 5, (3, 3), 1000, true).path;
         for _ in 0..5 {
-            assert_eq!(grid(&[], 5, 5, (3, 3), 1000).path, a);
+            assert_eq!(grid(&[], 5, 5, (3, 3), 1000, true).path, a);
         }
     }
 }
