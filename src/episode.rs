@@ -456,9 +456,14 @@ impl<'a> Episode<'a> {
 
     fn apply(&mut self, sim: &mut Simulation) -> Result<(), SumoError> {
         let v_max = self.config.scenario.v_max;
+        let vehicles = &self.scene.vehicles;
+        sim.set_speeds(
+            self.commands
+                .iter()
+                .map(|c| (&*vehicles[c.vehicle].id, c.maneuver.speed.clamp(0.0, v_max))),
+        )?;
         for c in &self.commands {
             let v = &self.scene.vehicles[c.vehicle];
-            sim.set_speed(&v.id, c.maneuver.speed.clamp(0.0, v_max))?;
             if let Some(dir) = c.maneuver.lane_change {
                 let edge = self.scene_edges[c.vehicle];
                 if let Some(idx) = self.road.sumo_lane_index(edge, v.lane + dir.offset()) {

@@ -64,6 +64,7 @@ extern "C" {
         speed: f64,
     ) -> i32;
     pub fn bk_vehicle_remove(id: *const c_char) -> i32;
+    pub fn bk_set_speeds(ids: *const c_char, count: usize, speeds: *const f64) -> i32;
     pub fn bk_set_max_speed(id: *const c_char, speed: f64) -> i32;
     pub fn bk_set_speed_mode(id: *const c_char, mode: i32) -> i32;
     pub fn bk_set_lane_change_mode(id: *const c_char, mode: i32) -> i32;

@@ -126,6 +126,9 @@ pub struct VehicleReadings {
 /// The open libsumo simulation of this process.
 pub struct Simulation {
     open: bool,
+    /// Reused buffers of [`Simulation::set_speeds`].
+    batch_ids: Vec<u8>,
+    batch_speeds: Vec<f64>,
     _slot: SlotGuard,
 }
 
@@ -145,6 +148,8 @@ impl Simulation {
         })?;
         Ok(Simulation {
             open: true,
+            batch_ids: Vec::new(),
+            batch_speeds: Vec::new(),
             _slot: slot,
         })
     }
@@ -344,6 +349,34 @@ impl Simulation {
         // SAFETY: valid C string.
         decode("vehicle.remove", unsafe {
             ffi::bk_vehicle_remove(cid.as_ptr())
+        })
+    }
+
+    /// [`Simulation::set_speed`] for many vehicles in one call across the boundary.
+    pub fn set_speeds<'a>(
+        &mut self,
+        commands: impl Iterator<Item = (&'a str, f64)>,
+    ) -> Result<(), SumoError> {
+        self.batch_ids.clear();
+        self.batch_speeds.clear();
+        for (id, speed) in commands {
+            if id.as_bytes().contains(&0) {
+                return Err(SumoError::NulInString(id.to_string()));
+            }
+            self.batch_ids.extend_from_slice(id.as_bytes());
+            self.batch_ids.push(0);
+            self.batch_speeds.push(speed);
+        }
+        if self.batch_speeds.is_empty() {
+            return Ok(());
+        }
+        // SAFETY: `batch_ids` holds `batch_speeds.len()` NUL-terminated strings.
+        decode("vehicle.setSpeed", unsafe {
+            ffi::bk_set_speeds(
+                self.batch_ids.as_ptr() as *const c_char,
+                self.batch_speeds.len(),
+                self.batch_speeds.as_ptr(),
+            )
         })
     }
 

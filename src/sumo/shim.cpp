@@ -226,6 +226,17 @@ int bk_vehicle_remove(const char* id) {
     return guarded([&] { libsumo::Vehicle::remove(id, libsumo::REMOVE_VAPORIZED); });
 }
 
+// setSpeed for `count` vehicles at once: `ids` NUL-separated, `speeds` in the same order.
+int bk_set_speeds(const char* ids, size_t count, const double* speeds) {
+    return guarded([&] {
+        const char* p = ids;
+        for (size_t i = 0; i < count; ++i) {
+            libsumo::Vehicle::setSpeed(p, speeds[i]);
+            p += std::strlen(p) + 1;
+        }
+    });
+}
+
 int bk_set_max_speed(const char* id, double speed) {
     return guarded([&] { libsumo::Vehicle::setMaxSpeed(id, speed); });
 }
