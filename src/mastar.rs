@@ -507,19 +507,7 @@ mod tests {
 
     /// A vehicle driving at constant speed on a lane centre.
     fn other(s: f64, lane: i32, speed: f64) -> Trajectory {
-        let poses = (0..=20)
-            .map(|k| Pose {
-                s: s + speed * 0.2 * k as f64,
-                y: lane as f64 * 4.5,
-                heading: 0.0,
-                speed,
-            })
-            .collect();
-        Trajectory {
-            poses,
-            length: 5.0,
-            width: 2.0,
-        }
+        Trajectory::straight(s, lane as f64 * 4.5, speed, 20, 0.2)
     }
 
     fn request<'a>(

@@ -24,6 +24,24 @@ pub struct Trajectory {
 }
 
 impl Trajectory {
+    /// A 5 m × 2 m vehicle driving straight at constant `speed` along lateral position `y`, from
+    /// `s0`, for `steps` steps of `dt`: for scenes built by hand.
+    pub fn straight(s0: f64, y: f64, speed: f64, steps: usize, dt: f64) -> Trajectory {
+        let poses = (0..=steps)
+            .map(|k| Pose {
+                s: s0 + speed * dt * k as f64,
+                y,
+                heading: 0.0,
+                speed,
+            })
+            .collect();
+        Trajectory {
+            poses,
+            length: 5.0,
+            width: 2.0,
+        }
+    }
+
     /// The pose at `step`; past the end the vehicle is assumed to hold its last pose's speed
     /// and heading (so a shorter trajectory still blocks space).
     pub fn at(&self, step: usize, dt: f64) -> Pose {
@@ -117,19 +135,7 @@ mod tests {
     use super::*;
 
     fn straight(s0: f64, y: f64, speed: f64, steps: usize) -> Trajectory {
-        let poses = (0..=steps)
-            .map(|k| Pose {
-                s: s0 + speed * 0.2 * k as f64,
-                y,
-                heading: 0.0,
-                speed,
-            })
-            .collect();
-        Trajectory {
-            poses,
-            length: 5.0,
-            width: 2.0,
-        }
+        Trajectory::straight(s0, y, speed, steps, 0.2)
     }
 
     #[test]
