@@ -2,35 +2,31 @@
 //! a highway on-ramp merge, co-simulated in-process with SUMO.
 //!
 //! The library does the work; the `bkpbs` binary only parses arguments and dispatches.
-//! Start at [`episode::run`]: it builds the demand ([`demand`]), starts SUMO ([`sumo`]) on the
-//! merge network ([`road`]), and lets a [`controller::Controller`] command the CAVs each step,
-//! recording [`metrics`].
+//! The folders are layers, lowest first; each imports only from the ones above it in this list:
+//! [`io`] and [`config`] (plain files and settings), [`model`] (the road frame), [`sumo`] (libsumo
+//! and the frame <-> SUMO translation), [`predict`] (HDV prediction), [`planner`] (M-A*, PBS),
+//! [`controller`] (one maneuver per CAV), [`episode`] (SUMO and a controller in lock-step),
+//! [`train`] (offline training of the predictor), [`campaign`] (grids of episodes), [`report`]
+//! (tables and figures). Start at [`episode::run`].
 
-pub mod bench;
-pub mod campaign;
+pub mod io;
+
 pub mod config;
-pub mod controller;
-pub mod demand;
-pub mod entry;
-pub mod episode;
-pub mod geometry;
-pub mod kinematics;
-pub mod mastar;
-pub mod math;
-pub mod merge_rule;
-pub mod metrics;
-pub mod output;
-pub mod pbs;
-pub mod plot;
-pub mod predict;
-pub mod primitives;
-pub mod priority;
-pub mod report;
-pub mod road;
-pub mod safety;
-pub mod scene;
-pub mod search;
+
+pub mod model;
+
 pub mod sumo;
-pub mod sumo_files;
-pub mod sumo_scene;
-pub mod trajectory;
+
+pub mod predict;
+
+pub mod planner;
+
+pub mod controller;
+
+pub mod episode;
+
+pub mod train;
+
+pub mod campaign;
+
+pub mod report;

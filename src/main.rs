@@ -7,8 +7,10 @@ use anyhow::{Context, Result};
 use clap::{Args, Parser, Subcommand};
 
 use bkpbs::config::{Config, PredictorKind};
-use bkpbs::{bench, controller, demand, episode, output, sumo_files};
-use bkpbs::{campaign, predict, report};
+use bkpbs::episode::{bench, demand, output};
+use bkpbs::sumo::files as sumo_files;
+use bkpbs::{campaign, report};
+use bkpbs::{controller, episode, train};
 
 #[derive(Parser)]
 #[command(
@@ -406,8 +408,8 @@ fn run(cli: Cli) -> Result<()> {
                 Some(p) => Config::from_file(p)?,
                 None => Config::default(),
             };
-            let d = predict::collect::CollectPlan::default();
-            let plan = predict::collect::CollectPlan {
+            let d = train::collect::CollectPlan::default();
+            let plan = train::collect::CollectPlan {
                 episodes: a.episodes,
                 seed_base: a.seed_base.unwrap_or(d.seed_base),
                 planners: a.planners.unwrap_or(d.planners),
@@ -416,10 +418,10 @@ fn run(cli: Cli) -> Result<()> {
                 steps: a.steps.unwrap_or(d.steps),
                 main_negative_keep: a.main_negative_keep.unwrap_or(d.main_negative_keep),
             };
-            print!("{}", predict::commands::run_collect(&base, &plan, &a.out)?);
+            print!("{}", train::commands::run_collect(&base, &plan, &a.out)?);
         }
         Command::Train(a) => {
-            let opts = predict::train::TrainOptions {
+            let opts = train::train::TrainOptions {
                 epochs: a.epochs,
                 seed: a.seed,
                 threads: a.threads,
@@ -429,15 +431,15 @@ fn run(cli: Cli) -> Result<()> {
             let conditioned = !a.unconditioned;
             print!(
                 "{}",
-                predict::commands::run_train(&a.data, &a.out, conditioned, &opts)?
+                train::commands::run_train(&a.data, &a.out, conditioned, &opts)?
             );
         }
         Command::EvalPredictor(a) => {
             let data = match a.data {
-                Some(p) => predict::commands::EvalData::File(p),
-                None => predict::commands::EvalData::fresh(a.episodes, a.seed_base),
+                Some(p) => train::commands::EvalData::File(p),
+                None => train::commands::EvalData::fresh(a.episodes, a.seed_base),
             };
-            let r = predict::commands::run_eval(
+            let r = train::commands::run_eval(
                 &Config::default(),
                 a.model.as_deref(),
                 a.unconditioned,
@@ -448,7 +450,7 @@ fn run(cli: Cli) -> Result<()> {
         }
         Command::BenchPredictor(a) => {
             let config = a.scenario.resolve()?;
-            print!("{}", predict::commands::run_bench(&config)?);
+            print!("{}", train::commands::run_bench(&config)?);
         }
         Command::Worker => campaign::worker::serve_stdio()?,
     }

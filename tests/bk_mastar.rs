@@ -3,7 +3,7 @@
 use bkpbs::config::Config;
 use bkpbs::controller;
 use bkpbs::episode;
-use bkpbs::metrics::Outcome;
+use bkpbs::episode::metrics::Outcome;
 
 fn run(alpha: f64, lambda: f64, seed: u64) -> episode::EpisodeResult {
     let mut c = Config::default();
@@ -36,8 +36,8 @@ fn full_episodes_at_both_densities_and_penetrations() {
             .vehicles
             .iter()
             .filter(|v| {
-                v.origin == bkpbs::scene::Origin::Ramp
-                    && v.kind == bkpbs::scene::Kind::Cav
+                v.origin == bkpbs::model::scene::Origin::Ramp
+                    && v.kind == bkpbs::model::scene::Kind::Cav
                     && v.insert_time < 40.0
             })
             .collect();

@@ -211,7 +211,7 @@ fn missing_net_file_is_refused() {
 fn a_net_without_the_merge_layout_is_refused() {
     let d = tmp();
     let net = d.path().join("other.net.xml");
-    let text = bkpbs::road::EMBEDDED_NET.replace("\"acc\"", "\"acceleration\"");
+    let text = bkpbs::model::road::EMBEDDED_NET.replace("\"acc\"", "\"acceleration\"");
     std::fs::write(&net, text).unwrap();
     let out = d.path().join("out");
     let o = bkpbs(&[

@@ -2,10 +2,10 @@
 
 use bkpbs::config::Config;
 use bkpbs::controller::{self, CavHandling, Command, Controller, Maneuver};
-use bkpbs::demand::PlannedVehicle;
+use bkpbs::episode::demand::PlannedVehicle;
+use bkpbs::episode::metrics::Outcome;
 use bkpbs::episode::{self, EpisodeResult};
-use bkpbs::metrics::Outcome;
-use bkpbs::scene::{Kind, Origin, Scene};
+use bkpbs::model::scene::{Kind, Origin, Scene};
 
 fn episode(planner: &str, alpha: f64, lambda: f64, seed: u64) -> EpisodeResult {
     let mut c = Config::default();

@@ -1,9 +1,9 @@
 //! The merge network, read back through libsumo (real SUMO, in-process).
 
 use bkpbs::config::Config;
-use bkpbs::road::Road;
+use bkpbs::model::road::Road;
+use bkpbs::sumo::files::EpisodeInput;
 use bkpbs::sumo::Simulation;
-use bkpbs::sumo_files::EpisodeInput;
 
 #[test]
 fn net_has_the_papers_geometry() {

@@ -4,39 +4,13 @@
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-use bkpbs::predict::features::{Observation, CAV_NODES};
-use bkpbs::predict::gcn::{
-    backward, bce_with_logit, forward, sigmoid, Architecture, Cache, Inputs,
-};
+mod common;
 
-/// Random observations with a mix of present and absent nodes.
-fn random_obs(rng: &mut ChaCha8Rng) -> Observation {
-    let mut o = Observation::default();
-    o.ego.lane = rng.gen_range(0..3);
-    o.ego.speed = rng.gen_range(5.0..35.0);
-    o.ego.accel = rng.gen_range(-3.0..3.0);
-    o.ego.to_merge_end = rng.gen_range(-50.0..300.0);
-    o.ego.from_ramp = rng.gen_bool(0.3);
-    for n in &mut o.neighbours {
-        if rng.gen_bool(0.7) {
-            n.present = true;
-            n.ds = rng.gen_range(-90.0..90.0);
-            n.dy = rng.gen_range(-5.0..5.0);
-            n.speed = rng.gen_range(0.0..35.0);
-            n.is_cav = rng.gen_bool(0.5);
-        }
-    }
-    let cavs = rng.gen_range(1..=CAV_NODES);
-    for step in o.cavs.iter_mut() {
-        for c in step.iter_mut().take(cavs) {
-            c.present = true;
-            c.ds = rng.gen_range(-60.0..60.0);
-            c.dy = rng.gen_range(-5.0..5.0);
-            c.speed = rng.gen_range(0.0..35.0);
-        }
-    }
-    o
-}
+use bkpbs::predict::features::Observation;
+use bkpbs::predict::gcn::{sigmoid, Architecture};
+use bkpbs::predict::infer::{Network, Workspace};
+use bkpbs::train::gcn::{backward, bce_with_logit, forward, Cache, Inputs};
+use common::random_obs;
 
 /// Σ BCE over the batch, in f64.
 fn loss(arch: &Architecture, p: &[f64], x: &Inputs<f64>, labels: &[bool]) -> f64 {
@@ -131,15 +105,15 @@ fn gradient_check_unconditioned() {
 use std::path::Path;
 
 use bkpbs::config::{Config, ConfigError, PredictorKind};
-use bkpbs::predict::dataset::{DataError, Dataset, Sample};
+use bkpbs::model::road::Road;
+use bkpbs::model::scene::{Kind, Origin, Scene, VehicleState};
+use bkpbs::model::trajectory::{Pose, Trajectory};
 use bkpbs::predict::features::Subset;
-use bkpbs::predict::fit::fit;
 use bkpbs::predict::model_file::{LaneChangeModel, ModelError, ModelFile};
-use bkpbs::predict::train::{TrainOptions, Trained};
 use bkpbs::predict::{Learned, Predictor};
-use bkpbs::road::Road;
-use bkpbs::scene::{Kind, Origin, Scene, VehicleState};
-use bkpbs::trajectory::{Pose, Trajectory};
+use bkpbs::train::dataset::{DataError, Dataset, Sample};
+use bkpbs::train::fit::fit;
+use bkpbs::train::train::{TrainOptions, Trained};
 
 /// A synthetic data set with a learnable rule: ramp HDVs change lanes when little acceleration
 /// lane is left and the right-of-way gap (left follower) is large; main-road HDVs when their
@@ -197,7 +171,7 @@ fn tiny_model(conditioned: bool) -> ModelFile {
 #[test]
 fn training_loop_learns_and_is_deterministic_for_any_thread_count() {
     let samples = synthetic(3000, 9);
-    let learner = bkpbs::predict::gcn::GcnLearner {
+    let learner = bkpbs::train::gcn::GcnLearner {
         arch: Architecture::new(true),
     };
     let opts = |threads| TrainOptions {
@@ -206,7 +180,7 @@ fn training_loop_learns_and_is_deterministic_for_any_thread_count() {
         ..TrainOptions::default()
     };
     let run = |threads| -> Trained {
-        bkpbs::predict::train::train(&learner, &samples, &opts(threads), |_| {}).unwrap()
+        bkpbs::train::train::train(&learner, &samples, &opts(threads), |_| {}).unwrap()
     };
     let a = run(1);
     let b = run(2);
@@ -216,7 +190,7 @@ fn training_loop_learns_and_is_deterministic_for_any_thread_count() {
     };
     assert_eq!(losses(&a), losses(&b));
     // The unconditioned network learns the rule.
-    let learner = bkpbs::predict::gcn::GcnLearner {
+    let learner = bkpbs::train::gcn::GcnLearner {
         arch: Architecture::new(false),
     };
     let opts = TrainOptions {
@@ -224,7 +198,7 @@ fn training_loop_learns_and_is_deterministic_for_any_thread_count() {
         patience: 25,
         ..TrainOptions::default()
     };
-    let t = bkpbs::predict::train::train(&learner, &samples, &opts, |_| {}).unwrap();
+    let t = bkpbs::train::train::train(&learner, &samples, &opts, |_| {}).unwrap();
     let first = t.log.first().unwrap();
     let best = &t.log[t.best_epoch - 1];
     assert!(
@@ -476,7 +450,7 @@ fn conditioning_on_a_cav_plan_uses_the_conditioned_model() {
 
 #[test]
 fn collecting_on_sumo_gives_consistent_samples() {
-    use bkpbs::predict::collect::{collect, meta_of, CollectPlan};
+    use bkpbs::train::collect::{collect, meta_of, CollectPlan};
     let plan = CollectPlan {
         episodes: 2,
         seed_base: 3,
@@ -587,4 +561,28 @@ fn episode_cli_takes_the_predictor_flag_and_reports_bad_models_in_one_line() {
         err.starts_with("error:") && err.contains("no/such/model.json"),
         "{err}"
     );
+}
+
+/// The allocation-free single-sample pass used for prediction gives the logits of the batched
+/// training pass.
+#[test]
+fn single_sample_pass_matches_the_batched_one() {
+    let mut rng = ChaCha8Rng::seed_from_u64(3);
+    for conditioned in [false, true] {
+        let arch = Architecture::new(conditioned);
+        let p: Vec<f32> = arch.init(&mut rng);
+        let net = Network::new(&arch, &p);
+        let obs: Vec<Observation> = (0..20).map(|_| random_obs(&mut rng)).collect();
+        let mut x = Inputs::<f32>::default();
+        x.encode(obs.iter(), conditioned);
+        let mut c = Cache::default();
+        forward(&arch, &p, &x, &mut c);
+        let mut ws = Workspace::default();
+        for (o, &batched) in obs.iter().zip(c.logits.iter()) {
+            bkpbs::predict::features::encode_a(o, ws.xa.as_mut_slice());
+            bkpbs::predict::features::encode_b(o, ws.xb.as_mut_slice());
+            let single = net.logit(&mut ws);
+            assert!((single - batched).abs() < 1e-4, "{single} vs {batched}");
+        }
+    }
 }

@@ -9,12 +9,12 @@ use std::rc::Rc;
 
 use bkpbs::config::Config;
 use bkpbs::controller::{CavHandling, Command, Controller, LaneChange, Maneuver};
-use bkpbs::demand::PlannedVehicle;
 use bkpbs::episode;
-use bkpbs::kinematics::BicycleState;
-use bkpbs::math::Point;
-use bkpbs::primitives::{Library, Primitive};
-use bkpbs::scene::{Kind, Origin, Scene};
+use bkpbs::episode::demand::PlannedVehicle;
+use bkpbs::model::kinematics::BicycleState;
+use bkpbs::model::math::Point;
+use bkpbs::model::scene::{Kind, Origin, Scene};
+use bkpbs::planner::primitives::{Library, Primitive};
 
 #[derive(Debug, Default, Clone)]
 struct Errors {

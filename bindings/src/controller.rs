@@ -8,8 +8,8 @@ use pyo3::types::{PyDict, PyList};
 
 use bkpbs::config::Config;
 use bkpbs::controller::{self, CavHandling, Command, Controller, LaneChange, PLANNERS};
-use bkpbs::road::Road;
-use bkpbs::scene::Origin;
+use bkpbs::model::road::Road;
+use bkpbs::model::scene::Origin;
 
 use crate::errors::bad_input;
 use crate::scene::{scene_of, SumoScene};

@@ -10,10 +10,11 @@ use pyo3::types::PyDict;
 
 use bkpbs::config::Config;
 use bkpbs::controller::{self, UnknownPlanner, PLANNERS};
+use bkpbs::episode::demand;
+use bkpbs::episode::output::{self, episode_row, EPISODE_COLUMNS};
 use bkpbs::episode::{self, EpisodeError, EpisodeResult};
-use bkpbs::output::{self, episode_row, EPISODE_COLUMNS};
-use bkpbs::road::EMBEDDED_NET;
-use bkpbs::{demand, sumo_files};
+use bkpbs::model::road::EMBEDDED_NET;
+use bkpbs::sumo::files as sumo_files;
 
 use crate::errors::{bad_input, episode_error, SimulationBusyError, SumoError};
 

@@ -6,8 +6,8 @@ use pyo3::exceptions::{PyOSError, PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 
 use bkpbs::episode::EpisodeError;
-use bkpbs::road::RoadError;
-use bkpbs::sumo_files::InputError;
+use bkpbs::model::road::RoadError;
+use bkpbs::sumo::files::InputError;
 
 pyo3::create_exception!(
     bkpbs,

@@ -9,10 +9,10 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 use bkpbs::config::{Config, PredictorKind};
+use bkpbs::model::road::Road;
+use bkpbs::model::scene::{Kind, Origin, Scene};
+use bkpbs::model::trajectory::{Pose, Trajectory};
 use bkpbs::predict::{ConstantSpeed, LaneChangeModel, Learned, Predictor};
-use bkpbs::road::Road;
-use bkpbs::scene::{Kind, Origin, Scene};
-use bkpbs::trajectory::{Pose, Trajectory};
 
 use crate::errors::bad_input;
 use crate::scene::{scene_of, SumoScene};

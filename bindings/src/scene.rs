@@ -1,6 +1,6 @@
 //! Vehicles as a user's own TraCI or libsumo loop reads them (dicts or objects with the same
 //! attribute names), checked and turned into the core's readings: SUMO's units and conventions,
-//! mapped to the road frame by `bkpbs::sumo_scene` exactly as the episode runner maps them.
+//! mapped to the road frame by `bkpbs::sumo::frame` exactly as the episode runner maps them.
 
 use std::cell::Cell;
 use std::collections::HashMap;
@@ -10,10 +10,10 @@ use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyString};
 
 use bkpbs::config::Scenario;
-use bkpbs::road::Road;
-use bkpbs::scene::{Kind, Origin, Scene};
+use bkpbs::model::road::Road;
+use bkpbs::model::scene::{Kind, Origin, Scene};
+use bkpbs::sumo::frame::{self, Identity};
 use bkpbs::sumo::RawVehicleState;
-use bkpbs::sumo_scene::{self, Identity};
 
 use crate::errors::bad_input;
 
@@ -163,7 +163,7 @@ fn read_vehicle(i: usize, obj: &Bound<'_, PyAny>, keys: &Keys<'_>) -> PyResult<R
         lane_position: number("lane_position", required("lane_position")?)?,
         lateral_offset: optional_number("lateral_offset")?.unwrap_or(0.0),
         lane_index,
-        edge_code: sumo_scene::edge_code(&road_id).unwrap_or(-1),
+        edge_code: frame::edge_code(&road_id).unwrap_or(-1),
     };
     if let Some(d) = dict.filter(|d| d.len() > found.get()) {
         for k in d.keys() {
@@ -218,9 +218,9 @@ pub fn scene_of(
         let r = read_vehicle(i, &item?, &keys)?;
         let origin = r
             .origin
-            .or_else(|| sumo_scene::origin_from_id(&r.id))
+            .or_else(|| frame::origin_from_id(&r.id))
             .or_else(|| origins.get(&r.id).copied())
-            .unwrap_or_else(|| sumo_scene::origin_from_edge(road, r.raw.edge_code));
+            .unwrap_or_else(|| frame::origin_from_edge(road, r.raw.edge_code));
         let who = Identity {
             id: Arc::from(r.id.as_str()),
             kind: r.kind,
@@ -231,7 +231,7 @@ pub fn scene_of(
             }),
         };
         seen.insert(r.id, origin);
-        if let Some(v) = sumo_scene::vehicle_state(road, scenario, who, &r.raw) {
+        if let Some(v) = frame::vehicle_state(road, scenario, who, &r.raw) {
             edges.push(r.raw.edge_code);
             scene.vehicles.push(v);
         }

@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 use super::grid::{Cell, Grid, Shard};
 use super::results::{self, episodes_header, key, Results, ResultsError, Row, CELL_COLUMNS};
 use super::worker::{DONE_FILE, ERROR_FILE};
-use crate::output::{TIMING_COLUMNS, VEHICLE_COLUMNS};
+use crate::episode::output::{TIMING_COLUMNS, VEHICLE_COLUMNS};
 
 /// Directory of the per-episode files below a campaign directory.
 pub const EPISODES_DIR: &str = "episodes";

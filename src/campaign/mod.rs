@@ -30,7 +30,7 @@ use std::time::Instant;
 
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
-use crate::output::WriteError;
+use crate::io::WriteError;
 use results::ResultsError;
 pub use settings::{Overrides, Settings, SettingsError};
 use worker::Outcome;

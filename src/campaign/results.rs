@@ -6,7 +6,7 @@ use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
 use super::grid::Cell;
-use crate::output::{self, WriteError, EPISODE_COLUMNS, TIMING_COLUMNS, VEHICLE_COLUMNS};
+use crate::episode::output::{self, WriteError, EPISODE_COLUMNS, TIMING_COLUMNS, VEHICLE_COLUMNS};
 
 /// The columns that name a cell; every collected file starts with them.
 pub const CELL_COLUMNS: [&str; 4] = ["planner", "alpha", "lambda", "seed"];

@@ -11,7 +11,7 @@ use super::collect::{self, cell_dir};
 use super::results::Results;
 use super::worker::{self, Outcome, Request};
 use super::{CampaignError, Settings, SETTINGS_FILE};
-use crate::output;
+use crate::episode::output;
 
 /// The episodes of a campaign run that still need running.
 #[derive(Debug, Clone)]

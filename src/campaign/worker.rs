@@ -19,7 +19,7 @@ use std::sync::Mutex;
 use serde::{Deserialize, Serialize};
 
 use crate::config::Config;
-use crate::{controller, episode, output};
+use crate::{controller, episode, io as output};
 
 /// Name of the file that records why a cell's episode failed.
 pub const ERROR_FILE: &str = "error.txt";

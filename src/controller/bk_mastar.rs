@@ -4,13 +4,13 @@
 //! executed; a CAV without a plan in either phase brakes at the emergency deceleration, and the
 //! step records a fallback.
 
-use super::lane_changes::LaneChanges;
 use super::{execute, CavHandling, Command, Controller, PlanStats};
 use crate::config::Config;
-use crate::mastar::{Mastar, Phase};
+use crate::model::scene::{Kind, Scene};
+use crate::model::trajectory::Trajectory;
+use crate::planner::lane_changes::LaneChanges;
+use crate::planner::mastar::{Mastar, Phase};
 use crate::predict::{ConstantSpeed, Predictor};
-use crate::scene::{Kind, Scene};
-use crate::trajectory::Trajectory;
 
 /// Decentralised M-A* planner.
 pub struct BkMastar {

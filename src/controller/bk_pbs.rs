@@ -1,4 +1,4 @@
-//! `bk-pbs`: all CAVs planned jointly each step by BK-PBS (see [`crate::pbs`]); each CAV then
+//! `bk-pbs`: all CAVs planned jointly each step by BK-PBS (see [`crate::planner::pbs`]); each CAV then
 //! executes the first primitive of its plan. A CAV the chosen node leaves without a plan (no
 //! plan even alone), or still in conflict after a fallback, is repaired: planned alone against
 //! every other trajectory of that node, and if that fails too, it brakes at the emergency
@@ -6,15 +6,15 @@
 
 use std::sync::Arc;
 
-use super::lane_changes::LaneChanges;
 use super::{execute, CavHandling, Command, Controller, PlanStats};
 use crate::config::Config;
-use crate::mastar::{Mastar, NoPlan, Phase, Plan};
-use crate::pbs::{Budget, Problem, RequestFor};
+use crate::model::scene::{Kind, Scene};
+use crate::model::trajectory::Trajectory;
+use crate::planner::lane_changes::LaneChanges;
+use crate::planner::mastar::{Mastar, NoPlan, Phase, Plan};
+use crate::planner::pbs::{Budget, Problem, RequestFor};
+use crate::planner::safety::SafetyRule;
 use crate::predict::Predictor;
-use crate::safety::SafetyRule;
-use crate::scene::{Kind, Scene};
-use crate::trajectory::Trajectory;
 
 /// Centralised priority-based planner.
 pub struct BkPbs {
@@ -177,9 +177,9 @@ impl Controller for BkPbs {
 mod tests {
 
     use super::*;
+    use crate::model::road::Road;
+    use crate::model::scene::{Origin, VehicleState};
     use crate::predict::ConstantSpeed;
-    use crate::road::Road;
-    use crate::scene::{Origin, VehicleState};
 
     #[test]
     fn every_cav_gets_a_maneuver_even_when_nothing_is_safe() {

@@ -2,8 +2,8 @@
 //! controllers (`bk-mastar`, `bk-pbs`).
 
 use super::{LaneChange, Maneuver};
-use crate::mastar::{FirstMove, Plan};
-use crate::scene::VehicleState;
+use crate::model::scene::VehicleState;
+use crate::planner::mastar::{FirstMove, Plan};
 
 /// The maneuver that executes a plan's first move, and the target lane of a lane change it
 /// starts (which the controller must remember, to continue the change in the next steps).

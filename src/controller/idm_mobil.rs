@@ -6,8 +6,8 @@ use std::sync::Arc;
 
 use super::{idm, mobil, CavHandling, Command, Controller, LaneChange, Maneuver};
 use crate::config::{Config, Idm, Mobil};
-use crate::road::MERGE_LANE;
-use crate::scene::{Kind, Scene};
+use crate::model::road::MERGE_LANE;
+use crate::model::scene::{Kind, Scene};
 
 /// Rule-based CAV controller.
 #[derive(Debug, Clone)]

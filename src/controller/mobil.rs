@@ -6,8 +6,8 @@
 
 use super::idm::{self, Leader};
 use crate::config::{Idm, Mobil};
-use crate::road::MERGE_LANE;
-use crate::scene::{Scene, VehicleState};
+use crate::model::road::MERGE_LANE;
+use crate::model::scene::{Scene, VehicleState};
 
 /// Whether `v` takes up space in `lane`.
 pub fn occupies(v: &VehicleState, lane: i32, lane_width: f64) -> bool {
@@ -174,8 +174,8 @@ pub fn evaluate(idm_p: &Idm, mobil: &Mobil, scene: &Scene, i: usize, target: i32
 mod tests {
 
     use super::*;
-    use crate::road::Road;
-    use crate::scene::{Kind, Origin};
+    use crate::model::road::Road;
+    use crate::model::scene::{Kind, Origin};
 
     fn car(s: f64, lane: i32, speed: f64, desired: f64) -> VehicleState {
         let id = format!("v{s}-{lane}");

@@ -9,12 +9,11 @@ pub mod bk_pbs;
 pub mod execute;
 pub mod idm;
 pub mod idm_mobil;
-pub mod lane_changes;
 pub mod mobil;
 pub mod sumo_native;
 
 use crate::config::Config;
-use crate::scene::Scene;
+use crate::model::scene::Scene;
 
 /// A lateral move to the neighbouring lane.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

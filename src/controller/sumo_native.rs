@@ -1,7 +1,7 @@
 //! The `sumo` reference: CAVs driven by SUMO's own IDM and LC2013 with desired speed v_max.
 
 use super::{CavHandling, Command, Controller};
-use crate::scene::Scene;
+use crate::model::scene::Scene;
 
 /// Leaves CAVs to SUMO; issues no commands.
 #[derive(Debug, Default, Clone, Copy)]

@@ -5,9 +5,9 @@
 
 use super::Predictor;
 use crate::config::Config;
-use crate::road::MERGE_LANE;
-use crate::scene::{Kind, Origin, Scene};
-use crate::trajectory::{Pose, Trajectory};
+use crate::model::road::MERGE_LANE;
+use crate::model::scene::{Kind, Origin, Scene};
+use crate::model::trajectory::{Pose, Trajectory};
 
 /// Keeps speed and lane; ramp HDVs merge at their median decision time.
 #[derive(Debug, Clone)]
@@ -98,8 +98,8 @@ impl Predictor for ConstantSpeed {
 mod tests {
 
     use super::*;
-    use crate::road::Road;
-    use crate::scene::VehicleState;
+    use crate::model::road::Road;
+    use crate::model::scene::VehicleState;
 
     fn vehicle(kind: Kind, origin: Origin, s: f64, lane: i32, speed: f64) -> VehicleState {
         VehicleState {

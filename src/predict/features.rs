@@ -12,8 +12,8 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::road::{Road, MAIN_LANES, MERGE_LANE};
-use crate::scene::{Kind, Origin, VehicleState};
+use crate::model::road::{Road, MAIN_LANES, MERGE_LANE};
+use crate::model::scene::{Kind, Origin, VehicleState};
 
 /// Neighbour slots of graph (a), in node order after the HDV itself.
 pub const SLOTS: [Slot; 6] = [
@@ -465,7 +465,7 @@ mod tests {
     use std::sync::Arc;
 
     use super::*;
-    use crate::scene::Kind;
+    use crate::model::scene::Kind;
 
     fn veh(kind: Kind, s: f64, lane: i32, speed: f64) -> VehicleState {
         VehicleState {

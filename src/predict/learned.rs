@@ -27,9 +27,9 @@ use super::infer::Workspace;
 use super::model_file::{LaneChangeModel, ModelError};
 use super::Predictor;
 use crate::config::{Config, ConfigError, PredictorKind};
-use crate::road::MERGE_LANE;
-use crate::scene::{Kind, Scene};
-use crate::trajectory::{Pose, Trajectory};
+use crate::model::road::MERGE_LANE;
+use crate::model::scene::{Kind, Scene};
+use crate::model::trajectory::{Pose, Trajectory};
 
 /// b_θ as a [`Predictor`].
 #[derive(Debug, Clone)]

@@ -3,31 +3,29 @@
 //! A [`Predictor`] turns a scene vehicle into a trajectory, optionally conditioned on the planned
 //! trajectories of higher-priority CAVs (BK-PBS); the learned model of `b_θ` plugs into the same
 //! trait. [`ConstantSpeed`] is the first implementation.
+//!
+//! This folder is the runtime predictor only: what planning needs each step. Collecting data,
+//! training and evaluating b_θ run whole episodes, so they sit above the episode runner, in
+//! [`crate::train`].
 
 mod constant;
 
-// The learned lane-change model b_θ: features, data, network, training, evaluation, predictor.
-pub mod adam;
-pub mod bench;
-pub mod collect;
-pub mod commands;
-pub mod dataset;
-pub mod eval;
+// The learned lane-change model b_θ: features, network shape, inference, model file, predictor.
+pub mod calibration;
 pub mod features;
-pub mod fit;
 pub mod gcn;
 pub mod infer;
 pub mod learned;
 pub mod logistic;
 pub mod model_file;
-pub mod train;
+pub mod training_record;
 
 pub use constant::ConstantSpeed;
 pub use learned::{configured, Learned};
 pub use model_file::{LaneChangeModel, ModelError};
 
-use crate::scene::Scene;
-use crate::trajectory::Trajectory;
+use crate::model::scene::Scene;
+use crate::model::trajectory::Trajectory;
 
 /// A model of other vehicles' motion.
 pub trait Predictor: Send + Sync {

@@ -10,11 +10,12 @@ use std::sync::{Arc, OnceLock};
 
 use serde::{Deserialize, Serialize};
 
+use super::calibration::Calibration;
 use super::features::{encode_a, encode_b, FeatureLayout, Observation, Subset};
 use super::gcn::Architecture;
 use super::infer::{Network, Workspace};
 use super::logistic::Logistic;
-use super::train::{Calibration, EpochLog, TrainOptions};
+use super::training_record::{EpochLog, TrainOptions};
 
 /// The `format` field of every model file.
 pub const MODEL_FORMAT: &str = "bkpbs-lane-change-model";
@@ -87,7 +88,7 @@ pub enum ModelError {
     #[error("model file {path} has the wrong shapes: {what}")]
     Shape { path: PathBuf, what: String },
     #[error(transparent)]
-    Write(#[from] crate::output::WriteError),
+    Write(#[from] crate::io::WriteError),
 }
 
 impl ModelFile {
@@ -172,7 +173,6 @@ impl ModelFile {
         let lr = Logistic {
             conditioned: self.conditioned,
         };
-        use super::train::Learner;
         if self.baseline.params.len() != lr.n_params() {
             return Err(shape(format!(
                 "{} baseline parameters, the logistic regression needs {}",
@@ -213,7 +213,7 @@ impl ModelFile {
     /// Writes the file atomically.
     pub fn write(&self, path: &Path) -> Result<(), ModelError> {
         let text = serde_json::to_string(self).expect("a model serialises");
-        crate::output::write_atomic(path, text.as_bytes())?;
+        crate::io::write_atomic(path, text.as_bytes())?;
         Ok(())
     }
 }

@@ -6,6 +6,7 @@
 //! `timings.csv` and `failures.csv` are written to the output directory. Tables and figures go
 //! to `<out>/report/`.
 
+pub mod plot;
 pub mod stats;
 pub mod summary;
 pub mod tables;
@@ -14,8 +15,8 @@ use std::path::{Path, PathBuf};
 
 use crate::campaign::results::{Results, ResultsError};
 use crate::campaign::SETTINGS_FILE;
-use crate::output::{self, WriteError};
-use crate::plot::{HeatPanel, Heatmap, PlotError, Scatter, ScatterSeries};
+use crate::episode::output::{self, WriteError};
+use crate::report::plot::{HeatPanel, Heatmap, PlotError, Scatter, ScatterSeries};
 pub use summary::{Summary, SummaryError};
 
 /// Directory of the tables and figures inside the output directory.

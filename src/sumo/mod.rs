@@ -6,6 +6,9 @@
 //! (`shim.cpp`), which catches every C++ exception; [`decode`] turns the shim's status into a
 //! [`SumoError`] carrying SUMO's own message and the call that failed.
 
+pub mod files;
+pub mod frame;
+
 mod ffi;
 mod quiet;
 

@@ -1,0 +1,206 @@
+//! Per-episode traffic demand, generated deterministically from (λ, α, seed).
+//!
+//! Arrivals form two Poisson processes: the main road at rate (1 − r)·λ, each vehicle on either
+//! main lane with equal probability, and the ramp at rate r·λ, where r is `demand.ramp_share`.
+//! Every vehicle is a CAV with probability α. Insertion speeds and HDV desired speeds are uniform
+//! over their configured ranges; CAVs want v_max. Depart times are rounded up to the step grid.
+//! The vehicles enter SUMO through [`crate::episode::entry`], which waits for room at the entry.
+
+use std::fmt::Write as _;
+
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+use crate::config::Config;
+use crate::model::scene::{Kind, Origin};
+
+/// Random stream of the demand (other streams of the same seed drive other random choices).
+pub const DEMAND_STREAM: u64 = 1;
+
+/// One vehicle the episode will try to insert.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PlannedVehicle {
+    pub id: String,
+    pub kind: Kind,
+    pub origin: Origin,
+    /// Scheduled insertion time (s).
+    pub depart: f64,
+    /// SUMO lane index on the first edge of the route.
+    pub depart_lane: u32,
+    pub depart_speed: f64,
+    pub desired_speed: f64,
+}
+
+/// Draws the vehicles arriving within the episode's horizon, sorted by depart time.
+pub fn generate(config: &Config) -> Vec<PlannedVehicle> {
+    let sc = &config.scenario;
+    let horizon = sc.steps as f64 * sc.dt;
+    let mut rng = ChaCha8Rng::seed_from_u64(sc.seed);
+    rng.set_stream(DEMAND_STREAM);
+    let rate_main = sc.lambda * (1.0 - config.demand.ramp_share) / 3600.0;
+    let rate_ramp = sc.lambda * config.demand.ramp_share / 3600.0;
+    let main = arrival_times(&mut rng, rate_main, horizon);
+    let ramp = arrival_times(&mut rng, rate_ramp, horizon);
+    let mut events: Vec<(f64, Origin)> = main
+        .into_iter()
+        .map(|t| (t, Origin::Main))
+        .chain(ramp.into_iter().map(|t| (t, Origin::Ramp)))
+        .collect();
+    events.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+    let [v_lo, v_hi] = config.demand.insertion_speed;
+    let [d_lo, d_hi] = config.demand.hdv_desired_speed;
+    events
+        .into_iter()
+        .enumerate()
+        .map(|(n, (t, origin))| {
+            let kind = if rng.gen_bool(sc.alpha) {
+                Kind::Cav
+            } else {
+                Kind::Hdv
+            };
+            let depart_lane = match origin {
+                Origin::Main => rng.gen_range(0..2),
+                Origin::Ramp => 0,
+            };
+            let depart_speed = rng.gen_range(v_lo..=v_hi);
+            let hdv_desired = rng.gen_range(d_lo..=d_hi);
+            let desired_speed = match kind {
+                Kind::Cav => sc.v_max,
+                Kind::Hdv => hdv_desired,
+            };
+            PlannedVehicle {
+                id: format!("{}.{n}", origin.as_str()),
+                kind,
+                origin,
+                depart: ((t / sc.dt).ceil() * sc.dt * 1e6).round() / 1e6,
+                depart_lane,
+                depart_speed: (depart_speed * 100.0).round() / 100.0,
+                desired_speed: (desired_speed * 100.0).round() / 100.0,
+            }
+        })
+        .collect()
+}
+
+/// Event times of a Poisson process of `rate` (1/s) on [0, horizon).
+fn arrival_times(rng: &mut ChaCha8Rng, rate: f64, horizon: f64) -> Vec<f64> {
+    let mut out = Vec::new();
+    if rate <= 0.0 {
+        return out;
+    }
+    let mut t = 0.0;
+    loop {
+        let u: f64 = rng.gen_range(f64::EPSILON..1.0);
+        t += -u.ln() / rate;
+        if t >= horizon {
+            return out;
+        }
+        out.push(t);
+    }
+}
+
+/// SUMO route file with the two routes (vehicles are added at run time by entry control).
+pub const ROUTES: &str = "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<!-- the merge scenario's two routes -->\n<routes>\n    <route id=\"main\" edges=\"main_in acc main_out\"/>\n    <route id=\"ramp\" edges=\"ramp acc main_out\"/>\n</routes>\n";
+
+/// The demand as a SUMO route file, for inspection or for running it in SUMO alone.
+pub fn route_file(vehicles: &[PlannedVehicle]) -> String {
+    let mut xml = ROUTES.trim_end().trim_end_matches("</routes>").to_string();
+    for v in vehicles {
+        let _ = writeln!(
+            xml,
+            "    <vehicle id=\"{}\" type=\"{}\" route=\"{}\" depart=\"{:.2}\" departLane=\"{}\" departPos=\"base\" departSpeed=\"{:.2}\"/>",
+            v.id,
+            v.kind.as_str(),
+            v.origin.as_str(),
+            v.depart,
+            v.depart_lane,
+            v.depart_speed
+        );
+    }
+    xml.push_str("</routes>\n");
+    xml
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn config(alpha: f64, lambda: f64, seed: u64) -> Config {
+        let mut c = Config::default();
+        c.scenario.alpha = alpha;
+        c.scenario.lambda = lambda;
+        c.scenario.seed = seed;
+        c
+    }
+
+    #[test]
+    fn same_seed_same_demand_other_seed_other_demand() {
+        assert_eq!(
+            generate(&config(0.5, 3000.0, 7)),
+            generate(&config(0.5, 3000.0, 7))
+        );
+        assert_ne!(
+            generate(&config(0.5, 3000.0, 7)),
+            generate(&config(0.5, 3000.0, 8))
+        );
+    }
+
+    #[test]
+    fn rates_and_penetration_match_over_many_seeds() {
+        let c0 = Config::default();
+        let horizon_h = c0.scenario.steps as f64 * c0.scenario.dt / 3600.0;
+        for &(alpha, lambda) in &[(0.4, 2500.0), (0.8, 3000.0)] {
+            let (mut n, mut cav, mut ramp) = (0usize, 0usize, 0usize);
+            let seeds = 400;
+            for seed in 0..seeds {
+                for v in generate(&config(alpha, lambda, seed)) {
+                    n += 1;
+                    cav += (v.kind == Kind::Cav) as usize;
+                    ramp += (v.origin == Origin::Ramp) as usize;
+                }
+            }
+            let rate = n as f64 / (seeds as f64 * horizon_h);
+            assert!(
+                (rate - lambda).abs() / lambda < 0.02,
+                "rate {rate} vs {lambda}"
+            );
+            let a = cav as f64 / n as f64;
+            assert!((a - alpha).abs() < 0.02, "alpha {a} vs {alpha}");
+            let r = ramp as f64 / n as f64;
+            assert!((r - c0.demand.ramp_share).abs() < 0.02, "ramp share {r}");
+        }
+    }
+
+    #[test]
+    fn speeds_lie_in_their_ranges_and_departs_on_grid() {
+        let c = config(0.5, 3000.0, 3);
+        for v in generate(&c) {
+            assert!((25.0..=35.0).contains(&v.depart_speed));
+            if v.kind == Kind::Hdv {
+                assert!((25.0..=35.0).contains(&v.desired_speed));
+            } else {
+                assert_eq!(v.desired_speed, 35.0);
+            }
+            let steps = v.depart / c.scenario.dt;
+            assert!((steps - steps.round()).abs() < 1e-6);
+            assert!(v.depart < 80.0 + 1e-9);
+        }
+    }
+
+    #[test]
+    fn alpha_extremes_give_one_kind() {
+        assert!(generate(&config(0.0, 3000.0, 1))
+            .iter()
+            .all(|v| v.kind == Kind::Hdv));
+        assert!(generate(&config(1.0, 3000.0, 1))
+            .iter()
+            .all(|v| v.kind == Kind::Cav));
+    }
+
+    #[test]
+    fn route_file_lists_every_vehicle() {
+        let vs = generate(&config(0.5, 3000.0, 2));
+        let xml = route_file(&vs);
+        assert_eq!(xml.matches("<vehicle ").count(), vs.len());
+        assert!(xml.contains("route=\"ramp\""));
+    }
+}

@@ -1,0 +1,186 @@
+//! Stochastic merging of ramp HDVs (DESIGN §3), applied through TraCI.
+//!
+//! A ramp HDV on the acceleration lane that has not yet decided draws, each step, a decision with
+//! probability ξ^k, where ξ ∈ [0, 1] is the share of the merge zone its front has driven and k is
+//! `ramp_merge.exponent` (default 1: the probability grows linearly and is 1 at the zone's end).
+//! Once decided, it asks SUMO every step to move to the main road's right lane; SUMO executes the
+//! request only into a gap it deems safe (the vehicle adapts its speed to find one). Decisions use
+//! their own random stream, so they are reproducible for a seed and independent of the demand.
+//!
+//! A decided HDV standing at the very end of the acceleration lane forces its way in (SUMO then
+//! only avoids immediate collisions), as a stuck human driver does. Without it SUMO deadlocks:
+//! its main-lane follower stops to let the merger in (LC2013's cooperation) while the merger,
+//! standing, waits for a safe gap that never opens (seen with bk-mastar, α = 0.4, λ = 2500,
+//! seed 4: the right lane stood still for the last 50 s).
+
+use std::collections::HashSet;
+use std::sync::Arc;
+
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+use crate::config::Config;
+use crate::model::road::MERGE_LANE;
+use crate::model::scene::{Kind, Origin, Scene};
+
+/// Random stream of the merge decisions.
+pub const MERGE_STREAM: u64 = 2;
+
+/// Slower than this (m/s) a ramp HDV counts as standing.
+const STANDING: f64 = 0.5;
+/// Within this distance (m) of the acceleration lane's end a standing HDV forces its way in.
+const END_ZONE: f64 = 10.0;
+
+/// A merge request of one ramp HDV this step.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct MergeRequest {
+    /// Scene index of the HDV.
+    pub vehicle: usize,
+    /// Stuck at the lane end: merge ignoring safe gaps (avoiding only immediate collisions).
+    pub forced: bool,
+}
+
+/// Per-episode state of the ramp HDVs' merge decisions.
+#[derive(Debug, Clone)]
+pub struct RampMergeRule {
+    exponent: f64,
+    rng: ChaCha8Rng,
+    decided: HashSet<Arc<str>>,
+}
+
+impl RampMergeRule {
+    pub fn new(config: &Config) -> Self {
+        let mut rng = ChaCha8Rng::seed_from_u64(config.scenario.seed);
+        rng.set_stream(MERGE_STREAM);
+        RampMergeRule {
+            exponent: config.ramp_merge.exponent,
+            rng,
+            decided: HashSet::new(),
+        }
+    }
+
+    /// Per-step decision probability at merge-zone progress `xi`.
+    pub fn probability(&self, xi: f64) -> f64 {
+        xi.clamp(0.0, 1.0).powf(self.exponent)
+    }
+
+    /// Whether the vehicle has decided to merge.
+    pub fn has_decided(&self, id: &str) -> bool {
+        self.decided.contains(id)
+    }
+
+    /// Draws this step's decisions; returns the HDVs that want to merge now.
+    pub fn requests(&mut self, scene: &Scene) -> Vec<MergeRequest> {
+        let road = &scene.road;
+        let zone = road.merge_end - road.merge_start;
+        let mut out = Vec::new();
+        for (i, v) in scene.vehicles.iter().enumerate() {
+            if v.kind != Kind::Hdv || v.origin != Origin::Ramp || v.on_ramp || v.lane != MERGE_LANE
+            {
+                continue;
+            }
+            if !self.decided.contains(&v.id) {
+                let xi = (v.front() - road.merge_start) / zone;
+                let p = self.probability(xi);
+                if self.rng.gen::<f64>() < p {
+                    self.decided.insert(v.id.clone());
+                }
+            }
+            if self.decided.contains(&v.id) {
+                let forced = v.speed < STANDING && v.front() > road.merge_end - END_ZONE;
+                out.push(MergeRequest { vehicle: i, forced });
+            }
+        }
+        out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::road::Road;
+    use crate::model::scene::VehicleState;
+
+    fn ramp_hdv(s: f64) -> VehicleState {
+        VehicleState {
+            desired_speed: 30.0,
+            ..VehicleState::on_lane("ramp.1", Kind::Hdv, Origin::Ramp, s, 0, 20.0)
+        }
+    }
+
+    #[test]
+    fn probability_grows_to_one_at_the_zone_end() {
+        let r = RampMergeRule::new(&Config::default());
+        assert_eq!(r.probability(0.0), 0.0);
+        assert_eq!(r.probability(0.5), 0.5);
+        assert_eq!(r.probability(1.0), 1.0);
+        assert_eq!(r.probability(1.7), 1.0);
+    }
+
+    #[test]
+    fn at_the_zone_end_the_decision_is_certain_and_sticks() {
+        let mut r = RampMergeRule::new(&Config::default());
+        let road = Road::paper_default();
+        let scene = Scene {
+            time: 0.0,
+            road: road.clone(),
+            vehicles: vec![ramp_hdv(road.merge_end - 2.5)],
+        };
+        assert_eq!(
+            r.requests(&scene)
+                .iter()
+                .map(|m| m.vehicle)
+                .collect::<Vec<_>>(),
+            vec![0]
+        );
+        let back = Scene {
+            time: 0.2,
+            road,
+            vehicles: vec![ramp_hdv(160.0)],
+        };
+        assert_eq!(r.requests(&back).len(), 1, "a decided vehicle keeps asking");
+    }
+
+    #[test]
+    fn standing_at_the_lane_end_forces_the_merge() {
+        let mut r = RampMergeRule::new(&Config::default());
+        let road = Road::paper_default();
+        let mut v = ramp_hdv(road.merge_end - 2.5 - 1.0);
+        v.speed = 0.1;
+        let scene = Scene {
+            time: 0.0,
+            road: road.clone(),
+            vehicles: vec![v.clone()],
+        };
+        assert!(r.requests(&scene)[0].forced);
+        v.speed = 5.0;
+        let scene = Scene {
+            time: 0.2,
+            road,
+            vehicles: vec![v],
+        };
+        assert!(!r.requests(&scene)[0].forced);
+    }
+
+    #[test]
+    fn empirical_decision_rate_matches_probability() {
+        let road = Road::paper_default();
+        let mut decided = 0;
+        let n = 4000;
+        for seed in 0..n {
+            let mut c = Config::default();
+            c.scenario.seed = seed;
+            let mut r = RampMergeRule::new(&c);
+            // front at 25 % of the zone
+            let s = road.merge_start + 0.25 * 180.0 - 2.5;
+            let scene = Scene {
+                time: 0.0,
+                road: road.clone(),
+                vehicles: vec![ramp_hdv(s)],
+            };
+            decided += (!r.requests(&scene).is_empty()) as usize;
+        }
+        let rate = decided as f64 / n as f64;
+        assert!((rate - 0.25).abs() < 0.025, "{rate}");
+    }
+}

@@ -1,0 +1,329 @@
+//! Episode metrics (paper eq. 1 and section VI): per-vehicle records, travel delay against the
+//! free-flow time t*, collision attribution, and the one-row episode summary.
+
+use crate::controller::PlanStats;
+use crate::model::scene::{Kind, Origin};
+
+/// Free-flow travel time t* over `distance` from speed `v0`: accelerate at `accel` up to
+/// `v_max`, then cruise, ignoring every other vehicle.
+pub fn free_flow_time(distance: f64, v0: f64, accel: f64, v_max: f64) -> f64 {
+    if distance <= 0.0 {
+        return 0.0;
+    }
+    let v0 = v0.min(v_max).max(0.0);
+    let d_acc = (v_max * v_max - v0 * v0) / (2.0 * accel);
+    if d_acc >= distance {
+        // Still accelerating at the end: v0·t + a·t²/2 = distance.
+        (-v0 + (v0 * v0 + 2.0 * accel * distance).sqrt()) / accel
+    } else {
+        (v_max - v0) / accel + (distance - d_acc) / v_max
+    }
+}
+
+/// How a vehicle's episode ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Outcome {
+    /// Still in the network when the episode ended.
+    Present,
+    Arrived,
+    Crashed,
+}
+
+impl Outcome {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Outcome::Present => "present",
+            Outcome::Arrived => "arrived",
+            Outcome::Crashed => "crashed",
+        }
+    }
+}
+
+/// One inserted vehicle, from insertion to arrival or crash.
+#[derive(Debug, Clone, PartialEq)]
+pub struct VehicleRecord {
+    pub id: String,
+    pub kind: Kind,
+    pub origin: Origin,
+    /// Departure time the demand scheduled (s).
+    pub scheduled_depart: f64,
+    /// Insertion speed the demand drew (m/s); t* starts from it.
+    pub scheduled_speed: f64,
+    /// Road-frame lane at insertion.
+    pub insert_lane: i32,
+    /// Time the vehicle was first seen in the network, at its insertion position (s).
+    pub insert_time: f64,
+    /// Speed SUMO inserted it with: the drawn one, or less when traffic ahead forbade it.
+    pub insert_speed: f64,
+    pub desired_speed: f64,
+    /// Route distance from the insertion position to the end of the section (m).
+    pub distance: f64,
+    /// Free-flow travel time t* (s).
+    pub t_star: f64,
+    pub outcome: Outcome,
+    /// Time the front bumper crossed the section end (s), interpolated within the last step.
+    pub arrival_time: Option<f64>,
+    pub crash_time: Option<f64>,
+    /// The other vehicles of the collision(s) it was removed in.
+    pub crashed_with: Vec<String>,
+    /// Removed in a collision that involved at least one CAV.
+    pub controllable_crash: bool,
+}
+
+impl VehicleRecord {
+    /// Travel delay t_f − t* of a vehicle that arrived without collision, with t_f counted
+    /// from its scheduled departure: time spent queueing at a congested entry is delay too.
+    pub fn delay(&self) -> Option<f64> {
+        self.arrival_time
+            .map(|t| t - self.scheduled_depart - self.t_star)
+    }
+
+    /// Time the vehicle waited at the entry for room (s).
+    pub fn entry_delay(&self) -> f64 {
+        (self.insert_time - self.scheduled_depart).max(0.0)
+    }
+}
+
+/// One collision as SUMO reported it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CollisionEvent {
+    pub time: f64,
+    pub collider: String,
+    pub victim: String,
+    pub collider_kind: Option<Kind>,
+    pub victim_kind: Option<Kind>,
+    pub lane: String,
+    pub position: f64,
+}
+
+impl CollisionEvent {
+    /// Involves at least one CAV, so a controller could have avoided it.
+    pub fn controllable(&self) -> bool {
+        self.collider_kind == Some(Kind::Cav) || self.victim_kind == Some(Kind::Cav)
+    }
+}
+
+/// The episode's one-row summary (reproducible: no wall-clock figure in it).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Summary {
+    pub planner: String,
+    pub alpha: f64,
+    pub lambda: f64,
+    pub seed: u64,
+    pub steps: u32,
+    /// Vehicles the demand scheduled within the horizon.
+    pub scheduled: usize,
+    pub inserted: usize,
+    /// Scheduled but never inserted (SUMO found no room in time).
+    pub undeparted: usize,
+    pub inserted_cav: usize,
+    pub arrived: usize,
+    pub crashed: usize,
+    pub present: usize,
+    /// Vehicles removed in collisions involving a CAV.
+    pub controllable_crashed: usize,
+    pub controllable_collision_rate: f64,
+    /// Collisions between two HDVs (events), out of any controller's reach.
+    pub hdv_collisions: usize,
+    pub hdv_crashed: usize,
+    pub mean_delay_s: Option<f64>,
+    pub mean_delay_cav_s: Option<f64>,
+    pub mean_delay_hdv_s: Option<f64>,
+    pub throughput_veh_h: f64,
+    /// Mean speed over all vehicle-steps (m/s).
+    pub mean_speed_mps: f64,
+    /// Vehicles standing (< 1 m/s) on the acceleration lane at the end (a jam indicator).
+    pub ramp_queue_end: usize,
+    /// Planner effort over the episode.
+    pub plan_stats: PlanStats,
+}
+
+fn mean(xs: impl Iterator<Item = f64>) -> Option<f64> {
+    let (sum, n) = xs.fold((0.0, 0usize), |(s, n), x| (s + x, n + 1));
+    (n > 0).then(|| sum / n as f64)
+}
+
+/// Everything the summary is computed from.
+pub struct SummaryInput<'a> {
+    pub planner: &'a str,
+    pub alpha: f64,
+    pub lambda: f64,
+    pub seed: u64,
+    pub steps: u32,
+    pub dt: f64,
+    pub scheduled: usize,
+    pub vehicles: &'a [VehicleRecord],
+    pub collisions: &'a [CollisionEvent],
+    pub speed_sum: f64,
+    pub speed_samples: u64,
+    pub ramp_queue_end: usize,
+    pub plan_stats: PlanStats,
+}
+
+impl Summary {
+    pub fn compute(inp: &SummaryInput) -> Summary {
+        let v = inp.vehicles;
+        let count = |f: &dyn Fn(&VehicleRecord) -> bool| v.iter().filter(|r| f(r)).count();
+        let inserted = v.len();
+        let crashed = count(&|r| r.outcome == Outcome::Crashed);
+        let controllable_crashed =
+            count(&|r| r.outcome == Outcome::Crashed && r.controllable_crash);
+        let delays = |k: Option<Kind>| {
+            mean(
+                v.iter()
+                    .filter(|r| k.map_or(true, |k| r.kind == k))
+                    .filter_map(|r| r.delay()),
+            )
+        };
+        let horizon_h = inp.steps as f64 * inp.dt / 3600.0;
+        let arrived = count(&|r| r.outcome == Outcome::Arrived);
+        Summary {
+            planner: inp.planner.to_string(),
+            alpha: inp.alpha,
+            lambda: inp.lambda,
+            seed: inp.seed,
+            steps: inp.steps,
+            scheduled: inp.scheduled,
+            inserted,
+            undeparted: inp.scheduled.saturating_sub(inserted),
+            inserted_cav: count(&|r| r.kind == Kind::Cav),
+            arrived,
+            crashed,
+            present: count(&|r| r.outcome == Outcome::Present),
+            controllable_crashed,
+            controllable_collision_rate: if inserted > 0 {
+                controllable_crashed as f64 / inserted as f64
+            } else {
+                0.0
+            },
+            hdv_collisions: inp.collisions.iter().filter(|c| !c.controllable()).count(),
+            hdv_crashed: count(&|r| r.outcome == Outcome::Crashed && !r.controllable_crash),
+            mean_delay_s: delays(None),
+            mean_delay_cav_s: delays(Some(Kind::Cav)),
+            mean_delay_hdv_s: delays(Some(Kind::Hdv)),
+            throughput_veh_h: arrived as f64 / horizon_h,
+            mean_speed_mps: if inp.speed_samples > 0 {
+                inp.speed_sum / inp.speed_samples as f64
+            } else {
+                0.0
+            },
+            ramp_queue_end: inp.ramp_queue_end,
+            plan_stats: inp.plan_stats,
+        }
+    }
+}
+
+/// Wall-clock figures of one episode: they differ from run to run, so they live apart.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Timing {
+    pub plan_ms_median: f64,
+    pub plan_ms_p99: f64,
+    pub plan_ms_max: f64,
+    /// Time inside the planner over the whole episode (ms).
+    pub plan_ms_total: f64,
+    /// Time inside SUMO's step per step (ms).
+    pub sumo_ms_per_step: f64,
+    /// Whole episode per step, SUMO start excluded (ms).
+    pub episode_ms_per_step: f64,
+    /// Whole episode including SUMO start and close (s).
+    pub wall_s: f64,
+}
+
+/// Nearest-rank percentile of `samples` (sorted in place); 0 for none.
+pub fn percentile(samples: &mut [f64], q: f64) -> f64 {
+    if samples.is_empty() {
+        return 0.0;
+    }
+    samples.sort_by(f64::total_cmp);
+    let rank = ((q / 100.0) * samples.len() as f64).ceil() as usize;
+    samples[rank.clamp(1, samples.len()) - 1]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn free_flow_time_hand_computed() {
+        // From 25 m/s at 3 m/s² to 35 m/s: 10/3 s over (35² − 25²)/6 = 100 m, then 355 m at 35.
+        // t* = 3.333333 + 10.142857 = 13.476190
+        let t = free_flow_time(455.0, 25.0, 3.0, 35.0);
+        assert!((t - 13.476_190).abs() < 1e-5, "{t}");
+        // Already at v_max: plain cruise.
+        assert!((free_flow_time(350.0, 35.0, 3.0, 35.0) - 10.0).abs() < 1e-12);
+        // Short distance, still accelerating: 25t + 1.5t² = 50 -> t = (−25 + √925)/3 = 1.804604 s.
+        let t = free_flow_time(50.0, 25.0, 3.0, 35.0);
+        assert!((25.0 * t + 1.5 * t * t - 50.0).abs() < 1e-9 && (t - 1.804_604).abs() < 1e-5);
+    }
+
+    fn rec(
+        kind: Kind,
+        outcome: Outcome,
+        controllable: bool,
+        arrival: Option<f64>,
+    ) -> VehicleRecord {
+        VehicleRecord {
+            id: "x".into(),
+            kind,
+            origin: Origin::Main,
+            scheduled_depart: 1.0,
+            scheduled_speed: 30.0,
+            insert_lane: 1,
+            insert_time: 1.0,
+            insert_speed: 30.0,
+            desired_speed: 30.0,
+            distance: 455.0,
+            t_star: 13.0,
+            outcome,
+            arrival_time: arrival,
+            crash_time: None,
+            crashed_with: vec![],
+            controllable_crash: controllable,
+        }
+    }
+
+    #[test]
+    fn summary_counts_and_rates() {
+        let vs = vec![
+            rec(Kind::Cav, Outcome::Arrived, false, Some(20.0)), // delay 20 − 1 − 13 = 6
+            rec(Kind::Hdv, Outcome::Arrived, false, Some(18.0)), // delay 4
+            rec(Kind::Cav, Outcome::Crashed, true, None),
+            rec(Kind::Hdv, Outcome::Crashed, true, None),
+            rec(Kind::Hdv, Outcome::Crashed, false, None),
+            rec(Kind::Hdv, Outcome::Present, false, None),
+        ];
+        let s = Summary::compute(&SummaryInput {
+            planner: "p",
+            alpha: 0.5,
+            lambda: 3000.0,
+            seed: 1,
+            steps: 400,
+            dt: 0.2,
+            scheduled: 8,
+            vehicles: &vs,
+            collisions: &[],
+            speed_sum: 10.0,
+            speed_samples: 4,
+            ramp_queue_end: 0,
+            plan_stats: PlanStats::default(),
+        });
+        assert_eq!(
+            (s.inserted, s.undeparted, s.arrived, s.crashed, s.present),
+            (6, 2, 2, 3, 1)
+        );
+        assert_eq!(s.controllable_crashed, 2);
+        assert!((s.controllable_collision_rate - 2.0 / 6.0).abs() < 1e-12);
+        assert_eq!(s.mean_delay_s, Some(5.0));
+        assert_eq!(s.mean_delay_cav_s, Some(6.0));
+        assert!((s.throughput_veh_h - 2.0 / (80.0 / 3600.0)).abs() < 1e-9);
+        assert_eq!(s.mean_speed_mps, 2.5);
+    }
+
+    #[test]
+    fn percentile_nearest_rank() {
+        let mut xs = vec![5.0, 1.0, 3.0, 2.0, 4.0];
+        assert_eq!(percentile(&mut xs, 50.0), 3.0);
+        assert_eq!(percentile(&mut xs, 99.0), 5.0);
+        assert_eq!(percentile(&mut [], 50.0), 0.0);
+    }
+}

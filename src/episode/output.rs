@@ -1,0 +1,287 @@
+//! CSV files of an episode, written atomically (temporary file, then rename), so a crash or a
+//! kill never leaves a half-written result and an earlier result stays until replaced whole.
+
+use std::path::{Path, PathBuf};
+
+use crate::episode::metrics::{CollisionEvent, Summary, Timing, VehicleRecord};
+use crate::episode::EpisodeResult;
+pub use crate::io::{write_atomic, WriteError};
+
+fn opt(x: Option<f64>, decimals: usize) -> String {
+    x.map(|v| format!("{v:.decimals$}")).unwrap_or_default()
+}
+
+fn csv_bytes(header: &[&str], rows: impl Iterator<Item = Vec<String>>) -> Vec<u8> {
+    let mut w = csv::Writer::from_writer(Vec::new());
+    w.write_record(header).expect("writing to memory");
+    for r in rows {
+        w.write_record(&r).expect("writing to memory");
+    }
+    w.into_inner().expect("writing to memory")
+}
+
+/// Columns of `episode.csv`.
+pub const EPISODE_COLUMNS: [&str; 31] = [
+    "planner",
+    "alpha",
+    "lambda",
+    "seed",
+    "steps",
+    "scheduled",
+    "inserted",
+    "undeparted",
+    "inserted_cav",
+    "arrived",
+    "crashed",
+    "present",
+    "controllable_crashed",
+    "controllable_collision_rate",
+    "hdv_collisions",
+    "hdv_crashed",
+    "mean_delay_s",
+    "mean_delay_cav_s",
+    "mean_delay_hdv_s",
+    "throughput_veh_h",
+    "mean_speed_mps",
+    "ramp_queue_end",
+    "plan_searches",
+    "plan_nodes_expanded",
+    "plan_phase2",
+    "plan_fallbacks",
+    "pbs_nodes",
+    "pbs_depth_sum",
+    "predictions",
+    "pbs_fallbacks",
+    "time_budget_hits",
+];
+
+/// The summary as one `episode.csv` row.
+pub fn episode_row(s: &Summary) -> Vec<String> {
+    vec![
+        s.planner.clone(),
+        format!("{}", s.alpha),
+        format!("{}", s.lambda),
+        s.seed.to_string(),
+        s.steps.to_string(),
+        s.scheduled.to_string(),
+        s.inserted.to_string(),
+        s.undeparted.to_string(),
+        s.inserted_cav.to_string(),
+        s.arrived.to_string(),
+        s.crashed.to_string(),
+        s.present.to_string(),
+        s.controllable_crashed.to_string(),
+        format!("{:.6}", s.controllable_collision_rate),
+        s.hdv_collisions.to_string(),
+        s.hdv_crashed.to_string(),
+        opt(s.mean_delay_s, 4),
+        opt(s.mean_delay_cav_s, 4),
+        opt(s.mean_delay_hdv_s, 4),
+        format!("{:.2}", s.throughput_veh_h),
+        format!("{:.4}", s.mean_speed_mps),
+        s.ramp_queue_end.to_string(),
+        s.plan_stats.searches.to_string(),
+        s.plan_stats.nodes_expanded.to_string(),
+        s.plan_stats.phase2_plans.to_string(),
+        s.plan_stats.fallbacks.to_string(),
+        s.plan_stats.pbs_nodes.to_string(),
+        s.plan_stats.pbs_depth.to_string(),
+        s.plan_stats.predictions.to_string(),
+        s.plan_stats.pbs_fallbacks.to_string(),
+        s.plan_stats.time_budget_hits.to_string(),
+    ]
+}
+
+/// Columns of `timing.csv`.
+pub const TIMING_COLUMNS: [&str; 6] = [
+    "plan_ms_median",
+    "plan_ms_p99",
+    "plan_ms_max",
+    "sumo_ms_per_step",
+    "episode_ms_per_step",
+    "wall_s",
+];
+
+fn timing_row(t: &Timing) -> Vec<String> {
+    [
+        t.plan_ms_median,
+        t.plan_ms_p99,
+        t.plan_ms_max,
+        t.sumo_ms_per_step,
+        t.episode_ms_per_step,
+        t.wall_s,
+    ]
+    .iter()
+    .map(|x| format!("{x:.4}"))
+    .collect()
+}
+
+/// Columns of `vehicles.csv`.
+pub const VEHICLE_COLUMNS: [&str; 19] = [
+    "id",
+    "type",
+    "origin",
+    "scheduled_depart_s",
+    "scheduled_speed_mps",
+    "insert_lane",
+    "insert_time_s",
+    "entry_delay_s",
+    "insert_speed_mps",
+    "desired_speed_mps",
+    "distance_m",
+    "t_star_s",
+    "outcome",
+    "arrival_time_s",
+    "travel_time_s",
+    "delay_s",
+    "crash_time_s",
+    "crashed_with",
+    "controllable_crash",
+];
+
+fn vehicle_row(r: &VehicleRecord) -> Vec<String> {
+    vec![
+        r.id.clone(),
+        r.kind.as_str().into(),
+        r.origin.as_str().into(),
+        format!("{:.2}", r.scheduled_depart),
+        format!("{:.2}", r.scheduled_speed),
+        r.insert_lane.to_string(),
+        format!("{:.2}", r.insert_time),
+        format!("{:.2}", r.entry_delay()),
+        format!("{:.2}", r.insert_speed),
+        format!("{:.2}", r.desired_speed),
+        format!("{:.3}", r.distance),
+        format!("{:.4}", r.t_star),
+        r.outcome.as_str().into(),
+        opt(r.arrival_time, 4),
+        opt(r.arrival_time.map(|t| t - r.insert_time), 4),
+        opt(r.delay(), 4),
+        opt(r.crash_time, 2),
+        r.crashed_with.join(" "),
+        r.controllable_crash.to_string(),
+    ]
+}
+
+/// Columns of `collisions.csv`.
+pub const COLLISION_COLUMNS: [&str; 8] = [
+    "time_s",
+    "collider",
+    "collider_type",
+    "victim",
+    "victim_type",
+    "lane",
+    "position_m",
+    "controllable",
+];
+
+fn collision_row(c: &CollisionEvent) -> Vec<String> {
+    let kind =
+        |k: Option<crate::model::scene::Kind>| k.map_or("unknown", |k| k.as_str()).to_string();
+    vec![
+        format!("{:.2}", c.time),
+        c.collider.clone(),
+        kind(c.collider_kind),
+        c.victim.clone(),
+        kind(c.victim_kind),
+        c.lane.clone(),
+        format!("{:.2}", c.position),
+        c.controllable().to_string(),
+    ]
+}
+
+impl EpisodeResult {
+    /// `episode.csv` as bytes.
+    pub fn episode_csv(&self) -> Vec<u8> {
+        csv_bytes(
+            &EPISODE_COLUMNS,
+            std::iter::once(episode_row(&self.summary)),
+        )
+    }
+
+    /// `vehicles.csv` as bytes.
+    pub fn vehicles_csv(&self) -> Vec<u8> {
+        csv_bytes(&VEHICLE_COLUMNS, self.vehicles.iter().map(vehicle_row))
+    }
+
+    /// `collisions.csv` as bytes.
+    pub fn collisions_csv(&self) -> Vec<u8> {
+        csv_bytes(
+            &COLLISION_COLUMNS,
+            self.collisions.iter().map(collision_row),
+        )
+    }
+
+    /// `timing.csv` as bytes.
+    pub fn timing_csv(&self) -> Vec<u8> {
+        csv_bytes(&TIMING_COLUMNS, std::iter::once(timing_row(&self.timing)))
+    }
+
+    /// Writes the four CSV files into `dir`; returns their paths.
+    pub fn write(&self, dir: &Path) -> Result<Vec<PathBuf>, WriteError> {
+        let files = [
+            ("vehicles.csv", self.vehicles_csv()),
+            ("collisions.csv", self.collisions_csv()),
+            ("timing.csv", self.timing_csv()),
+            // Last: its presence marks a complete episode directory.
+            ("episode.csv", self.episode_csv()),
+        ];
+        let mut paths = Vec::new();
+        if !self.sumo_log.is_empty() {
+            let p = dir.join("sumo.log");
+            write_atomic(&p, self.sumo_log.as_bytes())?;
+            paths.push(p);
+        }
+        for (name, bytes) in files {
+            let p = dir.join(name);
+            write_atomic(&p, &bytes)?;
+            paths.push(p);
+        }
+        Ok(paths)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn atomic_write_replaces_whole_and_leaves_no_temp() {
+        let d = tempfile::tempdir().unwrap();
+        let p = d.path().join("sub/x.csv");
+        write_atomic(&p, b"one").unwrap();
+        write_atomic(&p, b"two").unwrap();
+        assert_eq!(std::fs::read(&p).unwrap(), b"two");
+        let names: Vec<_> = std::fs::read_dir(p.parent().unwrap()).unwrap().collect();
+        assert_eq!(names.len(), 1);
+    }
+
+    #[test]
+    fn unwritable_target_names_the_path() {
+        let d = tempfile::tempdir().unwrap();
+        let blocker = d.path().join("file");
+        std::fs::write(&blocker, b"").unwrap();
+        let e = write_atomic(&blocker.join("x.csv"), b"x").unwrap_err();
+        assert!(e.to_string().contains("file/x.csv"), "{e}");
+    }
+
+    #[test]
+    fn episode_row_has_one_cell_per_column() {
+        let s = crate::episode::metrics::Summary::compute(&crate::episode::metrics::SummaryInput {
+            planner: "p",
+            alpha: 0.5,
+            lambda: 3000.0,
+            seed: 0,
+            steps: 1,
+            dt: 0.2,
+            scheduled: 0,
+            vehicles: &[],
+            collisions: &[],
+            speed_sum: 0.0,
+            speed_samples: 0,
+            ramp_queue_end: 0,
+            plan_stats: Default::default(),
+        });
+        assert_eq!(episode_row(&s).len(), EPISODE_COLUMNS.len());
+    }
+}

@@ -1,0 +1,513 @@
+//! One episode: SUMO and a controller in lock-step for H steps, with every vehicle accounted for.
+//!
+//! Each step: SUMO advances; departures, collisions and arrivals are booked; every vehicle's state
+//! is read in one call and turned into a [`Scene`]; ramp HDVs draw their merge decisions; the
+//! controller plans; its maneuvers go back to SUMO as speed and lane-change commands.
+
+use std::collections::HashMap;
+use std::sync::Arc;
+use std::time::Instant;
+
+use crate::config::{Config, ConfigError};
+use crate::controller::{CavHandling, Command, Controller, PlanStats};
+use crate::episode::demand::{self, PlannedVehicle};
+use crate::episode::entry::EntryControl;
+use crate::episode::merge_rule::RampMergeRule;
+use crate::episode::metrics::{
+    free_flow_time, percentile, CollisionEvent, Outcome, Summary, SummaryInput, Timing,
+    VehicleRecord,
+};
+use crate::model::road::{Road, RoadError, EDGES};
+use crate::model::scene::{Kind, Origin, Scene};
+use crate::sumo::files::{EpisodeInput, InputError};
+use crate::sumo::frame;
+use crate::sumo::{Simulation, StderrCapture, SumoError, VehicleReadings};
+
+/// SUMO speed mode for commanded CAVs: no checks at all, the commanded speed is the speed.
+const SPEED_MODE_COMMANDED: i32 = 0;
+/// SUMO lane-change mode for commanded CAVs: no own changes; requests obeyed without checks.
+const LC_MODE_COMMANDED: i32 = 0;
+/// SUMO lane-change mode for ramp HDVs: no own changes (the merge rule decides when), requests
+/// executed only into safe gaps, adapting speed to find one.
+const LC_MODE_RAMP_HDV: i32 = 0b10_0000_0000;
+/// The same for a ramp HDV stuck at the lane end: requests executed avoiding only immediate
+/// collisions (see `merge_rule`).
+const LC_MODE_RAMP_HDV_FORCED: i32 = 0b01_0000_0000;
+
+/// Why an episode could not complete.
+#[derive(Debug, thiserror::Error)]
+pub enum EpisodeError {
+    #[error(transparent)]
+    Config(#[from] ConfigError),
+    #[error(transparent)]
+    Input(#[from] InputError),
+    #[error(transparent)]
+    Planner(#[from] crate::controller::UnknownPlanner),
+    #[error("cannot start SUMO on net {net}: {cause}")]
+    Start {
+        net: std::path::PathBuf,
+        cause: SumoError,
+    },
+    #[error(transparent)]
+    Road(#[from] RoadError),
+    #[error("SUMO failed at step {step} (t = {time:.1} s): {cause}")]
+    Step {
+        step: u32,
+        time: f64,
+        cause: SumoError,
+    },
+}
+
+/// What an episode produced.
+#[derive(Debug, Clone)]
+pub struct EpisodeResult {
+    pub summary: Summary,
+    pub vehicles: Vec<VehicleRecord>,
+    pub collisions: Vec<CollisionEvent>,
+    pub timing: Timing,
+    /// What SUMO printed to stderr (captured unless `sumo.verbose`).
+    pub sumo_log: String,
+}
+
+/// Runs one episode with the demand drawn from the config's (λ, α, seed).
+pub fn run(
+    config: &Config,
+    controller: &mut dyn Controller,
+) -> Result<EpisodeResult, EpisodeError> {
+    config.validate()?;
+    let planned = demand::generate(config);
+    run_with_demand(config, controller, &planned)
+}
+
+/// Sees the scene of every step, before the controller plans: for recording data (e.g. the
+/// predictor's training set) without touching the runner.
+pub trait Observer {
+    fn observe(&mut self, scene: &Scene);
+}
+
+/// An observer that looks away.
+pub struct NoObserver;
+
+impl Observer for NoObserver {
+    fn observe(&mut self, _scene: &Scene) {}
+}
+
+/// Runs one episode with a given demand (for staged scenes and tests).
+pub fn run_with_demand(
+    config: &Config,
+    controller: &mut dyn Controller,
+    planned: &[PlannedVehicle],
+) -> Result<EpisodeResult, EpisodeError> {
+    run_observed(config, controller, planned, &mut NoObserver)
+}
+
+/// Runs one episode with a given demand, showing every step's scene to `observer`.
+pub fn run_observed(
+    config: &Config,
+    controller: &mut dyn Controller,
+    planned: &[PlannedVehicle],
+    observer: &mut dyn Observer,
+) -> Result<EpisodeResult, EpisodeError> {
+    let wall = Instant::now();
+    let input = EpisodeInput::write(config)?;
+    let capture = if config.sumo.verbose {
+        None
+    } else {
+        StderrCapture::start()
+    };
+    let outcome = (|| {
+        let sim = Simulation::start(&input.command_line(config)).map_err(|cause| {
+            EpisodeError::Start {
+                net: config
+                    .scenario
+                    .net_file
+                    .clone()
+                    .unwrap_or_else(|| "(embedded)".into()),
+                cause,
+            }
+        })?;
+        let road = Road::from_simulation(&sim)?;
+        Episode::new(config, controller, planned, road, observer).run(sim)
+    })();
+    let sumo_log = capture.map(StderrCapture::finish).unwrap_or_default();
+    let mut result = outcome?;
+    result.sumo_log = sumo_log;
+    result.timing.wall_s = wall.elapsed().as_secs_f64();
+    Ok(result)
+}
+
+/// Per-vehicle bookkeeping beyond the record.
+struct Tracked {
+    id: Arc<str>,
+    record: VehicleRecord,
+    last_time: f64,
+    last_front: f64,
+    last_speed: f64,
+}
+
+struct Episode<'a> {
+    config: &'a Config,
+    controller: &'a mut dyn Controller,
+    observer: &'a mut dyn Observer,
+    planned: HashMap<&'a str, &'a PlannedVehicle>,
+    scheduled: usize,
+    road: Road,
+    tracked: Vec<Tracked>,
+    index: HashMap<Arc<str>, usize>,
+    collisions: Vec<CollisionEvent>,
+    merge_rule: RampMergeRule,
+    entry: EntryControl,
+    readings: VehicleReadings,
+    /// Tracked index of each reading, valid for `slots_generation`.
+    slots: Vec<Option<usize>>,
+    slots_generation: u64,
+    scene: Scene,
+    /// SUMO edge code of each scene vehicle, for turning frame lanes back into SUMO lanes.
+    scene_edges: Vec<i32>,
+    commands: Vec<Command>,
+    plan_ms: Vec<f64>,
+    plan_stats: PlanStats,
+    sumo_s: f64,
+    speed_sum: f64,
+    speed_samples: u64,
+}
+
+impl<'a> Episode<'a> {
+    fn new(
+        config: &'a Config,
+        controller: &'a mut dyn Controller,
+        planned: &'a [PlannedVehicle],
+        road: Road,
+        observer: &'a mut dyn Observer,
+    ) -> Self {
+        Episode {
+            config,
+            controller,
+            observer,
+            planned: planned.iter().map(|p| (p.id.as_str(), p)).collect(),
+            scheduled: planned.len(),
+            scene: Scene {
+                time: 0.0,
+                road: road.clone(),
+                vehicles: Vec::new(),
+            },
+            scene_edges: Vec::new(),
+            road,
+            tracked: Vec::new(),
+            index: HashMap::new(),
+            collisions: Vec::new(),
+            merge_rule: RampMergeRule::new(config),
+            entry: EntryControl::new(config, planned),
+            readings: VehicleReadings::default(),
+            slots: Vec::new(),
+            slots_generation: u64::MAX,
+            commands: Vec::new(),
+            plan_ms: Vec::with_capacity(config.scenario.steps as usize),
+            plan_stats: PlanStats::default(),
+            sumo_s: 0.0,
+            speed_sum: 0.0,
+            speed_samples: 0,
+        }
+    }
+
+    fn run(&mut self, mut sim: Simulation) -> Result<EpisodeResult, EpisodeError> {
+        let loop_start = Instant::now();
+        let steps = self.config.scenario.steps;
+        sim.set_edge_codes(&EDGES)
+            .map_err(|cause| EpisodeError::Step {
+                step: 0,
+                time: 0.0,
+                cause,
+            })?;
+        for step in 0..steps {
+            let at = |cause| EpisodeError::Step {
+                step,
+                time: step as f64 * self.config.scenario.dt,
+                cause,
+            };
+            self.step(&mut sim, step + 1 < steps).map_err(at)?;
+        }
+        let loop_s = loop_start.elapsed().as_secs_f64();
+        // Vehicles standing on the acceleration lane at the end: a jam indicator.
+        let ramp_queue_end = self
+            .scene
+            .vehicles
+            .iter()
+            .filter(|v| !v.on_ramp && v.lane == crate::model::road::MERGE_LANE && v.speed < 1.0)
+            .count();
+        sim.close().map_err(|cause| EpisodeError::Step {
+            step: steps,
+            time: steps as f64 * self.config.scenario.dt,
+            cause,
+        })?;
+        Ok(self.finish(loop_s, ramp_queue_end))
+    }
+
+    /// One SUMO step and, unless it is the last, one planning round.
+    fn step(&mut self, sim: &mut Simulation, plan: bool) -> Result<(), SumoError> {
+        for a in self.entry.admit(self.scene.time, &self.scene) {
+            let v = &a.vehicle;
+            sim.add_vehicle(
+                &v.id,
+                v.origin.as_str(),
+                v.kind.as_str(),
+                v.depart_lane as i32,
+                a.speed,
+            )?;
+        }
+        let t0 = Instant::now();
+        sim.step()?;
+        self.sumo_s += t0.elapsed().as_secs_f64();
+        let now = sim.time()?;
+        self.book_departures(sim, now)?;
+        self.book_collisions(sim, now)?;
+        self.book_arrivals(sim, now)?;
+        sim.read_vehicles(&mut self.readings)?;
+        self.build_scene(now);
+        self.observer.observe(&self.scene);
+        if !plan {
+            return Ok(());
+        }
+        for m in self.merge_rule.requests(&self.scene) {
+            let v = &self.scene.vehicles[m.vehicle];
+            if m.forced {
+                sim.set_lane_change_mode(&v.id, LC_MODE_RAMP_HDV_FORCED)?;
+            }
+            sim.change_lane(&v.id, 1, self.config.scenario.dt)?;
+        }
+        self.commands.clear();
+        let t1 = Instant::now();
+        self.controller.plan(&self.scene, &mut self.commands);
+        self.plan_ms.push(t1.elapsed().as_secs_f64() * 1e3);
+        self.plan_stats += self.controller.last_stats();
+        if self.controller.handling() == CavHandling::Commanded {
+            self.apply(sim)?;
+        }
+        Ok(())
+    }
+
+    fn book_departures(&mut self, sim: &mut Simulation, now: f64) -> Result<(), SumoError> {
+        let commanded = self.controller.handling() == CavHandling::Commanded;
+        let end_edge = EDGES[3];
+        let end_pos = self.road.edges[3].length;
+        for id in sim.departed()? {
+            let kind = Kind::from_type_id(&sim.vehicle_type(&id)?).unwrap_or(Kind::Hdv);
+            let planned = self.planned.get(id.as_str()).copied();
+            let origin = planned.map_or(Origin::Main, |p| p.origin);
+            let desired = planned.map_or(self.config.scenario.v_max, |p| p.desired_speed);
+            let speed = planned.map_or(0.0, |p| p.depart_speed);
+            let scheduled_depart = planned.map_or(now, |p| p.depart);
+            match kind {
+                Kind::Hdv => {
+                    sim.set_max_speed(&id, desired)?;
+                    if origin == Origin::Ramp {
+                        sim.set_lane_change_mode(&id, LC_MODE_RAMP_HDV)?;
+                    }
+                }
+                Kind::Cav if commanded => {
+                    sim.set_speed_mode(&id, SPEED_MODE_COMMANDED)?;
+                    sim.set_lane_change_mode(&id, LC_MODE_COMMANDED)?;
+                }
+                Kind::Cav => {}
+            }
+            let distance = sim.driving_distance(&id, end_edge, end_pos)?;
+            let sc = &self.config.scenario;
+            let record = VehicleRecord {
+                id: id.clone(),
+                kind,
+                origin,
+                scheduled_depart,
+                scheduled_speed: speed,
+                // Lane and speed are filled in from the first reading, in this same step.
+                insert_lane: -1,
+                insert_time: now,
+                insert_speed: f64::NAN,
+                desired_speed: desired,
+                distance,
+                t_star: free_flow_time(distance, speed, sc.free_flow_accel, sc.v_max),
+                outcome: Outcome::Present,
+                arrival_time: None,
+                crash_time: None,
+                crashed_with: Vec::new(),
+                controllable_crash: false,
+            };
+            let key: Arc<str> = Arc::from(id.as_str());
+            self.index.insert(key.clone(), self.tracked.len());
+            self.tracked.push(Tracked {
+                id: key,
+                record,
+                last_time: now,
+                last_front: self.road.section_end - distance,
+                last_speed: speed,
+            });
+        }
+        Ok(())
+    }
+
+    fn book_collisions(&mut self, sim: &mut Simulation, now: f64) -> Result<(), SumoError> {
+        let collisions = sim.collisions()?;
+        let mut removed: Vec<&str> = Vec::new();
+        for c in &collisions {
+            for id in [c.collider.as_str(), c.victim.as_str()] {
+                if !removed.contains(&id) {
+                    sim.remove_vehicle(id)?;
+                    removed.push(id);
+                }
+            }
+        }
+        for c in collisions {
+            let kind_of = |id: &str, type_id: &str| {
+                Kind::from_type_id(type_id)
+                    .or_else(|| self.index.get(id).map(|&k| self.tracked[k].record.kind))
+            };
+            let event = CollisionEvent {
+                time: now,
+                collider_kind: kind_of(&c.collider, &c.collider_type),
+                victim_kind: kind_of(&c.victim, &c.victim_type),
+                collider: c.collider,
+                victim: c.victim,
+                lane: c.lane,
+                position: c.position,
+            };
+            let controllable = event.controllable();
+            for (me, other) in [
+                (&event.collider, &event.victim),
+                (&event.victim, &event.collider),
+            ] {
+                if let Some(&k) = self.index.get(me.as_str()) {
+                    let r = &mut self.tracked[k].record;
+                    r.outcome = Outcome::Crashed;
+                    r.crash_time.get_or_insert(now);
+                    r.crashed_with.push(other.clone());
+                    r.controllable_crash |= controllable;
+                }
+            }
+            self.collisions.push(event);
+        }
+        Ok(())
+    }
+
+    fn book_arrivals(&mut self, sim: &Simulation, now: f64) -> Result<(), SumoError> {
+        let end = self.road.section_end;
+        for id in sim.arrived()? {
+            let Some(&k) = self.index.get(id.as_str()) else {
+                continue;
+            };
+            let t = &mut self.tracked[k];
+            if t.record.outcome != Outcome::Present {
+                continue; // SUMO 1.15 lists vehicles removed by a collision as arrived too
+            }
+            // The front crossed the end within the last step: interpolate at the last speed.
+            let remaining = (end - t.last_front).max(0.0);
+            let crossing = if t.last_speed > 0.1 {
+                (t.last_time + remaining / t.last_speed).min(now)
+            } else {
+                now
+            };
+            t.record.outcome = Outcome::Arrived;
+            t.record.arrival_time = Some(crossing.max(t.last_time));
+        }
+        Ok(())
+    }
+
+    fn build_scene(&mut self, now: f64) {
+        if self.slots_generation != self.readings.generation {
+            self.slots.clear();
+            self.slots.extend(
+                self.readings
+                    .ids
+                    .iter()
+                    .map(|id| self.index.get(id.as_str()).copied()),
+            );
+            self.slots_generation = self.readings.generation;
+        }
+        let sc = &self.config.scenario;
+        self.scene.time = now;
+        self.scene.vehicles.clear();
+        self.scene_edges.clear();
+        for (raw, slot) in self.readings.states.iter().zip(&self.slots) {
+            let (Some(k), Some((front, lane))) = (*slot, frame::frame_position(&self.road, raw))
+            else {
+                continue;
+            };
+            let t = &mut self.tracked[k];
+            if t.record.insert_lane < 0 {
+                t.record.insert_lane = lane;
+                t.record.insert_speed = raw.speed;
+            }
+            t.last_time = now;
+            t.last_front = front;
+            t.last_speed = raw.speed;
+            self.speed_sum += raw.speed;
+            self.speed_samples += 1;
+            self.scene_edges.push(raw.edge_code);
+            let who = frame::Identity {
+                id: t.id.clone(),
+                kind: t.record.kind,
+                origin: t.record.origin,
+                desired_speed: t.record.desired_speed,
+            };
+            self.scene
+                .vehicles
+                .push(frame::state_at(&self.road, sc, who, raw, front, lane));
+        }
+    }
+
+    fn apply(&mut self, sim: &mut Simulation) -> Result<(), SumoError> {
+        let v_max = self.config.scenario.v_max;
+        let vehicles = &self.scene.vehicles;
+        sim.set_speeds(
+            self.commands
+                .iter()
+                .map(|c| (&*vehicles[c.vehicle].id, c.maneuver.speed.clamp(0.0, v_max))),
+        )?;
+        for c in &self.commands {
+            let v = &self.scene.vehicles[c.vehicle];
+            if let Some(dir) = c.maneuver.lane_change {
+                let edge = self.scene_edges[c.vehicle];
+                if let Some(idx) = self.road.sumo_lane_index(edge, v.lane + dir.offset()) {
+                    sim.change_lane(&v.id, idx, self.config.scenario.dt)?;
+                }
+            }
+        }
+        Ok(())
+    }
+
+    fn finish(&mut self, loop_s: f64, ramp_queue_end: usize) -> EpisodeResult {
+        let sc = &self.config.scenario;
+        let vehicles: Vec<VehicleRecord> = self.tracked.iter().map(|t| t.record.clone()).collect();
+        let summary = Summary::compute(&SummaryInput {
+            planner: self.controller.name(),
+            alpha: sc.alpha,
+            lambda: sc.lambda,
+            seed: sc.seed,
+            steps: sc.steps,
+            dt: sc.dt,
+            scheduled: self.scheduled,
+            vehicles: &vehicles,
+            collisions: &self.collisions,
+            speed_sum: self.speed_sum,
+            speed_samples: self.speed_samples,
+            ramp_queue_end,
+            plan_stats: self.plan_stats,
+        });
+        let mut plan = std::mem::take(&mut self.plan_ms);
+        let plan_ms_total = plan.iter().sum();
+        let timing = Timing {
+            plan_ms_median: percentile(&mut plan, 50.0),
+            plan_ms_p99: percentile(&mut plan, 99.0),
+            plan_ms_max: plan.last().copied().unwrap_or(0.0),
+            plan_ms_total,
+            sumo_ms_per_step: self.sumo_s * 1e3 / sc.steps as f64,
+            episode_ms_per_step: loop_s * 1e3 / sc.steps as f64,
+            wall_s: 0.0,
+        };
+        EpisodeResult {
+            summary,
+            vehicles,
+            collisions: std::mem::take(&mut self.collisions),
+            timing,
+            sumo_log: String::new(),
+        }
+    }
+}

@@ -1,0 +1,9 @@
+//! The plain road frame and what lives in it: vectors and boxes, kinematics, the road, a scene of
+//! vehicles, trajectories. No SUMO, no planning: every layer above speaks these types.
+
+pub mod geometry;
+pub mod kinematics;
+pub mod math;
+pub mod road;
+pub mod scene;
+pub mod trajectory;

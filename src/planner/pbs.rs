@@ -1,0 +1,677 @@
+//! BK-PBS: priority-based search over CAVs and HDVs with conditional re-prediction (paper
+//! section IV.C, Algorithm 1).
+//!
+//! Agents are every vehicle of the scene. The root plans each CAV alone by M-A* (no obstacles)
+//! and predicts each HDV unconditioned. A node is expanded depth-first: its first conflict that
+//! involves a CAV (the earliest step at which a CAV is not clear of another vehicle by the
+//! [`SafetyRule`], ties to the lowest pair; HDV–HDV pairs never count) gives two children,
+//! `j ≺ i` and `i ≺ j`. In a child, `update_plan` walks the newly lowered agent and everything
+//! below it in topological order and replans the lowered agent and each lower agent that is no
+//! longer clear of a higher one: a CAV by M-A* against all its higher-priority agents, an HDV by
+//! re-prediction conditioned on its higher-priority CAVs. A child whose CAV finds no plan, or
+//! whose re-predicted HDV still conflicts, is pruned; the surviving children are pushed so the
+//! cheaper is expanded first (cost = −Σ forward speeds over the horizon). A node without
+//! conflicts is the solution.
+//!
+//! Nodes store only their new priority edge, the trajectories they replanned and their list of
+//! conflicts (derived: a child recomputes only the pairs that involve a replanned agent); a
+//! node's full state is rebuilt from its path when it is expanded. A node budget (and optionally
+//! a wall-time budget) bounds a round; when it runs out, or every branch dies, the best node seen
+//! (fewest conflicts, then cost) is returned as a fallback.
+
+use std::sync::Arc;
+use std::time::Instant;
+
+use rayon::prelude::*;
+
+use crate::model::scene::{Kind, Scene};
+use crate::model::trajectory::{Pose, Trajectory};
+use crate::planner::mastar::{Mastar, NoPlan, Plan};
+use crate::planner::priority::PriorityGraph;
+use crate::planner::safety::{Body, SafetyRule};
+use crate::predict::Predictor;
+
+/// Bounds of one planning round.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Budget {
+    /// High-level nodes expanded at most (deterministic).
+    pub nodes: usize,
+    /// Wall time at most, if set (makes results depend on the machine's speed).
+    pub time_ms: Option<f64>,
+}
+
+/// Builds the M-A* request of a CAV against given obstacles (supplied by the controller, which
+/// knows the lane changes under way).
+pub trait RequestFor: Sync {
+    fn plan(
+        &self,
+        planner: &Mastar,
+        agent: usize,
+        obstacles: &[&Trajectory],
+    ) -> Result<Plan, NoPlan>;
+}
+
+/// One planning problem: a scene and how to plan and predict in it.
+pub struct Problem<'a> {
+    pub scene: &'a Scene,
+    pub planner: &'a Mastar,
+    pub predictor: &'a dyn Predictor,
+    pub requests: &'a dyn RequestFor,
+    pub rule: &'a SafetyRule,
+    /// Steps checked for conflicts (and predicted).
+    pub horizon: usize,
+    pub dt: f64,
+    pub budget: Budget,
+}
+
+/// Effort and outcome of a round.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct PbsStats {
+    /// High-level nodes expanded.
+    pub nodes: u64,
+    /// M-A* calls (root and replanning).
+    pub mastar_calls: u64,
+    /// Nodes expanded inside those M-A* calls.
+    pub mastar_nodes: u64,
+    /// HDV predictions (root and conditioned re-predictions).
+    pub predictions: u64,
+    /// Depth of the returned node.
+    pub depth: u64,
+    /// The budget ran out or every branch died: the best node seen was returned.
+    pub fallback: bool,
+    /// The wall-time budget was what ran out.
+    pub timed_out: bool,
+    /// CAV-involved conflicts left in the returned node.
+    pub conflicts_left: u64,
+}
+
+/// What a round returns: per agent (scene vehicle) its trajectory, and for CAVs the plan
+/// (`None` if even the root could not plan it: it must brake).
+#[derive(Debug, Clone)]
+pub struct Solution {
+    pub trajectories: Vec<Arc<Trajectory>>,
+    pub plans: Vec<Option<Arc<Plan>>>,
+    pub stats: PbsStats,
+}
+
+/// (step, i, j) with i < j.
+type Conflict = (usize, usize, usize);
+
+/// An agent at the root: trajectory, plan (CAVs), M-A* calls and nodes spent.
+type RootPlan = (Arc<Trajectory>, Option<Arc<Plan>>, u64, u64);
+
+struct Node {
+    parent: Option<usize>,
+    edge: Option<(usize, usize)>,
+    changed: Vec<(usize, Arc<Trajectory>, Option<Arc<Plan>>)>,
+    conflicts: Vec<Conflict>,
+    cost: f64,
+    depth: usize,
+}
+
+/// The full state of a node.
+struct State {
+    graph: PriorityGraph,
+    trajectories: Vec<Arc<Trajectory>>,
+    plans: Vec<Option<Arc<Plan>>>,
+}
+
+/// Counts kept while planning a child.
+#[derive(Default)]
+struct Effort {
+    mastar_calls: u64,
+    mastar_nodes: u64,
+    predictions: u64,
+}
+
+impl Problem<'_> {
+    fn is_cav(&self, a: usize) -> bool {
+        self.scene.vehicles[a].kind == Kind::Cav
+    }
+
+    /// The first step at which pair (a, b) conflicts, if any.
+    fn pair_conflict(&self, a: usize, b: usize, ts: &[Arc<Trajectory>]) -> Option<usize> {
+        let (ca, cb) = (self.is_cav(a), self.is_cav(b));
+        if !ca && !cb {
+            return None;
+        }
+        let (ta, tb) = (&ts[a], &ts[b]);
+        let (a0, b0) = (Body::of(ta, 0, self.dt), Body::of(tb, 0, self.dt));
+        (1..=self.horizon).find(|&k| {
+            let (pa, pb) = (ta.at(k, self.dt), tb.at(k, self.dt));
+            if (pa.s - pb.s).abs() > crate::planner::safety::REACH || (pa.y - pb.y).abs() > 6.0 {
+                return false;
+            }
+            let (ba, bb) = (body(ta, pa), body(tb, pb));
+            (ca && !self.rule.clear(&ba, &a0, &bb, &b0, k as f64 * self.dt))
+                || (cb && !self.rule.clear(&bb, &b0, &ba, &a0, k as f64 * self.dt))
+        })
+    }
+
+    /// Whether agents `a` and `b` conflict at any step.
+    pub fn conflict_between(&self, a: usize, b: usize, ts: &[Arc<Trajectory>]) -> bool {
+        self.pair_conflict(a.min(b), a.max(b), ts).is_some()
+    }
+
+    /// All conflicting pairs, each at its first step, sorted.
+    fn all_conflicts(&self, ts: &[Arc<Trajectory>]) -> Vec<Conflict> {
+        let n = ts.len();
+        let mut out = Vec::new();
+        for a in 0..n {
+            for b in a + 1..n {
+                if let Some(k) = self.pair_conflict(a, b, ts) {
+                    out.push((k, a, b));
+                }
+            }
+        }
+        out.sort_unstable();
+        out
+    }
+
+    /// The parent's conflicts with every pair touching a `changed` agent recomputed.
+    fn updated_conflicts(
+        &self,
+        parent: &[Conflict],
+        changed: &[usize],
+        ts: &[Arc<Trajectory>],
+    ) -> Vec<Conflict> {
+        let touched = |a: usize| changed.contains(&a);
+        let mut out: Vec<Conflict> = parent
+            .iter()
+            .copied()
+            .filter(|&(_, a, b)| !touched(a) && !touched(b))
+            .collect();
+        for &c in changed {
+            for o in 0..ts.len() {
+                if o == c || (touched(o) && o < c) {
+                    continue; // each changed pair once
+                }
+                let (a, b) = (c.min(o), c.max(o));
+                if let Some(k) = self.pair_conflict(a, b, ts) {
+                    out.push((k, a, b));
+                }
+            }
+        }
+        out.sort_unstable();
+        out
+    }
+
+    /// −Σ forward speeds over steps 1..=horizon of all agents.
+    fn cost(&self, ts: &[Arc<Trajectory>]) -> f64 {
+        -ts.iter()
+            .map(|t| {
+                (1..=self.horizon)
+                    .map(|k| forward(&t.at(k, self.dt)))
+                    .sum::<f64>()
+            })
+            .sum::<f64>()
+    }
+
+    fn predict(&self, agent: usize, conditioned_on: &[&Trajectory]) -> Arc<Trajectory> {
+        Arc::new(
+            self.predictor
+                .predict(self.scene, agent, conditioned_on, self.horizon),
+        )
+    }
+
+    /// Replans `lowered` and every agent below it that is no longer clear of a higher one.
+    /// Returns the replanned agents, or `None` if the child must be pruned.
+    fn update_plan(
+        &self,
+        state: &mut State,
+        lowered: usize,
+        effort: &mut Effort,
+    ) -> Option<Vec<usize>> {
+        let mut changed = Vec::new();
+        for k in state.graph.topological_from(lowered) {
+            let higher = state.graph.ancestors(k);
+            let conflicted = |ts: &[Arc<Trajectory>]| {
+                higher
+                    .iter()
+                    .any(|&h| self.pair_conflict(k.min(h), k.max(h), ts).is_some())
+            };
+            if k != lowered && !conflicted(&state.trajectories) {
+                continue;
+            }
+            if self.is_cav(k) {
+                let obstacles: Vec<&Trajectory> =
+                    higher.iter().map(|&h| &*state.trajectories[h]).collect();
+                effort.mastar_calls += 1;
+                match self.requests.plan(self.planner, k, &obstacles) {
+                    Ok(plan) => {
+                        effort.mastar_nodes += plan.expanded as u64;
+                        state.trajectories[k] = Arc::new(plan.trajectory.clone());
+                        state.plans[k] = Some(Arc::new(plan));
+                    }
+                    Err(e) => {
+                        effort.mastar_nodes += e.expanded as u64;
+                        return None;
+                    }
+                }
+            } else {
+                let cavs: Vec<&Trajectory> = higher
+                    .iter()
+                    .filter(|&&h| self.is_cav(h))
+                    .map(|&h| &*state.trajectories[h])
+                    .collect();
+                effort.predictions += 1;
+                state.trajectories[k] = self.predict(k, &cavs);
+                if conflicted(&state.trajectories) {
+                    return None;
+                }
+            }
+            changed.push(k);
+        }
+        Some(changed)
+    }
+
+    /// Runs one planning round.
+    pub fn solve(&self) -> Solution {
+        let start = Instant::now();
+        let n = self.scene.vehicles.len();
+        let mut stats = PbsStats::default();
+        // Root: CAVs alone (in parallel: they are independent), HDVs unconditioned.
+        let root: Vec<RootPlan> = (0..n)
+            .into_par_iter()
+            .map(|a| {
+                if self.is_cav(a) {
+                    match self.requests.plan(self.planner, a, &[]) {
+                        Ok(p) => (
+                            Arc::new(p.trajectory.clone()),
+                            Some(Arc::new(p.clone())),
+                            1,
+                            p.expanded as u64,
+                        ),
+                        Err(e) => (self.predict(a, &[]), None, 1, e.expanded as u64),
+                    }
+                } else {
+                    (self.predict(a, &[]), None, 0, 0)
+                }
+            })
+            .collect();
+        let mut trajectories = Vec::with_capacity(n);
+        let mut plans = Vec::with_capacity(n);
+        for (a, (t, p, calls, nodes)) in root.into_iter().enumerate() {
+            stats.mastar_calls += calls;
+            stats.mastar_nodes += nodes;
+            stats.predictions += u64::from(!self.is_cav(a));
+            trajectories.push(t);
+            plans.push(p);
+        }
+        let root_state = State {
+            graph: PriorityGraph::new(n),
+            trajectories,
+            plans,
+        };
+        let conflicts = self.all_conflicts(&root_state.trajectories);
+        let mut nodes = vec![Node {
+            parent: None,
+            edge: None,
+            changed: Vec::new(),
+            cost: self.cost(&root_state.trajectories),
+            conflicts,
+            depth: 0,
+        }];
+        let better = |a: &Node, b: &Node| (a.conflicts.len(), a.cost) < (b.conflicts.len(), b.cost);
+        let mut best = 0usize;
+        let mut stack = vec![0usize];
+        let mut solution = None;
+        while let Some(id) = stack.pop() {
+            if nodes[id].conflicts.is_empty() {
+                solution = Some(id);
+                break;
+            }
+            if stats.nodes as usize >= self.budget.nodes {
+                break;
+            }
+            if self
+                .budget
+                .time_ms
+                .is_some_and(|ms| start.elapsed().as_secs_f64() * 1e3 >= ms)
+            {
+                stats.timed_out = true;
+                break;
+            }
+            stats.nodes += 1;
+            let (_, i, j) = nodes[id].conflicts[0];
+            let state = self.materialize(&nodes, id, &root_state);
+            if state.graph.reaches(i, j) || state.graph.reaches(j, i) {
+                continue; // ordered agents still in conflict: a dead end
+            }
+            // Both children at once: they are independent.
+            let (left, right) = rayon::join(
+                || self.child(&nodes[id], &state, j, i),
+                || self.child(&nodes[id], &state, i, j),
+            );
+            let mut children: Vec<(Node, Effort)> = [left, right]
+                .into_iter()
+                .flatten()
+                .map(|(mut c, e)| {
+                    c.parent = Some(id);
+                    (c, e)
+                })
+                .collect();
+            for (_, e) in &children {
+                stats.mastar_calls += e.mastar_calls;
+                stats.mastar_nodes += e.mastar_nodes;
+                stats.predictions += e.predictions;
+            }
+            // Push the costlier first so the cheaper is expanded first.
+            children.sort_by(|a, b| b.0.cost.total_cmp(&a.0.cost));
+            for (c, _) in children {
+                let cid = nodes.len();
+                if better(&c, &nodes[best]) {
+                    best = cid;
+                }
+                nodes.push(c);
+                stack.push(cid);
+            }
+        }
+        let chosen = solution.unwrap_or(best);
+        stats.fallback = solution.is_none();
+        stats.depth = nodes[chosen].depth as u64;
+        stats.conflicts_left = nodes[chosen].conflicts.len() as u64;
+        let state = self.materialize(&nodes, chosen, &root_state);
+        Solution {
+            trajectories: state.trajectories,
+            plans: state.plans,
+            stats,
+        }
+    }
+
+    /// The child of `parent` (whose state is `state`) that adds `hi ≺ lo`, unless pruned.
+    fn child(&self, parent: &Node, state: &State, hi: usize, lo: usize) -> Option<(Node, Effort)> {
+        let mut graph = state.graph.clone();
+        if !graph.add(hi, lo) {
+            return None;
+        }
+        let mut child = State {
+            graph,
+            trajectories: state.trajectories.clone(),
+            plans: state.plans.clone(),
+        };
+        let mut effort = Effort::default();
+        let changed = self.update_plan(&mut child, lo, &mut effort)?;
+        // Lowering `lo` must resolve the conflict that caused the branch; when the conflict is
+        // only `hi`'s (e.g. `hi` follows `lo` too closely), only lowering `hi` can.
+        if self.conflict_between(hi, lo, &child.trajectories) {
+            return None;
+        }
+        let conflicts = self.updated_conflicts(&parent.conflicts, &changed, &child.trajectories);
+        Some((
+            Node {
+                parent: None,
+                edge: Some((hi, lo)),
+                changed: changed
+                    .iter()
+                    .map(|&a| (a, child.trajectories[a].clone(), child.plans[a].clone()))
+                    .collect(),
+                cost: self.cost(&child.trajectories),
+                conflicts,
+                depth: parent.depth + 1,
+            },
+            effort,
+        ))
+    }
+
+    /// Rebuilds a node's state from the root along its path.
+    fn materialize(&self, nodes: &[Node], id: usize, root: &State) -> State {
+        let mut path = Vec::new();
+        let mut at = Some(id);
+        while let Some(x) = at {
+            path.push(x);
+            at = nodes[x].parent;
+        }
+        let mut state = State {
+            graph: root.graph.clone(),
+            trajectories: root.trajectories.clone(),
+            plans: root.plans.clone(),
+        };
+        for &x in path.iter().rev() {
+            let node = &nodes[x];
+            if let Some((hi, lo)) = node.edge {
+                state.graph.add(hi, lo);
+            }
+            for (a, t, p) in &node.changed {
+                state.trajectories[*a] = t.clone();
+                state.plans[*a] = p.clone();
+            }
+        }
+        state
+    }
+}
+
+fn body(t: &Trajectory, pose: Pose) -> Body {
+    Body {
+        pose,
+        length: t.length,
+        width: t.width,
+    }
+}
+
+fn forward(p: &Pose) -> f64 {
+    p.speed * p.heading.cos()
+}
+
+#[cfg(test)]
+mod tests {
+    use std::sync::atomic::{AtomicUsize, Ordering};
+
+    use super::*;
+    use crate::config::Config;
+    use crate::model::road::Road;
+    use crate::model::scene::{Origin, VehicleState};
+    use crate::planner::lane_changes::LaneChanges;
+    use crate::predict::ConstantSpeed;
+
+    fn vehicle(id: &str, kind: Kind, origin: Origin, s: f64, lane: i32, v: f64) -> VehicleState {
+        VehicleState::on_lane(id, kind, origin, s, lane, v)
+    }
+
+    /// The constant-speed predictor, counting the calls conditioned on CAV plans.
+    struct Spy {
+        inner: ConstantSpeed,
+        conditioned: AtomicUsize,
+    }
+
+    impl Predictor for Spy {
+        fn name(&self) -> &'static str {
+            "spy"
+        }
+        fn predict(
+            &self,
+            scene: &Scene,
+            i: usize,
+            on: &[&Trajectory],
+            horizon: usize,
+        ) -> Trajectory {
+            if !on.is_empty() {
+                self.conditioned.fetch_add(1, Ordering::SeqCst);
+            }
+            self.inner.predict(scene, i, on, horizon)
+        }
+    }
+
+    struct Plain<'a>(&'a Scene);
+
+    impl RequestFor for Plain<'_> {
+        fn plan(
+            &self,
+            planner: &Mastar,
+            agent: usize,
+            obstacles: &[&Trajectory],
+        ) -> Result<Plan, NoPlan> {
+            planner.plan(&LaneChanges::default().request(self.0, agent, 0.2, obstacles))
+        }
+    }
+
+    fn solve(vehicles: Vec<VehicleState>, spy: &Spy) -> (Solution, Scene) {
+        solve_within(
+            vehicles,
+            spy,
+            Budget {
+                nodes: 200,
+                time_ms: None,
+            },
+        )
+    }
+
+    fn solve_within(vehicles: Vec<VehicleState>, spy: &Spy, budget: Budget) -> (Solution, Scene) {
+        let config = Config::default();
+        let scene = Scene {
+            time: 0.0,
+            road: Road::paper_default(),
+            vehicles,
+        };
+        let planner = Mastar::new(&config.planner, scene.road.clone(), 0.2, 1.0, 35.0);
+        let rule = SafetyRule::new(&config.planner, 4.5);
+        let requests = Plain(&scene);
+        let problem = Problem {
+            scene: &scene,
+            planner: &planner,
+            predictor: spy,
+            requests: &requests,
+            rule: &rule,
+            horizon: 20,
+            dt: 0.2,
+            budget,
+        };
+        let solution = problem.solve();
+        // Whatever the outcome, report whether any CAV-involved pair still conflicts.
+        (solution, scene)
+    }
+
+    fn spy() -> Spy {
+        Spy {
+            inner: ConstantSpeed::new(&Config::default()),
+            conditioned: AtomicUsize::new(0),
+        }
+    }
+
+    fn overlap_free(ts: &[Arc<Trajectory>]) -> bool {
+        let refs: Vec<Trajectory> = ts.iter().map(|t| (**t).clone()).collect();
+        crate::model::trajectory::first_collision(&refs, 20, 0.2, |_, _| true).is_none()
+    }
+
+    #[test]
+    fn two_cavs_whose_plans_cross_one_yields() {
+        // A ramp CAV merging from the acceleration lane right beside a main-road CAV: alone,
+        // each would take the same space.
+        let sp = spy();
+        let (sol, _) = solve(
+            vec![
+                vehicle("ramp.1", Kind::Cav, Origin::Ramp, 250.0, 0, 25.0),
+                vehicle("main.2", Kind::Cav, Origin::Main, 247.0, 1, 25.0),
+            ],
+            &sp,
+        );
+        assert!(sol.stats.nodes >= 1, "the root conflicts: {:?}", sol.stats);
+        assert!(
+            !sol.stats.fallback && sol.stats.conflicts_left == 0,
+            "{:?}",
+            sol.stats
+        );
+        assert!(overlap_free(&sol.trajectories));
+        assert!(sol.plans.iter().all(Option::is_some));
+    }
+
+    #[test]
+    fn cav_and_hdv_merging_into_one_gap_explore_both_branches() {
+        // A ramp HDV deep in the merge zone (about to merge) and a CAV beside it on the main
+        // road: the branch giving the CAV priority re-predicts the HDV conditioned on the CAV's
+        // plan; the other replans the CAV around the HDV.
+        let sp = spy();
+        let (sol, _) = solve(
+            vec![
+                vehicle("ramp.1", Kind::Hdv, Origin::Ramp, 280.0, 0, 24.0),
+                vehicle("main.2", Kind::Cav, Origin::Main, 276.0, 1, 25.0),
+            ],
+            &sp,
+        );
+        assert!(
+            sp.conditioned.load(Ordering::SeqCst) >= 1,
+            "CAV ≺ HDV branch re-predicts the HDV"
+        );
+        assert!(
+            sol.stats.mastar_calls >= 2,
+            "HDV ≺ CAV branch replans the CAV: {:?}",
+            sol.stats
+        );
+        assert!(
+            !sol.stats.fallback && sol.stats.conflicts_left == 0,
+            "{:?}",
+            sol.stats
+        );
+        assert!(overlap_free(&sol.trajectories));
+    }
+
+    #[test]
+    fn unresolvable_scene_falls_back_to_the_best_node() {
+        // A CAV at 35 m/s 1 m behind cars standing in both lanes: nothing avoids them.
+        let sp = spy();
+        let (sol, _) = solve(
+            vec![
+                vehicle("main.1", Kind::Cav, Origin::Main, 100.0, 1, 35.0),
+                vehicle("main.2", Kind::Hdv, Origin::Main, 106.0, 1, 0.0),
+                vehicle("main.3", Kind::Hdv, Origin::Main, 106.0, 2, 0.0),
+            ],
+            &sp,
+        );
+        assert!(sol.stats.fallback, "{:?}", sol.stats);
+        assert!(sol.stats.conflicts_left >= 1);
+        assert_eq!(sol.trajectories.len(), 3);
+    }
+
+    #[test]
+    fn an_exhausted_budget_returns_the_best_node_and_says_why() {
+        let cross = || {
+            vec![
+                vehicle("ramp.1", Kind::Cav, Origin::Ramp, 250.0, 0, 25.0),
+                vehicle("main.2", Kind::Cav, Origin::Main, 247.0, 1, 25.0),
+            ]
+        };
+        // No time at all: the root is all there is.
+        let (sol, _) = solve_within(
+            cross(),
+            &spy(),
+            Budget {
+                nodes: 200,
+                time_ms: Some(0.0),
+            },
+        );
+        assert!(
+            sol.stats.timed_out && sol.stats.fallback && sol.stats.nodes == 0,
+            "{:?}",
+            sol.stats
+        );
+        assert!(sol.plans.iter().all(Option::is_some), "root plans are kept");
+        // No nodes at all: the same, without the time-out flag.
+        let (sol, _) = solve_within(
+            cross(),
+            &spy(),
+            Budget {
+                nodes: 0,
+                time_ms: None,
+            },
+        );
+        assert!(!sol.stats.timed_out && sol.stats.fallback && sol.stats.nodes == 0);
+    }
+
+    #[test]
+    fn same_input_same_plan() {
+        let mk = || {
+            vec![
+                vehicle("ramp.1", Kind::Cav, Origin::Ramp, 250.0, 0, 25.0),
+                vehicle("main.2", Kind::Cav, Origin::Main, 247.0, 1, 25.0),
+                vehicle("main.3", Kind::Hdv, Origin::Main, 290.0, 1, 20.0),
+                vehicle("main.4", Kind::Cav, Origin::Main, 200.0, 2, 33.0),
+            ]
+        };
+        let (a, _) = solve(mk(), &spy());
+        let (b, _) = solve(mk(), &spy());
+        assert_eq!(a.stats, b.stats);
+        for (x, y) in a.trajectories.iter().zip(&b.trajectories) {
+            assert_eq!(x.poses, y.poses);
+        }
+    }
+}

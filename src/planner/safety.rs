@@ -1,0 +1,226 @@
+//! The rule a planned CAV keeps toward every other vehicle, shared by M-A* (toward obstacles)
+//! and BK-PBS (to decide which pairs of trajectories conflict).
+//!
+//! Clear means: the bodies do not overlap (the CAV's inflated by the planner's margins), and in
+//! its lane the CAV keeps a safe gap to the vehicle in front, and, after it changed lanes (a cut
+//! in), to the vehicle behind: gap ≥ `safe_gap` + v_back·`reaction_time` +
+//! (v_back² − v_front²)⁺ / (2·b), so that either could stop if the one in front brakes at the
+//! emergency deceleration b. The vehicle behind in its own lane is that vehicle's business, even
+//! when a constant-speed prediction drives it into the CAV: a follower brakes (SUMO's IDM does),
+//! and only a CAV that cut in is responsible for the gap behind it.
+
+use crate::config::PlannerSettings;
+use crate::model::geometry::{intersection_test_obb_obb, OrientedBox};
+use crate::model::math::Point;
+use crate::model::trajectory::{Pose, Trajectory};
+
+/// Parameters of the rule.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SafetyRule {
+    pub margin_long: f64,
+    pub margin_lat: f64,
+    pub safe_gap: f64,
+    pub reaction_time: f64,
+    /// Emergency deceleration b (m/s², positive).
+    pub brake: f64,
+    pub lane_width: f64,
+}
+
+/// A vehicle at one step: where it is and how big it is.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Body {
+    pub pose: Pose,
+    pub length: f64,
+    pub width: f64,
+}
+
+impl Body {
+    /// The body of `t` at `step`.
+    pub fn of(t: &Trajectory, step: usize, dt: f64) -> Body {
+        Body {
+            pose: t.at(step, dt),
+            length: t.length,
+            width: t.width,
+        }
+    }
+
+    fn forward_speed(&self) -> f64 {
+        self.pose.speed * self.pose.heading.cos()
+    }
+}
+
+/// Beyond this distance along the road no pair can be in conflict (m).
+pub const REACH: f64 = 120.0;
+
+impl SafetyRule {
+    pub fn new(settings: &PlannerSettings, lane_width: f64) -> Self {
+        SafetyRule {
+            margin_long: settings.margin_long,
+            margin_lat: settings.margin_lat,
+            safe_gap: settings.safe_gap,
+            reaction_time: settings.reaction_time,
+            brake: settings.emergency_decel,
+            lane_width,
+        }
+    }
+
+    /// Gap the vehicle behind needs to the one in front (m).
+    pub fn needed_gap(&self, v_back: f64, v_front: f64) -> f64 {
+        self.safe_gap
+            + v_back * self.reaction_time
+            + (v_back * v_back - v_front * v_front).max(0.0) / (2.0 * self.brake)
+    }
+
+    /// Whether the CAV `me`, `t` seconds into its plan, is clear of `other`; `me_now` and
+    /// `other_now` are where both are at the start of the plan.
+    ///
+    /// A gap that is already too small now (e.g. someone merged in front) cannot be repaired at
+    /// once: the gap required is then at most the one the CAV keeps by braking at the emergency
+    /// deceleration from now on, so braking hard is always an acceptable answer to it.
+    pub fn clear(&self, me: &Body, me_now: &Body, other: &Body, other_now: &Body, t: f64) -> bool {
+        let (p, o) = (&me.pose, &other.pose);
+        if (o.s - p.s).abs() > REACH {
+            return true;
+        }
+        let same_lane = self.same_lane(me, other);
+        let cut_in = (p.y - me_now.pose.y).abs() > 0.5 * self.lane_width;
+        // In front: now, or at the start (so driving through a vehicle between two steps still
+        // counts as hitting it).
+        let ahead = o.s > p.s || other_now.pose.s > me_now.pose.s;
+        if same_lane && !ahead && !cut_in {
+            return true;
+        }
+        let mine = OrientedBox::vehicle(
+            Point::new(p.s, p.y),
+            p.heading,
+            me.length + 2.0 * self.margin_long,
+            me.width + 2.0 * self.margin_lat,
+        );
+        let theirs =
+            OrientedBox::vehicle(Point::new(o.s, o.y), o.heading, other.length, other.width);
+        if intersection_test_obb_obb(&mine, &theirs) {
+            return false;
+        }
+        if !same_lane {
+            return true;
+        }
+        let (v, vo) = (me.forward_speed(), other.forward_speed());
+        if ahead {
+            let required = self.needed_gap(v, vo);
+            gap(me, other) >= self.relaxed(required, me_now, other_now, other, t)
+        } else if cut_in {
+            gap(other, me) >= self.needed_gap(vo, v)
+        } else {
+            true
+        }
+    }
+
+    fn same_lane(&self, a: &Body, b: &Body) -> bool {
+        (a.pose.y - b.pose.y).abs() < 0.5 * (a.width + b.width) + self.margin_lat
+    }
+
+    /// `required`, lowered to the gap an emergency stop from now would leave to `front` at `t`,
+    /// if `back_now` already follows `front_now` too closely in the same lane.
+    fn relaxed(
+        &self,
+        required: f64,
+        back_now: &Body,
+        front_now: &Body,
+        front: &Body,
+        t: f64,
+    ) -> f64 {
+        if !self.same_lane(back_now, front_now) || front_now.pose.s <= back_now.pose.s {
+            return required;
+        }
+        let v0 = back_now.forward_speed();
+        if gap(back_now, front_now) >= self.needed_gap(v0, front_now.forward_speed()) {
+            return required;
+        }
+        let t_stop = (v0 / self.brake).min(t);
+        let braked = Body {
+            pose: Pose {
+                s: back_now.pose.s + v0 * t_stop - 0.5 * self.brake * t_stop * t_stop,
+                ..back_now.pose
+            },
+            ..*back_now
+        };
+        // A hair below, so the braking plan itself passes despite rounding.
+        required.min(gap(&braked, front) - 1e-6)
+    }
+}
+
+/// Bumper gap from `back` to `front` (m).
+fn gap(back: &Body, front: &Body) -> f64 {
+    (front.pose.s - 0.5 * front.length) - (back.pose.s + 0.5 * back.length)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn body(s: f64, y: f64, speed: f64) -> Body {
+        Body {
+            pose: Pose {
+                s,
+                y,
+                heading: 0.0,
+                speed,
+            },
+            length: 5.0,
+            width: 2.0,
+        }
+    }
+
+    fn rule() -> SafetyRule {
+        SafetyRule::new(&PlannerSettings::default(), 4.5)
+    }
+
+    #[test]
+    fn needed_gap_hand_computed() {
+        // 2 + 30·0.2 + (900 − 400)/12 = 49.6667
+        assert!((rule().needed_gap(30.0, 20.0) - 49.666_667).abs() < 1e-5);
+        assert!((rule().needed_gap(20.0, 30.0) - 6.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn front_gap_is_kept_rear_only_after_a_lane_change() {
+        let r = rule();
+        let me = body(100.0, 4.5, 30.0);
+        let from_lane = |y: f64| body(80.0, y, 30.0);
+        let far = body(300.0, 4.5, 20.0);
+        // Leader 50 m ahead (gap 45) at 20 m/s: needs 49.67 → not clear; 55 m ahead → clear.
+        assert!(!r.clear(&me, &from_lane(4.5), &body(150.0, 4.5, 20.0), &far, 1.0));
+        assert!(r.clear(&me, &from_lane(4.5), &body(155.0, 4.5, 20.0), &far, 1.0));
+        // A faster car close behind in the same lane: its business, unless the CAV cut in;
+        // even a predicted rear-end overlap.
+        let (behind, was_behind) = (body(90.0, 4.5, 35.0), body(55.0, 4.5, 35.0));
+        assert!(r.clear(&me, &from_lane(4.5), &behind, &was_behind, 1.0));
+        assert!(!r.clear(&me, &from_lane(0.0), &behind, &was_behind, 1.0));
+        let rear_end = body(97.0, 4.5, 35.0);
+        assert!(r.clear(&me, &from_lane(4.5), &rear_end, &was_behind, 1.0));
+        assert!(!r.clear(&me, &from_lane(0.0), &rear_end, &was_behind, 1.0));
+        // But a car that was in front and is now "behind" was driven through: not clear.
+        assert!(!r.clear(
+            &me,
+            &from_lane(4.5),
+            &body(99.0, 4.5, 0.0),
+            &body(99.0, 4.5, 0.0),
+            1.0
+        ));
+        // Other lane: only the bodies matter.
+        assert!(r.clear(&me, &from_lane(4.5), &body(104.0, 9.0, 10.0), &far, 1.0));
+        assert!(!r.clear(&me, &from_lane(4.5), &body(104.0, 6.0, 10.0), &far, 1.0));
+    }
+
+    #[test]
+    fn a_gap_too_small_already_asks_for_hard_braking_only() {
+        let r = rule();
+        // Now: 20 m gap at 30 m/s behind a 25 m/s car (needs 2 + 6 + 275/12 = 30.9).
+        let (me_now, lead_now) = (body(100.0, 4.5, 30.0), body(125.0, 4.5, 25.0));
+        let lead = body(155.0, 4.5, 25.0);
+        // One second later, braking at 6 m/s² from now puts the CAV at 127 m (gap 23 m): fine.
+        assert!(r.clear(&body(127.0, 4.5, 24.0), &me_now, &lead, &lead_now, 1.0));
+        // Holding 30 m/s instead (at 130 m, gap 20 m) is not.
+        assert!(!r.clear(&body(130.0, 4.5, 30.0), &me_now, &lead, &lead_now, 1.0));
+    }
+}

@@ -1,0 +1,174 @@
+//! What SUMO is given for one episode: the network, the vehicle types, the demand, and options.
+
+use std::path::{Path, PathBuf};
+
+use crate::config::Config;
+use crate::model::road::EMBEDDED_NET;
+
+/// Why the episode's SUMO input could not be prepared.
+#[derive(Debug, thiserror::Error)]
+pub enum InputError {
+    #[error("net file {0} does not exist")]
+    MissingNet(PathBuf),
+    #[error("cannot write SUMO input {path}: {cause}")]
+    Write {
+        path: PathBuf,
+        cause: std::io::Error,
+    },
+}
+
+/// SUMO vehicle types `hdv` and `cav` from the configured IDM parameters.
+///
+/// Both are 5 m × 2 m with a 35 m/s maximum; speedFactor 1 and speedDev 0 so that the desired
+/// speed is exactly the one the demand draws (SUMO's default would randomise it).
+pub fn vehicle_types(config: &Config) -> String {
+    let s = &config.scenario;
+    let i = &config.idm;
+    let vtype = |id: &str, color: &str| {
+        format!(
+            "    <vType id=\"{id}\" vClass=\"passenger\" length=\"{}\" width=\"{}\" minGap=\"{}\" maxSpeed=\"{}\" accel=\"{}\" decel=\"{}\" emergencyDecel=\"{}\" tau=\"{}\" delta=\"{}\" carFollowModel=\"IDM\" laneChangeModel=\"LC2013\" speedFactor=\"1\" speedDev=\"0\" sigma=\"0\" color=\"{color}\"/>\n",
+            s.vehicle_length, s.vehicle_width, i.min_gap, s.v_max, i.accel, i.decel, i.max_decel, i.time_headway, i.delta
+        )
+    };
+    format!(
+        "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<!-- Vehicle types of the merge scenario (written by bkpbs from its configuration). -->\n<additional>\n{}{}</additional>\n",
+        vtype("hdv", "0,90,255"),
+        vtype("cav", "0,200,0")
+    )
+}
+
+/// The files of one episode, kept in a directory that lives as long as this value.
+pub struct EpisodeInput {
+    _dir: tempfile::TempDir,
+    pub net: PathBuf,
+    pub vehicle_types: PathBuf,
+    pub routes: PathBuf,
+}
+
+impl EpisodeInput {
+    /// Writes the network (unless the config names one), vehicle types and routes.
+    pub fn write(config: &Config) -> Result<Self, InputError> {
+        let dir = tempfile::Builder::new()
+            .prefix("bkpbs-episode-")
+            .tempdir()
+            .map_err(|cause| InputError::Write {
+                path: std::env::temp_dir(),
+                cause,
+            })?;
+        let put = |name: &str, text: &str| -> Result<PathBuf, InputError> {
+            let path = dir.path().join(name);
+            std::fs::write(&path, text).map_err(|cause| InputError::Write {
+                path: path.clone(),
+                cause,
+            })?;
+            Ok(path)
+        };
+        let net = match &config.scenario.net_file {
+            Some(p) if !p.is_file() => return Err(InputError::MissingNet(p.clone())),
+            Some(p) => p.clone(),
+            None => put("merge.net.xml", EMBEDDED_NET)?,
+        };
+        let vehicle_types = put("vtypes.add.xml", &vehicle_types(config))?;
+        let routes = put("routes.rou.xml", crate::episode::demand::ROUTES)?;
+        Ok(EpisodeInput {
+            _dir: dir,
+            net,
+            vehicle_types,
+            routes,
+        })
+    }
+
+    /// The SUMO command line for these files.
+    pub fn command_line(&self, config: &Config) -> Vec<String> {
+        command_line(config, &self.net, &self.vehicle_types, &self.routes)
+    }
+}
+
+/// SUMO options of the merge scenario.
+///
+/// Collisions are physical overlaps only (`mingap-factor 0`); SUMO only reports them
+/// (`collision.action warn`) and the episode removes both vehicles right after the step, because
+/// SUMO 1.15's own removal in the middle of its move stage trips an internal assertion (and
+/// aborts the process) when a participant is changing lanes across an edge boundary. No
+/// teleporting, so a jam stays a jam; lane changes take `lane_change_duration` seconds at
+/// constant lateral speed.
+pub fn command_line(config: &Config, net: &Path, vtypes: &Path, routes: &Path) -> Vec<String> {
+    let s = &config.scenario;
+    let mut args: Vec<String> = vec![
+        "sumo".into(),
+        "--net-file".into(),
+        net.display().to_string(),
+        "--additional-files".into(),
+        std::iter::once(vtypes.display().to_string())
+            .chain(
+                config
+                    .sumo
+                    .additional_files
+                    .iter()
+                    .map(|p| p.display().to_string()),
+            )
+            .collect::<Vec<_>>()
+            .join(","),
+        "--route-files".into(),
+        routes.display().to_string(),
+        "--step-length".into(),
+        format!("{}", s.dt),
+        "--begin".into(),
+        "0".into(),
+        "--seed".into(),
+        format!("{}", s.seed % (i32::MAX as u64)),
+        "--collision.action".into(),
+        "warn".into(),
+        "--collision.check-junctions".into(),
+        "true".into(),
+        "--collision.mingap-factor".into(),
+        "0".into(),
+        "--time-to-teleport".into(),
+        "-1".into(),
+        "--lanechange.duration".into(),
+        format!("{}", s.lane_change_duration),
+    ];
+    if !config.sumo.verbose {
+        for opt in ["--no-warnings", "--no-step-log", "--duration-log.disable"] {
+            args.push(opt.into());
+            args.push("true".into());
+        }
+    }
+    args.extend(config.sumo.extra_args.iter().cloned());
+    args
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn shipped_vehicle_types_match_the_defaults() {
+        let shipped = include_str!("../../sumo_net/vtypes.add.xml");
+        assert_eq!(
+            shipped,
+            vehicle_types(&Config::default()),
+            "sumo_net/vtypes.add.xml drifted from the defaults: regenerate it with `bkpbs config --vtypes`"
+        );
+    }
+
+    #[test]
+    fn shipped_demo_demand_matches_the_defaults() {
+        let shipped = include_str!("../../sumo_net/demo.rou.xml");
+        let generated = crate::episode::demand::route_file(&crate::episode::demand::generate(
+            &Config::default(),
+        ));
+        assert_eq!(
+            shipped, generated,
+            "regenerate with `bkpbs demand --out sumo_net/demo.rou.xml`"
+        );
+    }
+
+    #[test]
+    fn missing_net_file_is_named() {
+        let mut c = Config::default();
+        c.scenario.net_file = Some("nowhere/merge.net.xml".into());
+        let e = EpisodeInput::write(&c).err().unwrap().to_string();
+        assert!(e.contains("nowhere/merge.net.xml"), "{e}");
+    }
+}

@@ -1,0 +1,393 @@
+//! Collecting the lane-change data set from SUMO episodes.
+//!
+//! [`Recorder`] is an episode [`Observer`]: it buffers the last `PREVIEW + 1` scenes and, once the
+//! scene `PREVIEW` steps after step t has arrived, turns every HDV at a decision point in step t
+//! into a [`Sample`]: its graph (a) at t, the CAVs near it at t with their actual states over
+//! steps t+1 … t+15 (standing in for planned trajectories), where it is, and whether it started a
+//! lane change at t+1. The last `PREVIEW` steps of an episode have no full preview and give no
+//! samples. [`collect`] runs a mix of rollout policies over seeds.
+//!
+//! Lane changes on the main road are rare per step (a few per episode), so main-road samples
+//! without a lane change are kept only with probability `main_negative_keep`; each kept sample
+//! records the inverse as its weight, so the natural distribution can be restored.
+
+use std::collections::{HashMap, VecDeque};
+use std::sync::Arc;
+
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use serde::{Deserialize, Serialize};
+
+use super::dataset::{Dataset, Sample};
+use crate::config::{Config, PredictorKind};
+use crate::controller;
+use crate::episode::{self, EpisodeError, Observer};
+use crate::model::scene::{Kind, Scene};
+use crate::predict::features::{
+    cav_node, ego_of, is_decision_point, lane_change_direction, lane_change_start, neighbours,
+    select_cavs, Agent, CavNode, Observation, Subset, CAV_NODES, PREVIEW,
+};
+
+/// Random stream of the collector's thinning of main-road negatives.
+pub const THINNING_STREAM: u64 = 7;
+
+/// Counts of what the recorder saw, for the collection log.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct CollectStats {
+    pub episodes: u64,
+    /// HDV-steps seen (all of them).
+    pub hdv_steps: u64,
+    /// Samples kept, per subset and label.
+    pub ramp_negative: u64,
+    pub ramp_positive: u64,
+    pub main_negative: u64,
+    pub main_positive: u64,
+    /// Main-road negatives dropped by thinning.
+    pub main_negative_dropped: u64,
+    /// HDV-steps that are no decision points: on the ramp edge or mid-manoeuvre.
+    pub not_decision_points: u64,
+    /// HDVs gone at the next step (arrived or crashed): no label.
+    pub vanished: u64,
+    /// Lane changes in the unexpected direction (see `features::lane_change_direction`).
+    pub unexpected_direction: u64,
+}
+
+impl std::ops::AddAssign for CollectStats {
+    fn add_assign(&mut self, o: Self) {
+        self.episodes += o.episodes;
+        self.hdv_steps += o.hdv_steps;
+        self.ramp_negative += o.ramp_negative;
+        self.ramp_positive += o.ramp_positive;
+        self.main_negative += o.main_negative;
+        self.main_positive += o.main_positive;
+        self.main_negative_dropped += o.main_negative_dropped;
+        self.not_decision_points += o.not_decision_points;
+        self.vanished += o.vanished;
+        self.unexpected_direction += o.unexpected_direction;
+    }
+}
+
+impl std::fmt::Display for CollectStats {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{} episodes, {} HDV-steps: ramp {} + {} lane changes, main {} + {} lane changes \
+             ({} main negatives thinned out), {} not at a decision point, {} vanished",
+            self.episodes,
+            self.hdv_steps,
+            self.ramp_negative,
+            self.ramp_positive,
+            self.main_negative,
+            self.main_positive,
+            self.main_negative_dropped,
+            self.not_decision_points,
+            self.vanished
+        )
+    }
+}
+
+/// One scene with an id → index map.
+struct Buffered {
+    scene: Scene,
+    index: HashMap<Arc<str>, usize>,
+}
+
+/// The episode observer that produces samples (with a lag of `PREVIEW` steps).
+pub struct Recorder {
+    episode: u32,
+    dt: f64,
+    main_negative_keep: f64,
+    rng: ChaCha8Rng,
+    buffer: VecDeque<Buffered>,
+    step: u32,
+    agents: Vec<Agent>,
+    chosen: Vec<usize>,
+    /// Samples produced so far.
+    pub samples: Vec<Sample>,
+    pub stats: CollectStats,
+}
+
+impl Recorder {
+    /// For episode number `episode` (its seed seeds the thinning).
+    pub fn new(episode: u32, seed: u64, dt: f64, main_negative_keep: f64) -> Recorder {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        rng.set_stream(THINNING_STREAM);
+        Recorder {
+            episode,
+            dt,
+            main_negative_keep: main_negative_keep.clamp(1e-6, 1.0),
+            rng,
+            buffer: VecDeque::with_capacity(PREVIEW + 1),
+            step: 0,
+            agents: Vec::new(),
+            chosen: Vec::new(),
+            samples: Vec::new(),
+            stats: CollectStats::default(),
+        }
+    }
+
+    fn emit(&mut self) {
+        let now = &self.buffer[0].scene;
+        let next = &self.buffer[1];
+        let w = now.road.lane_width;
+        self.agents.clear();
+        self.agents
+            .extend(now.vehicles.iter().map(|v| Agent::of(v, w)));
+        for (i, v) in now.vehicles.iter().enumerate() {
+            if v.kind != Kind::Hdv {
+                continue;
+            }
+            self.stats.hdv_steps += 1;
+            if !is_decision_point(v) {
+                self.stats.not_decision_points += 1;
+                continue;
+            }
+            let Some(&j) = next.index.get(&v.id) else {
+                self.stats.vanished += 1;
+                continue;
+            };
+            let dir = lane_change_start(v, &next.scene.vehicles[j], w);
+            if dir != 0 && dir as i32 != lane_change_direction(v.lane) {
+                self.stats.unexpected_direction += 1;
+            }
+            let label = dir != 0;
+            let subset = Subset::of_lane(v.lane);
+            let mut weight = 1.0;
+            if subset == Subset::Main && !label && self.main_negative_keep < 1.0 {
+                if self.rng.gen::<f64>() >= self.main_negative_keep {
+                    self.stats.main_negative_dropped += 1;
+                    continue;
+                }
+                weight = (1.0 / self.main_negative_keep) as f32;
+            }
+            let ego = self.agents[i];
+            let others = self
+                .agents
+                .iter()
+                .enumerate()
+                .filter(|&(k, _)| k != i)
+                .map(|(_, a)| a);
+            let mut obs = Observation {
+                ego: ego_of(v, &now.road),
+                neighbours: neighbours(&ego, others),
+                ..Observation::default()
+            };
+            let cavs = self
+                .agents
+                .iter()
+                .copied()
+                .enumerate()
+                .filter(|&(k, a)| a.is_cav && k != i);
+            select_cavs(&ego, cavs, &mut self.chosen);
+            for (n, &c) in self.chosen.iter().enumerate() {
+                let id = &now.vehicles[c].id;
+                for k in 1..=PREVIEW {
+                    let later = &self.buffer[k];
+                    obs.cavs[k - 1][n] = match later.index.get(id) {
+                        Some(&m) => {
+                            let a = Agent::of(&later.scene.vehicles[m], w);
+                            cav_node(&ego, k, self.dt, a.s, a.y, a.speed)
+                        }
+                        None => CavNode::default(),
+                    };
+                }
+            }
+            debug_assert!(self.chosen.len() <= CAV_NODES);
+            match (subset, label) {
+                (Subset::Ramp, false) => self.stats.ramp_negative += 1,
+                (Subset::Ramp, true) => self.stats.ramp_positive += 1,
+                (Subset::Main, false) => self.stats.main_negative += 1,
+                (Subset::Main, true) => self.stats.main_positive += 1,
+            }
+            self.samples.push(Sample {
+                episode: self.episode,
+                step: self.step - PREVIEW as u32,
+                subset,
+                label,
+                weight,
+                obs,
+            });
+        }
+    }
+}
+
+impl Observer for Recorder {
+    fn observe(&mut self, scene: &Scene) {
+        let index = scene
+            .vehicles
+            .iter()
+            .enumerate()
+            .map(|(i, v)| (v.id.clone(), i))
+            .collect();
+        self.buffer.push_back(Buffered {
+            scene: scene.clone(),
+            index,
+        });
+        if self.buffer.len() == PREVIEW + 1 {
+            self.emit();
+            self.buffer.pop_front();
+        }
+        self.step += 1;
+    }
+}
+
+/// Which episodes to run: episode e uses seed `seed_base + e`, planner `planners[e mod P]`,
+/// α `alphas[(e / P) mod A]` and λ `lambdas[(e / (P·A)) mod L]`, so every combination recurs.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CollectPlan {
+    pub episodes: usize,
+    pub seed_base: u64,
+    pub planners: Vec<String>,
+    pub alphas: Vec<f64>,
+    pub lambdas: Vec<f64>,
+    pub steps: u32,
+    /// Probability of keeping a main-road sample without a lane change.
+    pub main_negative_keep: f64,
+}
+
+/// Seeds the committed models were trained on start here.
+pub const TRAIN_SEED_BASE: u64 = 10_000;
+/// Evaluation data is collected from here on: never used for training.
+pub const EVAL_SEED_BASE: u64 = 90_000;
+
+impl Default for CollectPlan {
+    fn default() -> Self {
+        CollectPlan {
+            episodes: 100,
+            seed_base: TRAIN_SEED_BASE,
+            planners: vec!["idm-mobil".into(), "bk-mastar".into()],
+            alphas: vec![0.2, 0.4, 0.6, 0.8],
+            lambdas: vec![2500.0, 3000.0],
+            steps: 400,
+            main_negative_keep: 0.1,
+        }
+    }
+}
+
+/// One episode of a plan.
+#[derive(Debug, Clone, PartialEq)]
+pub struct EpisodeSpec {
+    pub seed: u64,
+    pub planner: String,
+    pub alpha: f64,
+    pub lambda: f64,
+}
+
+impl CollectPlan {
+    /// The episode numbered `e`.
+    pub fn episode(&self, e: usize) -> EpisodeSpec {
+        let p = self.planners.len().max(1);
+        let a = self.alphas.len().max(1);
+        let l = self.lambdas.len().max(1);
+        EpisodeSpec {
+            seed: self.seed_base + e as u64,
+            planner: self.planners[e % p].clone(),
+            alpha: self.alphas[(e / p) % a],
+            lambda: self.lambdas[(e / (p * a)) % l],
+        }
+    }
+}
+
+/// Why collection stopped.
+#[derive(Debug, thiserror::Error)]
+pub enum CollectError {
+    #[error("collection plan: {0}")]
+    Plan(String),
+    #[error(transparent)]
+    Planner(#[from] controller::UnknownPlanner),
+    #[error(
+        "episode {episode} ({planner}, α = {alpha}, λ = {lambda}, seed {seed}) failed: {cause}"
+    )]
+    Episode {
+        episode: usize,
+        planner: String,
+        alpha: f64,
+        lambda: f64,
+        seed: u64,
+        cause: Box<EpisodeError>,
+    },
+}
+
+/// What the collector writes into a data file's header.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct CollectMeta {
+    pub plan: CollectPlan,
+    /// The predictor of the bk-mastar rollouts (always the constant-speed one, so the data never
+    /// depends on a learned model).
+    pub rollout_predictor: String,
+    pub stats: CollectStats,
+    pub bkpbs_version: String,
+}
+
+/// Runs the plan's episodes one after another (libsumo: one simulation per process) on top of
+/// `base` (scenario α, λ, seed and steps are set per episode), calling `progress` after each.
+pub fn collect(
+    base: &Config,
+    plan: &CollectPlan,
+    mut progress: impl FnMut(usize, &CollectStats),
+) -> Result<Dataset, CollectError> {
+    if plan.planners.is_empty() || plan.alphas.is_empty() || plan.lambdas.is_empty() {
+        return Err(CollectError::Plan(
+            "planners, alphas and lambdas need at least one value each".into(),
+        ));
+    }
+    if !(plan.main_negative_keep > 0.0 && plan.main_negative_keep <= 1.0) {
+        return Err(CollectError::Plan(format!(
+            "main_negative_keep = {} must lie in (0, 1]",
+            plan.main_negative_keep
+        )));
+    }
+    for p in &plan.planners {
+        if !controller::PLANNERS.contains(&p.as_str()) {
+            return Err(controller::UnknownPlanner(p.clone()).into());
+        }
+    }
+    let mut samples = Vec::new();
+    let mut stats = CollectStats::default();
+    for e in 0..plan.episodes {
+        let spec = plan.episode(e);
+        let mut config = base.clone();
+        config.scenario.alpha = spec.alpha;
+        config.scenario.lambda = spec.lambda;
+        config.scenario.seed = spec.seed;
+        config.scenario.steps = plan.steps;
+        config.predictor.kind = PredictorKind::Constant;
+        let fail = |cause: EpisodeError| CollectError::Episode {
+            episode: e,
+            planner: spec.planner.clone(),
+            alpha: spec.alpha,
+            lambda: spec.lambda,
+            seed: spec.seed,
+            cause: Box::new(cause),
+        };
+        config.validate().map_err(|c| fail(c.into()))?;
+        let mut ctl = controller::by_name(&spec.planner, &config).map_err(|b| fail(b.into()))?;
+        let demand = crate::episode::demand::generate(&config);
+        let mut rec = Recorder::new(
+            e as u32,
+            spec.seed,
+            config.scenario.dt,
+            plan.main_negative_keep,
+        );
+        episode::run_observed(&config, ctl.as_mut(), &demand, &mut rec).map_err(fail)?;
+        rec.stats.episodes = 1;
+        stats += rec.stats;
+        samples.append(&mut rec.samples);
+        progress(e + 1, &stats);
+    }
+    let meta = CollectMeta {
+        plan: plan.clone(),
+        rollout_predictor: "constant".into(),
+        stats,
+        bkpbs_version: env!("CARGO_PKG_VERSION").into(),
+    };
+    Ok(Dataset {
+        meta: serde_json::to_string(&meta).expect("metadata serialises"),
+        samples,
+    })
+}
+
+/// The collection metadata of a data file, if it has any.
+pub fn meta_of(data: &Dataset) -> Option<CollectMeta> {
+    serde_json::from_str(&data.meta).ok()
+}

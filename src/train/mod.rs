@@ -1,0 +1,15 @@
+//! Offline work on the learned predictor b_θ: collecting lane-change data from SUMO episodes,
+//! the data set, training (Adam, the network's backward pass), evaluation and the predictor's
+//! benchmark. It runs whole episodes, so it sits above the episode runner; the runtime predictor
+//! it produces is [`crate::predict`].
+
+pub mod adam;
+pub mod bench;
+pub mod collect;
+pub mod commands;
+pub mod dataset;
+pub mod eval;
+pub mod fit;
+pub mod gcn;
+pub mod logistic;
+pub mod train;

@@ -1,0 +1,37 @@
+//! Helpers shared by the integration tests. Each test binary includes this module and uses only
+//! part of it, hence the `dead_code` allowance.
+#![allow(dead_code)]
+
+use rand::Rng;
+use rand_chacha::ChaCha8Rng;
+
+use bkpbs::predict::features::{Observation, CAV_NODES};
+
+/// Random observations with a mix of present and absent nodes.
+pub fn random_obs(rng: &mut ChaCha8Rng) -> Observation {
+    let mut o = Observation::default();
+    o.ego.lane = rng.gen_range(0..3);
+    o.ego.speed = rng.gen_range(5.0..35.0);
+    o.ego.accel = rng.gen_range(-3.0..3.0);
+    o.ego.to_merge_end = rng.gen_range(-50.0..300.0);
+    o.ego.from_ramp = rng.gen_bool(0.3);
+    for n in &mut o.neighbours {
+        if rng.gen_bool(0.7) {
+            n.present = true;
+            n.ds = rng.gen_range(-90.0..90.0);
+            n.dy = rng.gen_range(-5.0..5.0);
+            n.speed = rng.gen_range(0.0..35.0);
+            n.is_cav = rng.gen_bool(0.5);
+        }
+    }
+    let cavs = rng.gen_range(1..=CAV_NODES);
+    for step in o.cavs.iter_mut() {
+        for c in step.iter_mut().take(cavs) {
+            c.present = true;
+            c.ds = rng.gen_range(-60.0..60.0);
+            c.dy = rng.gen_range(-5.0..5.0);
+            c.speed = rng.gen_range(0.0..35.0);
+        }
+    }
+    o
+}
