@@ -23,12 +23,6 @@ pub enum ConfigError {
         value: String,
         reason: &'static str,
     },
-    /// A predictor model file the configuration names cannot be used.
-    #[error("{field}: {cause}")]
-    Model {
-        field: &'static str,
-        cause: crate::predict::ModelError,
-    },
 }
 
 /// Everything an episode needs besides the controller.

@@ -314,7 +314,7 @@ fn run(cli: Cli) -> Result<()> {
                     _ => PredictorKind::Constant,
                 };
             }
-            let mut ctl = controller::by_name(&a.planner, &config)?;
+            controller::check(&a.planner, &config)?;
             let s = &config.scenario;
             let out = a.out.unwrap_or_else(|| {
                 PathBuf::from(format!(
@@ -322,7 +322,7 @@ fn run(cli: Cli) -> Result<()> {
                     a.planner, s.alpha, s.lambda, s.seed
                 ))
             });
-            let result = episode::run(&config, ctl.as_mut())?;
+            let result = episode::run(&config, &a.planner)?;
             result.write(&out).with_context(|| {
                 format!(
                     "episode finished but its results could not be saved in {}",
@@ -364,7 +364,7 @@ fn run(cli: Cli) -> Result<()> {
         Command::Bench(a) => {
             let config = a.scenario.resolve()?;
             for p in &a.planners {
-                controller::by_name(p, &config)?;
+                controller::check(p, &config)?;
             }
             let s = &config.scenario;
             println!(

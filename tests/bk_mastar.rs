@@ -1,7 +1,6 @@
 //! BK-M-A* on real SUMO: full episodes at both densities and both ends of the penetration range.
 
 use bkpbs::config::Config;
-use bkpbs::controller;
 use bkpbs::episode;
 use bkpbs::episode::metrics::Outcome;
 
@@ -10,8 +9,7 @@ fn run(alpha: f64, lambda: f64, seed: u64) -> episode::EpisodeResult {
     c.scenario.alpha = alpha;
     c.scenario.lambda = lambda;
     c.scenario.seed = seed;
-    let mut ctl = controller::by_name("bk-mastar", &c).unwrap();
-    episode::run(&c, ctl.as_mut()).unwrap()
+    episode::run(&c, "bk-mastar").unwrap()
 }
 
 #[test]

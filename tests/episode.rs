@@ -1,7 +1,7 @@
 //! Whole episodes on real SUMO, per controller.
 
 use bkpbs::config::Config;
-use bkpbs::controller::{self, CavHandling, Command, Controller, Maneuver};
+use bkpbs::controller::{CavHandling, Command, Controller, Maneuver};
 use bkpbs::episode::demand::PlannedVehicle;
 use bkpbs::episode::metrics::Outcome;
 use bkpbs::episode::{self, EpisodeResult};
@@ -12,8 +12,7 @@ fn episode(planner: &str, alpha: f64, lambda: f64, seed: u64) -> EpisodeResult {
     c.scenario.alpha = alpha;
     c.scenario.lambda = lambda;
     c.scenario.seed = seed;
-    let mut ctl = controller::by_name(planner, &c).unwrap();
-    episode::run(&c, ctl.as_mut()).unwrap()
+    episode::run(&c, planner).unwrap()
 }
 
 fn check_accounting(r: &EpisodeResult) {

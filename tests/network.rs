@@ -1,7 +1,6 @@
 //! The merge network, read back through libsumo (real SUMO, in-process).
 
 use bkpbs::config::Config;
-use bkpbs::model::road::Road;
 use bkpbs::sumo::files::EpisodeInput;
 use bkpbs::sumo::Simulation;
 
@@ -29,7 +28,7 @@ fn net_has_the_papers_geometry() {
     assert!((len("main_in_0") + len("acc_1") + len("main_out_0") - 460.0).abs() < 1e-6);
     assert!((len("acc_0") - 180.0).abs() < 1e-6);
     // The main road is straight along x: lane shapes run at constant y, starting where s says.
-    let road = Road::from_simulation(&sim).unwrap();
+    let road = bkpbs::sumo::frame::road_from_simulation(&sim).unwrap();
     assert_eq!(
         (road.merge_start, road.merge_end, road.section_end),
         (150.0, 330.0, 460.0)
@@ -46,7 +45,18 @@ fn net_has_the_papers_geometry() {
             "{edge} is straight"
         );
     }
-    // The acceleration lane leads nowhere: it ends within the merge zone.
+    // The acceleration lane leads nowhere: its shape ends at the merge end, and main_out, the
+    // only edge after it, has no lane in the frame lane it would continue.
+    let acc = sim.lane_shape("acc_0").unwrap();
+    assert!(
+        (acc.last().unwrap().0 - road.merge_end).abs() < 1e-6,
+        "{acc:?}"
+    );
+    assert!(!road
+        .lanes_at(road.merge_end)
+        .contains(&bkpbs::model::road::MERGE_LANE));
+    let out_lanes = sim.edge_lane_count("main_out").unwrap();
+    assert_eq!(out_lanes, 2, "main_out carries only the two main lanes");
     sim.close().unwrap();
 }
 
@@ -56,8 +66,7 @@ fn start_close_start_in_one_process_reproduces_the_run() {
     let run = || {
         let mut c = Config::default();
         c.scenario.steps = 150;
-        let mut ctl = bkpbs::controller::by_name("idm-mobil", &c).unwrap();
-        bkpbs::episode::run(&c, ctl.as_mut()).unwrap()
+        bkpbs::episode::run(&c, "idm-mobil").unwrap()
     };
     let a = run();
     let b = run();

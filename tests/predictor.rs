@@ -9,7 +9,8 @@ mod common;
 use bkpbs::predict::features::Observation;
 use bkpbs::predict::gcn::{sigmoid, Architecture};
 use bkpbs::predict::infer::{Network, Workspace};
-use bkpbs::train::gcn::{backward, bce_with_logit, forward, Cache, Inputs};
+use bkpbs::train::gcn::{backward, forward, Cache, Inputs};
+use bkpbs::train::train::bce_with_logit;
 use common::random_obs;
 
 /// Σ BCE over the batch, in f64.
@@ -104,7 +105,7 @@ fn gradient_check_unconditioned() {
 
 use std::path::Path;
 
-use bkpbs::config::{Config, ConfigError, PredictorKind};
+use bkpbs::config::{Config, PredictorKind};
 use bkpbs::model::road::Road;
 use bkpbs::model::scene::{Kind, Origin, Scene, VehicleState};
 use bkpbs::model::trajectory::{Pose, Trajectory};
@@ -311,7 +312,7 @@ fn configured_model_files_that_cannot_be_used_are_one_line_errors() {
     std::fs::write(&bad, "{\"format\":\"bkpbs-lane-change-model\",\"vers").unwrap();
     c.predictor.conditioned_model = Some(bad);
     c.validate().unwrap();
-    let e = bkpbs::controller::by_name("bk-mastar", &c)
+    let e = bkpbs::controller::check("bk-mastar", &c)
         .err()
         .expect("corrupt model refused")
         .to_string();
@@ -329,7 +330,7 @@ fn configured_model_files_that_cannot_be_used_are_one_line_errors() {
     c.predictor.unconditioned_model = Some(cp.clone());
     assert!(matches!(
         bkpbs::predict::configured(&c),
-        Err(ConfigError::Model { .. })
+        Err(bkpbs::predict::PredictorError { .. })
     ));
     c.predictor.conditioned_model = Some(cp);
     c.predictor.unconditioned_model = Some(up);
@@ -503,8 +504,7 @@ fn bk_mastar_with_the_learned_predictor_runs_a_sumo_episode() {
     c.scenario.alpha = 0.5;
     c.scenario.lambda = 3000.0;
     c.predictor.kind = PredictorKind::Learned;
-    let mut ctl = bkpbs::controller::by_name("bk-mastar", &c).unwrap();
-    let r = bkpbs::episode::run(&c, ctl.as_mut()).unwrap();
+    let r = bkpbs::episode::run(&c, "bk-mastar").unwrap();
     let s = &r.summary;
     assert_eq!(s.steps, 150);
     assert_eq!(s.inserted, s.arrived + s.crashed + s.present, "{s:?}");

@@ -10,9 +10,10 @@ use bkpbs::config::Config;
 use bkpbs::controller::{self, CavHandling, Command, Controller, LaneChange, PLANNERS};
 use bkpbs::model::road::Road;
 use bkpbs::model::scene::Origin;
+use bkpbs::sumo::frame;
 
 use crate::errors::bad_input;
-use crate::scene::{scene_of, SumoScene};
+use crate::scene::scene_of;
 
 /// What one CAV does during the next step.
 #[pyclass(name = "Maneuver", module = "bkpbs", frozen, eq)]
@@ -59,7 +60,7 @@ pub struct PyController {
 
 /// Builds the core controller `planner` for `config`.
 fn build(planner: &str, config: &Config) -> PyResult<Box<dyn Controller>> {
-    controller::by_name(planner, config).map_err(bad_input)
+    controller::by_name(planner, config, &Road::paper_default()).map_err(bad_input)
 }
 
 #[pymethods]
@@ -104,22 +105,22 @@ impl PyController {
         let sc = &self.config.scenario;
         self.calls += 1;
         let time = time.unwrap_or(self.calls as f64 * sc.dt);
-        let SumoScene { scene, edges } =
-            scene_of(vehicles, &self.road, sc, &mut self.origins, time)?;
+        let framed = scene_of(vehicles, &self.road, sc, &mut self.origins, time)?;
+        let scene = &framed.scene;
         self.commands.clear();
-        self.inner.plan(&scene, &mut self.commands);
+        self.inner.plan(scene, &mut self.commands);
         let out = PyDict::new(py);
         for c in &self.commands {
             let v = &scene.vehicles[c.vehicle];
             let m = c.maneuver;
             let target = v.lane + m.lane_change.map_or(0, LaneChange::offset);
             let maneuver = PyManeuver {
-                speed: m.speed.clamp(0.0, sc.v_max),
+                speed: frame::commanded_speed(m.speed, sc),
                 lane_change: m.lane_change.map(|l| match l {
                     LaneChange::Left => "left",
                     LaneChange::Right => "right",
                 }),
-                sumo_lane_index: self.road.sumo_lane_index(edges[c.vehicle], target),
+                sumo_lane_index: framed.sumo_lane_index(c.vehicle, target),
             };
             out.set_item(&*v.id, maneuver)?;
         }

@@ -9,7 +9,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 use bkpbs::config::Config;
-use bkpbs::controller::{self, UnknownPlanner, PLANNERS};
+use bkpbs::controller::{UnknownPlanner, PLANNERS};
 use bkpbs::episode::demand;
 use bkpbs::episode::output::{self, episode_row, EPISODE_COLUMNS};
 use bkpbs::episode::{self, EpisodeError, EpisodeResult};
@@ -108,10 +108,7 @@ fn run_detached(py: Python<'_>, planner: &str, config: &Config) -> PyResult<Epis
     let _slot = Slot::claim()?;
     let outcome = py.detach(|| {
         panic::catch_unwind(AssertUnwindSafe(
-            || -> Result<EpisodeResult, EpisodeError> {
-                let mut ctl = controller::by_name(planner, config)?;
-                episode::run(config, ctl.as_mut())
-            },
+            || -> Result<EpisodeResult, EpisodeError> { episode::run(config, planner) },
         ))
     });
     match outcome {

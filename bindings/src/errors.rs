@@ -6,8 +6,8 @@ use pyo3::exceptions::{PyOSError, PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 
 use bkpbs::episode::EpisodeError;
-use bkpbs::model::road::RoadError;
 use bkpbs::sumo::files::InputError;
+use bkpbs::sumo::frame::NetworkError;
 
 pyo3::create_exception!(
     bkpbs,
@@ -38,9 +38,9 @@ pub fn episode_error(e: &EpisodeError) -> PyErr {
     let message = e.to_string();
     match e {
         EpisodeError::Config(_)
-        | EpisodeError::Planner(_)
+        | EpisodeError::Controller(_)
         | EpisodeError::Input(InputError::MissingNet(_))
-        | EpisodeError::Road(RoadError::Shape(_)) => BkpbsError::new_err(message),
+        | EpisodeError::Road(NetworkError::Shape(_)) => BkpbsError::new_err(message),
         EpisodeError::Input(InputError::Write { .. }) => PyOSError::new_err(message),
         EpisodeError::Start { .. } | EpisodeError::Step { .. } | EpisodeError::Road(_) => {
             SumoError::new_err(message)

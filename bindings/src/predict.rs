@@ -15,7 +15,7 @@ use bkpbs::model::trajectory::{Pose, Trajectory};
 use bkpbs::predict::{ConstantSpeed, LaneChangeModel, Learned, Predictor};
 
 use crate::errors::bad_input;
-use crate::scene::{scene_of, SumoScene};
+use crate::scene::scene_of;
 
 fn load_model(path: &Path) -> PyResult<LaneChangeModel> {
     LaneChangeModel::load(path).map_err(bad_input)
@@ -91,7 +91,7 @@ impl PyPredictor {
     /// The scene and the index of HDV `vehicle_id` in it.
     fn hdv(&mut self, vehicles: &Bound<'_, PyAny>, vehicle_id: &str) -> PyResult<(Scene, usize)> {
         let sc = &self.config.scenario;
-        let SumoScene { scene, .. } = scene_of(vehicles, &self.road, sc, &mut self.origins, 0.0)?;
+        let scene = scene_of(vehicles, &self.road, sc, &mut self.origins, 0.0)?.scene;
         let Some(i) = scene.vehicles.iter().position(|v| &*v.id == vehicle_id) else {
             return Err(bad_input(format!(
                 "vehicle '{vehicle_id}' is not among the vehicles on the merge section"

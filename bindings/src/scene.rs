@@ -11,8 +11,8 @@ use pyo3::types::{PyDict, PyString};
 
 use bkpbs::config::Scenario;
 use bkpbs::model::road::Road;
-use bkpbs::model::scene::{Kind, Origin, Scene};
-use bkpbs::sumo::frame::{self, Identity};
+use bkpbs::model::scene::{Kind, Origin};
+use bkpbs::sumo::frame::{self, Identity, SumoScene};
 use bkpbs::sumo::RawVehicleState;
 
 use crate::errors::bad_input;
@@ -186,12 +186,6 @@ fn read_vehicle(i: usize, obj: &Bound<'_, PyAny>, keys: &Keys<'_>) -> PyResult<R
     })
 }
 
-/// A scene in the road frame and the SUMO edge code of each of its vehicles.
-pub struct SumoScene {
-    pub scene: Scene,
-    pub edges: Vec<i32>,
-}
-
 /// The scene of `vehicles` (a list of dicts or objects) at `time`. Vehicles off the merge
 /// section are left out. A vehicle's origin is its `origin` key, else its id's prefix
 /// (`main.`/`ramp.`), else what `origins` remembers from an earlier call, else the road it is
@@ -203,12 +197,8 @@ pub fn scene_of(
     origins: &mut HashMap<String, Origin>,
     time: f64,
 ) -> PyResult<SumoScene> {
-    let mut scene = Scene {
-        time,
-        road: road.clone(),
-        vehicles: Vec::new(),
-    };
-    let mut edges = Vec::new();
+    let mut framed = SumoScene::new(road);
+    framed.clear(time);
     let mut seen = HashMap::new();
     let list = vehicles
         .try_iter()
@@ -220,7 +210,7 @@ pub fn scene_of(
             .origin
             .or_else(|| frame::origin_from_id(&r.id))
             .or_else(|| origins.get(&r.id).copied())
-            .unwrap_or_else(|| frame::origin_from_edge(road, r.raw.edge_code));
+            .unwrap_or_else(|| frame::origin_from_edge(r.raw.edge_code));
         let who = Identity {
             id: Arc::from(r.id.as_str()),
             kind: r.kind,
@@ -232,10 +222,9 @@ pub fn scene_of(
         };
         seen.insert(r.id, origin);
         if let Some(v) = frame::vehicle_state(road, scenario, who, &r.raw) {
-            edges.push(r.raw.edge_code);
-            scene.vehicles.push(v);
+            framed.push(v, r.raw.edge_code);
         }
     }
     *origins = seen;
-    Ok(SumoScene { scene, edges })
+    Ok(framed)
 }

@@ -19,7 +19,7 @@ use std::sync::Mutex;
 use serde::{Deserialize, Serialize};
 
 use crate::config::Config;
-use crate::{controller, episode, io as output};
+use crate::{episode, io};
 
 /// Name of the file that records why a cell's episode failed.
 pub const ERROR_FILE: &str = "error.txt";
@@ -123,7 +123,7 @@ pub fn serve(mut input: impl BufRead, mut output: impl Write) -> Result<(), Work
 
 /// Writes `error.txt` into a cell directory (best effort: the reply carries the message too).
 pub fn record_failure(dir: &Path, error: &str) {
-    let _ = output::write_atomic(&dir.join(ERROR_FILE), format!("{error}\n").as_bytes());
+    let _ = io::write_atomic(&dir.join(ERROR_FILE), format!("{error}\n").as_bytes());
 }
 
 fn injected_fault(req: &Request) {
@@ -156,8 +156,7 @@ pub(crate) fn run_cell(req: &Request) -> Result<(), String> {
     IN_EPISODE.store(true, Ordering::SeqCst);
     let run = panic::catch_unwind(AssertUnwindSafe(|| {
         injected_fault(req);
-        let mut ctl = controller::by_name(&req.planner, &req.config).map_err(|e| e.to_string())?;
-        episode::run(&req.config, ctl.as_mut()).map_err(|e| e.to_string())
+        episode::run(&req.config, &req.planner).map_err(|e| e.to_string())
     }));
     IN_EPISODE.store(false, Ordering::SeqCst);
     let result = match run {

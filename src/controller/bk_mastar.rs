@@ -6,6 +6,7 @@
 
 use super::{execute, CavHandling, Command, Controller, PlanStats};
 use crate::config::Config;
+use crate::model::road::Road;
 use crate::model::scene::{Kind, Scene};
 use crate::model::trajectory::Trajectory;
 use crate::planner::lane_changes::LaneChanges;
@@ -17,19 +18,19 @@ pub struct BkMastar {
     config: Config,
     predictor: Box<dyn Predictor>,
     others: ConstantSpeed,
-    planner: Option<Mastar>,
+    planner: Mastar,
     lane_changes: LaneChanges,
     stats: PlanStats,
 }
 
 impl BkMastar {
-    /// With `predictor` for HDVs.
-    pub fn new(config: &Config, predictor: Box<dyn Predictor>) -> Self {
+    /// With `predictor` for HDVs, on `road`.
+    pub fn new(config: &Config, predictor: Box<dyn Predictor>, road: &Road) -> Self {
         BkMastar {
             config: config.clone(),
             predictor,
             others: ConstantSpeed::new(config),
-            planner: None,
+            planner: Mastar::from_config(config, road.clone()),
             lane_changes: LaneChanges::default(),
             stats: PlanStats::default(),
         }
@@ -47,12 +48,10 @@ impl Controller for BkMastar {
 
     fn plan(&mut self, scene: &Scene, out: &mut Vec<Command>) {
         let sc = &self.config.scenario;
-        let (dt, v_max) = (sc.dt, sc.v_max);
+        let dt = sc.dt;
         let lc_steps = sc.lane_change_steps();
         let horizon = self.config.planner.horizon + lc_steps;
-        let planner = self
-            .planner
-            .get_or_insert_with(|| Mastar::from_config(&self.config, scene.road.clone()));
+        let planner = &self.planner;
         let predictions: Vec<Trajectory> = scene
             .vehicles
             .iter()
@@ -81,7 +80,7 @@ impl Controller for BkMastar {
                 Ok(plan) => {
                     stats.nodes_expanded += plan.expanded as u64;
                     stats.phase2_plans += u64::from(plan.phase == Phase::Fallback);
-                    let (maneuver, target) = execute::first_move(&plan, req.lane, v_max);
+                    let (maneuver, target) = execute::first_move(&plan, req.lane);
                     if let Some(target) = target {
                         self.lane_changes
                             .start(&v.id, now, lc_steps as f64 * dt, target);

@@ -8,30 +8,30 @@ use std::sync::Arc;
 
 use super::{execute, CavHandling, Command, Controller, PlanStats};
 use crate::config::Config;
+use crate::model::road::Road;
 use crate::model::scene::{Kind, Scene};
 use crate::model::trajectory::Trajectory;
 use crate::planner::lane_changes::LaneChanges;
 use crate::planner::mastar::{Mastar, NoPlan, Phase, Plan};
 use crate::planner::pbs::{Budget, Problem, RequestFor};
-use crate::planner::safety::SafetyRule;
 use crate::predict::Predictor;
 
 /// Centralised priority-based planner.
 pub struct BkPbs {
     config: Config,
     predictor: Box<dyn Predictor>,
-    planner: Option<(Mastar, SafetyRule)>,
+    planner: Mastar,
     lane_changes: LaneChanges,
     stats: PlanStats,
 }
 
 impl BkPbs {
-    /// With `predictor` for HDVs (conditioned on higher-priority CAVs when it can be).
-    pub fn new(config: &Config, predictor: Box<dyn Predictor>) -> Self {
+    /// With `predictor` for HDVs (conditioned on higher-priority CAVs when it can be), on `road`.
+    pub fn new(config: &Config, predictor: Box<dyn Predictor>, road: &Road) -> Self {
         BkPbs {
             config: config.clone(),
             predictor,
-            planner: None,
+            planner: Mastar::from_config(config, road.clone()),
             lane_changes: LaneChanges::default(),
             stats: PlanStats::default(),
         }
@@ -71,12 +71,10 @@ impl Controller for BkPbs {
 
     fn plan(&mut self, scene: &Scene, out: &mut Vec<Command>) {
         let sc = &self.config.scenario;
-        let (dt, v_max) = (sc.dt, sc.v_max);
+        let dt = sc.dt;
         let lc_steps = sc.lane_change_steps();
-        let (planner, rule) = self.planner.get_or_insert_with(|| {
-            let rule = SafetyRule::new(&self.config.planner, scene.road.lane_width);
-            (Mastar::from_config(&self.config, scene.road.clone()), rule)
-        });
+        // One safety rule: the one M-A* plans with also judges conflicts between plans.
+        let (planner, rule) = (&self.planner, &self.planner.rule);
         let now = scene.time;
         self.lane_changes.forget_finished(now);
         let requests = Requests {
@@ -145,7 +143,7 @@ impl Controller for BkPbs {
                 Some(plan) => {
                     stats.phase2_plans += u64::from(plan.phase == Phase::Fallback);
                     let lane = self.lane_changes.request(scene, i, dt, &[]).lane;
-                    let (maneuver, target) = execute::first_move(&plan, lane, v_max);
+                    let (maneuver, target) = execute::first_move(&plan, lane);
                     if let Some(target) = target {
                         starts.push((v.id.clone(), target));
                     }
@@ -184,12 +182,13 @@ mod tests {
     #[test]
     fn every_cav_gets_a_maneuver_even_when_nothing_is_safe() {
         let config = Config::default();
+        let road = Road::paper_default();
         let v = |id: &str, kind, s, lane, speed| {
             VehicleState::on_lane(id, kind, Origin::Main, s, lane, speed)
         };
         let scene = Scene {
             time: 3.0,
-            road: Road::paper_default(),
+            road: road.clone(),
             vehicles: vec![
                 v("main.1", Kind::Cav, 100.0, 1, 35.0),
                 v("main.2", Kind::Hdv, 106.0, 1, 0.0),
@@ -197,7 +196,7 @@ mod tests {
                 v("main.4", Kind::Cav, 300.0, 2, 30.0),
             ],
         };
-        let mut ctl = BkPbs::new(&config, Box::new(ConstantSpeed::new(&config)));
+        let mut ctl = BkPbs::new(&config, Box::new(ConstantSpeed::new(&config)), &road);
         let mut out = Vec::new();
         ctl.plan(&scene, &mut out);
         let cavs: Vec<usize> = out.iter().map(|c| c.vehicle).collect();

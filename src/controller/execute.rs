@@ -8,7 +8,7 @@ use crate::planner::mastar::{FirstMove, Plan};
 /// The maneuver that executes a plan's first move, and the target lane of a lane change it
 /// starts (which the controller must remember, to continue the change in the next steps).
 /// `lane` is the lane the plan started in.
-pub fn first_move(plan: &Plan, lane: i32, v_max: f64) -> (Maneuver, Option<i32>) {
+pub fn first_move(plan: &Plan, lane: i32) -> (Maneuver, Option<i32>) {
     let (lane_change, target) = match plan.first {
         FirstMove::Start(p) if p.is_lane_change() => {
             let dir = if p.lane_offset() > 0 {
@@ -21,7 +21,7 @@ pub fn first_move(plan: &Plan, lane: i32, v_max: f64) -> (Maneuver, Option<i32>)
         _ => (None, None),
     };
     let maneuver = Maneuver {
-        speed: plan.next_speed().clamp(0.0, v_max),
+        speed: plan.next_speed(),
         lane_change,
     };
     (maneuver, target)

@@ -13,7 +13,9 @@ pub mod mobil;
 pub mod sumo_native;
 
 use crate::config::Config;
+use crate::model::road::Road;
 use crate::model::scene::Scene;
+use crate::predict::PredictorError;
 
 /// A lateral move to the neighbouring lane.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -127,32 +129,47 @@ pub enum BuildError {
     #[error(transparent)]
     Unknown(#[from] UnknownPlanner),
     #[error(transparent)]
-    Config(#[from] crate::config::ConfigError),
+    Predictor(#[from] PredictorError),
 }
 
-impl From<BuildError> for crate::episode::EpisodeError {
-    fn from(e: BuildError) -> Self {
-        match e {
-            BuildError::Unknown(u) => u.into(),
-            BuildError::Config(c) => c.into(),
-        }
-    }
-}
-
-/// Builds the controller called `name`; planners predict HDVs with the predictor
-/// `config.predictor` selects ([`crate::predict::configured`]).
-pub fn by_name(name: &str, config: &Config) -> Result<Box<dyn Controller>, BuildError> {
+/// Builds the controller called `name` for the road SUMO runs; planners predict HDVs with the
+/// predictor `config.predictor` selects ([`crate::predict::configured`]).
+///
+/// # Errors
+/// An unknown name, or a predictor model file that cannot be used.
+pub fn by_name(
+    name: &str,
+    config: &Config,
+    road: &Road,
+) -> Result<Box<dyn Controller>, BuildError> {
     match name {
         "sumo" => Ok(Box::new(sumo_native::SumoNative)),
         "idm-mobil" => Ok(Box::new(idm_mobil::IdmMobil::new(config))),
         "bk-mastar" => Ok(Box::new(bk_mastar::BkMastar::new(
             config,
             crate::predict::configured(config)?,
+            road,
         ))),
         "bk-pbs" => Ok(Box::new(bk_pbs::BkPbs::new(
             config,
             crate::predict::configured(config)?,
+            road,
         ))),
+        other => Err(UnknownPlanner(other.to_string()).into()),
+    }
+}
+
+/// Checks, before any SUMO starts, that [`by_name`] will build `name` under `config`: the name is
+/// known and the predictor it needs loads.
+///
+/// # Errors
+/// As [`by_name`].
+pub fn check(name: &str, config: &Config) -> Result<(), BuildError> {
+    match name {
+        "sumo" | "idm-mobil" => Ok(()),
+        "bk-mastar" | "bk-pbs" => crate::predict::configured(config)
+            .map(drop)
+            .map_err(Into::into),
         other => Err(UnknownPlanner(other.to_string()).into()),
     }
 }
@@ -164,10 +181,13 @@ mod tests {
     #[test]
     fn every_listed_planner_builds_and_unknown_is_refused() {
         let c = Config::default();
+        let road = Road::paper_default();
         for p in PLANNERS {
-            assert_eq!(by_name(p, &c).unwrap().name(), p);
+            check(p, &c).unwrap();
+            assert_eq!(by_name(p, &c, &road).unwrap().name(), p);
         }
-        let e = by_name("bk-pbz", &c).err().unwrap().to_string();
+        assert!(check("bk-pbz", &c).is_err());
+        let e = by_name("bk-pbz", &c, &road).err().unwrap().to_string();
         assert!(e.contains("bk-pbz") && e.contains("idm-mobil"), "{e}");
     }
 }

@@ -4,7 +4,6 @@
 use std::time::Instant;
 
 use crate::config::Config;
-use crate::controller;
 use crate::episode::demand;
 use crate::episode::metrics::percentile;
 use crate::episode::{self, EpisodeError};
@@ -75,8 +74,7 @@ pub fn run(
     for _ in 0..repeats.max(1) {
         alone.push(sumo_alone_ms_per_step(config)?);
         for (k, name) in planners.iter().enumerate() {
-            let mut c = controller::by_name(name, config)?;
-            let r = episode::run(config, c.as_mut())?;
+            let r = episode::run(config, name)?;
             let t = &r.timing;
             let nodes = r.summary.plan_stats.nodes_expanded as f64 / config.scenario.steps as f64;
             samples[k].push([

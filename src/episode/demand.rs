@@ -13,6 +13,7 @@ use rand_chacha::ChaCha8Rng;
 
 use crate::config::Config;
 use crate::model::scene::{Kind, Origin};
+use crate::sumo::files::ROUTES;
 
 /// Random stream of the demand (other streams of the same seed drive other random choices).
 pub const DEMAND_STREAM: u64 = 1;
@@ -98,9 +99,6 @@ fn arrival_times(rng: &mut ChaCha8Rng, rate: f64, horizon: f64) -> Vec<f64> {
     }
 }
 
-/// SUMO route file with the two routes (vehicles are added at run time by entry control).
-pub const ROUTES: &str = "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<!-- the merge scenario's two routes -->\n<routes>\n    <route id=\"main\" edges=\"main_in acc main_out\"/>\n    <route id=\"ramp\" edges=\"ramp acc main_out\"/>\n</routes>\n";
-
 /// The demand as a SUMO route file, for inspection or for running it in SUMO alone.
 pub fn route_file(vehicles: &[PlannedVehicle]) -> String {
     let mut xml = ROUTES.trim_end().trim_end_matches("</routes>").to_string();
@@ -123,6 +121,16 @@ pub fn route_file(vehicles: &[PlannedVehicle]) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn shipped_demo_demand_matches_the_defaults() {
+        let shipped = include_str!("../../sumo_net/demo.rou.xml");
+        let generated = route_file(&generate(&Config::default()));
+        assert_eq!(
+            shipped, generated,
+            "regenerate with `bkpbs demand --out sumo_net/demo.rou.xml`"
+        );
+    }
 
     fn config(alpha: f64, lambda: f64, seed: u64) -> Config {
         let mut c = Config::default();

@@ -4,22 +4,6 @@
 use crate::controller::PlanStats;
 use crate::model::scene::{Kind, Origin};
 
-/// Free-flow travel time t* over `distance` from speed `v0`: accelerate at `accel` up to
-/// `v_max`, then cruise, ignoring every other vehicle.
-pub fn free_flow_time(distance: f64, v0: f64, accel: f64, v_max: f64) -> f64 {
-    if distance <= 0.0 {
-        return 0.0;
-    }
-    let v0 = v0.min(v_max).max(0.0);
-    let d_acc = (v_max * v_max - v0 * v0) / (2.0 * accel);
-    if d_acc >= distance {
-        // Still accelerating at the end: v0·t + a·t²/2 = distance.
-        (-v0 + (v0 * v0 + 2.0 * accel * distance).sqrt()) / accel
-    } else {
-        (v_max - v0) / accel + (distance - d_acc) / v_max
-    }
-}
-
 /// How a vehicle's episode ended.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Outcome {
@@ -242,19 +226,6 @@ pub fn percentile(samples: &mut [f64], q: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn free_flow_time_hand_computed() {
-        // From 25 m/s at 3 m/s² to 35 m/s: 10/3 s over (35² − 25²)/6 = 100 m, then 355 m at 35.
-        // t* = 3.333333 + 10.142857 = 13.476190
-        let t = free_flow_time(455.0, 25.0, 3.0, 35.0);
-        assert!((t - 13.476_190).abs() < 1e-5, "{t}");
-        // Already at v_max: plain cruise.
-        assert!((free_flow_time(350.0, 35.0, 3.0, 35.0) - 10.0).abs() < 1e-12);
-        // Short distance, still accelerating: 25t + 1.5t² = 50 -> t = (−25 + √925)/3 = 1.804604 s.
-        let t = free_flow_time(50.0, 25.0, 3.0, 35.0);
-        assert!((25.0 * t + 1.5 * t * t - 50.0).abs() < 1e-9 && (t - 1.804_604).abs() < 1e-5);
-    }
 
     fn rec(
         kind: Kind,

@@ -11,5 +11,5 @@ pub mod output;
 pub mod runner;
 
 pub use runner::{
-    run, run_observed, run_with_demand, EpisodeError, EpisodeResult, NoObserver, Observer,
+    run, run_observed, run_with_demand, Driver, EpisodeError, EpisodeResult, NoObserver, Observer,
 };

@@ -9,18 +9,18 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use crate::config::{Config, ConfigError};
-use crate::controller::{CavHandling, Command, Controller, PlanStats};
+use crate::controller::{self, BuildError, CavHandling, Command, Controller, PlanStats};
 use crate::episode::demand::{self, PlannedVehicle};
 use crate::episode::entry::EntryControl;
 use crate::episode::merge_rule::RampMergeRule;
 use crate::episode::metrics::{
-    free_flow_time, percentile, CollisionEvent, Outcome, Summary, SummaryInput, Timing,
-    VehicleRecord,
+    percentile, CollisionEvent, Outcome, Summary, SummaryInput, Timing, VehicleRecord,
 };
-use crate::model::road::{Road, RoadError, EDGES};
+use crate::model::kinematics::free_flow_time;
+use crate::model::road::{Road, EDGES};
 use crate::model::scene::{Kind, Origin, Scene};
 use crate::sumo::files::{EpisodeInput, InputError};
-use crate::sumo::frame;
+use crate::sumo::frame::{self, NetworkError, SumoScene};
 use crate::sumo::{Simulation, StderrCapture, SumoError, VehicleReadings};
 
 /// SUMO speed mode for commanded CAVs: no checks at all, the commanded speed is the speed.
@@ -42,14 +42,14 @@ pub enum EpisodeError {
     #[error(transparent)]
     Input(#[from] InputError),
     #[error(transparent)]
-    Planner(#[from] crate::controller::UnknownPlanner),
+    Controller(#[from] BuildError),
     #[error("cannot start SUMO on net {net}: {cause}")]
     Start {
         net: std::path::PathBuf,
         cause: SumoError,
     },
     #[error(transparent)]
-    Road(#[from] RoadError),
+    Road(#[from] NetworkError),
     #[error("SUMO failed at step {step} (t = {time:.1} s): {cause}")]
     Step {
         step: u32,
@@ -69,14 +69,21 @@ pub struct EpisodeResult {
     pub sumo_log: String,
 }
 
-/// Runs one episode with the demand drawn from the config's (λ, α, seed).
-pub fn run(
-    config: &Config,
-    controller: &mut dyn Controller,
-) -> Result<EpisodeResult, EpisodeError> {
+/// Who drives the CAVs: a planner by name, built by [`controller::by_name`] once SUMO has given
+/// the road, or a controller the caller built (staged scenes, probes in tests).
+pub enum Driver<'a> {
+    Named(&'a str),
+    Given(&'a mut dyn Controller),
+}
+
+/// Runs one episode of the planner `planner` with the demand drawn from the config's (λ, α, seed).
+///
+/// # Errors
+/// An invalid config, an unknown planner or unusable predictor, or SUMO failing.
+pub fn run(config: &Config, planner: &str) -> Result<EpisodeResult, EpisodeError> {
     config.validate()?;
     let planned = demand::generate(config);
-    run_with_demand(config, controller, &planned)
+    run_observed(config, Driver::Named(planner), &planned, &mut NoObserver)
 }
 
 /// Sees the scene of every step, before the controller plans: for recording data (e.g. the
@@ -92,19 +99,20 @@ impl Observer for NoObserver {
     fn observe(&mut self, _scene: &Scene) {}
 }
 
-/// Runs one episode with a given demand (for staged scenes and tests).
+/// Runs one episode of a controller the caller built, with a given demand (for staged scenes
+/// and tests).
 pub fn run_with_demand(
     config: &Config,
     controller: &mut dyn Controller,
     planned: &[PlannedVehicle],
 ) -> Result<EpisodeResult, EpisodeError> {
-    run_observed(config, controller, planned, &mut NoObserver)
+    run_observed(config, Driver::Given(controller), planned, &mut NoObserver)
 }
 
 /// Runs one episode with a given demand, showing every step's scene to `observer`.
 pub fn run_observed(
     config: &Config,
-    controller: &mut dyn Controller,
+    driver: Driver<'_>,
     planned: &[PlannedVehicle],
     observer: &mut dyn Observer,
 ) -> Result<EpisodeResult, EpisodeError> {
@@ -126,7 +134,15 @@ pub fn run_observed(
                 cause,
             }
         })?;
-        let road = Road::from_simulation(&sim)?;
+        let road = frame::road_from_simulation(&sim)?;
+        let mut built;
+        let controller: &mut dyn Controller = match driver {
+            Driver::Named(name) => {
+                built = controller::by_name(name, config, &road)?;
+                built.as_mut()
+            }
+            Driver::Given(c) => c,
+        };
         Episode::new(config, controller, planned, road, observer).run(sim)
     })();
     let sumo_log = capture.map(StderrCapture::finish).unwrap_or_default();
@@ -161,9 +177,8 @@ struct Episode<'a> {
     /// Tracked index of each reading, valid for `slots_generation`.
     slots: Vec<Option<usize>>,
     slots_generation: u64,
-    scene: Scene,
-    /// SUMO edge code of each scene vehicle, for turning frame lanes back into SUMO lanes.
-    scene_edges: Vec<i32>,
+    /// This step's scene, with the SUMO edge of each vehicle for the commands back.
+    sumo_scene: SumoScene,
     commands: Vec<Command>,
     plan_ms: Vec<f64>,
     plan_stats: PlanStats,
@@ -186,12 +201,7 @@ impl<'a> Episode<'a> {
             observer,
             planned: planned.iter().map(|p| (p.id.as_str(), p)).collect(),
             scheduled: planned.len(),
-            scene: Scene {
-                time: 0.0,
-                road: road.clone(),
-                vehicles: Vec::new(),
-            },
-            scene_edges: Vec::new(),
+            sumo_scene: SumoScene::new(&road),
             road,
             tracked: Vec::new(),
             index: HashMap::new(),
@@ -230,6 +240,7 @@ impl<'a> Episode<'a> {
         let loop_s = loop_start.elapsed().as_secs_f64();
         // Vehicles standing on the acceleration lane at the end: a jam indicator.
         let ramp_queue_end = self
+            .sumo_scene
             .scene
             .vehicles
             .iter()
@@ -245,7 +256,10 @@ impl<'a> Episode<'a> {
 
     /// One SUMO step and, unless it is the last, one planning round.
     fn step(&mut self, sim: &mut Simulation, plan: bool) -> Result<(), SumoError> {
-        for a in self.entry.admit(self.scene.time, &self.scene) {
+        for a in self
+            .entry
+            .admit(self.sumo_scene.scene.time, &self.sumo_scene.scene)
+        {
             let v = &a.vehicle;
             sim.add_vehicle(
                 &v.id,
@@ -264,12 +278,12 @@ impl<'a> Episode<'a> {
         self.book_arrivals(sim, now)?;
         sim.read_vehicles(&mut self.readings)?;
         self.build_scene(now);
-        self.observer.observe(&self.scene);
+        self.observer.observe(&self.sumo_scene.scene);
         if !plan {
             return Ok(());
         }
-        for m in self.merge_rule.requests(&self.scene) {
-            let v = &self.scene.vehicles[m.vehicle];
+        for m in self.merge_rule.requests(&self.sumo_scene.scene) {
+            let v = &self.sumo_scene.scene.vehicles[m.vehicle];
             if m.forced {
                 sim.set_lane_change_mode(&v.id, LC_MODE_RAMP_HDV_FORCED)?;
             }
@@ -277,7 +291,8 @@ impl<'a> Episode<'a> {
         }
         self.commands.clear();
         let t1 = Instant::now();
-        self.controller.plan(&self.scene, &mut self.commands);
+        self.controller
+            .plan(&self.sumo_scene.scene, &mut self.commands);
         self.plan_ms.push(t1.elapsed().as_secs_f64() * 1e3);
         self.plan_stats += self.controller.last_stats();
         if self.controller.handling() == CavHandling::Commanded {
@@ -422,9 +437,7 @@ impl<'a> Episode<'a> {
             self.slots_generation = self.readings.generation;
         }
         let sc = &self.config.scenario;
-        self.scene.time = now;
-        self.scene.vehicles.clear();
-        self.scene_edges.clear();
+        self.sumo_scene.clear(now);
         for (raw, slot) in self.readings.states.iter().zip(&self.slots) {
             let (Some(k), Some((front, lane))) = (*slot, frame::frame_position(&self.road, raw))
             else {
@@ -440,32 +453,29 @@ impl<'a> Episode<'a> {
             t.last_speed = raw.speed;
             self.speed_sum += raw.speed;
             self.speed_samples += 1;
-            self.scene_edges.push(raw.edge_code);
             let who = frame::Identity {
                 id: t.id.clone(),
                 kind: t.record.kind,
                 origin: t.record.origin,
                 desired_speed: t.record.desired_speed,
             };
-            self.scene
-                .vehicles
-                .push(frame::state_at(&self.road, sc, who, raw, front, lane));
+            let vehicle = frame::state_at(sc, who, raw, front, lane);
+            self.sumo_scene.push(vehicle, raw.edge_code);
         }
     }
 
     fn apply(&mut self, sim: &mut Simulation) -> Result<(), SumoError> {
-        let v_max = self.config.scenario.v_max;
-        let vehicles = &self.scene.vehicles;
-        sim.set_speeds(
-            self.commands
-                .iter()
-                .map(|c| (&*vehicles[c.vehicle].id, c.maneuver.speed.clamp(0.0, v_max))),
-        )?;
+        let sc = &self.config.scenario;
+        let vehicles = &self.sumo_scene.scene.vehicles;
+        sim.set_speeds(self.commands.iter().map(|c| {
+            let speed = frame::commanded_speed(c.maneuver.speed, sc);
+            (&*vehicles[c.vehicle].id, speed)
+        }))?;
         for c in &self.commands {
-            let v = &self.scene.vehicles[c.vehicle];
+            let v = &vehicles[c.vehicle];
             if let Some(dir) = c.maneuver.lane_change {
-                let edge = self.scene_edges[c.vehicle];
-                if let Some(idx) = self.road.sumo_lane_index(edge, v.lane + dir.offset()) {
+                let target = v.lane + dir.offset();
+                if let Some(idx) = self.sumo_scene.sumo_lane_index(c.vehicle, target) {
                     sim.change_lane(&v.id, idx, self.config.scenario.dt)?;
                 }
             }

@@ -16,8 +16,7 @@
 //! d ahead on a main-road lane; a ramp CAV must reach a main-road lane (within the merge zone).
 
 use crate::config::PlannerSettings;
-use crate::episode::metrics::free_flow_time;
-use crate::model::kinematics::BicycleState;
+use crate::model::kinematics::{free_flow_time, BicycleState};
 use crate::model::math::Point;
 use crate::model::road::{Road, MAIN_LANES, MERGE_LANE};
 use crate::model::trajectory::{Pose, Trajectory};

@@ -26,7 +26,7 @@ use super::features::{
 use super::infer::Workspace;
 use super::model_file::{LaneChangeModel, ModelError};
 use super::Predictor;
-use crate::config::{Config, ConfigError, PredictorKind};
+use crate::config::{Config, PredictorKind};
 use crate::model::road::MERGE_LANE;
 use crate::model::scene::{Kind, Scene};
 use crate::model::trajectory::{Pose, Trajectory};
@@ -307,10 +307,21 @@ impl Predictor for Learned {
     }
 }
 
+/// A predictor model file the configuration names cannot be used.
+#[derive(Debug, thiserror::Error)]
+#[error("{field}: {cause}")]
+pub struct PredictorError {
+    /// The setting that names the file.
+    pub field: &'static str,
+    pub cause: ModelError,
+}
+
 /// The HDV predictor `config.predictor` selects: b_θ (with the configured or the embedded
-/// models) or constant speed. A model file that cannot be used is a [`ConfigError::Model`]
-/// naming the setting and the file.
-pub fn configured(config: &Config) -> Result<Box<dyn Predictor>, ConfigError> {
+/// models) or constant speed.
+///
+/// # Errors
+/// A model file that cannot be used, naming the setting and the file.
+pub fn configured(config: &Config) -> Result<Box<dyn Predictor>, PredictorError> {
     match config.predictor.kind {
         PredictorKind::Constant => Ok(Box::new(super::ConstantSpeed::new(config))),
         PredictorKind::Learned => {
@@ -318,7 +329,7 @@ pub fn configured(config: &Config) -> Result<Box<dyn Predictor>, ConfigError> {
             let load = |path: &Option<std::path::PathBuf>, field, conditioned| match path {
                 Some(path) => LaneChangeModel::load(path)
                     .map(Arc::new)
-                    .map_err(|cause| ConfigError::Model { field, cause }),
+                    .map_err(|cause| PredictorError { field, cause }),
                 None => Ok(LaneChangeModel::embedded(conditioned)),
             };
             let c = load(&p.conditioned_model, "predictor.conditioned_model", true)?;
@@ -328,7 +339,7 @@ pub fn configured(config: &Config) -> Result<Box<dyn Predictor>, ConfigError> {
                 false,
             )?;
             if !c.conditioned() || u.conditioned() {
-                return Err(ConfigError::Model {
+                return Err(PredictorError {
                     field: "predictor",
                     cause: ModelError::Shape {
                         path: if c.conditioned() {

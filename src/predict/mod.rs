@@ -21,7 +21,7 @@ pub mod model_file;
 pub mod training_record;
 
 pub use constant::ConstantSpeed;
-pub use learned::{configured, Learned};
+pub use learned::{configured, Learned, PredictorError};
 pub use model_file::{LaneChangeModel, ModelError};
 
 use crate::model::scene::Scene;

@@ -1,5 +1,7 @@
-//! A road-frame [`VehicleState`] from what SUMO reports about one vehicle: edge, lane, lane
-//! position of the front bumper, lateral offset, speed, acceleration and angle.
+//! The road frame and SUMO, both directions: the [`Road`] read from the running network, a
+//! road-frame [`VehicleState`] from what SUMO reports about one vehicle (edge, lane, lane
+//! position of the front bumper, lateral offset, speed, acceleration and angle), and back from a
+//! frame lane to the SUMO lane index a lane-change command needs.
 //!
 //! The episode runner reads these values for all vehicles in one libsumo call; a user's own
 //! TraCI or libsumo loop reads them one getter at a time (the Python bindings' `Controller`).
@@ -8,9 +10,110 @@
 use std::sync::Arc;
 
 use crate::config::Scenario;
-use crate::model::road::{Road, EDGES};
-use crate::model::scene::{Kind, Origin, VehicleState};
-use crate::sumo::RawVehicleState;
+use crate::model::road::{Road, RoadError, EDGES, RAMP};
+use crate::model::scene::{Kind, Origin, Scene, VehicleState};
+use crate::sumo::{RawVehicleState, Simulation, SumoError};
+
+/// Why the running network cannot serve as the merge road.
+#[derive(Debug, thiserror::Error)]
+pub enum NetworkError {
+    #[error(transparent)]
+    Shape(#[from] RoadError),
+    #[error(transparent)]
+    Sumo(#[from] SumoError),
+}
+
+/// Reads edge lengths, lane counts and the lane width from SUMO and checks the merge layout.
+///
+/// # Errors
+/// A missing edge or a wrong lane count ([`NetworkError::Shape`]), or SUMO failing.
+pub fn road_from_simulation(sim: &Simulation) -> Result<Road, NetworkError> {
+    let known = sim.edge_ids()?;
+    if let Some(e) = EDGES.iter().find(|e| !known.iter().any(|k| k == *e)) {
+        return Err(RoadError::Shape(format!("edge '{e}' is missing")).into());
+    }
+    let mut frames = [("", 0.0, 0); 4];
+    for (frame, name) in frames.iter_mut().zip(EDGES) {
+        let lane0 = format!("{name}_0");
+        *frame = (
+            name,
+            sim.lane_length(&lane0)?,
+            sim.edge_lane_count(name)? as i32,
+        );
+    }
+    // The frame's lane width is that of the first edge's lane 0.
+    let lane_width = sim.lane_width(&format!("{}_0", EDGES[0]))?;
+    Ok(Road::from_edges(lane_width, frames)?)
+}
+
+/// Frame `s` and lane of a SUMO (edge code, lane index, lane position); `None` off the section.
+pub fn to_frame(
+    road: &Road,
+    edge_code: i32,
+    lane_index: i32,
+    lane_position: f64,
+) -> Option<(f64, i32)> {
+    let e = road.edges.get(usize::try_from(edge_code).ok()?)?;
+    Some((e.s_start + lane_position, e.lane_offset + lane_index))
+}
+
+/// SUMO lane index on edge `edge_code` of frame lane `lane`, if that edge has it.
+pub fn sumo_lane_index(road: &Road, edge_code: i32, lane: i32) -> Option<i32> {
+    let e = road.edges.get(usize::try_from(edge_code).ok()?)?;
+    let idx = lane - e.lane_offset;
+    (0..e.lanes).contains(&idx).then_some(idx)
+}
+
+/// Whether a reading on `edge_code` lies on the ramp edge, before the merge zone.
+pub fn is_on_ramp(edge_code: i32) -> bool {
+    edge_code == RAMP as i32
+}
+
+/// The speed SUMO is commanded for a planned speed: within [0, v_max]. The one place where
+/// every controller's speeds are bounded, for the runner and the bindings alike.
+pub fn commanded_speed(planned: f64, scenario: &Scenario) -> f64 {
+    planned.clamp(0.0, scenario.v_max)
+}
+
+/// A scene in the road frame and the SUMO edge each of its vehicles was read on, so a frame
+/// lane can be turned back into the SUMO lane index a command needs.
+#[derive(Debug, Clone)]
+pub struct SumoScene {
+    pub scene: Scene,
+    pub edge_codes: Vec<i32>,
+}
+
+impl SumoScene {
+    /// An empty scene on `road` at time 0.
+    pub fn new(road: &Road) -> SumoScene {
+        SumoScene {
+            scene: Scene {
+                time: 0.0,
+                road: road.clone(),
+                vehicles: Vec::new(),
+            },
+            edge_codes: Vec::new(),
+        }
+    }
+
+    /// Empties the scene and sets its time.
+    pub fn clear(&mut self, time: f64) {
+        self.scene.time = time;
+        self.scene.vehicles.clear();
+        self.edge_codes.clear();
+    }
+
+    /// Adds a vehicle read on SUMO edge `edge_code`.
+    pub fn push(&mut self, vehicle: VehicleState, edge_code: i32) {
+        self.scene.vehicles.push(vehicle);
+        self.edge_codes.push(edge_code);
+    }
+
+    /// The SUMO lane index of frame lane `lane` on the edge scene vehicle `vehicle` is on.
+    pub fn sumo_lane_index(&self, vehicle: usize, lane: i32) -> Option<i32> {
+        sumo_lane_index(&self.scene.road, self.edge_codes[vehicle], lane)
+    }
+}
 
 /// What SUMO's readings do not say about a vehicle: who it is and what it wants.
 #[derive(Debug, Clone, PartialEq)]
@@ -38,8 +141,8 @@ pub fn origin_from_id(id: &str) -> Option<Origin> {
 }
 
 /// Where a vehicle entered, from the edge it was first seen on: the ramp or else the main road.
-pub fn origin_from_edge(road: &Road, edge_code: i32) -> Origin {
-    if road.is_on_ramp(edge_code) {
+pub fn origin_from_edge(edge_code: i32) -> Origin {
+    if is_on_ramp(edge_code) {
         Origin::Ramp
     } else {
         Origin::Main
@@ -48,14 +151,13 @@ pub fn origin_from_edge(road: &Road, edge_code: i32) -> Origin {
 
 /// Front-bumper `s` and road-frame lane of a reading; `None` off the merge section.
 pub fn frame_position(road: &Road, raw: &RawVehicleState) -> Option<(f64, i32)> {
-    road.to_frame(raw.edge_code, raw.lane_index, raw.lane_position)
+    to_frame(road, raw.edge_code, raw.lane_index, raw.lane_position)
 }
 
 /// The vehicle at the frame position [`frame_position`] gave: the centre lies half a length
 /// behind the front bumper, and SUMO's angle (degrees, 0 = north, clockwise) becomes a heading
 /// relative to the road (radians, positive to the left; the road runs east).
 pub fn state_at(
-    road: &Road,
     scenario: &Scenario,
     who: Identity,
     raw: &RawVehicleState,
@@ -75,7 +177,7 @@ pub fn state_at(
         desired_speed: who.desired_speed,
         length: scenario.vehicle_length,
         width: scenario.vehicle_width,
-        on_ramp: road.is_on_ramp(raw.edge_code),
+        on_ramp: is_on_ramp(raw.edge_code),
     }
 }
 
@@ -87,7 +189,7 @@ pub fn vehicle_state(
     raw: &RawVehicleState,
 ) -> Option<VehicleState> {
     let (front, lane) = frame_position(road, raw)?;
-    Some(state_at(road, scenario, who, raw, front, lane))
+    Some(state_at(scenario, who, raw, front, lane))
 }
 
 #[cfg(test)]
@@ -99,6 +201,21 @@ mod tests {
         assert_eq!(edge_code("main_in"), Some(0));
         assert_eq!(edge_code("main_out"), Some(3));
         assert_eq!(edge_code(":n1_0"), None);
+    }
+
+    #[test]
+    fn frame_mapping_round_trips() {
+        let r = Road::paper_default();
+        // main_in lane 1 (left) at 10 m -> frame lane 2, s = 10.
+        assert_eq!(to_frame(&r, 0, 1, 10.0), Some((10.0, 2)));
+        // acc lane 0 (acceleration lane) -> frame lane 0, s = 150 + pos.
+        assert_eq!(to_frame(&r, 2, 0, 20.0), Some((170.0, 0)));
+        assert_eq!(to_frame(&r, 3, 0, 5.0), Some((335.0, 1)));
+        assert_eq!(to_frame(&r, -1, 0, 5.0), None);
+        assert_eq!(sumo_lane_index(&r, 2, 1), Some(1));
+        assert_eq!(sumo_lane_index(&r, 0, 1), Some(0));
+        assert_eq!(sumo_lane_index(&r, 0, 0), None);
+        assert_eq!(sumo_lane_index(&r, 3, 3), None);
     }
 
     #[test]

@@ -10,9 +10,8 @@
 use std::time::Instant;
 
 use crate::config::Config;
-use crate::controller;
 use crate::episode::metrics::percentile;
-use crate::episode::{self, EpisodeError, Observer};
+use crate::episode::{self, Driver, EpisodeError, Observer};
 use crate::model::scene::{Kind, Scene};
 use crate::model::trajectory::Trajectory;
 use crate::predict::features::{
@@ -170,9 +169,8 @@ pub fn run(config: &Config, learned: &Learned) -> Result<PredictorBench, Episode
         single: [Vec::new(), Vec::new()],
         per_step: [Vec::new(), Vec::new(), Vec::new()],
     };
-    let mut ctl = controller::by_name("idm-mobil", &c)?;
     let demand = crate::episode::demand::generate(&c);
-    episode::run_observed(&c, ctl.as_mut(), &demand, &mut timer)?;
+    episode::run_observed(&c, Driver::Named("idm-mobil"), &demand, &mut timer)?;
     let med = |v: &mut Vec<f64>| percentile(v, 50.0);
     let pair = |v: &mut Vec<f64>| (percentile(v, 50.0), percentile(v, 99.0));
     let [s0, s1] = &mut timer.single;

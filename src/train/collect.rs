@@ -21,7 +21,7 @@ use serde::{Deserialize, Serialize};
 use super::dataset::{Dataset, Sample};
 use crate::config::{Config, PredictorKind};
 use crate::controller;
-use crate::episode::{self, EpisodeError, Observer};
+use crate::episode::{self, Driver, EpisodeError, Observer};
 use crate::model::scene::{Kind, Scene};
 use crate::predict::features::{
     cav_node, ego_of, is_decision_point, lane_change_direction, lane_change_start, neighbours,
@@ -361,7 +361,6 @@ pub fn collect(
             cause: Box::new(cause),
         };
         config.validate().map_err(|c| fail(c.into()))?;
-        let mut ctl = controller::by_name(&spec.planner, &config).map_err(|b| fail(b.into()))?;
         let demand = crate::episode::demand::generate(&config);
         let mut rec = Recorder::new(
             e as u32,
@@ -369,7 +368,8 @@ pub fn collect(
             config.scenario.dt,
             plan.main_negative_keep,
         );
-        episode::run_observed(&config, ctl.as_mut(), &demand, &mut rec).map_err(fail)?;
+        episode::run_observed(&config, Driver::Named(&spec.planner), &demand, &mut rec)
+            .map_err(fail)?;
         rec.stats.episodes = 1;
         stats += rec.stats;
         samples.append(&mut rec.samples);

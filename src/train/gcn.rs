@@ -7,7 +7,7 @@ use nalgebra::{DMatrix, Dyn, RawStorage, RealField, Scalar};
 use rand_chacha::ChaCha8Rng;
 
 use super::dataset::Sample;
-use super::train::Learner;
+use super::train::{bce_with_logit, Learner};
 use crate::predict::features::{
     encode_a, encode_b, Observation, CAV_NODES, COLUMNS_B, FEATURES_A, FEATURES_B, NODES_A, PREVIEW,
 };
@@ -285,12 +285,6 @@ pub fn backward<T: Real>(
         spread_masked(&c.dmb, CAV_NODES, &c.hb, &mut c.dhb);
         accumulate(be, grad, &c.dhb, &x.xb, &mut c.tmp);
     }
-}
-
-/// Binary cross-entropy of a logit against a label, computed stably.
-pub fn bce_with_logit(logit: f64, label: bool) -> f64 {
-    let y = label as u8 as f64;
-    logit.max(0.0) - logit * y + (-logit.abs()).exp().ln_1p()
 }
 
 /// The network as a [`Learner`] (training runs in f32).

@@ -3,8 +3,7 @@
 use rand_chacha::ChaCha8Rng;
 
 use super::dataset::Sample;
-use super::gcn::bce_with_logit;
-use super::train::Learner;
+use super::train::{bce_with_logit, Learner};
 use crate::predict::gcn::sigmoid;
 use crate::predict::logistic::Logistic;
 

@@ -101,6 +101,12 @@ impl Calibration {
     }
 }
 
+/// Binary cross-entropy of a logit against a label, computed stably.
+pub fn bce_with_logit(logit: f64, label: bool) -> f64 {
+    let y = label as u8 as f64;
+    logit.max(0.0) - logit * y + (-logit.abs()).exp().ln_1p()
+}
+
 /// Whether a sample belongs to the validation split (whole episodes, one in ten).
 pub fn is_validation(s: &Sample) -> bool {
     s.episode % 10 == 9
@@ -272,7 +278,7 @@ fn validate<L: Learner>(
     let loss = val
         .iter()
         .zip(&logits)
-        .map(|(s, &z)| super::gcn::bce_with_logit(z as f64, s.label))
+        .map(|(s, &z)| bce_with_logit(z as f64, s.label))
         .sum::<f64>()
         / val.len() as f64;
     let mut out = *calib;
