@@ -18,6 +18,20 @@ pub const MAIN_OUT: usize = 3;
 pub const MERGE_LANE: i32 = 0;
 /// Road-frame lanes of the main road, right then left.
 pub const MAIN_LANES: [i32; 2] = [1, 2];
+/// Every road-frame lane, lowest (the merge lane) to highest (the main road's left lane).
+pub const LANES: std::ops::RangeInclusive<i32> = MERGE_LANE..=MAIN_LANES[1];
+
+/// The nearest road-frame lane to `lane` (e.g. a lane computed from a predicted position that
+/// strayed off the road).
+pub fn clamp_lane(lane: i32) -> i32 {
+    lane.clamp(*LANES.start(), *LANES.end())
+}
+
+/// The road-frame lane whose centre line is nearest to lateral position `y` (lane `k`'s centre
+/// lies at `k · lane_width`).
+pub fn lane_at(y: f64, lane_width: f64) -> i32 {
+    clamp_lane((y / lane_width).round() as i32)
+}
 
 /// The merge network as embedded in the binary (`sumo_net/merge.net.xml`).
 pub const EMBEDDED_NET: &str = include_str!("../../sumo_net/merge.net.xml");

@@ -12,7 +12,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::model::road::{Road, MAIN_LANES, MERGE_LANE};
+use crate::model::road::{clamp_lane, Road, MAIN_LANES, MERGE_LANE};
 use crate::model::scene::{Kind, Origin, VehicleState};
 
 /// Neighbour slots of graph (a), in node order after the HDV itself.
@@ -240,7 +240,7 @@ pub fn lane_change_direction(lane: i32) -> i32 {
 /// The HDV part of the observation.
 pub fn ego_of(v: &VehicleState, road: &Road) -> Ego {
     Ego {
-        lane: v.lane.clamp(0, 2) as u8,
+        lane: clamp_lane(v.lane) as u8,
         lateral: v.lateral as f32,
         speed: v.speed as f32,
         accel: v.accel as f32,

@@ -27,7 +27,7 @@ use super::infer::Workspace;
 use super::model_file::{LaneChangeModel, ModelError};
 use super::Predictor;
 use crate::config::{Config, PredictorKind};
-use crate::model::road::MERGE_LANE;
+use crate::model::road::{lane_at, MERGE_LANE};
 use crate::model::scene::{Kind, Scene};
 use crate::model::trajectory::{Pose, Trajectory};
 
@@ -144,7 +144,7 @@ impl Learned {
             });
             buf.others.push((a, planned));
         }
-        let lane_of = |y: f64| ((y / w).round() as i32).clamp(0, 2);
+        let lane_of = |y: f64| lane_at(y, w);
         let plan_agent = |t: &Trajectory, k: usize| {
             let p = t.at(k, self.dt);
             Agent {

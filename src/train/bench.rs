@@ -12,6 +12,7 @@ use std::time::Instant;
 use crate::config::Config;
 use crate::episode::metrics::percentile;
 use crate::episode::{self, Driver, EpisodeError, Observer};
+use crate::model::road::lane_at;
 use crate::model::scene::{Kind, Scene};
 use crate::model::trajectory::Trajectory;
 use crate::predict::features::{
@@ -100,7 +101,7 @@ impl Observer for Timer<'_> {
             let dt = self.dt;
             let cands = refs.iter().enumerate().map(|(n, t)| {
                 let p = t.at(0, dt);
-                let lane = ((p.y / w).round() as i32).clamp(0, 2);
+                let lane = lane_at(p.y, w);
                 (
                     n,
                     Agent {
