@@ -10,7 +10,7 @@ use crate::model::road::Road;
 use crate::model::scene::{Kind, Scene};
 use crate::model::trajectory::Trajectory;
 use crate::planner::lane_changes::LaneChanges;
-use crate::planner::mastar::{Mastar, Phase};
+use crate::planner::mastar::Mastar;
 use crate::predict::{ConstantSpeed, Predictor};
 
 /// Decentralised M-A* planner.
@@ -75,24 +75,15 @@ impl Controller for BkMastar {
                 .map(|(_, t)| t)
                 .collect();
             let req = self.lane_changes.request(scene, i, dt, &obstacles);
-            stats.searches += 1;
-            let maneuver = match planner.plan(&req) {
-                Ok(plan) => {
-                    stats.nodes_expanded += plan.expanded as u64;
-                    stats.phase2_plans += u64::from(plan.phase == Phase::Fallback);
-                    let (maneuver, target) = execute::first_move(&plan, req.lane);
-                    if let Some(target) = target {
-                        self.lane_changes
-                            .start(&v.id, now, lc_steps as f64 * dt, target);
-                    }
-                    maneuver
-                }
-                Err(e) => {
-                    stats.nodes_expanded += e.expanded as u64;
-                    stats.fallbacks += 1;
-                    execute::emergency_brake(v, self.config.planner.emergency_decel, dt)
-                }
-            };
+            let result = planner.plan(&req);
+            execute::count_search(&mut stats, result.as_ref());
+            let decel = self.config.planner.emergency_decel;
+            let (maneuver, target) =
+                execute::maneuver_for(result.as_ref().ok(), v, req.lane, decel, dt, &mut stats);
+            if let Some(target) = target {
+                self.lane_changes
+                    .start(&v.id, now, lc_steps as f64 * dt, target);
+            }
             out.push(Command {
                 vehicle: i,
                 maneuver,

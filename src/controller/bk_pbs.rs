@@ -12,8 +12,8 @@ use crate::model::road::Road;
 use crate::model::scene::{Kind, Scene};
 use crate::model::trajectory::Trajectory;
 use crate::planner::lane_changes::LaneChanges;
-use crate::planner::mastar::{Mastar, NoPlan, Phase, Plan};
-use crate::planner::pbs::{Budget, Problem, RequestFor};
+use crate::planner::mastar::{Mastar, NoPlan, Plan};
+use crate::planner::pbs::{Budget, PbsStats, Problem, RequestFor, Solution};
 use crate::predict::Predictor;
 
 /// Centralised priority-based planner.
@@ -71,10 +71,8 @@ impl Controller for BkPbs {
 
     fn plan(&mut self, scene: &Scene, out: &mut Vec<Command>) {
         let sc = &self.config.scenario;
-        let dt = sc.dt;
-        let lc_steps = sc.lane_change_steps();
-        // One safety rule: the one M-A* plans with also judges conflicts between plans.
-        let (planner, rule) = (&self.planner, &self.planner.rule);
+        let (dt, lc_steps) = (sc.dt, sc.lane_change_steps());
+        let decel = self.config.planner.emergency_decel;
         let now = scene.time;
         self.lane_changes.forget_finished(now);
         let requests = Requests {
@@ -82,83 +80,27 @@ impl Controller for BkPbs {
             lane_changes: &self.lane_changes,
             dt,
         };
-        let pbs = &self.config.pbs;
-        let problem = Problem {
-            scene,
-            planner,
-            predictor: self.predictor.as_ref(),
-            requests: &requests,
-            rule,
-            horizon: self.config.planner.horizon + lc_steps,
-            dt,
-            budget: Budget {
-                nodes: pbs.node_budget,
-                time_ms: (pbs.time_budget_ms > 0.0).then_some(pbs.time_budget_ms),
-            },
-        };
+        let problem = self.problem(scene, &requests);
         let solution = problem.solve();
-        let s = solution.stats;
-        let mut stats = PlanStats {
-            searches: s.mastar_calls,
-            nodes_expanded: s.mastar_nodes,
-            pbs_nodes: s.nodes,
-            pbs_depth: s.depth,
-            predictions: s.predictions,
-            pbs_fallbacks: u64::from(s.fallback),
-            time_budget_hits: u64::from(s.timed_out),
-            ..PlanStats::default()
-        };
+        let mut stats = search_stats(&solution.stats);
         let mut starts = Vec::new();
         for (i, v) in scene.vehicles.iter().enumerate() {
             if v.kind != Kind::Cav {
                 continue;
             }
-            // Repair: after a fallback, a CAV still in conflict plans alone against everyone.
-            let in_conflict = s.fallback
-                && (0..scene.vehicles.len())
-                    .any(|j| j != i && problem.conflict_between(i, j, &solution.trajectories));
-            let plan: Option<Arc<Plan>> = if in_conflict || solution.plans[i].is_none() {
-                let others: Vec<&Trajectory> = solution
-                    .trajectories
-                    .iter()
-                    .enumerate()
-                    .filter(|(j, _)| *j != i)
-                    .map(|(_, t)| &**t)
-                    .collect();
-                stats.searches += 1;
-                match requests.plan(planner, i, &others) {
-                    Ok(p) => {
-                        stats.nodes_expanded += p.expanded as u64;
-                        Some(Arc::new(p))
-                    }
-                    Err(e) => {
-                        stats.nodes_expanded += e.expanded as u64;
-                        None
-                    }
-                }
-            } else {
-                solution.plans[i].clone()
-            };
-            let maneuver = match plan {
-                Some(plan) => {
-                    stats.phase2_plans += u64::from(plan.phase == Phase::Fallback);
-                    let lane = self.lane_changes.request(scene, i, dt, &[]).lane;
-                    let (maneuver, target) = execute::first_move(&plan, lane);
-                    if let Some(target) = target {
-                        starts.push((v.id.clone(), target));
-                    }
-                    maneuver
-                }
-                None => {
-                    stats.fallbacks += 1;
-                    execute::emergency_brake(v, self.config.planner.emergency_decel, dt)
-                }
-            };
+            let plan = executed_plan(&problem, &solution, &requests, i, &mut stats);
+            let lane = self.lane_changes.planning_lane(scene, i, dt);
+            let (maneuver, target) =
+                execute::maneuver_for(plan.as_deref(), v, lane, decel, dt, &mut stats);
+            if let Some(target) = target {
+                starts.push((v.id.clone(), target));
+            }
             out.push(Command {
                 vehicle: i,
                 maneuver,
             });
         }
+        // Recorded after the loop: `requests` reads the changes under way while CAVs are planned.
         for (id, target) in starts {
             self.lane_changes
                 .start(&id, now, lc_steps as f64 * dt, target);
@@ -169,6 +111,69 @@ impl Controller for BkPbs {
     fn last_stats(&self) -> PlanStats {
         self.stats
     }
+}
+
+impl BkPbs {
+    /// This step's BK-PBS problem: every CAV of `scene`, planned with M-A* and judged by the
+    /// same safety rule M-A* plans with.
+    fn problem<'a>(&'a self, scene: &'a Scene, requests: &'a Requests<'a>) -> Problem<'a> {
+        let pbs = &self.config.pbs;
+        Problem {
+            scene,
+            planner: &self.planner,
+            predictor: self.predictor.as_ref(),
+            requests,
+            rule: &self.planner.rule,
+            horizon: self.config.planner.horizon + self.config.scenario.lane_change_steps(),
+            dt: self.config.scenario.dt,
+            budget: Budget {
+                nodes: pbs.node_budget,
+                time_ms: (pbs.time_budget_ms > 0.0).then_some(pbs.time_budget_ms),
+            },
+        }
+    }
+}
+
+/// The episode's plan statistics of one BK-PBS search.
+fn search_stats(s: &PbsStats) -> PlanStats {
+    PlanStats {
+        searches: s.mastar_calls,
+        nodes_expanded: s.mastar_nodes,
+        pbs_nodes: s.nodes,
+        pbs_depth: s.depth,
+        predictions: s.predictions,
+        pbs_fallbacks: u64::from(s.fallback),
+        time_budget_hits: u64::from(s.timed_out),
+        ..PlanStats::default()
+    }
+}
+
+/// The plan CAV `i` executes: the chosen node's, or a repair when the node left it without one
+/// or, after a fallback, still in conflict: planned alone against every other trajectory of the
+/// node. `None` when even the repair finds no plan.
+fn executed_plan(
+    problem: &Problem<'_>,
+    solution: &Solution,
+    requests: &Requests<'_>,
+    i: usize,
+    stats: &mut PlanStats,
+) -> Option<Arc<Plan>> {
+    let n = problem.scene.vehicles.len();
+    let in_conflict = solution.stats.fallback
+        && (0..n).any(|j| j != i && problem.conflict_between(i, j, &solution.trajectories));
+    if !in_conflict && solution.plans[i].is_some() {
+        return solution.plans[i].clone();
+    }
+    let others: Vec<&Trajectory> = solution
+        .trajectories
+        .iter()
+        .enumerate()
+        .filter(|(j, _)| *j != i)
+        .map(|(_, t)| &**t)
+        .collect();
+    let result = requests.plan(problem.planner, i, &others);
+    execute::count_search(stats, result.as_ref());
+    result.ok().map(Arc::new)
 }
 
 #[cfg(test)]

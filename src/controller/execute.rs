@@ -1,9 +1,42 @@
 //! Turning planner output into the maneuvers SUMO executes: shared by the search-based
-//! controllers (`bk-mastar`, `bk-pbs`).
+//! controllers (`bk-mastar`, `bk-pbs`), so both execute a plan, and the lack of one, alike.
 
-use super::{LaneChange, Maneuver};
+use super::{LaneChange, Maneuver, PlanStats};
 use crate::model::scene::VehicleState;
-use crate::planner::mastar::{FirstMove, Plan};
+use crate::planner::mastar::{FirstMove, NoPlan, Phase, Plan};
+
+/// Counts one M-A* call and the nodes it expanded, whether or not it found a plan.
+pub fn count_search(stats: &mut PlanStats, result: Result<&Plan, &NoPlan>) {
+    stats.searches += 1;
+    stats.nodes_expanded += match result {
+        Ok(p) => p.expanded,
+        Err(e) => e.expanded,
+    } as u64;
+}
+
+/// What a CAV does next: its plan's first move (counting a phase-2 plan), or, without a plan,
+/// braking at `emergency_decel` (counted as a fallback). Also returns the target lane of a lane
+/// change the maneuver starts, which the controller must remember. `lane` is the lane the plan
+/// started in.
+pub fn maneuver_for(
+    plan: Option<&Plan>,
+    v: &VehicleState,
+    lane: i32,
+    emergency_decel: f64,
+    dt: f64,
+    stats: &mut PlanStats,
+) -> (Maneuver, Option<i32>) {
+    match plan {
+        Some(plan) => {
+            stats.phase2_plans += u64::from(plan.phase == Phase::Fallback);
+            first_move(plan, lane)
+        }
+        None => {
+            stats.fallbacks += 1;
+            (emergency_brake(v, emergency_decel, dt), None)
+        }
+    }
+}
 
 /// The maneuver that executes a plan's first move, and the target lane of a lane change it
 /// starts (which the controller must remember, to continue the change in the next steps).

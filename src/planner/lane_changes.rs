@@ -41,6 +41,13 @@ impl LaneChanges {
         })
     }
 
+    /// The lane scene vehicle `i` plans from: the target of its change under way, else its lane.
+    pub fn planning_lane(&self, scene: &Scene, i: usize, dt: f64) -> i32 {
+        let v = &scene.vehicles[i];
+        self.ongoing(&v.id, scene.time, dt)
+            .map_or(v.lane, |o| o.target_lane)
+    }
+
     /// The M-A* request of scene vehicle `i` among `obstacles`.
     pub fn request<'a>(
         &self,
