@@ -106,7 +106,6 @@ fn gradient_check_unconditioned() {
 use std::path::Path;
 
 use bkpbs::config::{Config, PredictorKind};
-use bkpbs::model::road::Road;
 use bkpbs::model::scene::{Kind, Origin, Scene, VehicleState};
 use bkpbs::model::trajectory::{Pose, Trajectory};
 use bkpbs::predict::features::Subset;
@@ -340,14 +339,6 @@ fn configured_model_files_that_cannot_be_used_are_one_line_errors() {
 // ---------------------------------------------------------------------------------------------
 // The predictor on hand-built scenes (with the committed models).
 
-fn scene(vehicles: Vec<VehicleState>) -> Scene {
-    Scene {
-        time: 0.0,
-        road: Road::paper_default(),
-        vehicles,
-    }
-}
-
 fn learned() -> Learned {
     let c = Config::default();
     Learned::with_models(
@@ -361,7 +352,7 @@ fn learned() -> Learned {
 fn ramp_hdv_near_the_lane_end_with_a_free_gap_is_predicted_to_merge_like_sumo() {
     let mut v = VehicleState::on_lane("ramp.1", Kind::Hdv, Origin::Ramp, 300.0, 0, 15.0);
     v.accel = 0.0;
-    let s = scene(vec![v]);
+    let s = Scene::on_paper_road(0.0, vec![v]);
     let p = learned();
     let r = p.rollout(&s, 0, &[], 20);
     let start = r.start.expect("predicted to merge within the horizon");
@@ -389,7 +380,7 @@ fn vehicles_that_cannot_or_need_not_change_lanes_keep_their_lane() {
     // A ramp vehicle already merged (ramp HDVs never change lanes on the main road), and a CAV.
     let merged = VehicleState::on_lane("ramp.3", Kind::Hdv, Origin::Ramp, 380.0, 1, 30.0);
     let cav = VehicleState::on_lane("main.9", Kind::Cav, Origin::Main, 250.0, 1, 30.0);
-    let s = scene(vec![on_ramp, merged, cav]);
+    let s = Scene::on_paper_road(0.0, vec![on_ramp, merged, cav]);
     for i in 0..3 {
         let t = p.predict(&s, i, &[], 20);
         let y0 = s.vehicles[i].lane as f64 * 4.5;
@@ -411,7 +402,7 @@ fn a_lane_change_under_way_is_finished_at_sumos_lateral_speed() {
     let mut w = VehicleState::on_lane("main.2", Kind::Hdv, Origin::Main, 100.0, 1, 30.0);
     w.lateral = 1.8;
     w.heading = -0.2;
-    let s = scene(vec![v, w]);
+    let s = Scene::on_paper_road(0.0, vec![v, w]);
     let a = p.predict(&s, 0, &[], 10);
     let ys: Vec<f64> = a.poses.iter().map(|q| (q.y * 1e6).round() / 1e6).collect();
     assert_eq!(&ys[..5], &[6.3, 7.2, 8.1, 9.0, 9.0]);
@@ -425,7 +416,7 @@ fn conditioning_on_a_cav_plan_uses_the_conditioned_model() {
     let p = learned();
     let hdv = VehicleState::on_lane("ramp.1", Kind::Hdv, Origin::Ramp, 270.0, 0, 20.0);
     let cav = VehicleState::on_lane("main.1", Kind::Cav, Origin::Main, 262.0, 1, 22.0);
-    let s = scene(vec![hdv, cav]);
+    let s = Scene::on_paper_road(0.0, vec![hdv, cav]);
     // The CAV's plan: speed up past the HDV.
     let plan = Trajectory {
         poses: (0..=40)

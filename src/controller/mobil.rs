@@ -174,7 +174,6 @@ pub fn evaluate(idm_p: &Idm, mobil: &Mobil, scene: &Scene, i: usize, target: i32
 mod tests {
 
     use super::*;
-    use crate::model::road::Road;
     use crate::model::scene::{Kind, Origin};
 
     fn car(s: f64, lane: i32, speed: f64, desired: f64) -> VehicleState {
@@ -185,21 +184,16 @@ mod tests {
         }
     }
 
-    fn scene(vehicles: Vec<VehicleState>) -> Scene {
-        Scene {
-            time: 0.0,
-            road: Road::paper_default(),
-            vehicles,
-        }
-    }
-
     #[test]
     fn overtakes_a_slow_leader_into_a_free_lane_hand_computed() {
         // Ego at s=100 lane 1, 30 m/s wanting 35; slow leader 40 m ahead (gap 35 m) at 25 m/s.
         // Before: s* = 5 + 45 + 30·5/(2√15) = 69.364917; a = 3(1 − 0.539775 − (69.364917/35)²)
         //       = 3(0.460225 − 3.927832) = −10.40 -> clamped to −9.
         // After (free lane 2): a = 3·0.460225 = 1.380675. Gain = 10.380675 > 0.2.
-        let sc = scene(vec![car(100.0, 1, 30.0, 35.0), car(140.0, 1, 25.0, 25.0)]);
+        let sc = Scene::on_paper_road(
+            0.0,
+            vec![car(100.0, 1, 30.0, 35.0), car(140.0, 1, 25.0, 25.0)],
+        );
         let p = Mobil::default();
         let g = evaluate(&Idm::default(), &p, &sc, 0, 2).unwrap();
         assert!((g - 10.380_675).abs() < 1e-4, "{g}");
@@ -210,17 +204,23 @@ mod tests {
     #[test]
     fn unsafe_when_new_follower_must_brake_hard() {
         // New follower in lane 2 just 8 m behind at 35 m/s vs ego 30: it would brake < −2.
-        let sc = scene(vec![
-            car(100.0, 1, 30.0, 35.0),
-            car(140.0, 1, 25.0, 25.0),
-            car(87.0, 2, 35.0, 35.0),
-        ]);
+        let sc = Scene::on_paper_road(
+            0.0,
+            vec![
+                car(100.0, 1, 30.0, 35.0),
+                car(140.0, 1, 25.0, 25.0),
+                car(87.0, 2, 35.0, 35.0),
+            ],
+        );
         assert!(evaluate(&Idm::default(), &Mobil::default(), &sc, 0, 2).is_none());
     }
 
     #[test]
     fn overlapping_target_slot_is_refused_by_both_criteria() {
-        let sc = scene(vec![car(200.0, 0, 25.0, 35.0), car(202.0, 1, 25.0, 35.0)]);
+        let sc = Scene::on_paper_road(
+            0.0,
+            vec![car(200.0, 0, 25.0, 35.0), car(202.0, 1, 25.0, 35.0)],
+        );
         assert!(evaluate(&Idm::default(), &Mobil::default(), &sc, 0, 1).is_none());
         assert!(!merge_is_safe(&Mobil::default(), &sc, 0, 1));
     }
@@ -230,27 +230,36 @@ mod tests {
         // Standing merger at s=300 (front 302.5); follower on lane 1 at 20 m/s.
         // Room needed: 20² / (2·3) = 66.67 m beyond the 2.5 m minimum gap.
         let m = Mobil::default();
-        let far = scene(vec![
-            car(300.0, 0, 0.0, 35.0),
-            car(300.0 - 5.0 - 70.0, 1, 20.0, 35.0),
-        ]);
+        let far = Scene::on_paper_road(
+            0.0,
+            vec![
+                car(300.0, 0, 0.0, 35.0),
+                car(300.0 - 5.0 - 70.0, 1, 20.0, 35.0),
+            ],
+        );
         assert!(merge_is_safe(&m, &far, 0, 1)); // gap 70 -> room 67.5 >= 66.67
-        let near = scene(vec![
-            car(300.0, 0, 0.0, 35.0),
-            car(300.0 - 5.0 - 68.0, 1, 20.0, 35.0),
-        ]);
+        let near = Scene::on_paper_road(
+            0.0,
+            vec![
+                car(300.0, 0, 0.0, 35.0),
+                car(300.0 - 5.0 - 68.0, 1, 20.0, 35.0),
+            ],
+        );
         assert!(!merge_is_safe(&m, &near, 0, 1)); // room 65.5 < 66.67
                                                   // A slower leader ahead of a moving merger counts the same way.
-        let lead = scene(vec![
-            car(200.0, 0, 25.0, 35.0),
-            car(200.0 + 5.0 + 10.0, 1, 15.0, 35.0),
-        ]);
+        let lead = Scene::on_paper_road(
+            0.0,
+            vec![
+                car(200.0, 0, 25.0, 35.0),
+                car(200.0 + 5.0 + 10.0, 1, 15.0, 35.0),
+            ],
+        );
         assert!(!merge_is_safe(&m, &lead, 0, 1)); // 10² / (2·3) = 16.7 > 7.5
     }
 
     #[test]
     fn lane_end_acts_as_standing_obstacle() {
-        let sc = scene(vec![car(300.0, 0, 20.0, 35.0)]);
+        let sc = Scene::on_paper_road(0.0, vec![car(300.0, 0, 20.0, 35.0)]);
         // Front at 302.5, end at 330: 27.5 m, plus v·T = 20·1.5 = 30 m.
         let c = constraint_ahead(1.5, &sc, &sc.vehicles[0], 0, 0, None).unwrap();
         assert!((c.gap - 57.5).abs() < 1e-9 && c.speed == 0.0);

@@ -151,14 +151,6 @@ mod tests {
         }
     }
 
-    fn scene(vehicles: Vec<VehicleState>) -> Scene {
-        Scene {
-            time: 0.0,
-            road: Road::paper_default(),
-            vehicles,
-        }
-    }
-
     #[test]
     fn free_entry_admits_at_the_drawn_speed_in_order() {
         let c = Config::default();
@@ -169,7 +161,7 @@ mod tests {
                 planned("b", Origin::Main, 0, 0.0, 28.0),
             ],
         );
-        let got = e.admit(0.0, &scene(vec![]));
+        let got = e.admit(0.0, &Scene::on_paper_road(0.0, vec![]));
         assert_eq!(got.len(), 1, "one per entry and step");
         assert_eq!((got[0].vehicle.id.as_str(), got[0].speed), ("a", 30.0));
         assert_eq!(e.pending(), 1);
@@ -179,8 +171,8 @@ mod tests {
     fn not_before_the_scheduled_time() {
         let c = Config::default();
         let mut e = EntryControl::new(&c, &[planned("a", Origin::Ramp, 0, 1.0, 30.0)]);
-        assert!(e.admit(0.8, &scene(vec![])).is_empty());
-        assert_eq!(e.admit(1.0, &scene(vec![])).len(), 1);
+        assert!(e.admit(0.8, &Scene::on_paper_road(0.0, vec![])).is_empty());
+        assert_eq!(e.admit(1.0, &Scene::on_paper_road(0.0, vec![])).len(), 1);
     }
 
     #[test]
@@ -188,17 +180,25 @@ mod tests {
         let c = Config::default(); // s0 = 5, a = 3, b = 5, T = 1.5
                                    // Leader just ahead of the entry: 5 m gap -> no room.
         let mut e = EntryControl::new(&c, &[planned("a", Origin::Main, 0, 0.0, 30.0)]);
-        assert!(e.admit(0.0, &scene(vec![car(12.5, 1, 20.0)])).is_empty());
+        assert!(e
+            .admit(0.0, &Scene::on_paper_road(0.0, vec![car(12.5, 1, 20.0)]))
+            .is_empty());
         // Leader at 20 m/s with rear 45 m ahead of the entry front (5 m): room 40 m.
         // c = 2√15 = 7.745967; p = 1.5 − 20/c = −1.081989;
         // v = c/2·(−p + √(p² + 4·40/c)) = 3.872983·(1.081989 + 4.671896) = 22.2847
-        let got = e.admit(0.0, &scene(vec![car(5.0 + 45.0 + 2.5, 1, 20.0)]));
+        let got = e.admit(
+            0.0,
+            &Scene::on_paper_road(0.0, vec![car(5.0 + 45.0 + 2.5, 1, 20.0)]),
+        );
         assert_eq!(got.len(), 1);
         assert!((got[0].speed - 22.2847).abs() < 1e-3, "{}", got[0].speed);
         // At 30 m/s wanted, a leader at 10 m/s that close means waiting.
         let mut e = EntryControl::new(&c, &[planned("b", Origin::Main, 0, 0.0, 30.0)]);
         assert!(e
-            .admit(0.0, &scene(vec![car(5.0 + 12.0 + 2.5, 1, 10.0)]))
+            .admit(
+                0.0,
+                &Scene::on_paper_road(0.0, vec![car(5.0 + 12.0 + 2.5, 1, 10.0)])
+            )
             .is_empty());
     }
 
@@ -206,6 +206,10 @@ mod tests {
     fn other_lanes_do_not_block() {
         let c = Config::default();
         let mut e = EntryControl::new(&c, &[planned("a", Origin::Main, 1, 0.0, 30.0)]);
-        assert_eq!(e.admit(0.0, &scene(vec![car(10.0, 1, 0.0)])).len(), 1);
+        assert_eq!(
+            e.admit(0.0, &Scene::on_paper_road(0.0, vec![car(10.0, 1, 0.0)]))
+                .len(),
+            1
+        );
     }
 }

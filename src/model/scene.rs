@@ -116,6 +116,16 @@ pub struct Scene {
 }
 
 impl Scene {
+    /// A scene on the shipped network's road ([`Road::paper_default`]) at `time`: for scenes
+    /// built by hand (tests, planning without SUMO).
+    pub fn on_paper_road(time: f64, vehicles: Vec<VehicleState>) -> Scene {
+        Scene {
+            time,
+            road: Road::paper_default(),
+            vehicles,
+        }
+    }
+
     /// Index of the nearest vehicle ahead of `s` on `lane` (excluding `skip`), by centre position.
     pub fn leader(&self, lane: i32, s: f64, skip: usize) -> Option<usize> {
         self.nearest(lane, skip, |o| o > s, |a, b| a < b)

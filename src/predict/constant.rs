@@ -110,11 +110,8 @@ mod tests {
 
     #[test]
     fn keeps_speed_and_lane() {
-        let scene = Scene {
-            time: 0.0,
-            road: Road::paper_default(),
-            vehicles: vec![vehicle(Kind::Hdv, Origin::Main, 100.0, 2, 30.0)],
-        };
+        let scene =
+            Scene::on_paper_road(0.0, vec![vehicle(Kind::Hdv, Origin::Main, 100.0, 2, 30.0)]);
         let t = ConstantSpeed::new(&Config::default()).predict(&scene, 0, &[], 15);
         assert_eq!(t.poses.len(), 16);
         assert!((t.poses[15].s - 190.0).abs() < 1e-9 && t.poses[15].y == 9.0);
