@@ -1,15 +1,12 @@
 //! BK-M-A* on real SUMO: full episodes at both densities and both ends of the penetration range.
 
-use bkpbs::config::Config;
+mod common;
+
 use bkpbs::episode;
 use bkpbs::episode::metrics::Outcome;
 
 fn run(alpha: f64, lambda: f64, seed: u64) -> episode::EpisodeResult {
-    let mut c = Config::default();
-    c.scenario.alpha = alpha;
-    c.scenario.lambda = lambda;
-    c.scenario.seed = seed;
-    episode::run(&c, "bk-mastar").unwrap()
+    common::episode_of("bk-mastar", alpha, lambda, seed)
 }
 
 #[test]

@@ -1,14 +1,11 @@
 //! BK-PBS on real SUMO: full episodes at both densities and both ends of the penetration range.
 
-use bkpbs::config::Config;
+mod common;
+
 use bkpbs::episode;
 
 fn run(alpha: f64, lambda: f64, seed: u64) -> episode::EpisodeResult {
-    let mut c = Config::default();
-    c.scenario.alpha = alpha;
-    c.scenario.lambda = lambda;
-    c.scenario.seed = seed;
-    episode::run(&c, "bk-pbs").unwrap()
+    common::episode_of("bk-pbs", alpha, lambda, seed)
 }
 
 #[test]

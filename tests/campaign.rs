@@ -9,14 +9,15 @@ use std::sync::OnceLock;
 use std::time::{Duration, Instant, SystemTime};
 
 use bkpbs::campaign::grid::{Cell, Grid, Shard};
-use bkpbs::report::stats::{mean, sample_std, t_975, Estimate};
+use bkpbs::episode::metrics::mean;
+use bkpbs::report::stats::{sample_std, t_975, Estimate};
 
 // ---------------------------------------------------------------- statistics, grid, shards
 
 #[test]
 fn mean_and_student_ci_match_hand_computed_values() {
-    assert_eq!(mean(&[]), None);
-    assert_eq!(mean(&[4.0]), Some(4.0));
+    assert_eq!(mean([]), None);
+    assert_eq!(mean([4.0]), Some(4.0));
     // 1..5: mean 3, s² = (4+1+0+1+4)/4 = 2.5, s/√n = √0.5 = 0.707107,
     // half-width = t(0.975, 4) · 0.707107 = 2.776445 · 0.707107 = 1.963243.
     let e = Estimate::of(&[1.0, 2.0, 3.0, 4.0, 5.0]).unwrap();

@@ -33,21 +33,29 @@ fn tmp() -> tempfile::TempDir {
     tempfile::tempdir().unwrap()
 }
 
+/// `bkpbs episode` with `flags`, writing into `out`.
+fn episode_into(out: &Path, flags: &[&str]) -> Output {
+    let mut args = vec!["episode"];
+    args.extend_from_slice(flags);
+    args.extend(["--out", out.to_str().unwrap()]);
+    bkpbs(&args)
+}
+
+/// A config file in `dir` holding `text`, and the output directory beside it.
+fn config_file(dir: &Path, name: &str, text: &str) -> (String, std::path::PathBuf) {
+    let cfg = dir.join(name);
+    std::fs::write(&cfg, text).unwrap();
+    (cfg.to_str().unwrap().to_string(), dir.join("out"))
+}
+
 #[test]
 fn episode_writes_its_csv_files() {
     let d = tmp();
     let out = d.path().join("run");
-    let o = bkpbs(&[
-        "episode",
-        "--planner",
-        "idm-mobil",
-        "--seed",
-        "3",
-        "--steps",
-        "100",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let o = episode_into(
+        &out,
+        &["--planner", "idm-mobil", "--seed", "3", "--steps", "100"],
+    );
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(
         stderr(&o).is_empty(),
@@ -90,19 +98,19 @@ fn same_seed_twice_gives_byte_identical_csv_across_processes() {
     let d = tmp();
     let run = |name: &str| {
         let out = d.path().join(name);
-        let o = bkpbs(&[
-            "episode",
-            "--planner",
-            "idm-mobil",
-            "--alpha",
-            "0.6",
-            "--lambda",
-            "3000",
-            "--seed",
-            "9",
-            "--out",
-            out.to_str().unwrap(),
-        ]);
+        let o = episode_into(
+            &out,
+            &[
+                "--planner",
+                "idm-mobil",
+                "--alpha",
+                "0.6",
+                "--lambda",
+                "3000",
+                "--seed",
+                "9",
+            ],
+        );
         assert!(o.status.success(), "{}", stderr(&o));
         out
     };
@@ -119,39 +127,21 @@ fn same_seed_twice_gives_byte_identical_csv_across_processes() {
 #[test]
 fn unknown_planner_is_refused() {
     let d = tmp();
-    let o = bkpbs(&[
-        "episode",
-        "--planner",
-        "bk-pbz",
-        "--out",
-        d.path().to_str().unwrap(),
-    ]);
+    let o = episode_into(d.path(), &["--planner", "bk-pbz"]);
     assert_clear_failure(&o, "bk-pbz", d.path());
 }
 
 #[test]
 fn alpha_outside_the_unit_interval_is_refused() {
     let d = tmp();
-    let o = bkpbs(&[
-        "episode",
-        "--alpha",
-        "1.5",
-        "--out",
-        d.path().to_str().unwrap(),
-    ]);
+    let o = episode_into(d.path(), &["--alpha", "1.5"]);
     assert_clear_failure(&o, "scenario.alpha", d.path());
 }
 
 #[test]
 fn missing_config_file_is_refused() {
     let d = tmp();
-    let o = bkpbs(&[
-        "episode",
-        "--config",
-        "no/such.toml",
-        "--out",
-        d.path().to_str().unwrap(),
-    ]);
+    let o = episode_into(d.path(), &["--config", "no/such.toml"]);
     assert_clear_failure(&o, "no/such.toml", d.path());
     // Regression: the OS error was printed twice (once in the message, once as its source).
     assert_eq!(
@@ -165,45 +155,23 @@ fn missing_config_file_is_refused() {
 #[test]
 fn malformed_config_file_is_refused() {
     let d = tmp();
-    let cfg = d.path().join("bad.toml");
-    std::fs::write(&cfg, "[scenario]\nalpha = \"lots\"\n").unwrap();
-    let out = d.path().join("out");
-    let o = bkpbs(&[
-        "episode",
-        "--config",
-        cfg.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let (cfg, out) = config_file(d.path(), "bad.toml", "[scenario]\nalpha = \"lots\"\n");
+    let o = episode_into(&out, &["--config", &cfg]);
     assert_clear_failure(&o, "bad.toml", &out);
 }
 
 #[test]
 fn misspelt_config_key_is_refused() {
     let d = tmp();
-    let cfg = d.path().join("typo.toml");
-    std::fs::write(&cfg, "[scenario]\nlamda = 2500\n").unwrap();
-    let out = d.path().join("out");
-    let o = bkpbs(&[
-        "episode",
-        "--config",
-        cfg.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let (cfg, out) = config_file(d.path(), "typo.toml", "[scenario]\nlamda = 2500\n");
+    let o = episode_into(&out, &["--config", &cfg]);
     assert_clear_failure(&o, "lamda", &out);
 }
 
 #[test]
 fn missing_net_file_is_refused() {
     let d = tmp();
-    let o = bkpbs(&[
-        "episode",
-        "--net",
-        "nowhere/merge.net.xml",
-        "--out",
-        d.path().to_str().unwrap(),
-    ]);
+    let o = episode_into(d.path(), &["--net", "nowhere/merge.net.xml"]);
     assert_clear_failure(&o, "nowhere/merge.net.xml", d.path());
 }
 
@@ -214,13 +182,7 @@ fn a_net_without_the_merge_layout_is_refused() {
     let text = bkpbs::model::road::EMBEDDED_NET.replace("\"acc\"", "\"acceleration\"");
     std::fs::write(&net, text).unwrap();
     let out = d.path().join("out");
-    let o = bkpbs(&[
-        "episode",
-        "--net",
-        net.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let o = episode_into(&out, &["--net", net.to_str().unwrap()]);
     assert_clear_failure(&o, "other.net.xml", &out);
     assert!(stderr(&o).contains("'acc'"), "{}", stderr(&o));
 }
@@ -240,19 +202,9 @@ fn sumo_error_mid_episode_is_reported_and_keeps_earlier_results() {
         "<routes>\n<route id=\"broken\" edges=\"main_in main_out\"/>\n<vehicle id=\"bad\" type=\"hdv\" route=\"broken\" depart=\"3\"/>\n</routes>\n",
     )
     .unwrap();
-    let cfg = d.path().join("cfg.toml");
-    std::fs::write(
-        &cfg,
-        format!("[sumo]\nadditional_files = [\"{}\"]\n", bad.display()),
-    )
-    .unwrap();
-    let o = bkpbs(&[
-        "episode",
-        "--config",
-        cfg.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let files = format!("[sumo]\nadditional_files = [\"{}\"]\n", bad.display());
+    let (cfg, _) = config_file(d.path(), "cfg.toml", &files);
+    let o = episode_into(&out, &["--config", &cfg]);
     let err = stderr(&o);
     assert!(!o.status.success());
     assert_eq!(err.lines().count(), 1, "{err}");

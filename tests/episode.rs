@@ -1,19 +1,14 @@
 //! Whole episodes on real SUMO, per controller.
 
+mod common;
+
 use bkpbs::config::Config;
 use bkpbs::controller::{CavHandling, Command, Controller, Maneuver};
 use bkpbs::episode::demand::PlannedVehicle;
 use bkpbs::episode::metrics::Outcome;
 use bkpbs::episode::{self, EpisodeResult};
 use bkpbs::model::scene::{Kind, Origin, Scene};
-
-fn episode(planner: &str, alpha: f64, lambda: f64, seed: u64) -> EpisodeResult {
-    let mut c = Config::default();
-    c.scenario.alpha = alpha;
-    c.scenario.lambda = lambda;
-    c.scenario.seed = seed;
-    episode::run(&c, planner).unwrap()
-}
+use common::episode_of as episode;
 
 fn check_accounting(r: &EpisodeResult) {
     let s = &r.summary;

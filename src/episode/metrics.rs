@@ -122,8 +122,12 @@ pub struct Summary {
     pub plan_stats: PlanStats,
 }
 
-fn mean(xs: impl Iterator<Item = f64>) -> Option<f64> {
-    let (sum, n) = xs.fold((0.0, 0usize), |(s, n), x| (s + x, n + 1));
+/// Arithmetic mean, summed in order; `None` for no values. The one mean of the project: the
+/// episode summary and the campaign report's tables both use it.
+pub fn mean(xs: impl IntoIterator<Item = f64>) -> Option<f64> {
+    let (sum, n) = xs
+        .into_iter()
+        .fold((0.0, 0usize), |(s, n), x| (s + x, n + 1));
     (n > 0).then(|| sum / n as f64)
 }
 

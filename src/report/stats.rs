@@ -4,6 +4,8 @@
 //! deviation (n − 1 in the denominator). Campaigns run few seeds (5 by default), where the normal
 //! approximation (1.96) would understate the interval by a third, hence t.
 
+use crate::episode::metrics::mean;
+
 /// Two-sided 95 % quantiles t(0.975, df) for df = 1..=30.
 const T_975: [f64; 30] = [
     12.706_205, 4.302_653, 3.182_446, 2.776_445, 2.570_582, 2.446_912, 2.364_624, 2.306_004,
@@ -33,14 +35,9 @@ pub fn t_975(df: usize) -> f64 {
     z + g1 / v + g2 / (v * v) + g3 / v.powi(3) + g4 / v.powi(4)
 }
 
-/// Arithmetic mean; `None` for no values.
-pub fn mean(xs: &[f64]) -> Option<f64> {
-    (!xs.is_empty()).then(|| xs.iter().sum::<f64>() / xs.len() as f64)
-}
-
 /// Sample standard deviation (n − 1); `None` below two values.
 pub fn sample_std(xs: &[f64]) -> Option<f64> {
-    let m = mean(xs)?;
+    let m = mean(xs.iter().copied())?;
     (xs.len() >= 2).then(|| {
         let ss: f64 = xs.iter().map(|x| (x - m) * (x - m)).sum();
         (ss / (xs.len() - 1) as f64).sqrt()
@@ -60,7 +57,7 @@ pub struct Estimate {
 impl Estimate {
     /// The estimate of a sample; `None` for no values.
     pub fn of(xs: &[f64]) -> Option<Estimate> {
-        let mean = mean(xs)?;
+        let mean = mean(xs.iter().copied())?;
         let ci95 = sample_std(xs).map(|s| t_975(xs.len() - 1) * s / (xs.len() as f64).sqrt());
         Some(Estimate {
             n: xs.len(),

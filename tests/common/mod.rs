@@ -5,7 +5,18 @@
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 
+use bkpbs::config::Config;
+use bkpbs::episode::{self, EpisodeResult};
 use bkpbs::predict::features::{Observation, CAV_NODES};
+
+/// A default-length episode of `planner` on real SUMO at (α, λ, seed), the paper's other settings.
+pub fn episode_of(planner: &str, alpha: f64, lambda: f64, seed: u64) -> EpisodeResult {
+    let mut c = Config::default();
+    c.scenario.alpha = alpha;
+    c.scenario.lambda = lambda;
+    c.scenario.seed = seed;
+    episode::run(&c, planner).unwrap()
+}
 
 /// Random observations with a mix of present and absent nodes.
 pub fn random_obs(rng: &mut ChaCha8Rng) -> Observation {
