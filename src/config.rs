@@ -240,7 +240,7 @@ pub struct PredictorSettings {
 }
 
 /// Which predictor [`PredictorSettings`] selects.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
 #[serde(rename_all = "lowercase")]
 pub enum PredictorKind {
     Learned,

@@ -1,0 +1,96 @@
+//! `bkpbs campaign` and its hidden `worker`: the grid of episodes run in worker processes.
+
+use std::path::PathBuf;
+
+use anyhow::{Context, Result};
+use clap::Args;
+
+use bkpbs::campaign::{self, Overrides, Settings};
+
+use super::report::print_report;
+
+#[derive(Args)]
+pub struct CampaignArgs {
+    /// TOML file with a [campaign] table and optionally scenario settings.
+    #[arg(long)]
+    config: Option<PathBuf>,
+    /// Results directory; re-running the same command resumes it.
+    #[arg(long)]
+    out: PathBuf,
+    /// Planners, comma-separated [default: all].
+    #[arg(long)]
+    planners: Option<String>,
+    /// CAV penetrations α, comma-separated [default: 0.4,0.5,0.6,0.7,0.8].
+    #[arg(long, allow_hyphen_values = true)]
+    alphas: Option<String>,
+    /// Arrival rates λ (veh/h), comma-separated [default: 2500,3000].
+    #[arg(long, allow_hyphen_values = true)]
+    lambdas: Option<String>,
+    /// Seeds per cell [default: 5].
+    #[arg(long)]
+    seeds: Option<u64>,
+    /// First seed [default: 0].
+    #[arg(long)]
+    seed_base: Option<u64>,
+    /// Episode length in steps [default: 400].
+    #[arg(long)]
+    steps: Option<u32>,
+    /// Worker processes [default: number of cores].
+    #[arg(long)]
+    workers: Option<usize>,
+    /// Run only slice k of n (1-based; cell i of the grid belongs to slice i mod n + 1).
+    #[arg(long, value_name = "K/N")]
+    shard: Option<String>,
+}
+
+/// A checked campaign: the grid, shard and scenario settings, and where results go.
+pub struct Campaign {
+    settings: Settings,
+    out: PathBuf,
+}
+
+impl CampaignArgs {
+    /// Resolves the file and the flags through the library, which parses the list flags itself
+    /// so that its errors name the flag.
+    pub fn resolve(self) -> Result<Campaign> {
+        let overrides = Overrides {
+            planners: self.planners,
+            alphas: self.alphas,
+            lambdas: self.lambdas,
+            seeds: self.seeds,
+            seed_base: self.seed_base,
+            steps: self.steps,
+            workers: self.workers,
+            shard: self.shard,
+        };
+        Ok(Campaign {
+            settings: Settings::resolve(self.config.as_deref(), &overrides)?,
+            out: self.out,
+        })
+    }
+}
+
+/// Runs the shard with workers of this very binary, reports what was collected, and fails if
+/// any episode failed (after the report, so the finished ones are not lost from view).
+pub fn run(c: Campaign) -> Result<()> {
+    let exe = std::env::current_exe().context("cannot locate the bkpbs binary")?;
+    let done = campaign::run(&c.settings, &c.out, &exe)?;
+    if done.collected > 0 {
+        print_report(std::slice::from_ref(&c.out), None)?;
+    }
+    if done.failed > 0 {
+        anyhow::bail!(
+            "{} of {} episodes failed (see {})",
+            done.failed,
+            done.shard,
+            c.out.join("failures.csv").display()
+        );
+    }
+    Ok(())
+}
+
+/// Serves a campaign's episode requests on stdin until it closes.
+pub fn worker() -> Result<()> {
+    campaign::worker::serve_stdio()?;
+    Ok(())
+}

@@ -1,0 +1,51 @@
+//! `bkpbs config`: the configuration as TOML, or the SUMO vehicle types it implies.
+
+use std::path::PathBuf;
+
+use anyhow::Result;
+use clap::Args;
+
+use bkpbs::config::Config;
+use bkpbs::sumo::files as sumo_files;
+
+use super::scenario::load_config;
+
+#[derive(Args)]
+pub struct ConfigArgs {
+    /// Print the full configuration as TOML.
+    #[arg(long, conflicts_with = "vtypes")]
+    print: bool,
+    /// Print the SUMO vehicle-type file the configuration implies.
+    #[arg(long)]
+    vtypes: bool,
+    /// Start from this file instead of the defaults.
+    #[arg(long)]
+    config: Option<PathBuf>,
+}
+
+/// What `config` prints: the TOML (`--print`, also without a flag) or the vehicle types.
+pub enum ShowConfig {
+    Toml(Config),
+    VehicleTypes(Config),
+}
+
+impl ConfigArgs {
+    /// Loads (and so checks) the configuration to show.
+    pub fn resolve(self) -> Result<ShowConfig> {
+        let config = load_config(self.config.as_deref(), |_| {})?;
+        Ok(if self.vtypes {
+            ShowConfig::VehicleTypes(config)
+        } else {
+            ShowConfig::Toml(config)
+        })
+    }
+}
+
+/// Prints the chosen view on stdout.
+pub fn run(show: ShowConfig) -> Result<()> {
+    match show {
+        ShowConfig::Toml(c) => print!("{}", c.to_toml()),
+        ShowConfig::VehicleTypes(c) => print!("{}", sumo_files::vehicle_types(&c)),
+    }
+    Ok(())
+}

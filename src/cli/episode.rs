@@ -1,0 +1,88 @@
+//! `bkpbs episode`: one episode, its CSV files and a one-line summary.
+
+use std::path::PathBuf;
+
+use anyhow::{Context, Result};
+use clap::Args;
+
+use bkpbs::config::{Config, PredictorKind, Scenario};
+use bkpbs::{controller, episode};
+
+use super::scenario::ScenarioArgs;
+
+#[derive(Args)]
+pub struct EpisodeArgs {
+    /// Controller of the CAVs: sumo, idm-mobil, bk-mastar or bk-pbs.
+    #[arg(long, default_value = "bk-pbs")]
+    planner: String,
+    #[command(flatten)]
+    scenario: ScenarioArgs,
+    /// Directory for the CSV files [default: out/<planner>_a<α>_l<λ>_s<seed>].
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// HDV predictor of the planners (overrides predictor.kind of the config).
+    #[arg(long, value_enum)]
+    predictor: Option<PredictorKind>,
+}
+
+/// A checked episode: the planner exists for this configuration and the output place is known.
+pub struct Episode {
+    config: Config,
+    planner: String,
+    out: PathBuf,
+}
+
+impl EpisodeArgs {
+    /// Checks the configuration and the planner before SUMO starts.
+    pub fn resolve(self) -> Result<Episode> {
+        let predictor = self.predictor;
+        let config = self.scenario.resolve_with(|c| {
+            if let Some(kind) = predictor {
+                c.predictor.kind = kind;
+            }
+        })?;
+        controller::check(&self.planner, &config)?;
+        let out = self
+            .out
+            .unwrap_or_else(|| default_out(&self.planner, &config.scenario));
+        Ok(Episode {
+            config,
+            planner: self.planner,
+            out,
+        })
+    }
+}
+
+/// `out/<planner>_a<α>_l<λ>_s<seed>`: runs of different settings never overwrite each other.
+fn default_out(planner: &str, s: &Scenario) -> PathBuf {
+    PathBuf::from(format!(
+        "out/{}_a{}_l{}_s{}",
+        planner, s.alpha, s.lambda, s.seed
+    ))
+}
+
+/// Runs the episode, writes its files and prints its summary and where the files are.
+pub fn run(e: Episode) -> Result<()> {
+    let result = episode::run(&e.config, &e.planner)?;
+    result.write(&e.out).with_context(|| {
+        format!(
+            "episode finished but its results could not be saved in {}",
+            e.out.display()
+        )
+    })?;
+    let m = &result.summary;
+    println!(
+        "{} α={} λ={} seed={}: inserted {}, arrived {}, crashed {} (controllable rate {:.4}), mean delay {} s",
+        m.planner,
+        m.alpha,
+        m.lambda,
+        m.seed,
+        m.inserted,
+        m.arrived,
+        m.crashed,
+        m.controllable_collision_rate,
+        m.mean_delay_s.map_or("n/a".into(), |d| format!("{d:.2}"))
+    );
+    println!("results: {}", e.out.join("episode.csv").display());
+    Ok(())
+}

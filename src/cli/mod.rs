@@ -1,0 +1,54 @@
+//! The subcommands of the `bkpbs` binary, each in two stages: its clap flags are resolved into
+//! checked options (bad values and combinations stop there, before any work), then one short
+//! function runs it through the library. `main.rs` only parses and dispatches.
+
+pub mod bench;
+pub mod campaign;
+pub mod config;
+pub mod demand;
+pub mod episode;
+pub mod report;
+pub mod scenario;
+pub mod train;
+
+use clap::{Parser, Subcommand};
+
+/// The whole command line.
+#[derive(Parser)]
+#[command(
+    name = "bkpbs",
+    version,
+    about = "BK-PBS merge coordination co-simulated with SUMO"
+)]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+/// One variant per subcommand; the doc comments are the help texts clap shows.
+#[derive(Subcommand)]
+pub enum Command {
+    /// Run one episode and write episode.csv, vehicles.csv, collisions.csv and timing.csv.
+    Episode(episode::EpisodeArgs),
+    /// Show the configuration (defaults = the paper's) or the SUMO vehicle types it implies.
+    Config(config::ConfigArgs),
+    /// Time SUMO alone against the same episode with controllers, side by side.
+    Bench(bench::BenchArgs),
+    /// Write an episode's demand as a SUMO route file (e.g. to watch it in sumo-gui).
+    Demand(demand::DemandArgs),
+    /// Run (or resume) the planners × α × λ × seeds grid in worker processes, then report.
+    Campaign(campaign::CampaignArgs),
+    /// Tables and figures from one or more campaign directories (several: shards, merged).
+    Report(report::ReportArgs),
+    /// Collect lane-change data for the predictor b_θ from SUMO episodes.
+    Collect(train::CollectArgs),
+    /// Train b_θ (and its logistic-regression baseline) on collected data.
+    Train(train::TrainArgs),
+    /// Evaluate b_θ like the paper's tables I–II, next to two baselines.
+    EvalPredictor(train::EvalPredictorArgs),
+    /// Time b_θ: one prediction, and all HDVs of a dense scene per step.
+    BenchPredictor(train::BenchPredictorArgs),
+    /// Internal: run episodes sent by a campaign on stdin (one JSON line each).
+    #[command(hide = true)]
+    Worker,
+}

@@ -1,0 +1,39 @@
+//! `bkpbs report`: tables and figures from campaign directories.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::Result;
+use clap::Args;
+
+use bkpbs::report;
+
+/// Needs no second stage: clap already requires a directory, and the library checks them.
+#[derive(Args)]
+pub struct ReportArgs {
+    /// Campaign directories (several are merged).
+    #[arg(required = true)]
+    dirs: Vec<PathBuf>,
+    /// Where to write [default: the first directory].
+    #[arg(long)]
+    out: Option<PathBuf>,
+}
+
+/// Writes the report of the directories.
+pub fn run(a: ReportArgs) -> Result<()> {
+    print_report(&a.dirs, a.out.as_deref())
+}
+
+/// Writes a report and prints its tables and where the files are; `campaign` ends with it too.
+pub fn print_report(dirs: &[PathBuf], out: Option<&Path>) -> Result<()> {
+    let r = report::run(dirs, out)?;
+    print!("{}", r.markdown);
+    println!(
+        "results in {}: episodes.csv, vehicles.csv, timings.csv, failures.csv",
+        r.out.display()
+    );
+    println!("tables and figures:");
+    for p in report::highlights(&r) {
+        println!("  {}", p.display());
+    }
+    Ok(())
+}

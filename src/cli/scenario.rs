@@ -1,0 +1,86 @@
+//! The scenario flags shared by the subcommands that run SUMO, and the one way every subcommand
+//! builds its configuration: the file (or the paper's defaults), then the flags, then one
+//! validation of the result.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::Result;
+use clap::Args;
+
+use bkpbs::config::Config;
+
+/// The configuration from `file` (the paper's defaults without one) with `flags` applied, then
+/// validated. One helper, so that a config file is read, overridden and checked the same way
+/// by every subcommand.
+pub fn load_config(file: Option<&Path>, flags: impl FnOnce(&mut Config)) -> Result<Config> {
+    let mut config = match file {
+        Some(p) => Config::from_file(p)?,
+        None => Config::default(),
+    };
+    flags(&mut config);
+    config.validate()?;
+    Ok(config)
+}
+
+/// Scenario flags shared by the subcommands that run SUMO; each overrides the config file.
+#[derive(Args)]
+pub struct ScenarioArgs {
+    /// TOML file with settings; unset fields keep the paper's defaults.
+    #[arg(long)]
+    config: Option<PathBuf>,
+    /// CAV penetration α in [0, 1].
+    #[arg(long)]
+    alpha: Option<f64>,
+    /// Arrival rate λ (veh/h).
+    #[arg(long = "lambda")]
+    lambda: Option<f64>,
+    /// Seed of the demand and of the HDVs' merge decisions.
+    #[arg(long)]
+    seed: Option<u64>,
+    /// Episode length in steps (default 400 of 0.2 s).
+    #[arg(long)]
+    steps: Option<u32>,
+    /// Network file to use instead of the embedded merge network.
+    #[arg(long)]
+    net: Option<PathBuf>,
+    /// Let SUMO print its warnings.
+    #[arg(long)]
+    verbose: bool,
+}
+
+impl ScenarioArgs {
+    /// The validated configuration: file (or defaults), then these flags.
+    pub fn resolve(&self) -> Result<Config> {
+        self.resolve_with(|_| {})
+    }
+
+    /// Like [`Self::resolve`], with a subcommand's own overrides applied after these flags and
+    /// before validation, so the configuration that runs is the one that was checked.
+    pub fn resolve_with(&self, more: impl FnOnce(&mut Config)) -> Result<Config> {
+        load_config(self.config.as_deref(), |c| {
+            self.apply(c);
+            more(c);
+        })
+    }
+
+    /// Writes the flags that were given over the file's values.
+    fn apply(&self, c: &mut Config) {
+        let s = &mut c.scenario;
+        if let Some(a) = self.alpha {
+            s.alpha = a;
+        }
+        if let Some(l) = self.lambda {
+            s.lambda = l;
+        }
+        if let Some(seed) = self.seed {
+            s.seed = seed;
+        }
+        if let Some(n) = self.steps {
+            s.steps = n;
+        }
+        if let Some(n) = &self.net {
+            s.net_file = Some(n.clone());
+        }
+        c.sumo.verbose |= self.verbose;
+    }
+}
