@@ -312,8 +312,7 @@ fn configured_model_files_that_cannot_be_used_are_one_line_errors() {
     c.predictor.conditioned_model = Some(bad);
     c.validate().unwrap();
     let e = bkpbs::controller::check("bk-mastar", &c)
-        .err()
-        .expect("corrupt model refused")
+        .expect_err("corrupt model refused")
         .to_string();
     assert!(
         e.contains("predictor.conditioned_model") && e.contains("corrupt.json"),

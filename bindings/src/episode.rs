@@ -14,7 +14,7 @@ use bkpbs::episode::demand;
 use bkpbs::episode::output::{self, episode_row, EPISODE_COLUMNS};
 use bkpbs::episode::{self, EpisodeError, EpisodeResult};
 use bkpbs::model::road::EMBEDDED_NET;
-use bkpbs::sumo::files as sumo_files;
+use bkpbs::sumo::files;
 
 use crate::errors::{bad_input, episode_error, SimulationBusyError, SumoError};
 
@@ -201,14 +201,14 @@ pub fn write_scenario<'py>(
         }
     };
     let vtypes = dir.join("vtypes.add.xml");
-    write(&vtypes, &sumo_files::vehicle_types(&config))?;
+    write(&vtypes, &files::vehicle_types(&config))?;
     let routes = dir.join("demand.rou.xml");
     let planned = demand::generate(&config);
     write(&routes, &demand::route_file(&planned))?;
     let d = PyDict::new(py);
     d.set_item(
         "sumo_args",
-        sumo_files::command_line(&config, &net, &vtypes, &routes),
+        files::command_line(&config, &net, &vtypes, &routes),
     )?;
     d.set_item("net", net)?;
     d.set_item("vtypes", vtypes)?;

@@ -6,7 +6,7 @@ use anyhow::Result;
 use clap::Args;
 
 use bkpbs::config::Config;
-use bkpbs::sumo::files as sumo_files;
+use bkpbs::sumo::files;
 
 use super::scenario::load_config;
 
@@ -45,7 +45,7 @@ impl ConfigArgs {
 pub fn run(show: ShowConfig) -> Result<()> {
     match show {
         ShowConfig::Toml(c) => print!("{}", c.to_toml()),
-        ShowConfig::VehicleTypes(c) => print!("{}", sumo_files::vehicle_types(&c)),
+        ShowConfig::VehicleTypes(c) => print!("{}", files::vehicle_types(&c)),
     }
     Ok(())
 }
