@@ -2,7 +2,6 @@
 //! attribute names), checked and turned into the core's readings: SUMO's units and conventions,
 //! mapped to the road frame by `bkpbs::sumo::frame` exactly as the episode runner maps them.
 
-use std::cell::Cell;
 use std::collections::HashMap;
 use std::sync::Arc;
 
@@ -70,49 +69,114 @@ impl<'py> Keys<'py> {
 
 /// Reads vehicle number `i` of the caller's list.
 fn read_vehicle(i: usize, obj: &Bound<'_, PyAny>, keys: &Keys<'_>) -> PyResult<Reading> {
-    let dict = obj.cast::<PyDict>().ok();
-    if dict.is_none() && !obj.hasattr("id")? {
-        return Err(bad_input(format!(
-            "vehicle {i}: expected a dict (or an object with attributes) {}, got {}",
-            REQUIRED.join(", "),
-            obj.get_type().name()?
-        )));
+    let mut v = VehicleReader::open(i, obj, keys)?;
+    let id = v.id()?;
+    let type_id = v.string("type")?;
+    let road_id = v.string("road_id")?;
+    let lane_index = v.lane_index()?;
+    let origin = v.origin()?;
+    let desired_speed = v.desired_speed()?;
+    let raw = RawVehicleState {
+        x: v.optional_number("x")?.unwrap_or(0.0),
+        y: v.optional_number("y")?.unwrap_or(0.0),
+        speed: v.required_number("speed")?,
+        acceleration: v.required_number("acceleration")?,
+        angle: v.required_number("angle")?,
+        lane_position: v.required_number("lane_position")?,
+        lateral_offset: v.optional_number("lateral_offset")?.unwrap_or(0.0),
+        lane_index,
+        edge_code: frame::edge_code(&road_id).unwrap_or(-1),
+    };
+    v.reject_unknown_keys()?;
+    Ok(Reading {
+        kind: Kind::from_type_id(&type_id).unwrap_or(Kind::Hdv),
+        id,
+        raw,
+        origin,
+        desired_speed,
+    })
+}
+
+/// One vehicle of the caller's list, a dict or an object with attributes, read key by key so
+/// that each error names the vehicle and the key at fault.
+struct VehicleReader<'a, 'py> {
+    obj: &'a Bound<'py, PyAny>,
+    dict: Option<&'a Bound<'py, PyDict>>,
+    keys: &'a Keys<'py>,
+    /// Known keys found in the dict; more keys than that means an unknown one.
+    found: usize,
+    /// How errors name the vehicle: "vehicle i", then "vehicle i ('id')" once the id is read.
+    who: String,
+}
+
+impl<'a, 'py> VehicleReader<'a, 'py> {
+    /// Refuses anything that is neither a dict nor has an `id` attribute.
+    fn open(i: usize, obj: &'a Bound<'py, PyAny>, keys: &'a Keys<'py>) -> PyResult<Self> {
+        let dict = obj.cast::<PyDict>().ok();
+        if dict.is_none() && !obj.hasattr("id")? {
+            return Err(bad_input(format!(
+                "vehicle {i}: expected a dict (or an object with attributes) {}, got {}",
+                REQUIRED.join(", "),
+                obj.get_type().name()?
+            )));
+        }
+        Ok(VehicleReader {
+            obj,
+            dict,
+            keys,
+            found: 0,
+            who: format!("vehicle {i}"),
+        })
     }
-    // Known keys found in the dict; more keys than that means an unknown one.
-    let found = Cell::new(0usize);
-    let get = |key: &str| -> PyResult<Option<Bound<'_, PyAny>>> {
-        let v = match dict {
-            Some(d) => d.get_item(keys.get(key))?,
-            None => obj.getattr_opt(keys.get(key))?,
+
+    /// The value of `key`; `None` when it is missing or Python's `None`.
+    fn get(&mut self, key: &str) -> PyResult<Option<Bound<'py, PyAny>>> {
+        let v = match self.dict {
+            Some(d) => d.get_item(self.keys.get(key))?,
+            None => self.obj.getattr_opt(self.keys.get(key))?,
         };
-        found.set(found.get() + usize::from(v.is_some()));
+        self.found += usize::from(v.is_some());
         Ok(v.filter(|v| !v.is_none()))
-    };
-    let id: String = match get("id")? {
-        Some(v) => v
-            .cast::<PyString>()
-            .map_err(|_| bad_input(format!("vehicle {i}: 'id' must be a string")))?
-            .to_cow()?
-            .to_string(),
-        None => return Err(bad_input(format!("vehicle {i}: missing key 'id'"))),
-    };
-    let who = format!("vehicle {i} ('{id}')");
-    let required = |key: &str| -> PyResult<Bound<'_, PyAny>> {
-        get(key)?.ok_or_else(|| {
+    }
+
+    /// The id, which from then on names the vehicle in errors.
+    fn id(&mut self) -> PyResult<String> {
+        let value = self.get("id")?;
+        let who = &self.who;
+        let id = match value {
+            Some(v) => v
+                .cast::<PyString>()
+                .map_err(|_| bad_input(format!("{who}: 'id' must be a string")))?
+                .to_cow()?
+                .to_string(),
+            None => return Err(bad_input(format!("{who}: missing key 'id'"))),
+        };
+        self.who = format!("{who} ('{id}')");
+        Ok(id)
+    }
+
+    fn required(&mut self, key: &str) -> PyResult<Bound<'py, PyAny>> {
+        let value = self.get(key)?;
+        let who = &self.who;
+        value.ok_or_else(|| {
             bad_input(format!(
                 "{who}: missing key '{key}' (a vehicle needs {})",
                 REQUIRED.join(", ")
             ))
         })
-    };
-    let string = |key: &str| -> PyResult<String> {
-        let v = required(key)?;
+    }
+
+    fn string(&mut self, key: &str) -> PyResult<String> {
+        let v = self.required(key)?;
+        let who = &self.who;
         let s = v
             .cast::<PyString>()
             .map_err(|_| bad_input(format!("{who}: '{key}' must be a string")))?;
         Ok(s.to_cow()?.to_string())
-    };
-    let number = |key: &str, v: Bound<'_, PyAny>| -> PyResult<f64> {
+    }
+
+    fn number(&self, key: &str, v: Bound<'py, PyAny>) -> PyResult<f64> {
+        let who = &self.who;
         match v.extract::<f64>() {
             Ok(x) if x.is_finite() => Ok(x),
             _ => Err(bad_input(format!(
@@ -120,52 +184,61 @@ fn read_vehicle(i: usize, obj: &Bound<'_, PyAny>, keys: &Keys<'_>) -> PyResult<R
                 v.repr()?
             ))),
         }
-    };
-    let type_id = string("type")?;
-    let road_id = string("road_id")?;
-    let lane_index_obj = required("lane_index")?;
-    let lane_index: i32 = lane_index_obj.extract().map_err(|_| {
-        bad_input(format!(
-            "{who}: 'lane_index' must be an integer, got {}",
-            lane_index_obj
-                .repr()
-                .map(|r| r.to_string())
-                .unwrap_or_default()
-        ))
-    })?;
-    let optional_number =
-        |key: &str| -> PyResult<Option<f64>> { get(key)?.map(|v| number(key, v)).transpose() };
-    let origin = match get("origin")? {
-        None => None,
-        Some(v) => match v.extract::<String>().ok().as_deref() {
-            Some("main") => Some(Origin::Main),
-            Some("ramp") => Some(Origin::Ramp),
-            _ => {
-                return Err(bad_input(format!(
-                    "{who}: 'origin' must be \"main\" or \"ramp\", got {}",
-                    v.repr()?
-                )))
-            }
-        },
-    };
-    let desired_speed = optional_number("desired_speed")?;
-    if desired_speed.is_some_and(|d| d < 0.0) {
-        return Err(bad_input(format!(
-            "{who}: 'desired_speed' must not be negative"
-        )));
     }
-    let raw = RawVehicleState {
-        x: optional_number("x")?.unwrap_or(0.0),
-        y: optional_number("y")?.unwrap_or(0.0),
-        speed: number("speed", required("speed")?)?,
-        acceleration: number("acceleration", required("acceleration")?)?,
-        angle: number("angle", required("angle")?)?,
-        lane_position: number("lane_position", required("lane_position")?)?,
-        lateral_offset: optional_number("lateral_offset")?.unwrap_or(0.0),
-        lane_index,
-        edge_code: frame::edge_code(&road_id).unwrap_or(-1),
-    };
-    if let Some(d) = dict.filter(|d| d.len() > found.get()) {
+
+    fn required_number(&mut self, key: &str) -> PyResult<f64> {
+        let v = self.required(key)?;
+        self.number(key, v)
+    }
+
+    fn optional_number(&mut self, key: &str) -> PyResult<Option<f64>> {
+        self.get(key)?.map(|v| self.number(key, v)).transpose()
+    }
+
+    fn lane_index(&mut self) -> PyResult<i32> {
+        let v = self.required("lane_index")?;
+        let who = &self.who;
+        v.extract().map_err(|_| {
+            bad_input(format!(
+                "{who}: 'lane_index' must be an integer, got {}",
+                v.repr().map(|r| r.to_string()).unwrap_or_default()
+            ))
+        })
+    }
+
+    fn origin(&mut self) -> PyResult<Option<Origin>> {
+        let Some(v) = self.get("origin")? else {
+            return Ok(None);
+        };
+        let who = &self.who;
+        match v.extract::<String>().ok().as_deref() {
+            Some("main") => Ok(Some(Origin::Main)),
+            Some("ramp") => Ok(Some(Origin::Ramp)),
+            _ => Err(bad_input(format!(
+                "{who}: 'origin' must be \"main\" or \"ramp\", got {}",
+                v.repr()?
+            ))),
+        }
+    }
+
+    fn desired_speed(&mut self) -> PyResult<Option<f64>> {
+        let desired_speed = self.optional_number("desired_speed")?;
+        if desired_speed.is_some_and(|d| d < 0.0) {
+            let who = &self.who;
+            return Err(bad_input(format!(
+                "{who}: 'desired_speed' must not be negative"
+            )));
+        }
+        Ok(desired_speed)
+    }
+
+    /// Refuses a dict with keys beyond the known ones (a misspelt key would otherwise be
+    /// ignored). Objects may carry any other attributes.
+    fn reject_unknown_keys(&self) -> PyResult<()> {
+        let Some(d) = self.dict.filter(|d| d.len() > self.found) else {
+            return Ok(());
+        };
+        let who = &self.who;
         for k in d.keys() {
             let k: String = k.extract().unwrap_or_else(|_| "<not a string>".into());
             if !REQUIRED.contains(&k.as_str()) && !OPTIONAL.contains(&k.as_str()) {
@@ -176,14 +249,8 @@ fn read_vehicle(i: usize, obj: &Bound<'_, PyAny>, keys: &Keys<'_>) -> PyResult<R
                 )));
             }
         }
+        Ok(())
     }
-    Ok(Reading {
-        kind: Kind::from_type_id(&type_id).unwrap_or(Kind::Hdv),
-        id,
-        raw,
-        origin,
-        desired_speed,
-    })
 }
 
 /// The scene of `vehicles` (a list of dicts or objects) at `time`. Vehicles off the merge

@@ -65,12 +65,36 @@ fn ensure_font() -> Result<(), PlotError> {
         .map_err(PlotError::Font)
 }
 
-/// Something drawable on any plotters backend.
+/// Something drawable on any plotters backend: a main area and a strip on its right (colour
+/// bar or legend), so that nothing explaining the plot is ever drawn over it.
 trait Painter {
+    /// Width and height of the whole figure, in pixels.
     fn size(&self) -> (u32, u32);
-    fn paint<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<(), String>
+    /// Width of the strip on the right, in pixels.
+    fn side_width(&self) -> u32;
+    fn paint_main<DB: DrawingBackend>(&self, area: &DrawingArea<DB, Shift>) -> Result<(), String>
     where
         DB::ErrorType: 'static;
+    fn paint_side<DB: DrawingBackend>(&self, area: &DrawingArea<DB, Shift>) -> Result<(), String>
+    where
+        DB::ErrorType: 'static;
+}
+
+/// Paints the white background, then the main area, then the strip on its right.
+fn paint<DB: DrawingBackend>(p: &impl Painter, root: &DrawingArea<DB, Shift>) -> Result<(), String>
+where
+    DB::ErrorType: 'static,
+{
+    root.fill(&WHITE).map_err(drawing_failed)?;
+    let (w, _) = p.size();
+    let (main, side) = root.split_horizontally(w - p.side_width());
+    p.paint_main(&main)?;
+    p.paint_side(&side)
+}
+
+/// A plotters drawing error as text, which is all [`PlotError::Draw`] keeps of it.
+fn drawing_failed<E: std::error::Error + Send + Sync>(e: DrawingAreaErrorKind<E>) -> String {
+    e.to_string()
 }
 
 fn render(p: &impl Painter, figure: &'static str) -> Result<Figure, PlotError> {
@@ -80,14 +104,14 @@ fn render(p: &impl Painter, figure: &'static str) -> Result<Figure, PlotError> {
     let mut buf = vec![0u8; (w * h * 3) as usize];
     {
         let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
-        p.paint(&root).map_err(err)?;
+        paint(p, &root).map_err(err)?;
         root.present().map_err(|e| err(e.to_string()))?;
     }
     let png = encode_png(&buf, w, h).map_err(err)?;
     let mut svg = String::new();
     {
         let root = SVGBackend::with_string(&mut svg, (w, h)).into_drawing_area();
-        p.paint(&root).map_err(err)?;
+        paint(p, &root).map_err(err)?;
         root.present().map_err(|e| err(e.to_string()))?;
     }
     Ok(Figure { png, svg })
@@ -169,6 +193,17 @@ const PANEL_H: u32 = 300;
 const BAR_W: u32 = 150;
 const PANELS_PER_ROW: usize = 3;
 
+/// The odd centres of `n` heat map cells, where the axis labels go: the chart's coordinates
+/// are integers, cell i spanning [2i, 2i + 2].
+fn cell_centres(n: usize) -> Vec<i32> {
+    (0..n as i32).map(|i| 2 * i + 1).collect()
+}
+
+/// The index of the cell holding chart coordinate `v`.
+fn cell_index(v: &i32) -> usize {
+    (v.max(&0) / 2) as usize
+}
+
 impl Heatmap {
     fn layout(&self) -> (usize, usize) {
         let n = self.panels.len().max(1);
@@ -194,6 +229,97 @@ impl Heatmap {
     pub fn render(&self) -> Result<Figure, PlotError> {
         render(self, "heat map")
     }
+
+    /// A value as printed in the cells and on the colour bar.
+    fn number(&self, v: f64) -> String {
+        format!("{v:.prec$}", prec = self.decimals)
+    }
+
+    fn col_label(&self, x: &i32) -> String {
+        self.col_labels
+            .get(cell_index(x))
+            .cloned()
+            .unwrap_or_default()
+    }
+
+    /// Row 0 is at the top, the chart's y axis points up.
+    fn row_label(&self, y: &i32) -> String {
+        self.row_labels
+            .len()
+            .checked_sub(cell_index(y) + 1)
+            .and_then(|r| self.row_labels.get(r))
+            .cloned()
+            .unwrap_or_default()
+    }
+
+    /// One panel: its title, labelled axes and a coloured, numbered cell per value.
+    fn paint_panel<DB: DrawingBackend>(
+        &self,
+        panel: &HeatPanel,
+        area: &DrawingArea<DB, Shift>,
+        vmax: f64,
+    ) -> Result<(), String>
+    where
+        DB::ErrorType: 'static,
+    {
+        let nx = self.col_labels.len();
+        let ny = self.row_labels.len();
+        let mut chart = ChartBuilder::on(area)
+            .caption(&panel.title, (FONT, 22))
+            .margin(10)
+            .x_label_area_size(48)
+            .y_label_area_size(72)
+            .build_cartesian_2d(
+                (0..2 * nx as i32).with_key_points(cell_centres(nx)),
+                (0..2 * ny as i32).with_key_points(cell_centres(ny)),
+            )
+            .map_err(drawing_failed)?;
+        chart
+            .configure_mesh()
+            .disable_mesh()
+            .x_desc(&self.col_axis)
+            .y_desc(&self.row_axis)
+            .x_label_formatter(&|x| self.col_label(x))
+            .y_label_formatter(&|y| self.row_label(y))
+            .label_style((FONT, 16))
+            .axis_desc_style((FONT, 17))
+            .draw()
+            .map_err(drawing_failed)?;
+        let plot = chart.plotting_area();
+        for (r, row) in panel.values.iter().enumerate() {
+            let y = 2 * (ny - 1 - r) as i32;
+            for (c, v) in row.iter().enumerate() {
+                self.draw_cell(plot, (2 * c as i32, y), *v, vmax)
+                    .map_err(drawing_failed)?;
+            }
+        }
+        Ok(())
+    }
+
+    /// The cell with lower left corner `(x, y)`: filled with the colour of `value` and labelled
+    /// with it, or grey with a dash when there is no value.
+    fn draw_cell<DB, CT>(
+        &self,
+        area: &DrawingArea<DB, CT>,
+        (x, y): (i32, i32),
+        value: Option<f64>,
+        vmax: f64,
+    ) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>>
+    where
+        DB: DrawingBackend,
+        CT: CoordTranslate<From = (i32, i32)>,
+    {
+        let (fill, text) = match value {
+            Some(v) => (viridis(v / vmax), self.number(v)),
+            None => (RGBColor(220, 220, 220), "–".to_string()),
+        };
+        area.draw(&Rectangle::new([(x, y), (x + 2, y + 2)], fill.filled()))?;
+        let ink = text_colour_on(fill);
+        let style = TextStyle::from((FONT, 18).into_font())
+            .color(&ink)
+            .pos(Pos::new(HPos::Center, VPos::Center));
+        area.draw(&Text::new(text, (x + 1, y + 1), style))
+    }
 }
 
 impl Painter for Heatmap {
@@ -202,98 +328,47 @@ impl Painter for Heatmap {
         (cols as u32 * PANEL_W + BAR_W, rows as u32 * PANEL_H)
     }
 
-    fn paint<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<(), String>
+    fn side_width(&self) -> u32 {
+        BAR_W
+    }
+
+    /// The panels, in rows of at most [`PANELS_PER_ROW`].
+    fn paint_main<DB: DrawingBackend>(&self, area: &DrawingArea<DB, Shift>) -> Result<(), String>
     where
         DB::ErrorType: 'static,
     {
-        let e = |x: DrawingAreaErrorKind<DB::ErrorType>| x.to_string();
-        root.fill(&WHITE).map_err(e)?;
-        let (w, _) = self.size();
-        let (main, bar) = root.split_horizontally(w - BAR_W);
-        let (rows, cols) = self.layout();
         let vmax = self.scale_max();
-        let nx = self.col_labels.len();
-        let ny = self.row_labels.len();
-        // Integer coordinates, cell i spanning [2i, 2i + 2]: labels sit at the odd centres.
-        let centres = |n: usize| (0..n as i32).map(|i| 2 * i + 1).collect::<Vec<i32>>();
-        let index = |v: &i32| (v.max(&0) / 2) as usize;
-        let col_label = |x: &i32| self.col_labels.get(index(x)).cloned().unwrap_or_default();
-        // Row 0 at the top.
-        let row_label = |y: &i32| {
-            ny.checked_sub(index(y) + 1)
-                .and_then(|r| self.row_labels.get(r))
-                .cloned()
-                .unwrap_or_default()
-        };
-        for (panel, area) in self.panels.iter().zip(main.split_evenly((rows, cols))) {
-            let mut chart = ChartBuilder::on(&area)
-                .caption(&panel.title, (FONT, 22))
-                .margin(10)
-                .x_label_area_size(48)
-                .y_label_area_size(72)
-                .build_cartesian_2d(
-                    (0..2 * nx as i32).with_key_points(centres(nx)),
-                    (0..2 * ny as i32).with_key_points(centres(ny)),
-                )
-                .map_err(e)?;
-            chart
-                .configure_mesh()
-                .disable_mesh()
-                .x_desc(&self.col_axis)
-                .y_desc(&self.row_axis)
-                .x_label_formatter(&col_label)
-                .y_label_formatter(&row_label)
-                .label_style((FONT, 16))
-                .axis_desc_style((FONT, 17))
-                .draw()
-                .map_err(e)?;
-            for (r, row) in panel.values.iter().enumerate() {
-                let y = 2 * (ny - 1 - r) as i32;
-                for (c, v) in row.iter().enumerate() {
-                    let x = 2 * c as i32;
-                    let (fill, text) = match v {
-                        Some(v) => (
-                            viridis(v / vmax),
-                            format!("{v:.prec$}", prec = self.decimals),
-                        ),
-                        None => (RGBColor(220, 220, 220), "–".to_string()),
-                    };
-                    chart
-                        .draw_series(std::iter::once(Rectangle::new(
-                            [(x, y), (x + 2, y + 2)],
-                            fill.filled(),
-                        )))
-                        .map_err(e)?;
-                    let ink = text_colour_on(fill);
-                    let style = TextStyle::from((FONT, 18).into_font())
-                        .color(&ink)
-                        .pos(Pos::new(HPos::Center, VPos::Center));
-                    chart
-                        .draw_series(std::iter::once(Text::new(text, (x + 1, y + 1), style)))
-                        .map_err(e)?;
-                }
-            }
+        for (panel, area) in self.panels.iter().zip(area.split_evenly(self.layout())) {
+            self.paint_panel(panel, &area, vmax)?;
         }
-        // The shared colour bar.
-        let mut scale = ChartBuilder::on(&bar)
+        Ok(())
+    }
+
+    /// The colour bar all panels share.
+    fn paint_side<DB: DrawingBackend>(&self, area: &DrawingArea<DB, Shift>) -> Result<(), String>
+    where
+        DB::ErrorType: 'static,
+    {
+        let vmax = self.scale_max();
+        let mut scale = ChartBuilder::on(area)
             .margin_top(40)
             .margin_bottom(58)
             .margin_left(10)
             .margin_right(10)
             .right_y_label_area_size(84)
             .build_cartesian_2d(0.0..1.0, 0.0..vmax)
-            .map_err(e)?;
+            .map_err(drawing_failed)?;
         scale
             .configure_mesh()
             .disable_mesh()
             .disable_x_axis()
             .y_desc(&self.scale_label)
             .y_labels(6)
-            .y_label_formatter(&|v| format!("{v:.prec$}", prec = self.decimals))
+            .y_label_formatter(&|v| self.number(*v))
             .label_style((FONT, 15))
             .axis_desc_style((FONT, 16))
             .draw()
-            .map_err(e)?;
+            .map_err(drawing_failed)?;
         const STEPS: usize = 100;
         scale
             .draw_series((0..STEPS).map(|i| {
@@ -304,7 +379,7 @@ impl Painter for Heatmap {
                     viridis((i as f64 + 0.5) / STEPS as f64).filled(),
                 )
             }))
-            .map_err(e)?;
+            .map_err(drawing_failed)?;
         Ok(())
     }
 }
@@ -380,6 +455,48 @@ impl Scatter {
     pub fn render(&self) -> Result<Figure, PlotError> {
         render(self, "scatter")
     }
+
+    fn points(&self) -> impl Iterator<Item = &(f64, f64, usize)> {
+        self.series.iter().flat_map(|s| s.points.iter())
+    }
+
+    /// Upper end of the x axis: the largest x (at least [`Scatter::min_x_max`]) and 10 % more.
+    fn x_max(&self) -> f64 {
+        self.points()
+            .map(|p| p.0)
+            .fold(0.0_f64, f64::max)
+            .max(self.min_x_max)
+            * 1.1
+    }
+
+    /// The y axis: the points' range padded by 10 % (at least 0.5), not below 0 unless a point
+    /// is; 0 to 1 without points.
+    fn y_range(&self) -> (f64, f64) {
+        let (lo, hi) = self
+            .points()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| {
+                (lo.min(p.1), hi.max(p.1))
+            });
+        if lo.is_finite() {
+            let pad = ((hi - lo) * 0.1).max(0.5);
+            ((lo - pad).max(0.0_f64.min(lo)), hi + pad)
+        } else {
+            (0.0, 1.0)
+        }
+    }
+}
+
+/// One legend entry at height `y`: a marker of shape `kind` in `colour`, then `name`.
+fn draw_legend_entry<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    y: i32,
+    kind: usize,
+    colour: RGBColor,
+    name: &str,
+) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+    let text = TextStyle::from((FONT, 16).into_font()).pos(Pos::new(HPos::Left, VPos::Center));
+    draw_markers(area, kind, &[(14, y)], colour)?;
+    area.draw(&Text::new(name.to_string(), (30, y), text))
 }
 
 impl Painter for Scatter {
@@ -387,37 +504,25 @@ impl Painter for Scatter {
         (900 + LEGEND_W, 600)
     }
 
-    fn paint<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<(), String>
+    fn side_width(&self) -> u32 {
+        LEGEND_W
+    }
+
+    /// Axes with a grid, and the points of each series in its colour.
+    fn paint_main<DB: DrawingBackend>(&self, area: &DrawingArea<DB, Shift>) -> Result<(), String>
     where
         DB::ErrorType: 'static,
     {
-        let e = |x: DrawingAreaErrorKind<DB::ErrorType>| x.to_string();
-        root.fill(&WHITE).map_err(e)?;
-        let (w, _) = self.size();
-        let (main, legend) = root.split_horizontally(w - LEGEND_W);
-        let pts = || self.series.iter().flat_map(|s| s.points.iter());
-        let x_max = pts()
-            .map(|p| p.0)
-            .fold(0.0_f64, f64::max)
-            .max(self.min_x_max)
-            * 1.1;
-        let (y_lo, y_hi) = pts().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| {
-            (lo.min(p.1), hi.max(p.1))
-        });
-        let (y_lo, y_hi) = if y_lo.is_finite() {
-            let pad = ((y_hi - y_lo) * 0.1).max(0.5);
-            ((y_lo - pad).max(0.0_f64.min(y_lo)), y_hi + pad)
-        } else {
-            (0.0, 1.0)
-        };
-        let mut chart = ChartBuilder::on(&main)
+        let x_max = self.x_max();
+        let (y_lo, y_hi) = self.y_range();
+        let mut chart = ChartBuilder::on(area)
             .caption(&self.title, (FONT, 24))
             .margin(16)
             .x_label_area_size(56)
             .y_label_area_size(72)
             // A little room left of 0, so points without collisions stay off the axis.
             .build_cartesian_2d(-0.03 * x_max..x_max, y_lo..y_hi)
-            .map_err(e)?;
+            .map_err(drawing_failed)?;
         chart
             .configure_mesh()
             .x_desc(&self.x_label)
@@ -428,7 +533,7 @@ impl Painter for Scatter {
             .light_line_style(RGBColor(240, 240, 240))
             .bold_line_style(RGBColor(215, 215, 215))
             .draw()
-            .map_err(e)?;
+            .map_err(drawing_failed)?;
         let plot = chart.plotting_area();
         for (i, s) in self.series.iter().enumerate() {
             for kind in 0..MARKER_KINDS {
@@ -438,25 +543,25 @@ impl Painter for Scatter {
                     .filter(|p| p.2 % MARKER_KINDS == kind)
                     .map(|p| (p.0, p.1))
                     .collect();
-                draw_markers(plot, kind, &at, series_colour(i)).map_err(e)?;
+                draw_markers(plot, kind, &at, series_colour(i)).map_err(drawing_failed)?;
             }
         }
-        // Legend beside the plot, never over a point: series colours, then marker shapes.
-        let text = TextStyle::from((FONT, 16).into_font()).pos(Pos::new(HPos::Left, VPos::Center));
+        Ok(())
+    }
+
+    /// The legend beside the plot, never over a point: series colours, then marker shapes.
+    fn paint_side<DB: DrawingBackend>(&self, area: &DrawingArea<DB, Shift>) -> Result<(), String>
+    where
+        DB::ErrorType: 'static,
+    {
         let mut y = 70;
         for (i, s) in self.series.iter().enumerate() {
-            draw_markers(&legend, 0, &[(14, y)], series_colour(i)).map_err(e)?;
-            legend
-                .draw(&Text::new(s.name.clone(), (30, y), text.clone()))
-                .map_err(e)?;
+            draw_legend_entry(area, y, 0, series_colour(i), &s.name).map_err(drawing_failed)?;
             y += 26;
         }
         y += 12;
         for (m, name) in self.markers.iter().enumerate() {
-            draw_markers(&legend, m, &[(14, y)], BLACK).map_err(e)?;
-            legend
-                .draw(&Text::new(name.clone(), (30, y), text.clone()))
-                .map_err(e)?;
+            draw_legend_entry(area, y, m, BLACK, name).map_err(drawing_failed)?;
             y += 26;
         }
         Ok(())

@@ -34,20 +34,6 @@ fn estimate_cells(e: Option<&Estimate>, decimals: usize, scale: f64) -> [String;
     }
 }
 
-/// The per-α column triple of a wide table.
-fn alpha_columns(alphas: &[f64], unit: &str) -> Vec<String> {
-    alphas
-        .iter()
-        .flat_map(|a| {
-            [
-                format!("a{a}_mean{unit}"),
-                format!("a{a}_ci95{unit}"),
-                format!("a{a}_n"),
-            ]
-        })
-        .collect()
-}
-
 fn delay_of(g: Option<&Group>) -> Option<&Estimate> {
     g.and_then(|g| g.delay.as_ref())
 }
@@ -63,90 +49,107 @@ pub fn lambda_label(l: f64) -> String {
 
 /// All CSV tables: `delay_l<λ>.csv`, `collision_rate_<planner>.csv`, `summary.csv`.
 pub fn csv_files(s: &Summary) -> Vec<CsvFile> {
-    let mut files = Vec::new();
-    for &l in &s.lambdas {
-        let header: Vec<String> = std::iter::once("planner".to_string())
-            .chain(alpha_columns(&s.alphas, "_s"))
-            .collect();
-        let rows: Vec<Vec<String>> = s
-            .planners
-            .iter()
-            .map(|p| {
-                std::iter::once(p.clone())
-                    .chain(
-                        s.alphas
-                            .iter()
-                            .flat_map(|&a| estimate_cells(delay_of(s.get(p, a, l)), 4, 1.0)),
-                    )
-                    .collect()
-            })
-            .collect();
-        files.push(CsvFile {
-            name: format!("delay_l{}.csv", lambda_label(l)),
-            bytes: csv_bytes(&header, &rows),
-        });
-    }
-    for p in &s.planners {
-        let header: Vec<String> = std::iter::once("lambda".to_string())
-            .chain(alpha_columns(&s.alphas, ""))
-            .collect();
-        let rows: Vec<Vec<String>> = s
-            .lambdas
-            .iter()
-            .map(|&l| {
-                std::iter::once(lambda_label(l))
-                    .chain(
-                        s.alphas
-                            .iter()
-                            .flat_map(|&a| estimate_cells(rate_of(s.get(p, a, l)), 6, 1.0)),
-                    )
-                    .collect()
-            })
-            .collect();
-        files.push(CsvFile {
-            name: format!("collision_rate_{p}.csv"),
-            bytes: csv_bytes(&header, &rows),
-        });
-    }
-    let header: Vec<String> = [
-        "planner",
-        "alpha",
-        "lambda",
-        "episodes",
-        "delay_mean_s",
-        "delay_ci95_s",
-        "delay_n",
-        "collision_rate_mean",
-        "collision_rate_ci95",
-        "collision_rate_n",
-        "throughput_mean_veh_h",
-        "throughput_ci95_veh_h",
-        "throughput_n",
-    ]
-    .iter()
-    .map(|s| s.to_string())
-    .collect();
+    let delays = s.lambdas.iter().map(|&l| delay_table(s, l));
+    let rates = s.planners.iter().map(|p| collision_rate_table(s, p));
+    delays
+        .chain(rates)
+        .chain(std::iter::once(summary_table(s)))
+        .collect()
+}
+
+/// The header of a wide table: `first`, then a mean, CI and n column per α.
+fn wide_header(first: &str, alphas: &[f64], unit: &str) -> Vec<String> {
+    let triples = alphas.iter().flat_map(|a| {
+        [
+            format!("a{a}_mean{unit}"),
+            format!("a{a}_ci95{unit}"),
+            format!("a{a}_n"),
+        ]
+    });
+    std::iter::once(first.to_string()).chain(triples).collect()
+}
+
+/// A row of a wide table: `first`, then the cells of `estimate(α)` for every α.
+fn wide_row<'s>(
+    first: String,
+    alphas: &[f64],
+    estimate: impl Fn(f64) -> Option<&'s Estimate>,
+    decimals: usize,
+) -> Vec<String> {
+    std::iter::once(first)
+        .chain(
+            alphas
+                .iter()
+                .flat_map(|&a| estimate_cells(estimate(a), decimals, 1.0)),
+        )
+        .collect()
+}
+
+/// Mean delay at λ `l`: rows planners, columns α.
+fn delay_table(s: &Summary, l: f64) -> CsvFile {
+    let header = wide_header("planner", &s.alphas, "_s");
     let rows: Vec<Vec<String>> = s
-        .groups
+        .planners
         .iter()
-        .map(|g| {
-            let mut r = vec![
-                g.planner.clone(),
-                format!("{}", g.alpha),
-                lambda_label(g.lambda),
-                g.episodes.to_string(),
-            ];
-            r.extend(estimate_cells(g.delay.as_ref(), 4, 1.0));
-            r.extend(estimate_cells(g.collision_rate.as_ref(), 6, 1.0));
-            r.extend(estimate_cells(g.throughput.as_ref(), 2, 1.0));
-            r
-        })
+        .map(|p| wide_row(p.clone(), &s.alphas, |a| delay_of(s.get(p, a, l)), 4))
         .collect();
-    files.push(CsvFile {
+    CsvFile {
+        name: format!("delay_l{}.csv", lambda_label(l)),
+        bytes: csv_bytes(&header, &rows),
+    }
+}
+
+/// Controllable collision rate of planner `p`: rows λ, columns α.
+fn collision_rate_table(s: &Summary, p: &str) -> CsvFile {
+    let header = wide_header("lambda", &s.alphas, "");
+    let rows: Vec<Vec<String>> = s
+        .lambdas
+        .iter()
+        .map(|&l| wide_row(lambda_label(l), &s.alphas, |a| rate_of(s.get(p, a, l)), 6))
+        .collect();
+    CsvFile {
+        name: format!("collision_rate_{p}.csv"),
+        bytes: csv_bytes(&header, &rows),
+    }
+}
+
+const SUMMARY_HEADER: [&str; 13] = [
+    "planner",
+    "alpha",
+    "lambda",
+    "episodes",
+    "delay_mean_s",
+    "delay_ci95_s",
+    "delay_n",
+    "collision_rate_mean",
+    "collision_rate_ci95",
+    "collision_rate_n",
+    "throughput_mean_veh_h",
+    "throughput_ci95_veh_h",
+    "throughput_n",
+];
+
+/// One long table, a row per (planner, α, λ) with every estimate.
+fn summary_table(s: &Summary) -> CsvFile {
+    let header: Vec<String> = SUMMARY_HEADER.iter().map(|s| s.to_string()).collect();
+    let rows: Vec<Vec<String>> = s.groups.iter().map(summary_row).collect();
+    CsvFile {
         name: "summary.csv".into(),
         bytes: csv_bytes(&header, &rows),
-    });
-    files
+    }
+}
+
+fn summary_row(g: &Group) -> Vec<String> {
+    let mut r = vec![
+        g.planner.clone(),
+        format!("{}", g.alpha),
+        lambda_label(g.lambda),
+        g.episodes.to_string(),
+    ];
+    r.extend(estimate_cells(g.delay.as_ref(), 4, 1.0));
+    r.extend(estimate_cells(g.collision_rate.as_ref(), 6, 1.0));
+    r.extend(estimate_cells(g.throughput.as_ref(), 2, 1.0));
+    r
 }
 
 /// "m ± c" with `decimals`, "(n=k)" appended when fewer than `full` seeds, "–" for nothing.
