@@ -110,6 +110,8 @@ impl Learned {
         })
     }
 
+    /// The rollout behind [`Learned::rollout`] and [`Predictor::predict`], with the caller's
+    /// buffers; `record` keeps the per-step probabilities (predicting needs only the start).
     fn rollout_with(
         &self,
         buf: &mut Buffers,
@@ -131,30 +133,7 @@ impl Learned {
         let conditioned = !plans.is_empty();
         let model = self.model(conditioned);
         let ego0 = Agent::of(v, w);
-        // Everyone else now; a scene vehicle at a plan's first pose is that plan's CAV.
-        buf.others.clear();
-        for (j, o) in scene.vehicles.iter().enumerate() {
-            if j == i {
-                continue;
-            }
-            let a = Agent::of(o, w);
-            let planned = plans.iter().any(|t| {
-                let p = t.at(0, self.dt);
-                (p.s - a.s).abs() < 0.5 && (p.y - a.y).abs() < 0.5
-            });
-            buf.others.push((a, planned));
-        }
-        let lane_of = |y: f64| lane_at(y, w);
-        let plan_agent = |t: &Trajectory, k: usize| {
-            let p = t.at(k, self.dt);
-            Agent {
-                s: p.s,
-                y: p.y,
-                lane: lane_of(p.y),
-                speed: p.speed,
-                is_cav: true,
-            }
-        };
+        self.collect_others(&mut buf.others, scene, i, plans);
         let mut obs = Observation {
             ego: ego_of(v, road),
             ..Observation::default()
@@ -174,34 +153,8 @@ impl Learned {
                 }
                 continue;
             }
-            buf.moved.clear();
-            buf.moved.extend(
-                buf.others
-                    .iter()
-                    .filter(|(_, planned)| !planned)
-                    .map(|(a, _)| Agent {
-                        s: a.s + a.speed * self.dt * k as f64,
-                        ..*a
-                    }),
-            );
-            buf.plan_agents.clear();
-            for (n, t) in plans.iter().enumerate() {
-                let a = plan_agent(t, k);
-                buf.moved.push(a);
-                buf.plan_agents.push((n, a));
-            }
             obs.ego.to_merge_end = (road.merge_end - v.front() - dk) as f32;
-            obs.neighbours = neighbours(&ego, buf.moved.iter());
-            if conditioned {
-                select_cavs(&ego, buf.plan_agents.iter().copied(), &mut buf.chosen);
-                obs.cavs = Default::default();
-                for (slot, &n) in buf.chosen.iter().enumerate() {
-                    for j in 1..=PREVIEW {
-                        let a = plan_agent(plans[n], k + j);
-                        obs.cavs[j - 1][slot] = cav_node(&ego, j, self.dt, a.s, a.y, a.speed);
-                    }
-                }
-            }
+            self.observe_at(buf, &mut obs, &ego, plans, k, w);
             let p = model.probability(&obs, &mut buf.ws);
             if record {
                 out.probabilities.push(p);
@@ -213,6 +166,83 @@ impl Learned {
             }
         }
         out
+    }
+
+    /// Every scene vehicle but `i`, now, and whether a given plan replaces it: a scene vehicle
+    /// at a plan's first pose is that plan's CAV, so it must not be counted twice.
+    fn collect_others(
+        &self,
+        others: &mut Vec<(Agent, bool)>,
+        scene: &Scene,
+        i: usize,
+        plans: &[&Trajectory],
+    ) {
+        let w = scene.road.lane_width;
+        others.clear();
+        for (j, o) in scene.vehicles.iter().enumerate() {
+            if j == i {
+                continue;
+            }
+            let a = Agent::of(o, w);
+            let planned = plans.iter().any(|t| {
+                let p = t.at(0, self.dt);
+                (p.s - a.s).abs() < 0.5 && (p.y - a.y).abs() < 0.5
+            });
+            others.push((a, planned));
+        }
+    }
+
+    /// Fills the surroundings of the rolled-out HDV `ego` at rollout step `k` into `obs`: graph
+    /// (a) from the unplanned vehicles at constant speed and the planned CAVs at their plans'
+    /// poses, and, with plans given, sequence (b) from the plans over the preview after `k`.
+    fn observe_at(
+        &self,
+        buf: &mut Buffers,
+        obs: &mut Observation,
+        ego: &Agent,
+        plans: &[&Trajectory],
+        k: usize,
+        w: f64,
+    ) {
+        buf.moved.clear();
+        buf.moved.extend(
+            buf.others
+                .iter()
+                .filter(|(_, planned)| !planned)
+                .map(|(a, _)| Agent {
+                    s: a.s + a.speed * self.dt * k as f64,
+                    ..*a
+                }),
+        );
+        buf.plan_agents.clear();
+        for (n, t) in plans.iter().enumerate() {
+            let a = self.plan_agent(t, k, w);
+            buf.moved.push(a);
+            buf.plan_agents.push((n, a));
+        }
+        obs.neighbours = neighbours(ego, buf.moved.iter());
+        if !plans.is_empty() {
+            select_cavs(ego, buf.plan_agents.iter().copied(), &mut buf.chosen);
+            obs.cavs = Default::default();
+            for (slot, &n) in buf.chosen.iter().enumerate() {
+                for j in 1..=PREVIEW {
+                    let a = self.plan_agent(plans[n], k + j, w);
+                    obs.cavs[j - 1][slot] = cav_node(ego, j, self.dt, a.s, a.y, a.speed);
+                }
+            }
+        }
+    }
+
+    /// The CAV following plan `t`, at step `k`.
+    fn plan_agent(&self, t: &Trajectory, k: usize, w: f64) -> Agent {
+        let p = t.at(k, self.dt);
+        Agent {
+            s: p.s,
+            y: p.y,
+            lane: lane_at(p.y, w),
+            speed: p.speed,
+            is_cav: true,
+        }
     }
 
     fn trajectory(

@@ -82,71 +82,95 @@ impl Observer for Timer<'_> {
             .iter()
             .find(|&&i| is_decision_point(&scene.vehicles[i]))
         {
-            let w = scene.road.lane_width;
-            let ego = Agent::of(&scene.vehicles[i], w);
-            let others: Vec<Agent> = scene
-                .vehicles
-                .iter()
-                .enumerate()
-                .filter(|&(j, _)| j != i)
-                .map(|(_, v)| Agent::of(v, w))
-                .collect();
-            let plain = Observation {
-                ego: ego_of(&scene.vehicles[i], &scene.road),
-                neighbours: neighbours(&ego, others.iter()),
-                ..Observation::default()
-            };
-            // The conditioned input: the nearest CAVs' trajectories over the preview.
-            let mut with_cavs = plain;
-            let dt = self.dt;
-            let cands = refs.iter().enumerate().map(|(n, t)| {
-                let p = t.at(0, dt);
-                let lane = lane_at(p.y, w);
-                (
-                    n,
-                    Agent {
-                        s: p.s,
-                        y: p.y,
-                        lane,
-                        speed: p.speed,
-                        is_cav: true,
-                    },
-                )
-            });
-            let mut chosen = Vec::new();
-            select_cavs(&ego, cands, &mut chosen);
-            for (slot, &n) in chosen.iter().enumerate() {
-                for k in 1..=PREVIEW {
-                    let p = refs[n].at(k, dt);
-                    with_cavs.cavs[k - 1][slot] = cav_node(&ego, k, dt, p.s, p.y, p.speed);
-                }
-            }
-            for (k, conditioned) in [false, true].into_iter().enumerate() {
-                let model = self.learned.model(conditioned);
-                let obs = if conditioned { with_cavs } else { plain };
-                let t = Instant::now();
-                let mut acc = 0.0;
-                for _ in 0..REPEATS {
-                    acc += model.probability(std::hint::black_box(&obs), &mut self.ws);
-                }
-                std::hint::black_box(acc);
-                self.single[k].push(t.elapsed().as_secs_f64() * 1e6 / REPEATS as f64);
-            }
+            self.time_single(scene, i, &refs);
         }
+        self.time_all(scene, &hdvs, &refs);
+    }
+}
+
+impl Timer<'_> {
+    /// Times one model evaluation for HDV `i`, unconditioned and conditioned on `plans`,
+    /// repeated [`REPEATS`] times so the clock's resolution does not matter.
+    fn time_single(&mut self, scene: &Scene, i: usize, plans: &[&Trajectory]) {
+        let (plain, with_cavs) = observations(scene, i, plans, self.dt);
+        for (k, conditioned) in [false, true].into_iter().enumerate() {
+            let model = self.learned.model(conditioned);
+            let obs = if conditioned { with_cavs } else { plain };
+            let t = Instant::now();
+            let mut acc = 0.0;
+            for _ in 0..REPEATS {
+                acc += model.probability(std::hint::black_box(&obs), &mut self.ws);
+            }
+            std::hint::black_box(acc);
+            self.single[k].push(t.elapsed().as_secs_f64() * 1e6 / REPEATS as f64);
+        }
+    }
+
+    /// Times the trajectories of all `hdvs` over the horizon by each predictor: constant speed,
+    /// b_θ unconditioned, b_θ conditioned on `plans`.
+    fn time_all(&mut self, scene: &Scene, hdvs: &[usize], plans: &[&Trajectory]) {
         let time = |f: &dyn Fn(usize) -> Trajectory| {
             let t = Instant::now();
-            for &i in &hdvs {
+            for &i in hdvs {
                 std::hint::black_box(f(i));
             }
             t.elapsed().as_secs_f64() * 1e3
         };
         let c = time(&|i| self.constant.predict(scene, i, &[], self.horizon));
         let u = time(&|i| self.learned.predict(scene, i, &[], self.horizon));
-        let k = time(&|i| self.learned.predict(scene, i, &refs, self.horizon));
+        let k = time(&|i| self.learned.predict(scene, i, plans, self.horizon));
         self.per_step[0].push(c);
         self.per_step[1].push(u);
         self.per_step[2].push(k);
     }
+}
+
+/// The model inputs of HDV `i` as it stands: unconditioned, and conditioned on the nearest
+/// CAVs' `plans` over the preview.
+fn observations(
+    scene: &Scene,
+    i: usize,
+    plans: &[&Trajectory],
+    dt: f64,
+) -> (Observation, Observation) {
+    let w = scene.road.lane_width;
+    let ego = Agent::of(&scene.vehicles[i], w);
+    let others: Vec<Agent> = scene
+        .vehicles
+        .iter()
+        .enumerate()
+        .filter(|&(j, _)| j != i)
+        .map(|(_, v)| Agent::of(v, w))
+        .collect();
+    let plain = Observation {
+        ego: ego_of(&scene.vehicles[i], &scene.road),
+        neighbours: neighbours(&ego, others.iter()),
+        ..Observation::default()
+    };
+    let mut with_cavs = plain;
+    let cands = plans.iter().enumerate().map(|(n, t)| {
+        let p = t.at(0, dt);
+        let lane = lane_at(p.y, w);
+        (
+            n,
+            Agent {
+                s: p.s,
+                y: p.y,
+                lane,
+                speed: p.speed,
+                is_cav: true,
+            },
+        )
+    });
+    let mut chosen = Vec::new();
+    select_cavs(&ego, cands, &mut chosen);
+    for (slot, &n) in chosen.iter().enumerate() {
+        for k in 1..=PREVIEW {
+            let p = plans[n].at(k, dt);
+            with_cavs.cavs[k - 1][slot] = cav_node(&ego, k, dt, p.s, p.y, p.speed);
+        }
+    }
+    (plain, with_cavs)
 }
 
 /// Runs the benchmark episode of `config` with `learned`.

@@ -22,7 +22,7 @@ use super::dataset::{Dataset, Sample};
 use crate::config::{Config, PredictorKind};
 use crate::controller;
 use crate::episode::{self, Driver, EpisodeError, Observer};
-use crate::model::scene::{Kind, Scene};
+use crate::model::scene::{Kind, Scene, VehicleState};
 use crate::predict::features::{
     cav_node, ego_of, is_decision_point, lane_change_direction, lane_change_start, neighbours,
     select_cavs, Agent, CavNode, Observation, Subset, CAV_NODES, PREVIEW,
@@ -64,6 +64,18 @@ impl std::ops::AddAssign for CollectStats {
         self.not_decision_points += o.not_decision_points;
         self.vanished += o.vanished;
         self.unexpected_direction += o.unexpected_direction;
+    }
+}
+
+impl CollectStats {
+    /// Counts a kept sample under its subset and label.
+    fn count(&mut self, subset: Subset, label: bool) {
+        match (subset, label) {
+            (Subset::Ramp, false) => self.ramp_negative += 1,
+            (Subset::Ramp, true) => self.ramp_positive += 1,
+            (Subset::Main, false) => self.main_negative += 1,
+            (Subset::Main, true) => self.main_positive += 1,
+        }
     }
 }
 
@@ -126,6 +138,8 @@ impl Recorder {
         }
     }
 
+    /// Turns every HDV at a decision point in the oldest buffered scene into a sample, labelled
+    /// by the next scene; called once the buffer holds the preview after that scene.
     fn emit(&mut self) {
         let now = &self.buffer[0].scene;
         let next = &self.buffer[1];
@@ -137,68 +151,21 @@ impl Recorder {
             if v.kind != Kind::Hdv {
                 continue;
             }
-            self.stats.hdv_steps += 1;
-            if !is_decision_point(v) {
-                self.stats.not_decision_points += 1;
-                continue;
-            }
-            let Some(&j) = next.index.get(&v.id) else {
-                self.stats.vanished += 1;
+            let Some(label) = label_of(v, next, w, &mut self.stats) else {
                 continue;
             };
-            let dir = lane_change_start(v, &next.scene.vehicles[j], w);
-            if dir != 0 && dir as i32 != lane_change_direction(v.lane) {
-                self.stats.unexpected_direction += 1;
-            }
-            let label = dir != 0;
             let subset = Subset::of_lane(v.lane);
-            let mut weight = 1.0;
-            if subset == Subset::Main && !label && self.main_negative_keep < 1.0 {
-                if self.rng.gen::<f64>() >= self.main_negative_keep {
-                    self.stats.main_negative_dropped += 1;
-                    continue;
-                }
-                weight = (1.0 / self.main_negative_keep) as f32;
-            }
-            let ego = self.agents[i];
-            let others = self
-                .agents
-                .iter()
-                .enumerate()
-                .filter(|&(k, _)| k != i)
-                .map(|(_, a)| a);
-            let mut obs = Observation {
-                ego: ego_of(v, &now.road),
-                neighbours: neighbours(&ego, others),
-                ..Observation::default()
+            let Some(weight) = thinning_weight(
+                &mut self.rng,
+                self.main_negative_keep,
+                subset,
+                label,
+                &mut self.stats,
+            ) else {
+                continue;
             };
-            let cavs = self
-                .agents
-                .iter()
-                .copied()
-                .enumerate()
-                .filter(|&(k, a)| a.is_cav && k != i);
-            select_cavs(&ego, cavs, &mut self.chosen);
-            for (n, &c) in self.chosen.iter().enumerate() {
-                let id = &now.vehicles[c].id;
-                for k in 1..=PREVIEW {
-                    let later = &self.buffer[k];
-                    obs.cavs[k - 1][n] = match later.index.get(id) {
-                        Some(&m) => {
-                            let a = Agent::of(&later.scene.vehicles[m], w);
-                            cav_node(&ego, k, self.dt, a.s, a.y, a.speed)
-                        }
-                        None => CavNode::default(),
-                    };
-                }
-            }
-            debug_assert!(self.chosen.len() <= CAV_NODES);
-            match (subset, label) {
-                (Subset::Ramp, false) => self.stats.ramp_negative += 1,
-                (Subset::Ramp, true) => self.stats.ramp_positive += 1,
-                (Subset::Main, false) => self.stats.main_negative += 1,
-                (Subset::Main, true) => self.stats.main_positive += 1,
-            }
+            let obs = observation(&self.buffer, &self.agents, &mut self.chosen, i, self.dt);
+            self.stats.count(subset, label);
             self.samples.push(Sample {
                 episode: self.episode,
                 step: self.step - PREVIEW as u32,
@@ -209,6 +176,90 @@ impl Recorder {
             });
         }
     }
+}
+
+/// Whether HDV `v` starts a lane change at the `next` step, or `None` when it gives no sample:
+/// not at a decision point, or gone at the next step. Counts what it sees into `stats`.
+fn label_of(v: &VehicleState, next: &Buffered, w: f64, stats: &mut CollectStats) -> Option<bool> {
+    stats.hdv_steps += 1;
+    if !is_decision_point(v) {
+        stats.not_decision_points += 1;
+        return None;
+    }
+    let Some(&j) = next.index.get(&v.id) else {
+        stats.vanished += 1;
+        return None;
+    };
+    let dir = lane_change_start(v, &next.scene.vehicles[j], w);
+    if dir != 0 && dir as i32 != lane_change_direction(v.lane) {
+        stats.unexpected_direction += 1;
+    }
+    Some(dir != 0)
+}
+
+/// The weight of a sample, or `None` when thinning drops it: main-road negatives are kept with
+/// probability `keep` (one draw from `rng` each) and weighted by its inverse, all others kept
+/// with weight 1.
+fn thinning_weight(
+    rng: &mut ChaCha8Rng,
+    keep: f64,
+    subset: Subset,
+    label: bool,
+    stats: &mut CollectStats,
+) -> Option<f32> {
+    if subset == Subset::Main && !label && keep < 1.0 {
+        if rng.gen::<f64>() >= keep {
+            stats.main_negative_dropped += 1;
+            return None;
+        }
+        return Some((1.0 / keep) as f32);
+    }
+    Some(1.0)
+}
+
+/// The input of vehicle `i` (among `agents`) in the oldest buffered scene: its graph (a) then,
+/// and the nearest CAVs' actual states over the following `PREVIEW` scenes, standing in for
+/// their plans (a CAV gone by then leaves empty nodes).
+fn observation(
+    buffer: &VecDeque<Buffered>,
+    agents: &[Agent],
+    chosen: &mut Vec<usize>,
+    i: usize,
+    dt: f64,
+) -> Observation {
+    let now = &buffer[0].scene;
+    let w = now.road.lane_width;
+    let ego = agents[i];
+    let others = agents
+        .iter()
+        .enumerate()
+        .filter(|&(k, _)| k != i)
+        .map(|(_, a)| a);
+    let mut obs = Observation {
+        ego: ego_of(&now.vehicles[i], &now.road),
+        neighbours: neighbours(&ego, others),
+        ..Observation::default()
+    };
+    let cavs = agents
+        .iter()
+        .copied()
+        .enumerate()
+        .filter(|&(k, a)| a.is_cav && k != i);
+    select_cavs(&ego, cavs, chosen);
+    for (n, &c) in chosen.iter().enumerate() {
+        let id = &now.vehicles[c].id;
+        for (k, later) in (1..=PREVIEW).zip(buffer.range(1..=PREVIEW)) {
+            obs.cavs[k - 1][n] = match later.index.get(id) {
+                Some(&m) => {
+                    let a = Agent::of(&later.scene.vehicles[m], w);
+                    cav_node(&ego, k, dt, a.s, a.y, a.speed)
+                }
+                None => CavNode::default(),
+            };
+        }
+    }
+    debug_assert!(chosen.len() <= CAV_NODES);
+    obs
 }
 
 impl Observer for Recorder {

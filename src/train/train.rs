@@ -171,72 +171,22 @@ pub fn train<L: Learner>(
     opts: &TrainOptions,
     mut progress: impl FnMut(&EpochLog),
 ) -> Result<Trained, TrainError> {
-    if opts.batch == 0 || opts.chunk == 0 || opts.threads == 0 || opts.epochs == 0 {
-        return Err(TrainError::Options(format!(
-            "epochs {}, batch {}, chunk {} and threads {} must be positive",
-            opts.epochs, opts.batch, opts.chunk, opts.threads
-        )));
-    }
+    check_options(opts)?;
     let start = Instant::now();
-    let (val, tr): (Vec<&Sample>, Vec<&Sample>) = samples.iter().partition(|s| is_validation(s));
-    if tr.is_empty() {
-        return Err(TrainError::NoTrainingData(samples.len()));
-    }
-    if val.is_empty() {
-        return Err(TrainError::NoValidationData);
-    }
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(opts.threads)
-        .build()
-        .map_err(|e| TrainError::Threads(opts.threads, e.to_string()))?;
-    let mut rng = ChaCha8Rng::seed_from_u64(opts.seed);
-    let mut params = learner.init(&mut rng);
-    let mut adam = Adam::new(params.len(), opts.lr);
-    let calib = Calibration::prior_shift(&tr);
-    let chunks_per_batch = opts.batch.div_ceil(opts.chunk);
-    let mut workers: Vec<(L::Scratch, Vec<f32>, f64)> = (0..chunks_per_batch)
-        .map(|_| (learner.scratch(), vec![0.0; params.len()], 0.0))
-        .collect();
-    let mut grad = vec![0.0f32; params.len()];
-    let mut order: Vec<usize> = (0..tr.len()).collect();
-    let mut batch: Vec<&Sample> = Vec::with_capacity(opts.batch);
+    let (val, tr) = split(samples)?;
+    let mut run = TrainingRun::new(learner, tr, opts)?;
+    let calib = Calibration::prior_shift(&run.tr);
     let mut log = Vec::new();
-    let (mut best, mut best_loss, mut best_epoch) = (params.clone(), f64::INFINITY, 0);
+    let (mut best, mut best_loss, mut best_epoch) = (run.params.clone(), f64::INFINITY, 0);
     let mut eval_scratch = learner.scratch();
     for epoch in 1..=opts.epochs {
         let t0 = Instant::now();
-        order.shuffle(&mut rng);
-        let mut loss_sum = 0.0;
-        for ids in order.chunks(opts.batch) {
-            batch.clear();
-            batch.extend(ids.iter().map(|&i| tr[i]));
-            let scale = 1.0 / batch.len() as f32;
-            let chunks: Vec<&[&Sample]> = batch.chunks(opts.chunk).collect();
-            let used = chunks.len();
-            let p = &params;
-            pool.install(|| {
-                workers[..used]
-                    .par_iter_mut()
-                    .zip(chunks.par_iter())
-                    .for_each(|((scratch, g, loss), part)| {
-                        g.iter_mut().for_each(|x| *x = 0.0);
-                        *loss = learner.loss_grad(p, part, scale, g, scratch);
-                    });
-            });
-            grad.iter_mut().for_each(|x| *x = 0.0);
-            for (_, g, loss) in &workers[..used] {
-                for (a, b) in grad.iter_mut().zip(g) {
-                    *a += b;
-                }
-                loss_sum += loss;
-            }
-            adam.step(&mut params, &grad);
-        }
+        let loss_sum = run.epoch();
         let (val_loss, val_ramp, val_main, _) =
-            validate(learner, &params, &val, &calib, &mut eval_scratch);
+            validate(learner, &run.params, &val, &calib, &mut eval_scratch);
         let entry = EpochLog {
             epoch,
-            train_loss: loss_sum / tr.len() as f64,
+            train_loss: loss_sum / run.tr.len() as f64,
             val_loss,
             val_ramp,
             val_main,
@@ -247,7 +197,7 @@ pub fn train<L: Learner>(
         if val_loss < best_loss {
             best_loss = val_loss;
             best_epoch = epoch;
-            best.copy_from_slice(&params);
+            best.copy_from_slice(&run.params);
         } else if epoch - best_epoch >= opts.patience {
             break;
         }
@@ -260,6 +210,146 @@ pub fn train<L: Learner>(
         best_epoch,
         wall_s: start.elapsed().as_secs_f64(),
     })
+}
+
+/// Rejects options under which the loop could not make progress (zero-sized batches, chunks,
+/// thread pools or runs).
+fn check_options(opts: &TrainOptions) -> Result<(), TrainError> {
+    if opts.batch == 0 || opts.chunk == 0 || opts.threads == 0 || opts.epochs == 0 {
+        return Err(TrainError::Options(format!(
+            "epochs {}, batch {}, chunk {} and threads {} must be positive",
+            opts.epochs, opts.batch, opts.chunk, opts.threads
+        )));
+    }
+    Ok(())
+}
+
+/// The validation and the training split of `samples`, neither of which may be empty.
+fn split(samples: &[Sample]) -> Result<(Vec<&Sample>, Vec<&Sample>), TrainError> {
+    let (val, tr): (Vec<&Sample>, Vec<&Sample>) = samples.iter().partition(|s| is_validation(s));
+    if tr.is_empty() {
+        return Err(TrainError::NoTrainingData(samples.len()));
+    }
+    if val.is_empty() {
+        return Err(TrainError::NoValidationData);
+    }
+    Ok((val, tr))
+}
+
+/// A training run between epochs: the parameters, the optimiser, the random stream (seeded once,
+/// drawn by the initialisation and then by each epoch's shuffle) and the reused buffers.
+struct TrainingRun<'a, L: Learner> {
+    learner: &'a L,
+    opts: &'a TrainOptions,
+    /// The training split.
+    tr: Vec<&'a Sample>,
+    rng: ChaCha8Rng,
+    params: Vec<f32>,
+    adam: Adam,
+    gradient: Gradient<L>,
+    /// Indices into `tr`, shuffled each epoch.
+    order: Vec<usize>,
+    batch: Vec<&'a Sample>,
+}
+
+impl<'a, L: Learner> TrainingRun<'a, L> {
+    /// Parameters initialised from `opts.seed`, and buffers for `opts.batch`.
+    fn new(
+        learner: &'a L,
+        tr: Vec<&'a Sample>,
+        opts: &'a TrainOptions,
+    ) -> Result<TrainingRun<'a, L>, TrainError> {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(opts.threads)
+            .build()
+            .map_err(|e| TrainError::Threads(opts.threads, e.to_string()))?;
+        let mut rng = ChaCha8Rng::seed_from_u64(opts.seed);
+        let params = learner.init(&mut rng);
+        let adam = Adam::new(params.len(), opts.lr);
+        let chunks_per_batch = opts.batch.div_ceil(opts.chunk);
+        let gradient = Gradient {
+            pool,
+            workers: (0..chunks_per_batch)
+                .map(|_| (learner.scratch(), vec![0.0; params.len()], 0.0))
+                .collect(),
+            sum: vec![0.0f32; params.len()],
+        };
+        Ok(TrainingRun {
+            learner,
+            opts,
+            order: (0..tr.len()).collect(),
+            tr,
+            rng,
+            params,
+            adam,
+            gradient,
+            batch: Vec::with_capacity(opts.batch),
+        })
+    }
+
+    /// One pass over the training split in shuffled minibatches, one Adam step each; returns
+    /// the summed training loss.
+    fn epoch(&mut self) -> f64 {
+        self.order.shuffle(&mut self.rng);
+        let mut loss_sum = 0.0;
+        for ids in self.order.chunks(self.opts.batch) {
+            self.batch.clear();
+            self.batch.extend(ids.iter().map(|&i| self.tr[i]));
+            self.gradient.compute(
+                self.learner,
+                &self.params,
+                &self.batch,
+                self.opts.chunk,
+                &mut loss_sum,
+            );
+            self.adam.step(&mut self.params, &self.gradient.sum);
+        }
+        loss_sum
+    }
+}
+
+/// The mean gradient of a minibatch, computed in fixed chunks on a thread pool and summed in
+/// chunk order, so the result does not depend on the number of threads.
+struct Gradient<L: Learner> {
+    pool: rayon::ThreadPool,
+    /// Per chunk of a minibatch: scratch, gradient and loss.
+    workers: Vec<(L::Scratch, Vec<f32>, f64)>,
+    /// The minibatch's gradient.
+    sum: Vec<f32>,
+}
+
+impl<L: Learner> Gradient<L> {
+    /// Sets `sum` to the mean gradient of `batch` at `params` and adds each chunk's summed loss
+    /// to `loss_sum`, in chunk order.
+    fn compute(
+        &mut self,
+        learner: &L,
+        params: &[f32],
+        batch: &[&Sample],
+        chunk: usize,
+        loss_sum: &mut f64,
+    ) {
+        let scale = 1.0 / batch.len() as f32;
+        let chunks: Vec<&[&Sample]> = batch.chunks(chunk).collect();
+        let used = chunks.len();
+        let workers = &mut self.workers[..used];
+        self.pool.install(|| {
+            workers
+                .par_iter_mut()
+                .zip(chunks.par_iter())
+                .for_each(|((scratch, g, loss), part)| {
+                    g.iter_mut().for_each(|x| *x = 0.0);
+                    *loss = learner.loss_grad(params, part, scale, g, scratch);
+                });
+        });
+        self.sum.iter_mut().for_each(|x| *x = 0.0);
+        for (_, g, loss) in &self.workers[..used] {
+            for (a, b) in self.sum.iter_mut().zip(g) {
+                *a += b;
+            }
+            *loss_sum += loss;
+        }
+    }
 }
 
 /// Validation loss (on the thinned data, like the training loss), the confusion of each subset
