@@ -10,7 +10,7 @@ use bkpbs::predict::features::Observation;
 use bkpbs::predict::gcn::{sigmoid, Architecture};
 use bkpbs::predict::infer::{Network, Workspace};
 use bkpbs::train::gcn::{backward, forward, Cache, Inputs};
-use bkpbs::train::train::bce_with_logit;
+use bkpbs::train::training_loop::bce_with_logit;
 use common::random_obs;
 
 /// Σ BCE over the batch, in f64.
@@ -113,7 +113,7 @@ use bkpbs::predict::model_file::{LaneChangeModel, ModelError, ModelFile};
 use bkpbs::predict::{Learned, Predictor};
 use bkpbs::train::dataset::{DataError, Dataset, Sample};
 use bkpbs::train::fit::fit;
-use bkpbs::train::train::{TrainOptions, Trained};
+use bkpbs::train::training_loop::{TrainOptions, Trained};
 
 /// A synthetic data set with a learnable rule: ramp HDVs change lanes when little acceleration
 /// lane is left and the right-of-way gap (left follower) is large; main-road HDVs when their
@@ -180,7 +180,7 @@ fn training_loop_learns_and_is_deterministic_for_any_thread_count() {
         ..TrainOptions::default()
     };
     let run = |threads| -> Trained {
-        bkpbs::train::train::train(&learner, &samples, &opts(threads), |_| {}).unwrap()
+        bkpbs::train::training_loop::train(&learner, &samples, &opts(threads), |_| {}).unwrap()
     };
     let a = run(1);
     let b = run(2);
@@ -198,7 +198,7 @@ fn training_loop_learns_and_is_deterministic_for_any_thread_count() {
         patience: 25,
         ..TrainOptions::default()
     };
-    let t = bkpbs::train::train::train(&learner, &samples, &opts, |_| {}).unwrap();
+    let t = bkpbs::train::training_loop::train(&learner, &samples, &opts, |_| {}).unwrap();
     let first = t.log.first().unwrap();
     let best = &t.log[t.best_epoch - 1];
     assert!(

@@ -9,7 +9,7 @@ use clap::Args;
 use bkpbs::config::Config;
 use bkpbs::train::collect::CollectPlan;
 use bkpbs::train::commands::{self, EvalData};
-use bkpbs::train::train::TrainOptions;
+use bkpbs::train::training_loop::TrainOptions;
 
 use super::scenario::{load_config, ScenarioArgs};
 

@@ -12,7 +12,7 @@ use super::collect::{collect, meta_of, CollectError, CollectPlan, EVAL_SEED_BASE
 use super::dataset::{DataError, Dataset};
 use super::eval::{evaluate, EvalReport};
 use super::fit::{fit, Fitting};
-use super::train::{TrainError, TrainOptions};
+use super::training_loop::{TrainError, TrainOptions};
 use crate::config::Config;
 use crate::episode::EpisodeError;
 use crate::predict::learned::Learned;

@@ -22,7 +22,7 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
 use super::dataset::{Dataset, Sample};
-use super::train::Confusion;
+use super::training_loop::Confusion;
 use crate::predict::features::Subset;
 use crate::predict::infer::Workspace;
 use crate::predict::model_file::LaneChangeModel;

@@ -5,7 +5,7 @@ use std::time::Instant;
 
 use super::dataset::Dataset;
 use super::gcn::GcnLearner;
-use super::train::{is_validation, train, EpochLog, TrainError, TrainOptions};
+use super::training_loop::{is_validation, train, EpochLog, TrainError, TrainOptions};
 use crate::predict::features::FeatureLayout;
 use crate::predict::gcn::Architecture;
 use crate::predict::logistic::Logistic;

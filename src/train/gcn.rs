@@ -7,7 +7,7 @@ use nalgebra::{DMatrix, Dyn, RawStorage, RealField, Scalar};
 use rand_chacha::ChaCha8Rng;
 
 use super::dataset::Sample;
-use super::train::{bce_with_logit, Learner};
+use super::training_loop::{bce_with_logit, Learner};
 use crate::predict::features::{
     encode_a, encode_b, Observation, CAV_NODES, COLUMNS_B, FEATURES_A, FEATURES_B, NODES_A, PREVIEW,
 };

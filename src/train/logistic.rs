@@ -3,7 +3,7 @@
 use rand_chacha::ChaCha8Rng;
 
 use super::dataset::Sample;
-use super::train::{bce_with_logit, Learner};
+use super::training_loop::{bce_with_logit, Learner};
 use crate::predict::gcn::sigmoid;
 use crate::predict::logistic::Logistic;
 

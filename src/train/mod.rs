@@ -12,4 +12,4 @@ pub mod eval;
 pub mod fit;
 pub mod gcn;
 pub mod logistic;
-pub mod train;
+pub mod training_loop;
