@@ -22,7 +22,7 @@ use crate::model::road::{Road, MAIN_LANES, MERGE_LANE};
 use crate::model::trajectory::{Pose, Trajectory};
 use crate::planner::primitives::{Library, Primitive, Throttle};
 use crate::planner::safety::{Body, SafetyRule};
-use crate::planner::search::{astar, Stop};
+use crate::planner::search::{astar, Search, Stop};
 
 /// Which phase produced a plan.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -161,7 +161,7 @@ impl Mastar {
             .obstacles
             .iter()
             .copied()
-            .filter(|t| (t.poses[0].s - req.start.pos.x).abs() < 200.0)
+            .filter(|t| (t.poses[0].s - req.start.pos.x).abs() < OBSTACLE_RANGE)
             .collect();
         let mut expanded = 0;
         for phase in [Phase::Forward, Phase::Fallback] {
@@ -176,244 +176,28 @@ impl Mastar {
         Err(NoPlan { expanded })
     }
 
+    /// One phase of M-A*: A* from the CAV's state to the phase's goal or horizon. Returns the
+    /// nodes expanded when it finds no plan.
     fn search(
         &self,
         req: &Request,
         obstacles: &[&Trajectory],
         phase: Phase,
     ) -> Result<Plan, usize> {
-        let set = &self.settings;
-        let (primitives, goal_distance, budget, lc_penalty): (&[Primitive], f64, usize, f64) =
-            match phase {
-                Phase::Forward => (
-                    &[
-                        Primitive::Accelerate,
-                        Primitive::Idle,
-                        Primitive::Decelerate,
-                        Primitive::LaneChangeLeft,
-                        Primitive::LaneChangeRight,
-                    ],
-                    set.goal_distance,
-                    set.phase1_budget,
-                    set.phase1_lane_change_penalty,
-                ),
-                Phase::Fallback => (
-                    &[
-                        Primitive::Decelerate,
-                        Primitive::EmergencyBrake,
-                        Primitive::LaneChangeLeft,
-                        Primitive::LaneChangeRight,
-                    ],
-                    set.fallback_goal_distance,
-                    set.phase2_budget,
-                    set.phase2_lane_change_penalty,
-                ),
-            };
-        let s0 = req.start.pos.x;
-        let horizon = set.horizon;
-        let dt = self.library.dt;
-        let steps_for = |remaining: f64, v: f64| -> f64 {
-            free_flow_time(remaining, v, self.library.accel, self.v_max) / dt
-        };
-        let check_horizon = horizon + self.library.lane_change_steps;
-        // Coasting on at constant speed from a goal or horizon node must stay safe up to the
-        // horizon other vehicles are predicted (and BK-PBS checks conflicts) over, so a plan
-        // never ends right behind a slower vehicle.
-        let tail_safe = |st: &BicycleState, step: usize| -> bool {
-            (step + 1..=check_horizon).all(|k| {
-                let t = (k - step) as f64 * dt;
-                let coast = BicycleState {
-                    pos: Point::new(st.pos.x + st.speed * t, st.pos.y),
-                    heading: 0.0,
-                    speed: st.speed,
-                };
-                self.on_road(&coast, req) && self.safe(&coast, k, req, obstacles)
-            })
-        };
-        let reached = |n: &Node| -> bool {
-            if req.must_merge {
-                MAIN_LANES.contains(&n.lane) && n.step > 0
-            } else {
-                n.state.pos.x - s0 >= goal_distance && MAIN_LANES.contains(&n.lane)
-            }
-        };
-        // Remaining cost, estimated from below.
-        let heuristic = |n: &Node| -> f64 {
-            if n.terminal || n.goal {
-                return 0.0;
-            }
-            let to_horizon = horizon.saturating_sub(n.step) as f64;
-            let to_goal = if req.must_merge {
-                let approach =
-                    (self.road.merge_start - (n.state.pos.x - 0.5 * req.length)).max(0.0);
-                approach / (self.v_max * dt) + self.library.lane_change_steps as f64
-            } else {
-                steps_for(
-                    (goal_distance - (n.state.pos.x - s0)).max(0.0),
-                    n.state.speed,
-                )
-            };
-            to_goal.min(to_horizon)
-        };
-        // Cost charged when a plan reaches the horizon short of its goal.
-        let terminal_cost = |n: &Node| -> f64 {
-            let lacking = steps_for(
-                (goal_distance - (n.state.pos.x - s0)).max(0.0),
-                n.state.speed,
-            );
-            if req.must_merge && !MAIN_LANES.contains(&n.lane) {
-                lacking + 5.0
-            } else {
-                lacking
-            }
-        };
-        let root = Node {
-            step: 0,
-            lane: req.lane,
-            state: req.start,
-            via: None,
-            segment: Vec::new(),
-            terminal: false,
-            goal: false,
-        };
-        let successors = |n: &Node| -> Vec<(Node, f64)> {
-            let mut out = Vec::new();
-            if n.terminal {
-                return out;
-            }
-            let mut moves: Vec<(FirstMove, i32, Vec<BicycleState>)> = Vec::new();
-            match (n.step, req.ongoing) {
-                (0, Some(lc)) if lc.steps_left > 0 => {
-                    let y0 = n.state.pos.y;
-                    let y1 = self.lane_y(lc.target_lane);
-                    let total = lc.steps_left as f64 * dt;
-                    let seg = self.library.track(
-                        &n.state,
-                        Throttle::HoldForwardSpeed(n.state.speed * n.state.heading.cos()),
-                        lc.steps_left,
-                        |t| {
-                            if t < total {
-                                (y0 + (y1 - y0) * t / total, (y1 - y0) / total)
-                            } else {
-                                (y1, 0.0)
-                            }
-                        },
-                    );
-                    moves.push((FirstMove::Continue, lc.target_lane, seg));
-                }
-                _ => {
-                    for &p in primitives {
-                        if !self.library.available(p, &n.state) {
-                            continue;
-                        }
-                        let lane = n.lane + p.lane_offset();
-                        if !(MERGE_LANE..=MAIN_LANES[1]).contains(&lane) {
-                            continue;
-                        }
-                        let seg = if n.step == 0 {
-                            self.library.rollout(p, &n.state, self.lane_y(n.lane))
-                        } else {
-                            self.library.rollout_settled(p, &n.state)
-                        };
-                        moves.push((FirstMove::Start(p), lane, seg));
-                    }
-                }
-            }
-            for (mv, lane, seg) in moves {
-                let ok = seg.iter().enumerate().all(|(k, st)| {
-                    let step = n.step + k + 1;
-                    self.on_road(st, req) && self.safe(st, step, req, obstacles)
-                });
-                if !ok {
-                    continue;
-                }
-                let steps = seg.len();
-                let mut state = *seg.last().expect("moves span at least one step");
-                // Inside the search every node is settled on its lane (see rollout_settled); the
-                // first move, which is what gets executed, is rolled out exactly.
-                state.pos.y = self.lane_y(lane);
-                state.speed *= state.heading.cos();
-                state.heading = 0.0;
-                let step = n.step + steps;
-                let mut cost = steps as f64;
-                if matches!(mv, FirstMove::Start(p) if p.is_lane_change()) {
-                    cost += lc_penalty;
-                }
-                let mut next = Node {
-                    step,
-                    lane,
-                    state,
-                    via: Some(mv),
-                    segment: seg,
-                    terminal: false,
-                    goal: false,
-                };
-                let ends = reached(&next) || step >= horizon;
-                let tail_ok = ends && tail_safe(&next.state, step);
-                if reached(&next) && tail_ok {
-                    next.goal = true;
-                    if !req.must_merge && state.speed > 0.0 {
-                        // Charge the time the goal distance was actually passed, not the whole
-                        // step.
-                        let over = next.state.pos.x - s0 - goal_distance;
-                        cost -= (over / (state.speed * dt)).clamp(0.0, 1.0 - 1e-9);
-                    }
-                } else if step >= horizon {
-                    if !tail_ok {
-                        continue;
-                    }
-                    next.terminal = true;
-                    cost += terminal_cost(&next);
-                }
-                out.push((next, cost));
-            }
-            out
-        };
-        let (s_bin, v_bin) = (set.s_bin, set.v_bin);
-        let key = |n: &Node| {
-            (
-                n.step,
-                n.lane,
-                (n.state.pos.x / s_bin).round() as i64,
-                (n.state.speed / v_bin).round() as i64,
-                n.terminal,
-            )
-        };
+        let spec = PhaseSpec::of(phase, &self.settings);
+        let problem = PhaseSearch::new(self, req, obstacles, spec);
         let result = astar(
-            root,
-            successors,
-            heuristic,
+            problem.root(),
+            |n| problem.successors(n),
+            |n| problem.heuristic(n),
             |n| n.terminal || n.goal,
-            key,
-            budget,
+            |n| problem.key(n),
+            spec.budget,
         );
         if result.stop != Stop::Found || result.path.len() < 2 {
             return Err(result.expanded);
         }
-        let mut poses = vec![pose(&req.start)];
-        let mut prims = Vec::new();
-        for n in &result.path[1..] {
-            poses.extend(n.segment.iter().map(pose));
-            if let Some(FirstMove::Start(p)) = n.via {
-                prims.push(p);
-            }
-        }
-        let first = result.path[1].via.expect("non-root nodes have a move");
-        if matches!(first, FirstMove::Start(_)) {
-            prims.remove(0);
-        }
-        Ok(Plan {
-            first,
-            primitives: prims,
-            trajectory: Trajectory {
-                poses,
-                length: req.length,
-                width: req.width,
-            },
-            phase,
-            expanded: result.expanded,
-            cost: result.cost,
-        })
+        Ok(assemble(req, phase, &result))
     }
 
     /// Whether the (un-inflated) body stays on drivable road.
@@ -469,6 +253,362 @@ impl Mastar {
             self.rule
                 .clear(&me, &me_now, &other, &other_now, step as f64 * dt)
         })
+    }
+}
+
+/// Other vehicles farther than this along the road from the CAV now are left out of its search
+/// (m). Every obstacle kept costs a safety check at every step of every rolled-out primitive, and
+/// one this far away would have to close 80 m on the CAV within the 4 s checked (15 + 5 steps of
+/// 0.2 s) just to come within the safety rule's [`REACH`](crate::planner::safety::REACH) of
+/// 120 m, beyond which it never counts. A practical range, not a proven bound: changing it can
+/// change plans.
+const OBSTACLE_RANGE: f64 = 200.0;
+
+/// Extra cost (steps) of a ramp CAV's plan that reaches the horizon still on the acceleration
+/// lane. Such a plan still owes at least the lane change onto the main road (5 steps: 1 s at the
+/// default 0.2 s steps), which the free-flow time of the distance it lacks does not count; without
+/// it, a plan still on the ramp at the horizon could cost less than one that merges a few steps
+/// later.
+const UNMERGED_PENALTY: f64 = 5.0;
+
+/// Phase 1's primitives: everything but the emergency brake.
+const FORWARD_PRIMITIVES: [Primitive; 5] = [
+    Primitive::Accelerate,
+    Primitive::Idle,
+    Primitive::Decelerate,
+    Primitive::LaneChangeLeft,
+    Primitive::LaneChangeRight,
+];
+
+/// Phase 2's primitives: slowing down, hard or not, and the lane changes.
+const FALLBACK_PRIMITIVES: [Primitive; 4] = [
+    Primitive::Decelerate,
+    Primitive::EmergencyBrake,
+    Primitive::LaneChangeLeft,
+    Primitive::LaneChangeRight,
+];
+
+/// What one phase searches for: the primitives it may use, its goal distance, its expansion
+/// budget and what a lane change costs on top of its steps. The two phases differ only in these.
+#[derive(Debug, Clone, Copy)]
+struct PhaseSpec {
+    primitives: &'static [Primitive],
+    goal_distance: f64,
+    budget: usize,
+    lane_change_penalty: f64,
+}
+
+impl PhaseSpec {
+    /// The spec of `phase` under `settings`.
+    fn of(phase: Phase, settings: &PlannerSettings) -> Self {
+        match phase {
+            Phase::Forward => PhaseSpec {
+                primitives: &FORWARD_PRIMITIVES,
+                goal_distance: settings.goal_distance,
+                budget: settings.phase1_budget,
+                lane_change_penalty: settings.phase1_lane_change_penalty,
+            },
+            Phase::Fallback => PhaseSpec {
+                primitives: &FALLBACK_PRIMITIVES,
+                goal_distance: settings.fallback_goal_distance,
+                budget: settings.phase2_budget,
+                lane_change_penalty: settings.phase2_lane_change_penalty,
+            },
+        }
+    }
+}
+
+/// The A* problem of one phase for one request: the successor, heuristic and goal functions
+/// over [`Node`]s, with the planner, the request and its nearby obstacles borrowed for the
+/// search. Keeping them together lets [`Mastar::search`] read as the algorithm.
+struct PhaseSearch<'p> {
+    planner: &'p Mastar,
+    req: &'p Request<'p>,
+    obstacles: &'p [&'p Trajectory],
+    spec: PhaseSpec,
+    /// The CAV's start along the road: progress is measured from here.
+    s0: f64,
+    /// Step length (s).
+    dt: f64,
+    /// The planning horizon T (steps): a node at or past it ends its plan.
+    horizon: usize,
+    /// Steps a plan's end must stay safe up to when coasted on: T plus a lane change, the
+    /// horizon other vehicles are predicted (and BK-PBS checks conflicts) over.
+    check_horizon: usize,
+}
+
+impl<'p> PhaseSearch<'p> {
+    /// The search of phase `spec` for `req` among `obstacles`.
+    fn new(
+        planner: &'p Mastar,
+        req: &'p Request<'p>,
+        obstacles: &'p [&'p Trajectory],
+        spec: PhaseSpec,
+    ) -> Self {
+        let horizon = planner.settings.horizon;
+        PhaseSearch {
+            planner,
+            req,
+            obstacles,
+            spec,
+            s0: req.start.pos.x,
+            dt: planner.library.dt,
+            horizon,
+            check_horizon: horizon + planner.library.lane_change_steps,
+        }
+    }
+
+    /// The search's start: the CAV as it is now.
+    fn root(&self) -> Node {
+        Node {
+            step: 0,
+            lane: self.req.lane,
+            state: self.req.start,
+            via: None,
+            segment: Vec::new(),
+            terminal: false,
+            goal: false,
+        }
+    }
+
+    /// Steps to cover `remaining` metres from speed `v` at full throttle up to v_max.
+    fn steps_for(&self, remaining: f64, v: f64) -> f64 {
+        free_flow_time(remaining, v, self.planner.library.accel, self.planner.v_max) / self.dt
+    }
+
+    /// Steps the CAV at `n` still lacks to its goal distance, at free flow.
+    fn lacking_steps(&self, n: &Node) -> f64 {
+        self.steps_for(
+            (self.spec.goal_distance - (n.state.pos.x - self.s0)).max(0.0),
+            n.state.speed,
+        )
+    }
+
+    /// Whether the CAV at `st` at `step` is on the road and clear of every obstacle.
+    fn free(&self, st: &BicycleState, step: usize) -> bool {
+        self.planner.on_road(st, self.req) && self.planner.safe(st, step, self.req, self.obstacles)
+    }
+
+    /// Whether coasting on at constant speed from `st` at `step` stays free up to the check
+    /// horizon, so a plan never ends right behind a slower vehicle.
+    fn tail_safe(&self, st: &BicycleState, step: usize) -> bool {
+        (step + 1..=self.check_horizon).all(|k| {
+            let t = (k - step) as f64 * self.dt;
+            let coast = BicycleState {
+                pos: Point::new(st.pos.x + st.speed * t, st.pos.y),
+                heading: 0.0,
+                speed: st.speed,
+            };
+            self.free(&coast, k)
+        })
+    }
+
+    /// The goal test: a ramp CAV on a main-road lane; a main-road CAV the goal distance ahead on
+    /// a main-road lane.
+    fn reached(&self, n: &Node) -> bool {
+        if self.req.must_merge {
+            MAIN_LANES.contains(&n.lane) && n.step > 0
+        } else {
+            n.state.pos.x - self.s0 >= self.spec.goal_distance && MAIN_LANES.contains(&n.lane)
+        }
+    }
+
+    /// Remaining cost, estimated from below: the time to the goal at free flow (for a ramp CAV,
+    /// for its rear to reach the merge zone at v_max, plus a lane change), capped by the steps
+    /// left to the horizon.
+    fn heuristic(&self, n: &Node) -> f64 {
+        if n.terminal || n.goal {
+            return 0.0;
+        }
+        let to_horizon = self.horizon.saturating_sub(n.step) as f64;
+        let to_goal = if self.req.must_merge {
+            let road = &self.planner.road;
+            let approach = (road.merge_start - (n.state.pos.x - 0.5 * self.req.length)).max(0.0);
+            approach / (self.planner.v_max * self.dt)
+                + self.planner.library.lane_change_steps as f64
+        } else {
+            self.lacking_steps(n)
+        };
+        to_goal.min(to_horizon)
+    }
+
+    /// Cost charged when a plan reaches the horizon short of its goal.
+    fn terminal_cost(&self, n: &Node) -> f64 {
+        let lacking = self.lacking_steps(n);
+        if self.req.must_merge && !MAIN_LANES.contains(&n.lane) {
+            lacking + UNMERGED_PENALTY
+        } else {
+            lacking
+        }
+    }
+
+    /// The closed-set key: nodes alike in step, lane, s bin, v bin and terminality are one.
+    fn key(&self, n: &Node) -> (usize, i32, i64, i64, bool) {
+        let (s_bin, v_bin) = (self.planner.settings.s_bin, self.planner.settings.v_bin);
+        (
+            n.step,
+            n.lane,
+            (n.state.pos.x / s_bin).round() as i64,
+            (n.state.speed / v_bin).round() as i64,
+            n.terminal,
+        )
+    }
+
+    /// The children of `n` with their edge costs: every move that stays free, settled on its
+    /// lane, and marked goal or terminal where it ends the plan.
+    fn successors(&self, n: &Node) -> Vec<(Node, f64)> {
+        if n.terminal {
+            return Vec::new();
+        }
+        self.moves(n)
+            .into_iter()
+            .filter_map(|(mv, lane, seg)| self.successor(n, mv, lane, seg))
+            .collect()
+    }
+
+    /// The moves from `n`, each with the lane it ends in and its states at each step: at the
+    /// root the lane change under way, if any, is continued; otherwise every primitive of the
+    /// phase that is available and keeps to the road's lanes.
+    fn moves(&self, n: &Node) -> Vec<(FirstMove, i32, Vec<BicycleState>)> {
+        match (n.step, self.req.ongoing) {
+            (0, Some(lc)) if lc.steps_left > 0 => {
+                let seg = self.continue_lane_change(&n.state, lc);
+                vec![(FirstMove::Continue, lc.target_lane, seg)]
+            }
+            _ => {
+                let library = &self.planner.library;
+                let mut moves = Vec::new();
+                for &p in self.spec.primitives {
+                    if !library.available(p, &n.state) {
+                        continue;
+                    }
+                    let lane = n.lane + p.lane_offset();
+                    if !(MERGE_LANE..=MAIN_LANES[1]).contains(&lane) {
+                        continue;
+                    }
+                    let seg = if n.step == 0 {
+                        library.rollout(p, &n.state, self.planner.lane_y(n.lane))
+                    } else {
+                        library.rollout_settled(p, &n.state)
+                    };
+                    moves.push((FirstMove::Start(p), lane, seg));
+                }
+                moves
+            }
+        }
+    }
+
+    /// The rest of the lane change under way from `st`: forward speed held, lateral position
+    /// linear to the target lane's centre over the steps left.
+    fn continue_lane_change(&self, st: &BicycleState, lc: OngoingLaneChange) -> Vec<BicycleState> {
+        let y0 = st.pos.y;
+        let y1 = self.planner.lane_y(lc.target_lane);
+        let total = lc.steps_left as f64 * self.dt;
+        self.planner.library.track(
+            st,
+            Throttle::HoldForwardSpeed(st.speed * st.heading.cos()),
+            lc.steps_left,
+            |t| {
+                if t < total {
+                    (y0 + (y1 - y0) * t / total, (y1 - y0) / total)
+                } else {
+                    (y1, 0.0)
+                }
+            },
+        )
+    }
+
+    /// The child of `n` reached by `mv` along `seg` into `lane`, with its edge cost, unless a
+    /// state of `seg` is not free or the child reaches the horizon with an unsafe tail.
+    fn successor(
+        &self,
+        n: &Node,
+        mv: FirstMove,
+        lane: i32,
+        seg: Vec<BicycleState>,
+    ) -> Option<(Node, f64)> {
+        let ok = seg
+            .iter()
+            .enumerate()
+            .all(|(k, st)| self.free(st, n.step + k + 1));
+        if !ok {
+            return None;
+        }
+        let steps = seg.len();
+        let mut state = *seg.last().expect("moves span at least one step");
+        // Inside the search every node is settled on its lane (see rollout_settled); the first
+        // move, which is what gets executed, is rolled out exactly.
+        state.pos.y = self.planner.lane_y(lane);
+        state.speed *= state.heading.cos();
+        state.heading = 0.0;
+        let mut cost = steps as f64;
+        if matches!(mv, FirstMove::Start(p) if p.is_lane_change()) {
+            cost += self.spec.lane_change_penalty;
+        }
+        let next = Node {
+            step: n.step + steps,
+            lane,
+            state,
+            via: Some(mv),
+            segment: seg,
+            terminal: false,
+            goal: false,
+        };
+        self.mark_end(next, cost)
+    }
+
+    /// Marks `next` as a goal if it reached the goal with a safe tail (charging only the part of
+    /// its last step before the goal distance was passed), else, at the horizon, as terminal
+    /// (charging the terminal cost), or drops it there if its tail is unsafe. A goal node with an
+    /// unsafe tail short of the horizon stays an ordinary node, searched on.
+    fn mark_end(&self, mut next: Node, mut cost: f64) -> Option<(Node, f64)> {
+        let (step, state) = (next.step, next.state);
+        let ends = self.reached(&next) || step >= self.horizon;
+        let tail_ok = ends && self.tail_safe(&next.state, step);
+        if self.reached(&next) && tail_ok {
+            next.goal = true;
+            if !self.req.must_merge && state.speed > 0.0 {
+                // Charge the time the goal distance was actually passed, not the whole step.
+                let over = next.state.pos.x - self.s0 - self.spec.goal_distance;
+                cost -= (over / (state.speed * self.dt)).clamp(0.0, 1.0 - 1e-9);
+            }
+        } else if step >= self.horizon {
+            if !tail_ok {
+                return None;
+            }
+            next.terminal = true;
+            cost += self.terminal_cost(&next);
+        }
+        Some((next, cost))
+    }
+}
+
+/// The plan along a found path (root first): its poses, the first move and the primitives after
+/// it.
+fn assemble(req: &Request, phase: Phase, result: &Search<Node>) -> Plan {
+    let mut poses = vec![pose(&req.start)];
+    let mut prims = Vec::new();
+    for n in &result.path[1..] {
+        poses.extend(n.segment.iter().map(pose));
+        if let Some(FirstMove::Start(p)) = n.via {
+            prims.push(p);
+        }
+    }
+    let first = result.path[1].via.expect("non-root nodes have a move");
+    if matches!(first, FirstMove::Start(_)) {
+        prims.remove(0);
+    }
+    Plan {
+        first,
+        primitives: prims,
+        trajectory: Trajectory {
+            poses,
+            length: req.length,
+            width: req.width,
+        },
+        phase,
+        expanded: result.expanded,
+        cost: result.cost,
     }
 }
 

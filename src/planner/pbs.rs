@@ -109,6 +109,45 @@ struct Node {
     depth: usize,
 }
 
+/// The high-level search tree: every node generated (ids are indices), the depth-first stack
+/// of nodes still to expand, and the best node seen, the fallback answer.
+struct Tree {
+    nodes: Vec<Node>,
+    stack: Vec<usize>,
+    best: usize,
+}
+
+impl Tree {
+    /// A tree of `root` alone, which is also the best node so far and the first to expand.
+    fn new(root: Node) -> Self {
+        Tree {
+            nodes: vec![root],
+            stack: vec![0],
+            best: 0,
+        }
+    }
+
+    /// Adds `children` in order, each pushed on the stack (so the last is expanded first) and
+    /// made the best node if it beats the best so far.
+    fn push_children(&mut self, children: Vec<Node>) {
+        for c in children {
+            let cid = self.nodes.len();
+            if c.better_than(&self.nodes[self.best]) {
+                self.best = cid;
+            }
+            self.nodes.push(c);
+            self.stack.push(cid);
+        }
+    }
+}
+
+impl Node {
+    /// Whether this node is a better fallback than `other`: fewer conflicts, then cheaper.
+    fn better_than(&self, other: &Node) -> bool {
+        (self.conflicts.len(), self.cost) < (other.conflicts.len(), other.cost)
+    }
+}
+
 /// The full state of a node.
 struct State {
     graph: PriorityGraph,
@@ -265,30 +304,36 @@ impl Problem<'_> {
         Some(changed)
     }
 
-    /// Runs one planning round.
+    /// Runs one planning round: Algorithm 1, depth-first from the root until a node without
+    /// conflicts or the end of the budget, then the best node seen as a fallback.
     pub fn solve(&self) -> Solution {
         let start = Instant::now();
-        let n = self.scene.vehicles.len();
         let mut stats = PbsStats::default();
-        // Root: CAVs alone (in parallel: they are independent), HDVs unconditioned.
-        let root: Vec<RootPlan> = (0..n)
-            .into_par_iter()
-            .map(|a| {
-                if self.is_cav(a) {
-                    match self.requests.plan(self.planner, a, &[]) {
-                        Ok(p) => (
-                            Arc::new(p.trajectory.clone()),
-                            Some(Arc::new(p.clone())),
-                            1,
-                            p.expanded as u64,
-                        ),
-                        Err(e) => (self.predict(a, &[]), None, 1, e.expanded as u64),
-                    }
-                } else {
-                    (self.predict(a, &[]), None, 0, 0)
-                }
-            })
-            .collect();
+        let root_state = self.plan_root(&mut stats);
+        let mut tree = Tree::new(self.root_node(&root_state));
+        let mut solution = None;
+        while let Some(id) = tree.stack.pop() {
+            if tree.nodes[id].conflicts.is_empty() {
+                solution = Some(id);
+                break;
+            }
+            if self.budget_spent(start, &mut stats) {
+                break;
+            }
+            stats.nodes += 1;
+            let children = self.expand(&tree.nodes, id, &root_state, &mut stats);
+            tree.push_children(children);
+        }
+        let chosen = solution.unwrap_or(tree.best);
+        stats.fallback = solution.is_none();
+        self.answer(&tree.nodes, chosen, &root_state, stats)
+    }
+
+    /// The root's state: each CAV planned alone (in parallel: they are independent), each HDV
+    /// predicted unconditioned; the effort is added to `stats`.
+    fn plan_root(&self, stats: &mut PbsStats) -> State {
+        let n = self.scene.vehicles.len();
+        let root: Vec<RootPlan> = (0..n).into_par_iter().map(|a| self.root_plan(a)).collect();
         let mut trajectories = Vec::with_capacity(n);
         let mut plans = Vec::with_capacity(n);
         for (a, (t, p, calls, nodes)) in root.into_iter().enumerate() {
@@ -298,80 +343,111 @@ impl Problem<'_> {
             trajectories.push(t);
             plans.push(p);
         }
-        let root_state = State {
+        State {
             graph: PriorityGraph::new(n),
             trajectories,
             plans,
-        };
+        }
+    }
+
+    /// Agent `a` at the root: a CAV planned by M-A* without obstacles (predicted, without a
+    /// plan, if even that fails), an HDV predicted unconditioned.
+    fn root_plan(&self, a: usize) -> RootPlan {
+        if self.is_cav(a) {
+            match self.requests.plan(self.planner, a, &[]) {
+                Ok(p) => (
+                    Arc::new(p.trajectory.clone()),
+                    Some(Arc::new(p.clone())),
+                    1,
+                    p.expanded as u64,
+                ),
+                Err(e) => (self.predict(a, &[]), None, 1, e.expanded as u64),
+            }
+        } else {
+            (self.predict(a, &[]), None, 0, 0)
+        }
+    }
+
+    /// The tree's root node, whose state is `root_state`.
+    fn root_node(&self, root_state: &State) -> Node {
         let conflicts = self.all_conflicts(&root_state.trajectories);
-        let mut nodes = vec![Node {
+        Node {
             parent: None,
             edge: None,
             changed: Vec::new(),
             cost: self.cost(&root_state.trajectories),
             conflicts,
             depth: 0,
-        }];
-        let better = |a: &Node, b: &Node| (a.conflicts.len(), a.cost) < (b.conflicts.len(), b.cost);
-        let mut best = 0usize;
-        let mut stack = vec![0usize];
-        let mut solution = None;
-        while let Some(id) = stack.pop() {
-            if nodes[id].conflicts.is_empty() {
-                solution = Some(id);
-                break;
-            }
-            if stats.nodes as usize >= self.budget.nodes {
-                break;
-            }
-            if self
-                .budget
-                .time_ms
-                .is_some_and(|ms| start.elapsed().as_secs_f64() * 1e3 >= ms)
-            {
-                stats.timed_out = true;
-                break;
-            }
-            stats.nodes += 1;
-            let (_, i, j) = nodes[id].conflicts[0];
-            let state = self.materialize(&nodes, id, &root_state);
-            if state.graph.reaches(i, j) || state.graph.reaches(j, i) {
-                continue; // ordered agents still in conflict: a dead end
-            }
-            // Both children at once: they are independent.
-            let (left, right) = rayon::join(
-                || self.child(&nodes[id], &state, j, i),
-                || self.child(&nodes[id], &state, i, j),
-            );
-            let mut children: Vec<(Node, Effort)> = [left, right]
-                .into_iter()
-                .flatten()
-                .map(|(mut c, e)| {
-                    c.parent = Some(id);
-                    (c, e)
-                })
-                .collect();
-            for (_, e) in &children {
-                stats.mastar_calls += e.mastar_calls;
-                stats.mastar_nodes += e.mastar_nodes;
-                stats.predictions += e.predictions;
-            }
-            // Push the costlier first so the cheaper is expanded first.
-            children.sort_by(|a, b| b.0.cost.total_cmp(&a.0.cost));
-            for (c, _) in children {
-                let cid = nodes.len();
-                if better(&c, &nodes[best]) {
-                    best = cid;
-                }
-                nodes.push(c);
-                stack.push(cid);
-            }
         }
-        let chosen = solution.unwrap_or(best);
-        stats.fallback = solution.is_none();
+    }
+
+    /// Whether the round must stop expanding: the node budget is used up or, if set, the
+    /// wall-time budget (which is then flagged in `stats`).
+    fn budget_spent(&self, start: Instant, stats: &mut PbsStats) -> bool {
+        if stats.nodes as usize >= self.budget.nodes {
+            return true;
+        }
+        if self
+            .budget
+            .time_ms
+            .is_some_and(|ms| start.elapsed().as_secs_f64() * 1e3 >= ms)
+        {
+            stats.timed_out = true;
+            return true;
+        }
+        false
+    }
+
+    /// The surviving children of node `id`, branching on its first conflict (i, j) into
+    /// `j ≺ i` and `i ≺ j`, costlier first; none if i and j are already ordered (a dead end).
+    /// Their effort is added to `stats`.
+    fn expand(
+        &self,
+        nodes: &[Node],
+        id: usize,
+        root_state: &State,
+        stats: &mut PbsStats,
+    ) -> Vec<Node> {
+        let (_, i, j) = nodes[id].conflicts[0];
+        let state = self.materialize(nodes, id, root_state);
+        if state.graph.reaches(i, j) || state.graph.reaches(j, i) {
+            return Vec::new(); // ordered agents still in conflict: a dead end
+        }
+        // Both children at once: they are independent.
+        let (left, right) = rayon::join(
+            || self.child(&nodes[id], &state, j, i),
+            || self.child(&nodes[id], &state, i, j),
+        );
+        let mut children: Vec<(Node, Effort)> = [left, right]
+            .into_iter()
+            .flatten()
+            .map(|(mut c, e)| {
+                c.parent = Some(id);
+                (c, e)
+            })
+            .collect();
+        for (_, e) in &children {
+            stats.mastar_calls += e.mastar_calls;
+            stats.mastar_nodes += e.mastar_nodes;
+            stats.predictions += e.predictions;
+        }
+        // Push the costlier first so the cheaper is expanded first.
+        children.sort_by(|a, b| b.0.cost.total_cmp(&a.0.cost));
+        children.into_iter().map(|(c, _)| c).collect()
+    }
+
+    /// The round's answer from node `chosen`: its full state, with its depth and conflicts
+    /// left recorded in `stats`.
+    fn answer(
+        &self,
+        nodes: &[Node],
+        chosen: usize,
+        root_state: &State,
+        mut stats: PbsStats,
+    ) -> Solution {
         stats.depth = nodes[chosen].depth as u64;
         stats.conflicts_left = nodes[chosen].conflicts.len() as u64;
-        let state = self.materialize(&nodes, chosen, &root_state);
+        let state = self.materialize(nodes, chosen, root_state);
         Solution {
             trajectories: state.trajectories,
             plans: state.plans,
