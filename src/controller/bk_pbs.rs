@@ -11,8 +11,8 @@ use crate::config::Config;
 use crate::model::road::Road;
 use crate::model::scene::{Kind, Scene};
 use crate::model::trajectory::Trajectory;
-use crate::planner::lane_changes::LaneChanges;
-use crate::planner::mastar::{Mastar, NoPlan, Plan};
+use crate::planner::lane_changes::{LaneChanges, SceneRequests};
+use crate::planner::mastar::{Mastar, Plan};
 use crate::planner::pbs::{Budget, PbsStats, Problem, RequestFor, Solution};
 use crate::predict::Predictor;
 
@@ -38,28 +38,6 @@ impl BkPbs {
     }
 }
 
-/// M-A* requests built from the scene and the lane changes under way.
-struct Requests<'a> {
-    scene: &'a Scene,
-    lane_changes: &'a LaneChanges,
-    dt: f64,
-}
-
-impl RequestFor for Requests<'_> {
-    fn plan(
-        &self,
-        planner: &Mastar,
-        agent: usize,
-        obstacles: &[&Trajectory],
-    ) -> Result<Plan, NoPlan> {
-        planner.plan(
-            &self
-                .lane_changes
-                .request(self.scene, agent, self.dt, obstacles),
-        )
-    }
-}
-
 impl Controller for BkPbs {
     fn name(&self) -> &'static str {
         "bk-pbs"
@@ -75,7 +53,7 @@ impl Controller for BkPbs {
         let decel = self.config.planner.emergency_decel;
         let now = scene.time;
         self.lane_changes.forget_finished(now);
-        let requests = Requests {
+        let requests = SceneRequests {
             scene,
             lane_changes: &self.lane_changes,
             dt,
@@ -116,7 +94,7 @@ impl Controller for BkPbs {
 impl BkPbs {
     /// This step's BK-PBS problem: every CAV of `scene`, planned with M-A* and judged by the
     /// same safety rule M-A* plans with.
-    fn problem<'a>(&'a self, scene: &'a Scene, requests: &'a Requests<'a>) -> Problem<'a> {
+    fn problem<'a>(&'a self, scene: &'a Scene, requests: &'a SceneRequests<'a>) -> Problem<'a> {
         let pbs = &self.config.pbs;
         Problem {
             scene,
@@ -154,7 +132,7 @@ fn search_stats(s: &PbsStats) -> PlanStats {
 fn executed_plan(
     problem: &Problem<'_>,
     solution: &Solution,
-    requests: &Requests<'_>,
+    requests: &SceneRequests<'_>,
     i: usize,
     stats: &mut PlanStats,
 ) -> Option<Arc<Plan>> {

@@ -78,58 +78,6 @@ pub fn bodies_overlap(a: &Trajectory, b: &Trajectory, step: usize, dt: f64) -> b
     intersection_test_obb_obb(&a.body(step, dt), &b.body(step, dt))
 }
 
-/// The earliest collision found: vehicles `i < j` overlap at `step`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct FirstCollision {
-    pub step: usize,
-    pub i: usize,
-    pub j: usize,
-}
-
-/// The earliest step (from 1) at which two trajectories overlap, among pairs `relevant(i, j)`
-/// accepts; ties go to the smallest `(i, j)`. Steps 1..=`horizon` are checked (step 0 is the
-/// present, which no plan can change).
-pub fn first_collision(
-    trajectories: &[Trajectory],
-    horizon: usize,
-    dt: f64,
-    relevant: impl Fn(usize, usize) -> bool,
-) -> Option<FirstCollision> {
-    let n = trajectories.len();
-    for step in 1..=horizon {
-        let bodies: Vec<OrientedBox> = trajectories.iter().map(|t| t.body(step, dt)).collect();
-        // Sweep along s: only pairs whose centres are within the sum of radii can overlap.
-        let mut order: Vec<usize> = (0..n).collect();
-        order.sort_by(|&a, &b| {
-            bodies[a]
-                .centre
-                .x
-                .total_cmp(&bodies[b].centre.x)
-                .then(a.cmp(&b))
-        });
-        let mut best: Option<(usize, usize)> = None;
-        for (k, &a) in order.iter().enumerate() {
-            for &b in &order[k + 1..] {
-                let reach = bodies[a].bounding_radius() + bodies[b].bounding_radius();
-                if bodies[b].centre.x - bodies[a].centre.x > reach {
-                    break;
-                }
-                let (i, j) = (a.min(b), a.max(b));
-                if best.is_some_and(|p| p <= (i, j)) || !relevant(i, j) {
-                    continue;
-                }
-                if intersection_test_obb_obb(&bodies[a], &bodies[b]) {
-                    best = Some((i, j));
-                }
-            }
-        }
-        if let Some((i, j)) = best {
-            return Some(FirstCollision { step, i, j });
-        }
-    }
-    None
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -139,58 +87,20 @@ mod tests {
     }
 
     #[test]
-    fn finds_the_earliest_pair() {
-        // 0 catches 1 (closing 10 m/s from 20 m: bumpers meet after 1.5 s, step 8);
-        // 2 and 3 are in another lane and meet later (closing 5 m/s from 20 m: step 15).
-        let ts = vec![
-            straight(0.0, 0.0, 30.0, 20),
-            straight(20.0, 0.0, 20.0, 20),
-            straight(100.0, 4.5, 25.0, 20),
-            straight(120.0, 4.5, 20.0, 20),
-        ];
-        let c = first_collision(&ts, 20, 0.2, |_, _| true).unwrap();
-        assert_eq!(
-            c,
-            FirstCollision {
-                step: 8,
-                i: 0,
-                j: 1
-            }
-        );
-        // Ignoring pairs with vehicle 0 leaves the later one.
-        let c = first_collision(&ts, 20, 0.2, |i, _| i != 0).unwrap();
-        assert_eq!(
-            c,
-            FirstCollision {
-                step: 15,
-                i: 2,
-                j: 3
-            }
-        );
+    fn catching_up_overlaps_from_the_step_the_bumpers_meet() {
+        // Closing 10 m/s from a 15 m bumper gap: the boxes touch after 1.5 s, step 8 of 0.2 s.
+        let (a, b) = (straight(0.0, 0.0, 30.0, 20), straight(20.0, 0.0, 20.0, 20));
+        assert!(!bodies_overlap(&a, &b, 7, 0.2));
+        assert!(bodies_overlap(&a, &b, 8, 0.2));
     }
 
     #[test]
-    fn near_miss_and_adjacent_lanes_are_not_collisions() {
-        // Following at constant 6 m gap, and side by side in adjacent lanes.
-        let ts = vec![
-            straight(0.0, 0.0, 30.0, 15),
-            straight(11.0, 0.0, 30.0, 15),
-            straight(0.0, 4.5, 30.0, 15),
-        ];
-        assert!(first_collision(&ts, 15, 0.2, |_, _| true).is_none());
-    }
-
-    #[test]
-    fn ties_in_time_go_to_the_lowest_pair() {
-        let ts = vec![
-            straight(50.0, 0.0, 20.0, 10),
-            straight(0.0, 4.5, 30.0, 10),
-            straight(20.0, 4.5, 20.0, 10),
-            straight(30.0, 0.0, 30.0, 10),
-        ];
-        // Pairs (1,2) and (0,3) both close 10 m/s from 15 m bumper gap: same step; (0,3) first.
-        let c = first_collision(&ts, 10, 0.2, |_, _| true).unwrap();
-        assert_eq!((c.step, c.i, c.j), (8, 0, 3));
+    fn near_miss_and_adjacent_lanes_do_not_overlap() {
+        // Following at a constant 6 m gap, and side by side in adjacent lanes.
+        let lead = straight(11.0, 0.0, 30.0, 15);
+        let (follow, beside) = (straight(0.0, 0.0, 30.0, 15), straight(0.0, 4.5, 30.0, 15));
+        assert!((0..=15).all(|k| !bodies_overlap(&follow, &lead, k, 0.2)));
+        assert!((0..=15).all(|k| !bodies_overlap(&follow, &beside, k, 0.2)));
     }
 
     #[test]

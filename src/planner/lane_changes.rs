@@ -12,7 +12,8 @@ use crate::model::math::Point;
 use crate::model::road::MERGE_LANE;
 use crate::model::scene::{Origin, Scene};
 use crate::model::trajectory::Trajectory;
-use crate::planner::mastar::{OngoingLaneChange, Request};
+use crate::planner::mastar::{Mastar, NoPlan, OngoingLaneChange, Plan, Request};
+use crate::planner::pbs::RequestFor;
 
 /// Commanded lane changes: vehicle → (time the change ends, target lane).
 #[derive(Debug, Clone, Default)]
@@ -74,6 +75,29 @@ impl LaneChanges {
             width: v.width,
             obstacles,
         }
+    }
+}
+
+/// How BK-PBS plans each agent of a scene: the M-A* request of its current state, continuing
+/// the lane change it has under way.
+pub struct SceneRequests<'a> {
+    pub scene: &'a Scene,
+    pub lane_changes: &'a LaneChanges,
+    pub dt: f64,
+}
+
+impl RequestFor for SceneRequests<'_> {
+    fn plan(
+        &self,
+        planner: &Mastar,
+        agent: usize,
+        obstacles: &[&Trajectory],
+    ) -> Result<Plan, NoPlan> {
+        planner.plan(
+            &self
+                .lane_changes
+                .request(self.scene, agent, self.dt, obstacles),
+        )
     }
 }
 
