@@ -627,6 +627,250 @@ mod tests {
         assert!(e.contains("scenario.alpha"), "{e}");
     }
 
+    /// One way to break the default config: the field, its bad value as the error prints it,
+    /// the reason given, and the change.
+    type Case = (&'static str, &'static str, &'static str, fn(&mut Config));
+
+    const UNIT: &str = "must lie in [0, 1]";
+    const RATE: &str = "must be a positive rate in veh/h";
+    const COUNT: &str = "must be at least 1";
+    const STEP: &str = "must lie in (0, 1] s";
+    const POSITIVE: &str = "must be positive";
+    const ONE_STEP: &str = "must be at least one step";
+    const SPEED_RANGE: &str = "must be [low, high] with 0 < low <= high <= v_max";
+    const NON_NEGATIVE: &str = "must not be negative";
+    const IDM_DECEL: &str = "must be at least idm.decel";
+    const TIME_BUDGET: &str = "must be 0 (off) or a positive time in ms";
+    const OPEN_UNIT: &str = "must lie in (0, 1)";
+    const MODEL_FILE: &str = "no such model file";
+
+    /// Every rule, in the order `validate` checks them.
+    const CASES: [Case; 46] = [
+        ("scenario.alpha", "1.5", UNIT, |c| c.scenario.alpha = 1.5),
+        ("scenario.lambda", "0", RATE, |c| c.scenario.lambda = 0.0),
+        ("scenario.steps", "0", COUNT, |c| c.scenario.steps = 0),
+        ("scenario.dt", "0", STEP, |c| c.scenario.dt = 0.0),
+        ("scenario.v_max", "0", POSITIVE, |c| c.scenario.v_max = 0.0),
+        ("scenario.free_flow_accel", "0", POSITIVE, |c| {
+            c.scenario.free_flow_accel = 0.0
+        }),
+        ("scenario.vehicle_length", "0", POSITIVE, |c| {
+            c.scenario.vehicle_length = 0.0
+        }),
+        ("scenario.vehicle_width", "0", POSITIVE, |c| {
+            c.scenario.vehicle_width = 0.0
+        }),
+        ("scenario.lane_change_duration", "0.1", ONE_STEP, |c| {
+            c.scenario.lane_change_duration = 0.1
+        }),
+        ("demand.ramp_share", "-0.1", UNIT, |c| {
+            c.demand.ramp_share = -0.1
+        }),
+        ("demand.insertion_speed", "[30.0, 20.0]", SPEED_RANGE, |c| {
+            c.demand.insertion_speed = [30.0, 20.0]
+        }),
+        (
+            "demand.hdv_desired_speed",
+            "[20.0, 40.0]",
+            SPEED_RANGE,
+            |c| c.demand.hdv_desired_speed = [20.0, 40.0],
+        ),
+        ("idm.accel", "0", POSITIVE, |c| c.idm.accel = 0.0),
+        ("idm.decel", "0", POSITIVE, |c| c.idm.decel = 0.0),
+        ("idm.min_gap", "-1", NON_NEGATIVE, |c| c.idm.min_gap = -1.0),
+        ("idm.time_headway", "-1", NON_NEGATIVE, |c| {
+            c.idm.time_headway = -1.0
+        }),
+        ("idm.delta", "0", POSITIVE, |c| c.idm.delta = 0.0),
+        ("idm.max_decel", "4", IDM_DECEL, |c| c.idm.max_decel = 4.0),
+        ("mobil.politeness", "-1", NON_NEGATIVE, |c| {
+            c.mobil.politeness = -1.0
+        }),
+        ("mobil.safe_braking", "0", POSITIVE, |c| {
+            c.mobil.safe_braking = 0.0
+        }),
+        ("mobil.merge_safe_braking", "0", POSITIVE, |c| {
+            c.mobil.merge_safe_braking = 0.0
+        }),
+        ("mobil.merge_min_gap", "-1", NON_NEGATIVE, |c| {
+            c.mobil.merge_min_gap = -1.0
+        }),
+        ("mobil.decision_interval", "-1", NON_NEGATIVE, |c| {
+            c.mobil.decision_interval = -1.0
+        }),
+        ("pbs.node_budget", "0", COUNT, |c| c.pbs.node_budget = 0),
+        ("pbs.time_budget_ms", "-1", TIME_BUDGET, |c| {
+            c.pbs.time_budget_ms = -1.0
+        }),
+        ("planner.horizon", "0", COUNT, |c| c.planner.horizon = 0),
+        ("planner.phase1_budget", "0", COUNT, |c| {
+            c.planner.phase1_budget = 0
+        }),
+        ("planner.phase2_budget", "0", COUNT, |c| {
+            c.planner.phase2_budget = 0
+        }),
+        ("planner.goal_distance", "0", POSITIVE, |c| {
+            c.planner.goal_distance = 0.0
+        }),
+        ("planner.fallback_goal_distance", "0", POSITIVE, |c| {
+            c.planner.fallback_goal_distance = 0.0
+        }),
+        ("planner.accel", "0", POSITIVE, |c| c.planner.accel = 0.0),
+        ("planner.decel", "0", POSITIVE, |c| c.planner.decel = 0.0),
+        ("planner.emergency_decel", "0", POSITIVE, |c| {
+            c.planner.emergency_decel = 0.0
+        }),
+        ("planner.s_bin", "0", POSITIVE, |c| c.planner.s_bin = 0.0),
+        ("planner.v_bin", "0", POSITIVE, |c| c.planner.v_bin = 0.0),
+        (
+            "planner.phase1_lane_change_penalty",
+            "-1",
+            NON_NEGATIVE,
+            |c| c.planner.phase1_lane_change_penalty = -1.0,
+        ),
+        (
+            "planner.phase2_lane_change_penalty",
+            "-1",
+            NON_NEGATIVE,
+            |c| c.planner.phase2_lane_change_penalty = -1.0,
+        ),
+        ("planner.min_lane_change_speed", "-1", NON_NEGATIVE, |c| {
+            c.planner.min_lane_change_speed = -1.0
+        }),
+        ("planner.margin_long", "-1", NON_NEGATIVE, |c| {
+            c.planner.margin_long = -1.0
+        }),
+        ("planner.margin_lat", "-1", NON_NEGATIVE, |c| {
+            c.planner.margin_lat = -1.0
+        }),
+        ("planner.safe_gap", "-1", NON_NEGATIVE, |c| {
+            c.planner.safe_gap = -1.0
+        }),
+        ("planner.reaction_time", "-1", NON_NEGATIVE, |c| {
+            c.planner.reaction_time = -1.0
+        }),
+        ("ramp_merge.exponent", "0", POSITIVE, |c| {
+            c.ramp_merge.exponent = 0.0
+        }),
+        ("predictor.decision_probability", "1", OPEN_UNIT, |c| {
+            c.predictor.decision_probability = 1.0
+        }),
+        (
+            "predictor.conditioned_model",
+            "no/such/model.json",
+            MODEL_FILE,
+            |c| c.predictor.conditioned_model = Some("no/such/model.json".into()),
+        ),
+        (
+            "predictor.unconditioned_model",
+            "no/such/model.json",
+            MODEL_FILE,
+            |c| c.predictor.unconditioned_model = Some("no/such/model.json".into()),
+        ),
+    ];
+
+    /// Checks that every field under `reason` rejects its bad value with exactly today's text;
+    /// returns how many fields that was.
+    fn assert_rule_rejects(reason: &str) -> usize {
+        let cases: Vec<&Case> = CASES.iter().filter(|c| c.2 == reason).collect();
+        for (field, value, reason, break_it) in &cases {
+            let mut c = Config::default();
+            break_it(&mut c);
+            let e = c.validate().unwrap_err().to_string();
+            assert_eq!(e, format!("invalid setting {field} = {value}: {reason}"));
+        }
+        cases.len()
+    }
+
+    #[test]
+    fn default_config_passes_every_rule() {
+        Config::default().validate().unwrap();
+    }
+
+    #[test]
+    fn rules_are_checked_in_order_and_the_first_failure_is_reported() {
+        // Break every field from the last rule to the first: each time, the newly broken field
+        // is the earliest failing one and must be the one reported.
+        let mut c = Config::default();
+        for (field, _, _, break_it) in CASES.iter().rev() {
+            break_it(&mut c);
+            let e = c.validate().unwrap_err().to_string();
+            assert!(e.starts_with(&format!("invalid setting {field} = ")), "{e}");
+        }
+    }
+
+    #[test]
+    fn unit_interval_rule() {
+        assert_eq!(assert_rule_rejects(UNIT), 2);
+    }
+
+    #[test]
+    fn rate_rule() {
+        assert_eq!(assert_rule_rejects(RATE), 1);
+    }
+
+    #[test]
+    fn count_rule() {
+        assert_eq!(assert_rule_rejects(COUNT), 5);
+    }
+
+    #[test]
+    fn step_length_rule() {
+        assert_eq!(assert_rule_rejects(STEP), 1);
+    }
+
+    #[test]
+    fn positive_rule() {
+        assert_eq!(assert_rule_rejects(POSITIVE), 17);
+    }
+
+    #[test]
+    fn lane_change_duration_rule() {
+        assert_eq!(assert_rule_rejects(ONE_STEP), 1);
+    }
+
+    #[test]
+    fn speed_range_rule() {
+        assert_eq!(assert_rule_rejects(SPEED_RANGE), 2);
+        for bad in [[0.0, 30.0], [30.0, 20.0], [25.0, 36.0], [f64::NAN, 30.0]] {
+            let mut c = Config::default();
+            c.demand.insertion_speed = bad;
+            let e = c.validate().unwrap_err().to_string();
+            assert_eq!(
+                e,
+                format!("invalid setting demand.insertion_speed = {bad:?}: {SPEED_RANGE}")
+            );
+        }
+        let mut c = Config::default();
+        c.demand.insertion_speed = [35.0, 35.0];
+        c.validate().unwrap();
+    }
+
+    #[test]
+    fn non_negative_rule() {
+        assert_eq!(assert_rule_rejects(NON_NEGATIVE), 12);
+    }
+
+    #[test]
+    fn max_decel_rule() {
+        assert_eq!(assert_rule_rejects(IDM_DECEL), 1);
+    }
+
+    #[test]
+    fn time_budget_rule() {
+        assert_eq!(assert_rule_rejects(TIME_BUDGET), 1);
+    }
+
+    #[test]
+    fn open_unit_interval_rule() {
+        assert_eq!(assert_rule_rejects(OPEN_UNIT), 1);
+    }
+
+    #[test]
+    fn model_file_rule() {
+        assert_eq!(assert_rule_rejects(MODEL_FILE), 2);
+    }
+
     #[test]
     fn missing_and_malformed_files_name_the_file() {
         let e = Config::from_file(Path::new("no/such/file.toml")).unwrap_err();
