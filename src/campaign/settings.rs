@@ -451,3 +451,173 @@ fn first_difference(a: &toml::Value, b: &toml::Value, path: &str) -> Option<Stri
         _ => (a != b).then(|| path.to_string()),
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The error text of resolving `flags` with no campaign file.
+    fn flag_error(flags: Overrides) -> String {
+        Settings::resolve(None, &flags).unwrap_err().to_string()
+    }
+
+    /// The error text of resolving a campaign file holding `text`, and the file's path.
+    fn file_error(text: &str) -> (String, String) {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("campaign.toml");
+        std::fs::write(&path, text).unwrap();
+        let e = Settings::resolve(Some(&path), &Overrides::default()).unwrap_err();
+        (e.to_string(), path.display().to_string())
+    }
+
+    #[test]
+    fn defaults_resolve() {
+        let s = Settings::resolve(None, &Overrides::default()).unwrap();
+        assert_eq!(s.table, CampaignTable::default());
+        assert_eq!(s.config.scenario.steps, 400);
+        assert!(s.workers >= 1);
+    }
+
+    #[test]
+    fn list_flags_are_trimmed_and_skip_empty_entries() {
+        let s = Settings::resolve(
+            None,
+            &Overrides {
+                planners: Some(" sumo , idm-mobil,,".into()),
+                alphas: Some("0.4, 0.6,".into()),
+                lambdas: Some(" 2500 ".into()),
+                ..Overrides::default()
+            },
+        )
+        .unwrap();
+        assert_eq!(s.table.planners, ["sumo", "idm-mobil"]);
+        assert_eq!(s.table.alphas, [0.4, 0.6]);
+        assert_eq!(s.table.lambdas, [2500.0]);
+    }
+
+    #[test]
+    fn bad_flags_name_the_flag() {
+        let cases = [
+            (
+                Overrides {
+                    planners: Some(" , ".into()),
+                    ..Overrides::default()
+                },
+                "--planners: the list is empty".to_string(),
+            ),
+            (
+                Overrides {
+                    planners: Some("sumo,bk-pbz".into()),
+                    ..Overrides::default()
+                },
+                format!(
+                    "--planners: unknown planner 'bk-pbz' (known: {})",
+                    PLANNERS.join(", ")
+                ),
+            ),
+            (
+                Overrides {
+                    alphas: Some("0.4,abc".into()),
+                    ..Overrides::default()
+                },
+                "--alphas: 'abc' is not a number".into(),
+            ),
+            (
+                Overrides {
+                    alphas: Some("0.4,1.5".into()),
+                    ..Overrides::default()
+                },
+                "--alphas: α 1.5 must lie in [0, 1]".into(),
+            ),
+            (
+                Overrides {
+                    lambdas: Some("2500,-5".into()),
+                    ..Overrides::default()
+                },
+                "--lambdas: λ -5 must be a positive rate in veh/h".into(),
+            ),
+            (
+                Overrides {
+                    lambdas: Some("x".into()),
+                    ..Overrides::default()
+                },
+                "--lambdas: 'x' is not a number".into(),
+            ),
+            (
+                Overrides {
+                    seeds: Some(0),
+                    ..Overrides::default()
+                },
+                "--seeds: seed count 0 must be at least 1".into(),
+            ),
+            (
+                Overrides {
+                    steps: Some(0),
+                    ..Overrides::default()
+                },
+                "--steps: steps 0 must be at least 1".into(),
+            ),
+            (
+                Overrides {
+                    workers: Some(0),
+                    ..Overrides::default()
+                },
+                "--workers: workers 0 must be at least 1".into(),
+            ),
+        ];
+        for (flags, expected) in cases {
+            assert_eq!(flag_error(flags), expected);
+        }
+    }
+
+    #[test]
+    fn errors_come_in_order_parsing_shard_table_cells() {
+        let bad_everything = Overrides {
+            planners: Some("nope".into()),
+            alphas: Some("abc".into()),
+            lambdas: Some("x".into()),
+            seeds: Some(0),
+            shard: Some("3/2".into()),
+            ..Overrides::default()
+        };
+        assert_eq!(
+            flag_error(bad_everything.clone()),
+            "--alphas: 'abc' is not a number"
+        );
+        let e = flag_error(Overrides {
+            alphas: None,
+            lambdas: None,
+            ..bad_everything.clone()
+        });
+        assert!(e.contains("3/2"), "{e}");
+        let e = flag_error(Overrides {
+            alphas: Some("2".into()),
+            lambdas: None,
+            shard: None,
+            ..bad_everything
+        });
+        assert!(e.starts_with("--planners: unknown planner 'nope'"), "{e}");
+    }
+
+    #[test]
+    fn bad_file_values_name_the_key_and_file() {
+        let (e, path) = file_error("[campaign]\nalphas = []\n");
+        assert_eq!(e, format!("campaign.alphas in {path}: the list is empty"));
+        let (e, path) = file_error("[campaign]\nseeds = 0\n");
+        assert_eq!(
+            e,
+            format!("campaign.seeds in {path}: seed count 0 must be at least 1")
+        );
+        let (e, path) = file_error("[scenario]\nalpha = 0.5\n");
+        assert_eq!(
+            e,
+            format!("scenario.alpha in {path} is set by the campaign (use campaign.alphas)")
+        );
+    }
+
+    #[test]
+    fn every_cell_must_make_a_valid_episode() {
+        let (e, _) = file_error("[idm]\naccel = 0.0\n");
+        assert_eq!(e, "invalid setting idm.accel = 0: must be positive");
+    }
+}
