@@ -360,214 +360,245 @@ impl Config {
         toml::to_string_pretty(self).expect("config always serialises")
     }
 
-    /// Rejects values no episode can run with.
+    /// Rejects values no episode can run with, section by section; the first failing rule is
+    /// the one reported. `sumo` has no rules: SUMO checks its own files and options.
     pub fn validate(&self) -> Result<(), ConfigError> {
-        let s = &self.scenario;
-        check(
-            "scenario.alpha",
-            s.alpha,
-            (0.0..=1.0).contains(&s.alpha),
-            "must lie in [0, 1]",
-        )?;
-        check(
-            "scenario.lambda",
-            s.lambda,
-            s.lambda > 0.0 && s.lambda.is_finite(),
-            "must be a positive rate in veh/h",
-        )?;
-        check("scenario.steps", s.steps, s.steps > 0, "must be at least 1")?;
-        check(
-            "scenario.dt",
-            s.dt,
-            s.dt > 0.0 && s.dt <= 1.0,
-            "must lie in (0, 1] s",
-        )?;
-        check("scenario.v_max", s.v_max, s.v_max > 0.0, "must be positive")?;
-        check(
-            "scenario.free_flow_accel",
-            s.free_flow_accel,
-            s.free_flow_accel > 0.0,
-            "must be positive",
-        )?;
-        check(
-            "scenario.vehicle_length",
-            s.vehicle_length,
-            s.vehicle_length > 0.0,
-            "must be positive",
-        )?;
-        check(
-            "scenario.vehicle_width",
-            s.vehicle_width,
-            s.vehicle_width > 0.0,
-            "must be positive",
-        )?;
-        check(
-            "scenario.lane_change_duration",
-            s.lane_change_duration,
-            s.lane_change_duration >= s.dt,
-            "must be at least one step",
-        )?;
-        let d = &self.demand;
-        check(
-            "demand.ramp_share",
-            d.ramp_share,
-            (0.0..=1.0).contains(&d.ramp_share),
-            "must lie in [0, 1]",
-        )?;
-        for (field, r) in [
-            ("demand.insertion_speed", d.insertion_speed),
-            ("demand.hdv_desired_speed", d.hdv_desired_speed),
-        ] {
-            check(
-                field,
-                format!("{r:?}"),
-                r[0] > 0.0 && r[0] <= r[1] && r[1] <= s.v_max,
-                "must be [low, high] with 0 < low <= high <= v_max",
-            )?;
-        }
-        let i = &self.idm;
-        check("idm.accel", i.accel, i.accel > 0.0, "must be positive")?;
-        check("idm.decel", i.decel, i.decel > 0.0, "must be positive")?;
-        check(
-            "idm.min_gap",
-            i.min_gap,
-            i.min_gap >= 0.0,
-            "must not be negative",
-        )?;
-        check(
-            "idm.time_headway",
-            i.time_headway,
-            i.time_headway >= 0.0,
-            "must not be negative",
-        )?;
-        check("idm.delta", i.delta, i.delta > 0.0, "must be positive")?;
-        check(
-            "idm.max_decel",
-            i.max_decel,
-            i.max_decel >= i.decel,
-            "must be at least idm.decel",
-        )?;
-        let m = &self.mobil;
-        check(
-            "mobil.politeness",
-            m.politeness,
-            m.politeness >= 0.0,
-            "must not be negative",
-        )?;
-        check(
-            "mobil.safe_braking",
-            m.safe_braking,
-            m.safe_braking > 0.0,
-            "must be positive",
-        )?;
-        check(
-            "mobil.merge_safe_braking",
-            m.merge_safe_braking,
-            m.merge_safe_braking > 0.0,
-            "must be positive",
-        )?;
-        check(
-            "mobil.merge_min_gap",
-            m.merge_min_gap,
-            m.merge_min_gap >= 0.0,
-            "must not be negative",
-        )?;
-        check(
-            "mobil.decision_interval",
-            m.decision_interval,
-            m.decision_interval >= 0.0,
-            "must not be negative",
-        )?;
-        check(
-            "pbs.node_budget",
-            self.pbs.node_budget,
-            self.pbs.node_budget >= 1,
-            "must be at least 1",
-        )?;
-        check(
-            "pbs.time_budget_ms",
-            self.pbs.time_budget_ms,
-            self.pbs.time_budget_ms >= 0.0 && self.pbs.time_budget_ms.is_finite(),
-            "must be 0 (off) or a positive time in ms",
-        )?;
-        let p = &self.planner;
-        check(
-            "planner.horizon",
-            p.horizon,
-            p.horizon >= 1,
-            "must be at least 1",
-        )?;
-        check(
-            "planner.phase1_budget",
-            p.phase1_budget,
-            p.phase1_budget >= 1,
-            "must be at least 1",
-        )?;
-        check(
-            "planner.phase2_budget",
-            p.phase2_budget,
-            p.phase2_budget >= 1,
-            "must be at least 1",
-        )?;
-        for (f, v) in [
-            ("planner.goal_distance", p.goal_distance),
-            ("planner.fallback_goal_distance", p.fallback_goal_distance),
-            ("planner.accel", p.accel),
-            ("planner.decel", p.decel),
-            ("planner.emergency_decel", p.emergency_decel),
-            ("planner.s_bin", p.s_bin),
-            ("planner.v_bin", p.v_bin),
-        ] {
-            check(f, v, v > 0.0, "must be positive")?;
-        }
-        for (f, v) in [
-            (
-                "planner.phase1_lane_change_penalty",
-                p.phase1_lane_change_penalty,
-            ),
-            (
-                "planner.phase2_lane_change_penalty",
-                p.phase2_lane_change_penalty,
-            ),
-            ("planner.min_lane_change_speed", p.min_lane_change_speed),
-            ("planner.margin_long", p.margin_long),
-            ("planner.margin_lat", p.margin_lat),
-            ("planner.safe_gap", p.safe_gap),
-            ("planner.reaction_time", p.reaction_time),
-        ] {
-            check(f, v, v >= 0.0, "must not be negative")?;
-        }
-        check(
-            "ramp_merge.exponent",
-            self.ramp_merge.exponent,
-            self.ramp_merge.exponent > 0.0,
-            "must be positive",
-        )?;
-        let q = self.predictor.decision_probability;
-        check(
-            "predictor.decision_probability",
-            q,
-            q > 0.0 && q < 1.0,
-            "must lie in (0, 1)",
-        )?;
-        for (field, path) in [
-            (
-                "predictor.conditioned_model",
-                &self.predictor.conditioned_model,
-            ),
-            (
-                "predictor.unconditioned_model",
-                &self.predictor.unconditioned_model,
-            ),
-        ] {
-            if let Some(p) = path {
-                check(field, p.display(), p.is_file(), "no such model file")?;
-            }
-        }
-        Ok(())
+        check_scenario(&self.scenario)?;
+        check_demand(&self.demand, self.scenario.v_max)?;
+        check_idm(&self.idm)?;
+        check_mobil(&self.mobil)?;
+        check_pbs(&self.pbs)?;
+        check_planner(&self.planner)?;
+        check_ramp_merge(&self.ramp_merge)?;
+        check_predictor(&self.predictor)
     }
 }
 
+/// What a number in the settings must satisfy. Each rule owns its error text, so settings alike
+/// are rejected alike.
+#[derive(Debug, Clone, Copy)]
+enum Rule {
+    /// A count: at least 1.
+    AtLeastOne,
+    /// Above zero; unlike [`Rule::Rate`], infinity passes.
+    Positive,
+    NonNegative,
+    /// A share: [0, 1].
+    UnitInterval,
+    /// A probability strictly between 0 and 1.
+    OpenUnitInterval,
+    /// The step length: (0, 1] s.
+    StepLength,
+    /// An arrival rate: positive and finite.
+    Rate,
+    /// A time budget: 0 (off) or positive and finite.
+    TimeBudget,
+    /// At least another setting's value, which the reason names.
+    AtLeast(f64, &'static str),
+}
+
+impl Rule {
+    fn holds(self, v: f64) -> bool {
+        match self {
+            Rule::AtLeastOne => v >= 1.0,
+            Rule::Positive => v > 0.0,
+            Rule::NonNegative => v >= 0.0,
+            Rule::UnitInterval => (0.0..=1.0).contains(&v),
+            Rule::OpenUnitInterval => v > 0.0 && v < 1.0,
+            Rule::StepLength => v > 0.0 && v <= 1.0,
+            Rule::Rate => v > 0.0 && v.is_finite(),
+            Rule::TimeBudget => v >= 0.0 && v.is_finite(),
+            Rule::AtLeast(bound, _) => v >= bound,
+        }
+    }
+
+    fn reason(self) -> &'static str {
+        match self {
+            Rule::AtLeastOne => "must be at least 1",
+            Rule::Positive => "must be positive",
+            Rule::NonNegative => "must not be negative",
+            Rule::UnitInterval => "must lie in [0, 1]",
+            Rule::OpenUnitInterval => "must lie in (0, 1)",
+            Rule::StepLength => "must lie in (0, 1] s",
+            Rule::Rate => "must be a positive rate in veh/h",
+            Rule::TimeBudget => "must be 0 (off) or a positive time in ms",
+            Rule::AtLeast(_, reason) => reason,
+        }
+    }
+}
+
+/// A setting's value as a [`Rule`] reads it; a count stays an integer so that an error prints it
+/// as it was written.
+#[derive(Debug, Clone, Copy)]
+enum Value {
+    Real(f64),
+    Count(u64),
+}
+
+impl Value {
+    fn number(self) -> f64 {
+        match self {
+            Value::Real(v) => v,
+            Value::Count(n) => n as f64,
+        }
+    }
+}
+
+impl std::fmt::Display for Value {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Value::Real(v) => write!(f, "{v}"),
+            Value::Count(n) => write!(f, "{n}"),
+        }
+    }
+}
+
+impl From<f64> for Value {
+    fn from(v: f64) -> Self {
+        Value::Real(v)
+    }
+}
+
+impl From<u32> for Value {
+    fn from(n: u32) -> Self {
+        Value::Count(n.into())
+    }
+}
+
+impl From<usize> for Value {
+    fn from(n: usize) -> Self {
+        Value::Count(n as u64)
+    }
+}
+
+/// One rule of a section's table: the dotted field name, its value and what it must satisfy.
+type Row = (&'static str, Value, Rule);
+
+/// The [`Row`]s of one section, `section: value; field => rule, …`: each field is named once,
+/// so an error cannot name another field than the one checked.
+macro_rules! rows {
+    ($section:ident: $settings:expr; $($field:ident => $rule:expr),+ $(,)?) => {
+        [$((
+            concat!(stringify!($section), ".", stringify!($field)),
+            Value::from($settings.$field),
+            $rule,
+        )),+]
+    };
+}
+
+/// Checks the rows in order and reports the first that fails.
+fn check_rows(rows: &[Row]) -> Result<(), ConfigError> {
+    for &(field, value, rule) in rows {
+        check(field, value, rule.holds(value.number()), rule.reason())?;
+    }
+    Ok(())
+}
+
+fn check_scenario(s: &Scenario) -> Result<(), ConfigError> {
+    use Rule::*;
+    check_rows(&rows!(scenario: s;
+        alpha => UnitInterval,
+        lambda => Rate,
+        steps => AtLeastOne,
+        dt => StepLength,
+        v_max => Positive,
+        free_flow_accel => Positive,
+        vehicle_length => Positive,
+        vehicle_width => Positive,
+        lane_change_duration => AtLeast(s.dt, "must be at least one step"),
+    ))
+}
+
+/// The speed ranges are pairs bounded by the speed limit, so they have a rule of their own.
+fn check_demand(d: &Demand, v_max: f64) -> Result<(), ConfigError> {
+    check_rows(&rows!(demand: d; ramp_share => Rule::UnitInterval))?;
+    for (field, r) in [
+        ("demand.insertion_speed", d.insertion_speed),
+        ("demand.hdv_desired_speed", d.hdv_desired_speed),
+    ] {
+        check(
+            field,
+            format!("{r:?}"),
+            r[0] > 0.0 && r[0] <= r[1] && r[1] <= v_max,
+            "must be [low, high] with 0 < low <= high <= v_max",
+        )?;
+    }
+    Ok(())
+}
+
+fn check_idm(i: &Idm) -> Result<(), ConfigError> {
+    use Rule::*;
+    check_rows(&rows!(idm: i;
+        accel => Positive,
+        decel => Positive,
+        min_gap => NonNegative,
+        time_headway => NonNegative,
+        delta => Positive,
+        max_decel => AtLeast(i.decel, "must be at least idm.decel"),
+    ))
+}
+
+fn check_mobil(m: &Mobil) -> Result<(), ConfigError> {
+    use Rule::*;
+    check_rows(&rows!(mobil: m;
+        politeness => NonNegative,
+        safe_braking => Positive,
+        merge_safe_braking => Positive,
+        merge_min_gap => NonNegative,
+        decision_interval => NonNegative,
+    ))
+}
+
+fn check_pbs(p: &PbsSettings) -> Result<(), ConfigError> {
+    check_rows(&rows!(pbs: p;
+        node_budget => Rule::AtLeastOne,
+        time_budget_ms => Rule::TimeBudget,
+    ))
+}
+
+fn check_planner(p: &PlannerSettings) -> Result<(), ConfigError> {
+    use Rule::*;
+    check_rows(&rows!(planner: p;
+        horizon => AtLeastOne,
+        phase1_budget => AtLeastOne,
+        phase2_budget => AtLeastOne,
+        goal_distance => Positive,
+        fallback_goal_distance => Positive,
+        accel => Positive,
+        decel => Positive,
+        emergency_decel => Positive,
+        s_bin => Positive,
+        v_bin => Positive,
+        phase1_lane_change_penalty => NonNegative,
+        phase2_lane_change_penalty => NonNegative,
+        min_lane_change_speed => NonNegative,
+        margin_long => NonNegative,
+        margin_lat => NonNegative,
+        safe_gap => NonNegative,
+        reaction_time => NonNegative,
+    ))
+}
+
+fn check_ramp_merge(r: &RampMerge) -> Result<(), ConfigError> {
+    check_rows(&rows!(ramp_merge: r; exponent => Rule::Positive))
+}
+
+/// Model files are checked with the other settings so that a missing one is reported before
+/// any episode starts.
+fn check_predictor(p: &PredictorSettings) -> Result<(), ConfigError> {
+    check_rows(&rows!(predictor: p; decision_probability => Rule::OpenUnitInterval))?;
+    for (field, path) in [
+        ("predictor.conditioned_model", &p.conditioned_model),
+        ("predictor.unconditioned_model", &p.unconditioned_model),
+    ] {
+        if let Some(path) = path {
+            check(field, path.display(), path.is_file(), "no such model file")?;
+        }
+    }
+    Ok(())
+}
+
+/// The error for `field` unless `ok`.
 fn check(
     field: &'static str,
     value: impl std::fmt::Display,
@@ -625,6 +656,279 @@ mod tests {
         c.scenario.alpha = 1.5;
         let e = c.validate().unwrap_err().to_string();
         assert!(e.contains("scenario.alpha"), "{e}");
+    }
+
+    /// One way to break the default config: the field, its bad value as the error prints it,
+    /// the reason given, and the change.
+    type Case = (&'static str, &'static str, &'static str, fn(&mut Config));
+
+    const UNIT: &str = "must lie in [0, 1]";
+    const RATE: &str = "must be a positive rate in veh/h";
+    const COUNT: &str = "must be at least 1";
+    const STEP: &str = "must lie in (0, 1] s";
+    const POSITIVE: &str = "must be positive";
+    const ONE_STEP: &str = "must be at least one step";
+    const SPEED_RANGE: &str = "must be [low, high] with 0 < low <= high <= v_max";
+    const NON_NEGATIVE: &str = "must not be negative";
+    const IDM_DECEL: &str = "must be at least idm.decel";
+    const TIME_BUDGET: &str = "must be 0 (off) or a positive time in ms";
+    const OPEN_UNIT: &str = "must lie in (0, 1)";
+    const MODEL_FILE: &str = "no such model file";
+
+    /// Every rule, in the order `validate` checks them.
+    const CASES: [Case; 46] = [
+        ("scenario.alpha", "1.5", UNIT, |c| c.scenario.alpha = 1.5),
+        ("scenario.lambda", "0", RATE, |c| c.scenario.lambda = 0.0),
+        ("scenario.steps", "0", COUNT, |c| c.scenario.steps = 0),
+        ("scenario.dt", "0", STEP, |c| c.scenario.dt = 0.0),
+        ("scenario.v_max", "0", POSITIVE, |c| c.scenario.v_max = 0.0),
+        ("scenario.free_flow_accel", "0", POSITIVE, |c| {
+            c.scenario.free_flow_accel = 0.0
+        }),
+        ("scenario.vehicle_length", "0", POSITIVE, |c| {
+            c.scenario.vehicle_length = 0.0
+        }),
+        ("scenario.vehicle_width", "0", POSITIVE, |c| {
+            c.scenario.vehicle_width = 0.0
+        }),
+        ("scenario.lane_change_duration", "0.1", ONE_STEP, |c| {
+            c.scenario.lane_change_duration = 0.1
+        }),
+        ("demand.ramp_share", "-0.1", UNIT, |c| {
+            c.demand.ramp_share = -0.1
+        }),
+        ("demand.insertion_speed", "[30.0, 20.0]", SPEED_RANGE, |c| {
+            c.demand.insertion_speed = [30.0, 20.0]
+        }),
+        (
+            "demand.hdv_desired_speed",
+            "[20.0, 40.0]",
+            SPEED_RANGE,
+            |c| c.demand.hdv_desired_speed = [20.0, 40.0],
+        ),
+        ("idm.accel", "0", POSITIVE, |c| c.idm.accel = 0.0),
+        ("idm.decel", "0", POSITIVE, |c| c.idm.decel = 0.0),
+        ("idm.min_gap", "-1", NON_NEGATIVE, |c| c.idm.min_gap = -1.0),
+        ("idm.time_headway", "-1", NON_NEGATIVE, |c| {
+            c.idm.time_headway = -1.0
+        }),
+        ("idm.delta", "0", POSITIVE, |c| c.idm.delta = 0.0),
+        ("idm.max_decel", "4", IDM_DECEL, |c| c.idm.max_decel = 4.0),
+        ("mobil.politeness", "-1", NON_NEGATIVE, |c| {
+            c.mobil.politeness = -1.0
+        }),
+        ("mobil.safe_braking", "0", POSITIVE, |c| {
+            c.mobil.safe_braking = 0.0
+        }),
+        ("mobil.merge_safe_braking", "0", POSITIVE, |c| {
+            c.mobil.merge_safe_braking = 0.0
+        }),
+        ("mobil.merge_min_gap", "-1", NON_NEGATIVE, |c| {
+            c.mobil.merge_min_gap = -1.0
+        }),
+        ("mobil.decision_interval", "-1", NON_NEGATIVE, |c| {
+            c.mobil.decision_interval = -1.0
+        }),
+        ("pbs.node_budget", "0", COUNT, |c| c.pbs.node_budget = 0),
+        ("pbs.time_budget_ms", "-1", TIME_BUDGET, |c| {
+            c.pbs.time_budget_ms = -1.0
+        }),
+        ("planner.horizon", "0", COUNT, |c| c.planner.horizon = 0),
+        ("planner.phase1_budget", "0", COUNT, |c| {
+            c.planner.phase1_budget = 0
+        }),
+        ("planner.phase2_budget", "0", COUNT, |c| {
+            c.planner.phase2_budget = 0
+        }),
+        ("planner.goal_distance", "0", POSITIVE, |c| {
+            c.planner.goal_distance = 0.0
+        }),
+        ("planner.fallback_goal_distance", "0", POSITIVE, |c| {
+            c.planner.fallback_goal_distance = 0.0
+        }),
+        ("planner.accel", "0", POSITIVE, |c| c.planner.accel = 0.0),
+        ("planner.decel", "0", POSITIVE, |c| c.planner.decel = 0.0),
+        ("planner.emergency_decel", "0", POSITIVE, |c| {
+            c.planner.emergency_decel = 0.0
+        }),
+        ("planner.s_bin", "0", POSITIVE, |c| c.planner.s_bin = 0.0),
+        ("planner.v_bin", "0", POSITIVE, |c| c.planner.v_bin = 0.0),
+        (
+            "planner.phase1_lane_change_penalty",
+            "-1",
+            NON_NEGATIVE,
+            |c| c.planner.phase1_lane_change_penalty = -1.0,
+        ),
+        (
+            "planner.phase2_lane_change_penalty",
+            "-1",
+            NON_NEGATIVE,
+            |c| c.planner.phase2_lane_change_penalty = -1.0,
+        ),
+        ("planner.min_lane_change_speed", "-1", NON_NEGATIVE, |c| {
+            c.planner.min_lane_change_speed = -1.0
+        }),
+        ("planner.margin_long", "-1", NON_NEGATIVE, |c| {
+            c.planner.margin_long = -1.0
+        }),
+        ("planner.margin_lat", "-1", NON_NEGATIVE, |c| {
+            c.planner.margin_lat = -1.0
+        }),
+        ("planner.safe_gap", "-1", NON_NEGATIVE, |c| {
+            c.planner.safe_gap = -1.0
+        }),
+        ("planner.reaction_time", "-1", NON_NEGATIVE, |c| {
+            c.planner.reaction_time = -1.0
+        }),
+        ("ramp_merge.exponent", "0", POSITIVE, |c| {
+            c.ramp_merge.exponent = 0.0
+        }),
+        ("predictor.decision_probability", "1", OPEN_UNIT, |c| {
+            c.predictor.decision_probability = 1.0
+        }),
+        (
+            "predictor.conditioned_model",
+            "no/such/model.json",
+            MODEL_FILE,
+            |c| c.predictor.conditioned_model = Some("no/such/model.json".into()),
+        ),
+        (
+            "predictor.unconditioned_model",
+            "no/such/model.json",
+            MODEL_FILE,
+            |c| c.predictor.unconditioned_model = Some("no/such/model.json".into()),
+        ),
+    ];
+
+    /// Checks that every field under `reason` rejects its bad value with exactly today's text;
+    /// returns how many fields that was.
+    fn assert_rule_rejects(reason: &str) -> usize {
+        let cases: Vec<&Case> = CASES.iter().filter(|c| c.2 == reason).collect();
+        for (field, value, reason, break_it) in &cases {
+            let mut c = Config::default();
+            break_it(&mut c);
+            let e = c.validate().unwrap_err().to_string();
+            assert_eq!(e, format!("invalid setting {field} = {value}: {reason}"));
+        }
+        cases.len()
+    }
+
+    /// Checks which numbers a rule lets through, at its edges.
+    fn assert_bounds(rule: Rule, good: &[f64], bad: &[f64]) {
+        for &v in good {
+            assert!(rule.holds(v), "{rule:?} should accept {v}");
+        }
+        for &v in bad {
+            assert!(!rule.holds(v), "{rule:?} should reject {v}");
+        }
+        assert!(CASES.iter().any(|c| c.2 == rule.reason()));
+    }
+
+    #[test]
+    fn default_config_passes_every_rule() {
+        Config::default().validate().unwrap();
+    }
+
+    #[test]
+    fn rules_are_checked_in_order_and_the_first_failure_is_reported() {
+        // Break every field from the last rule to the first: each time, the newly broken field
+        // is the earliest failing one and must be the one reported.
+        let mut c = Config::default();
+        for (field, _, _, break_it) in CASES.iter().rev() {
+            break_it(&mut c);
+            let e = c.validate().unwrap_err().to_string();
+            assert!(e.starts_with(&format!("invalid setting {field} = ")), "{e}");
+        }
+    }
+
+    #[test]
+    fn unit_interval_rule() {
+        assert_eq!(assert_rule_rejects(UNIT), 2);
+        assert_bounds(Rule::UnitInterval, &[0.0, 1.0], &[-0.1, 1.5, f64::NAN]);
+    }
+
+    #[test]
+    fn rate_rule() {
+        assert_eq!(assert_rule_rejects(RATE), 1);
+        assert_bounds(Rule::Rate, &[1e-9, 1e6], &[0.0, f64::INFINITY, f64::NAN]);
+    }
+
+    #[test]
+    fn count_rule() {
+        assert_eq!(assert_rule_rejects(COUNT), 5);
+        assert_bounds(Rule::AtLeastOne, &[1.0], &[0.0]);
+    }
+
+    #[test]
+    fn step_length_rule() {
+        assert_eq!(assert_rule_rejects(STEP), 1);
+        assert_bounds(Rule::StepLength, &[1e-9, 1.0], &[0.0, 1.01, f64::NAN]);
+    }
+
+    #[test]
+    fn positive_rule() {
+        assert_eq!(assert_rule_rejects(POSITIVE), 17);
+        assert_bounds(Rule::Positive, &[1e-9, f64::INFINITY], &[0.0, f64::NAN]);
+    }
+
+    #[test]
+    fn lane_change_duration_rule() {
+        assert_eq!(assert_rule_rejects(ONE_STEP), 1);
+        assert_bounds(Rule::AtLeast(0.2, ONE_STEP), &[0.2, 1.0], &[0.19, f64::NAN]);
+    }
+
+    #[test]
+    fn speed_range_rule() {
+        assert_eq!(assert_rule_rejects(SPEED_RANGE), 2);
+        for bad in [[0.0, 30.0], [30.0, 20.0], [25.0, 36.0], [f64::NAN, 30.0]] {
+            let mut c = Config::default();
+            c.demand.insertion_speed = bad;
+            let e = c.validate().unwrap_err().to_string();
+            assert_eq!(
+                e,
+                format!("invalid setting demand.insertion_speed = {bad:?}: {SPEED_RANGE}")
+            );
+        }
+        let mut c = Config::default();
+        c.demand.insertion_speed = [35.0, 35.0];
+        c.validate().unwrap();
+    }
+
+    #[test]
+    fn non_negative_rule() {
+        assert_eq!(assert_rule_rejects(NON_NEGATIVE), 12);
+        assert_bounds(Rule::NonNegative, &[0.0, f64::INFINITY], &[-1e-9, f64::NAN]);
+    }
+
+    #[test]
+    fn max_decel_rule() {
+        assert_eq!(assert_rule_rejects(IDM_DECEL), 1);
+        assert_bounds(
+            Rule::AtLeast(5.0, IDM_DECEL),
+            &[5.0, 9.0],
+            &[4.99, f64::NAN],
+        );
+    }
+
+    #[test]
+    fn time_budget_rule() {
+        assert_eq!(assert_rule_rejects(TIME_BUDGET), 1);
+        assert_bounds(
+            Rule::TimeBudget,
+            &[0.0, 1e6],
+            &[-1.0, f64::INFINITY, f64::NAN],
+        );
+    }
+
+    #[test]
+    fn open_unit_interval_rule() {
+        assert_eq!(assert_rule_rejects(OPEN_UNIT), 1);
+        assert_bounds(Rule::OpenUnitInterval, &[1e-9, 0.5], &[0.0, 1.0, f64::NAN]);
+    }
+
+    #[test]
+    fn model_file_rule() {
+        assert_eq!(assert_rule_rejects(MODEL_FILE), 2);
     }
 
     #[test]

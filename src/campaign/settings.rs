@@ -130,7 +130,8 @@ pub struct Settings {
     pub config: Config,
 }
 
-/// A campaign file split into its two parts.
+/// A campaign file split into its two parts; without a file, both parts' defaults.
+#[derive(Default)]
 struct FileParts {
     table: CampaignTable,
     config: Config,
@@ -185,6 +186,8 @@ fn read_file(path: &Path) -> Result<FileParts, SettingsError> {
     Ok(FileParts { table, config })
 }
 
+/// The entries of a comma-separated flag, trimmed, empty ones skipped. Text entries (planner
+/// names) always parse; only a numeric list can fail, hence the error's wording.
 fn parse_list<T: std::str::FromStr>(origin: &str, text: &str) -> Result<Vec<T>, SettingsError> {
     text.split(',')
         .map(str::trim)
@@ -198,6 +201,24 @@ fn parse_list<T: std::str::FromStr>(origin: &str, text: &str) -> Result<Vec<T>, 
         .collect()
 }
 
+/// Replaces the table's values by the flags that are set.
+fn apply_overrides(table: &mut CampaignTable, o: &Overrides) -> Result<(), SettingsError> {
+    if let Some(text) = &o.planners {
+        table.planners = parse_list("--planners", text)?;
+    }
+    if let Some(text) = &o.alphas {
+        table.alphas = parse_list("--alphas", text)?;
+    }
+    if let Some(text) = &o.lambdas {
+        table.lambdas = parse_list("--lambdas", text)?;
+    }
+    table.seeds = o.seeds.unwrap_or(table.seeds);
+    table.seed_base = o.seed_base.unwrap_or(table.seed_base);
+    table.steps = o.steps.unwrap_or(table.steps);
+    table.workers = o.workers.or(table.workers);
+    Ok(())
+}
+
 /// Where a value came from, for error messages: the flag, or the key and its file.
 fn origin(flag_set: bool, flag: &str, key: &str, file: Option<&Path>) -> String {
     match (flag_set, file) {
@@ -208,118 +229,23 @@ fn origin(flag_set: bool, flag: &str, key: &str, file: Option<&Path>) -> String 
 }
 
 impl Settings {
-    /// Reads the optional campaign file, applies the flags and validates everything.
+    /// Reads the optional campaign file, applies the flags and validates everything, so that a
+    /// bad setting stops the campaign before any episode runs.
     pub fn resolve(file: Option<&Path>, o: &Overrides) -> Result<Settings, SettingsError> {
-        let FileParts { mut table, config } = match file {
+        let FileParts {
+            mut table,
+            mut config,
+        } = match file {
             Some(p) => read_file(p)?,
-            None => FileParts {
-                table: CampaignTable::default(),
-                config: Config::default(),
-            },
+            None => FileParts::default(),
         };
-        let from = |set: bool, flag: &str, key: &str| origin(set, flag, key, file);
-        if let Some(p) = &o.planners {
-            table.planners = p
-                .split(',')
-                .map(str::trim)
-                .filter(|s| !s.is_empty())
-                .map(String::from)
-                .collect();
-        }
-        if let Some(a) = &o.alphas {
-            table.alphas = parse_list("--alphas", a)?;
-        }
-        if let Some(l) = &o.lambdas {
-            table.lambdas = parse_list("--lambdas", l)?;
-        }
-        if let Some(n) = o.seeds {
-            table.seeds = n;
-        }
-        if let Some(b) = o.seed_base {
-            table.seed_base = b;
-        }
-        if let Some(s) = o.steps {
-            table.steps = s;
-        }
-        if let Some(w) = o.workers {
-            table.workers = Some(w);
-        }
+        apply_overrides(&mut table, o)?;
         let shard = match &o.shard {
             Some(s) => s.parse()?,
             None => Shard::ALL,
         };
-
-        let planners_from = from(o.planners.is_some(), "--planners", "planners");
-        if table.planners.is_empty() {
-            return Err(SettingsError::Empty {
-                origin: planners_from,
-            });
-        }
-        for p in &table.planners {
-            if !PLANNERS.contains(&p.as_str()) {
-                return Err(SettingsError::Planner {
-                    origin: planners_from,
-                    planner: UnknownPlanner(p.clone()),
-                });
-            }
-        }
-        let alphas_from = from(o.alphas.is_some(), "--alphas", "alphas");
-        check_values(
-            &alphas_from,
-            "α",
-            &table.alphas,
-            |a| (0.0..=1.0).contains(&a),
-            "must lie in [0, 1]",
-        )?;
-        let lambdas_from = from(o.lambdas.is_some(), "--lambdas", "lambdas");
-        check_values(
-            &lambdas_from,
-            "λ",
-            &table.lambdas,
-            |l| l > 0.0 && l.is_finite(),
-            "must be a positive rate in veh/h",
-        )?;
-        let positive = |set, flag: &str, key: &str, what, v: u64| {
-            if v == 0 {
-                Err(SettingsError::OutOfRange {
-                    origin: from(set, flag, key),
-                    what,
-                    value: "0".into(),
-                    reason: "must be at least 1",
-                })
-            } else {
-                Ok(())
-            }
-        };
-        positive(
-            o.seeds.is_some(),
-            "--seeds",
-            "seeds",
-            "seed count",
-            table.seeds,
-        )?;
-        positive(
-            o.steps.is_some(),
-            "--steps",
-            "steps",
-            "steps",
-            table.steps.into(),
-        )?;
-        let workers = match table.workers {
-            Some(w) => {
-                positive(
-                    o.workers.is_some(),
-                    "--workers",
-                    "workers",
-                    "workers",
-                    w as u64,
-                )?;
-                w
-            }
-            None => std::thread::available_parallelism().map_or(1, |n| n.get()),
-        };
-
-        let mut config = config;
+        check_table(&table, o, file)?;
+        let workers = worker_count(&table, o, file)?;
         config.scenario.steps = table.steps;
         let grid = Grid::new(
             &table.planners,
@@ -328,15 +254,7 @@ impl Settings {
             table.seed_base,
             table.seeds,
         );
-        // Every (α, λ) must make a valid episode configuration.
-        for &a in &grid.alphas {
-            for &l in &grid.lambdas {
-                let mut c = config.clone();
-                c.scenario.alpha = a;
-                c.scenario.lambda = l;
-                c.validate()?;
-            }
-        }
+        check_cells(&config, &grid)?;
         Ok(Settings {
             table,
             grid,
@@ -391,6 +309,100 @@ impl Settings {
         )
         .or_else(|| (self.table.steps != other.table.steps).then(|| "campaign.steps".into()))
     }
+}
+
+/// Checks the resolved table's lists and counts; an error names the flag or file key the bad
+/// value came from.
+fn check_table(
+    table: &CampaignTable,
+    o: &Overrides,
+    file: Option<&Path>,
+) -> Result<(), SettingsError> {
+    check_planners(
+        &table.planners,
+        origin(o.planners.is_some(), "--planners", "planners", file),
+    )?;
+    check_values(
+        &origin(o.alphas.is_some(), "--alphas", "alphas", file),
+        "α",
+        &table.alphas,
+        |a| (0.0..=1.0).contains(&a),
+        "must lie in [0, 1]",
+    )?;
+    check_values(
+        &origin(o.lambdas.is_some(), "--lambdas", "lambdas", file),
+        "λ",
+        &table.lambdas,
+        |l| l > 0.0 && l.is_finite(),
+        "must be a positive rate in veh/h",
+    )?;
+    at_least_one(
+        origin(o.seeds.is_some(), "--seeds", "seeds", file),
+        "seed count",
+        table.seeds,
+    )?;
+    at_least_one(
+        origin(o.steps.is_some(), "--steps", "steps", file),
+        "steps",
+        table.steps.into(),
+    )
+}
+
+/// The planner list must name at least one controller, and only known ones.
+fn check_planners(planners: &[String], origin: String) -> Result<(), SettingsError> {
+    if planners.is_empty() {
+        return Err(SettingsError::Empty { origin });
+    }
+    match planners.iter().find(|p| !PLANNERS.contains(&p.as_str())) {
+        Some(p) => Err(SettingsError::Planner {
+            origin,
+            planner: UnknownPlanner(p.clone()),
+        }),
+        None => Ok(()),
+    }
+}
+
+/// A count must be at least 1; `what` names it in the error.
+fn at_least_one(origin: String, what: &'static str, n: u64) -> Result<(), SettingsError> {
+    if n == 0 {
+        Err(SettingsError::OutOfRange {
+            origin,
+            what,
+            value: "0".into(),
+            reason: "must be at least 1",
+        })
+    } else {
+        Ok(())
+    }
+}
+
+/// The table's worker count, else one per core.
+fn worker_count(
+    table: &CampaignTable,
+    o: &Overrides,
+    file: Option<&Path>,
+) -> Result<usize, SettingsError> {
+    match table.workers {
+        Some(w) => {
+            let origin = origin(o.workers.is_some(), "--workers", "workers", file);
+            at_least_one(origin, "workers", w as u64).map(|()| w)
+        }
+        None => Ok(std::thread::available_parallelism().map_or(1, |n| n.get())),
+    }
+}
+
+/// Every (α, λ) of the grid must make a valid episode configuration, so that no cell fails on
+/// its settings halfway through the campaign.
+fn check_cells(config: &Config, grid: &Grid) -> Result<(), ConfigError> {
+    for &alpha in &grid.alphas {
+        for &lambda in &grid.lambdas {
+            let mut c = config.clone();
+            c.scenario.alpha = alpha;
+            c.scenario.lambda = lambda;
+            c.validate()?;
+        }
+    }
+    Ok(())
 }
 
 fn check_values(
@@ -449,5 +461,175 @@ fn first_difference(a: &toml::Value, b: &toml::Value, path: &str) -> Option<Stri
             })
         }
         _ => (a != b).then(|| path.to_string()),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The error text of resolving `flags` with no campaign file.
+    fn flag_error(flags: Overrides) -> String {
+        Settings::resolve(None, &flags).unwrap_err().to_string()
+    }
+
+    /// The error text of resolving a campaign file holding `text`, and the file's path.
+    fn file_error(text: &str) -> (String, String) {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("campaign.toml");
+        std::fs::write(&path, text).unwrap();
+        let e = Settings::resolve(Some(&path), &Overrides::default()).unwrap_err();
+        (e.to_string(), path.display().to_string())
+    }
+
+    #[test]
+    fn defaults_resolve() {
+        let s = Settings::resolve(None, &Overrides::default()).unwrap();
+        assert_eq!(s.table, CampaignTable::default());
+        assert_eq!(s.config.scenario.steps, 400);
+        assert!(s.workers >= 1);
+    }
+
+    #[test]
+    fn list_flags_are_trimmed_and_skip_empty_entries() {
+        let s = Settings::resolve(
+            None,
+            &Overrides {
+                planners: Some(" sumo , idm-mobil,,".into()),
+                alphas: Some("0.4, 0.6,".into()),
+                lambdas: Some(" 2500 ".into()),
+                ..Overrides::default()
+            },
+        )
+        .unwrap();
+        assert_eq!(s.table.planners, ["sumo", "idm-mobil"]);
+        assert_eq!(s.table.alphas, [0.4, 0.6]);
+        assert_eq!(s.table.lambdas, [2500.0]);
+    }
+
+    #[test]
+    fn bad_flags_name_the_flag() {
+        let cases = [
+            (
+                Overrides {
+                    planners: Some(" , ".into()),
+                    ..Overrides::default()
+                },
+                "--planners: the list is empty".to_string(),
+            ),
+            (
+                Overrides {
+                    planners: Some("sumo,bk-pbz".into()),
+                    ..Overrides::default()
+                },
+                format!(
+                    "--planners: unknown planner 'bk-pbz' (known: {})",
+                    PLANNERS.join(", ")
+                ),
+            ),
+            (
+                Overrides {
+                    alphas: Some("0.4,abc".into()),
+                    ..Overrides::default()
+                },
+                "--alphas: 'abc' is not a number".into(),
+            ),
+            (
+                Overrides {
+                    alphas: Some("0.4,1.5".into()),
+                    ..Overrides::default()
+                },
+                "--alphas: α 1.5 must lie in [0, 1]".into(),
+            ),
+            (
+                Overrides {
+                    lambdas: Some("2500,-5".into()),
+                    ..Overrides::default()
+                },
+                "--lambdas: λ -5 must be a positive rate in veh/h".into(),
+            ),
+            (
+                Overrides {
+                    lambdas: Some("x".into()),
+                    ..Overrides::default()
+                },
+                "--lambdas: 'x' is not a number".into(),
+            ),
+            (
+                Overrides {
+                    seeds: Some(0),
+                    ..Overrides::default()
+                },
+                "--seeds: seed count 0 must be at least 1".into(),
+            ),
+            (
+                Overrides {
+                    steps: Some(0),
+                    ..Overrides::default()
+                },
+                "--steps: steps 0 must be at least 1".into(),
+            ),
+            (
+                Overrides {
+                    workers: Some(0),
+                    ..Overrides::default()
+                },
+                "--workers: workers 0 must be at least 1".into(),
+            ),
+        ];
+        for (flags, expected) in cases {
+            assert_eq!(flag_error(flags), expected);
+        }
+    }
+
+    #[test]
+    fn errors_come_in_order_parsing_shard_table_cells() {
+        let bad_everything = Overrides {
+            planners: Some("nope".into()),
+            alphas: Some("abc".into()),
+            lambdas: Some("x".into()),
+            seeds: Some(0),
+            shard: Some("3/2".into()),
+            ..Overrides::default()
+        };
+        assert_eq!(
+            flag_error(bad_everything.clone()),
+            "--alphas: 'abc' is not a number"
+        );
+        let e = flag_error(Overrides {
+            alphas: None,
+            lambdas: None,
+            ..bad_everything.clone()
+        });
+        assert!(e.contains("3/2"), "{e}");
+        let e = flag_error(Overrides {
+            alphas: Some("2".into()),
+            lambdas: None,
+            shard: None,
+            ..bad_everything
+        });
+        assert!(e.starts_with("--planners: unknown planner 'nope'"), "{e}");
+    }
+
+    #[test]
+    fn bad_file_values_name_the_key_and_file() {
+        let (e, path) = file_error("[campaign]\nalphas = []\n");
+        assert_eq!(e, format!("campaign.alphas in {path}: the list is empty"));
+        let (e, path) = file_error("[campaign]\nseeds = 0\n");
+        assert_eq!(
+            e,
+            format!("campaign.seeds in {path}: seed count 0 must be at least 1")
+        );
+        let (e, path) = file_error("[scenario]\nalpha = 0.5\n");
+        assert_eq!(
+            e,
+            format!("scenario.alpha in {path} is set by the campaign (use campaign.alphas)")
+        );
+    }
+
+    #[test]
+    fn every_cell_must_make_a_valid_episode() {
+        let (e, _) = file_error("[idm]\naccel = 0.0\n");
+        assert_eq!(e, "invalid setting idm.accel = 0: must be positive");
     }
 }
