@@ -787,11 +787,19 @@ mod tests {
     #[test]
     fn main_road_cav_never_enters_the_acceleration_lane() {
         let m = planner();
-        let leader = other(45.0 + 150.0, 1, 10.0);
+        let leader = other(55.0 + 150.0, 1, 15.0);
         let left = other(30.0 + 150.0, 2, 28.0);
         let obs = [&leader, &left];
-        if let Ok(plan) = m.plan(&request(&m, 170.0, 1, 28.0, false, &obs)) {
-            assert!(plan.trajectory.poses.iter().all(|p| p.y > 2.25));
-        }
+        // Boxed in (a slower leader ahead, a car beside on the left) the CAV must brake rather
+        // than dodge right into the acceleration lane. A plan must exist: with the leader 10 m
+        // closer and slower no plan does, and the assertion below would check nothing.
+        let plan = m
+            .plan(&request(&m, 170.0, 1, 28.0, false, &obs))
+            .expect("braking in lane is always available here");
+        assert!(plan.trajectory.poses.iter().all(|p| p.y > 2.25));
+        assert!(
+            plan.trajectory.poses.last().unwrap().s < 170.0 + 28.0 * 4.0,
+            "it slowed down"
+        );
     }
 }
