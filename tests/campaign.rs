@@ -124,19 +124,21 @@ fn shards_split_the_grid_into_disjoint_interleaved_slices() {
 
 const BIN: &str = env!("CARGO_BIN_EXE_bkpbs");
 
-/// The tiny grid of the tests: 2 planners × 2 α × 1 λ × 2 seeds, 60 steps.
-const TINY: [&str; 10] = [
-    "--planners",
-    "sumo,idm-mobil",
-    "--alphas",
-    "0.4,0.8",
-    "--lambdas",
-    "3000",
-    "--seeds",
-    "2",
-    "--steps",
-    "60",
-];
+/// A grid of the tests: sumo and idm-mobil × α 0.4, 0.8 × λ 3000 × `seeds` seeds, `steps` steps.
+fn grid<'a>(seeds: &'a str, steps: &'a str) -> [&'a str; 10] {
+    [
+        "--planners",
+        "sumo,idm-mobil",
+        "--alphas",
+        "0.4,0.8",
+        "--lambdas",
+        "3000",
+        "--seeds",
+        seeds,
+        "--steps",
+        steps,
+    ]
+}
 
 fn campaign(out: &Path, extra: &[&str]) -> Output {
     Command::new(BIN)
@@ -178,7 +180,10 @@ fn reference() -> &'static Path {
     static DIR: OnceLock<tempfile::TempDir> = OnceLock::new();
     DIR.get_or_init(|| {
         let d = tempfile::tempdir().unwrap();
-        let o = campaign(d.path(), &[&TINY[..], &["--workers", "2"]].concat());
+        let o = campaign(
+            d.path(),
+            &[&grid("2", "60")[..], &["--workers", "2"]].concat(),
+        );
         assert_ok(&o);
         d
     })
@@ -189,7 +194,10 @@ fn reference() -> &'static Path {
 fn one_and_two_workers_give_byte_identical_results() {
     let two = reference();
     let d = tempfile::tempdir().unwrap();
-    let o = campaign(d.path(), &[&TINY[..], &["--workers", "1"]].concat());
+    let o = campaign(
+        d.path(),
+        &[&grid("2", "60")[..], &["--workers", "1"]].concat(),
+    );
     assert_ok(&o);
     for f in ["episodes.csv", "vehicles.csv"] {
         assert_eq!(read(&two.join(f)), read(&d.path().join(f)), "{f}");
@@ -243,7 +251,7 @@ fn shards_merged_by_report_equal_the_unsharded_run() {
     for (dir, k) in [(&a, "1/2"), (&b, "2/2")] {
         let o = campaign(
             dir,
-            &[&TINY[..], &["--workers", "1", "--shard", k]].concat(),
+            &[&grid("2", "60")[..], &["--workers", "1", "--shard", k]].concat(),
         );
         assert_ok(&o);
         assert!(
@@ -303,18 +311,7 @@ fn finished(out: &Path) -> BTreeMap<PathBuf, SystemTime> {
 fn killed_campaign_resumes_without_losing_or_duplicating_episodes() {
     let d = tempfile::tempdir().unwrap();
     let out = d.path().join("c");
-    let args = [
-        "--planners",
-        "sumo,idm-mobil",
-        "--alphas",
-        "0.4,0.8",
-        "--lambdas",
-        "3000",
-        "--seeds",
-        "6",
-        "--steps",
-        "150",
-    ];
+    let args = grid("6", "150");
     let total = 2 * 2 * 6;
     // The campaign and its workers in a process group of their own, killed together.
     let mut child = Command::new(BIN)
