@@ -44,6 +44,8 @@ pub struct Config {
     /// How the planners predict HDVs (BK-M-A*, BK-PBS).
     pub predictor: PredictorSettings,
     pub sumo: SumoSettings,
+    /// Choices in how the episode metrics are computed.
+    pub metrics: MetricsSettings,
 }
 
 /// The episode's setting: which traffic, how long, on which road.
@@ -83,6 +85,40 @@ pub struct Demand {
     pub insertion_speed: [f64; 2],
     /// HDV desired speed range (m/s), uniform.
     pub hdv_desired_speed: [f64; 2],
+    /// What α means for an episode's vehicles.
+    pub cav_share: CavShare,
+}
+
+/// How α makes CAVs of an episode's vehicles.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum CavShare {
+    /// The paper's definition, α = CAVs / all vehicles: round(α·n) of the n vehicles are CAVs,
+    /// chosen at random.
+    Exact,
+    /// Each vehicle is a CAV with probability α, so an episode's share varies around α.
+    Probability,
+}
+
+/// Choices in how the episode metrics are computed (see the README's "How metrics are
+/// computed").
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct MetricsSettings {
+    /// The insertion speed the free-flow time t* starts from.
+    pub t_star_speed: TStarSpeed,
+}
+
+/// The insertion speed t* is computed from.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum TStarSpeed {
+    /// The speed the demand drew: entering slower because traffic at the entry forbade the
+    /// drawn speed counts as delay.
+    #[default]
+    Drawn,
+    /// The speed SUMO actually inserted the vehicle with.
+    Inserted,
 }
 
 /// Intelligent Driver Model parameters (highway-env's values, in bumper-to-bumper terms).
@@ -301,6 +337,7 @@ impl Default for Demand {
             ramp_share: 0.2,
             insertion_speed: [25.0, 35.0],
             hdv_desired_speed: [25.0, 35.0],
+            cav_share: CavShare::Exact,
         }
     }
 }

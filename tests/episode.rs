@@ -161,3 +161,27 @@ fn an_hdv_behind_the_stopped_cav_brakes_in_time() {
         r.summary
     );
 }
+
+#[test]
+fn t_star_from_the_inserted_speed_when_asked() {
+    // Same episode twice: t* from the drawn speed (default) and from SUMO's insertion speed.
+    let mut c = bkpbs::config::Config::default();
+    c.scenario.steps = 150;
+    c.scenario.lambda = 3000.0;
+    let drawn = episode::run(&c, "idm-mobil").unwrap();
+    c.metrics.t_star_speed = bkpbs::config::TStarSpeed::Inserted;
+    let inserted = episode::run(&c, "idm-mobil").unwrap();
+    let (accel, v_max) = (c.scenario.free_flow_accel, c.scenario.v_max);
+    let mut slower = 0;
+    for (d, i) in drawn.vehicles.iter().zip(&inserted.vehicles) {
+        assert_eq!((&d.id, d.insert_speed), (&i.id, i.insert_speed));
+        let t = bkpbs::model::kinematics::free_flow_time;
+        assert_eq!(d.t_star, t(d.distance, d.scheduled_speed, accel, v_max));
+        assert_eq!(i.t_star, t(i.distance, i.insert_speed, accel, v_max));
+        slower += usize::from(i.insert_speed < i.scheduled_speed - 0.01);
+    }
+    assert!(
+        slower > 0,
+        "some vehicle entered slower than drawn, so the variants differ"
+    );
+}

@@ -9,6 +9,9 @@ use crate::config::{Config, Idm, Mobil};
 use crate::model::road::MERGE_LANE;
 use crate::model::scene::{Kind, Scene};
 
+/// Slack of time comparisons on the step grid (s).
+const TIME_EPSILON: f64 = 1e-6;
+
 /// Rule-based CAV controller.
 #[derive(Debug, Clone)]
 pub struct IdmMobil {
@@ -44,7 +47,9 @@ impl IdmMobil {
                 .then_some(LaneChange::Left);
         }
         if let Some(t) = self.last_change.get(&me.id) {
-            if scene.time - t < self.mobil.decision_interval {
+            // Times lie on the step grid but are not exact in binary: compare with a margin
+            // far below a step, so a change exactly one interval ago counts as one interval.
+            if scene.time - t < self.mobil.decision_interval - TIME_EPSILON {
                 return None;
             }
         }

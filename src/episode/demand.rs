@@ -2,7 +2,9 @@
 //!
 //! Arrivals form two Poisson processes: the main road at rate (1 − r)·λ, each vehicle on either
 //! main lane with equal probability, and the ramp at rate r·λ, where r is `demand.ramp_share`.
-//! Every vehicle is a CAV with probability α. Insertion speeds and HDV desired speeds are uniform
+//! α is the share of CAVs among the episode's vehicles (`demand.cav_share = "exact"`, the
+//! paper's definition: round(α·n) CAVs placed at random) or, optionally, each vehicle's
+//! probability of being a CAV (`"probability"`). Insertion speeds and HDV desired speeds are uniform
 //! over their configured ranges; CAVs want v_max. Depart times are rounded up to the step grid.
 //! The vehicles enter SUMO through [`crate::episode::entry`], which waits for room at the entry.
 
@@ -11,7 +13,7 @@ use std::fmt::Write as _;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-use crate::config::Config;
+use crate::config::{CavShare, Config};
 use crate::model::scene::{Kind, Origin};
 use crate::sumo::files::ROUTES;
 
@@ -32,32 +34,32 @@ pub struct PlannedVehicle {
     pub desired_speed: f64,
 }
 
+/// Random stream that places the CAVs when `demand.cav_share` is exact.
+pub const CAV_PLACEMENT_STREAM: u64 = 3;
+
 /// Draws the vehicles arriving within the episode's horizon, sorted by depart time.
+///
+/// Departures are rounded up to the step grid, and only those at or before the last simulated
+/// step are kept: a vehicle due later could never enter.
 pub fn generate(config: &Config) -> Vec<PlannedVehicle> {
     let sc = &config.scenario;
-    let horizon = sc.steps as f64 * sc.dt;
     let mut rng = ChaCha8Rng::seed_from_u64(sc.seed);
     rng.set_stream(DEMAND_STREAM);
-    let rate_main = sc.lambda * (1.0 - config.demand.ramp_share) / 3600.0;
-    let rate_ramp = sc.lambda * config.demand.ramp_share / 3600.0;
-    let main = arrival_times(&mut rng, rate_main, horizon);
-    let ramp = arrival_times(&mut rng, rate_ramp, horizon);
-    let mut events: Vec<(f64, Origin)> = main
-        .into_iter()
-        .map(|t| (t, Origin::Main))
-        .chain(ramp.into_iter().map(|t| (t, Origin::Ramp)))
-        .collect();
-    events.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+    let events = arrivals(config, &mut rng);
+    let cavs = exact_cavs(config, events.len());
     let [v_lo, v_hi] = config.demand.insertion_speed;
     let [d_lo, d_hi] = config.demand.hdv_desired_speed;
     events
         .into_iter()
         .enumerate()
         .map(|(n, (t, origin))| {
-            let kind = if rng.gen_bool(sc.alpha) {
-                Kind::Cav
-            } else {
-                Kind::Hdv
+            // Drawn in either mode, so the exact mode changes who is a CAV and nothing else.
+            let drawn_cav = rng.gen_bool(sc.alpha);
+            let kind = match &cavs {
+                Some(chosen) if chosen[n] => Kind::Cav,
+                Some(_) => Kind::Hdv,
+                None if drawn_cav => Kind::Cav,
+                None => Kind::Hdv,
             };
             let depart_lane = match origin {
                 Origin::Main => rng.gen_range(0..2),
@@ -73,13 +75,53 @@ pub fn generate(config: &Config) -> Vec<PlannedVehicle> {
                 id: format!("{}.{n}", origin.as_str()),
                 kind,
                 origin,
-                depart: ((t / sc.dt).ceil() * sc.dt * 1e6).round() / 1e6,
+                depart: t,
                 depart_lane,
                 depart_speed: (depart_speed * 100.0).round() / 100.0,
                 desired_speed: (desired_speed * 100.0).round() / 100.0,
             }
         })
         .collect()
+}
+
+/// Arrival events (time on the step grid, origin) of both entries, sorted, up to the last
+/// simulated step.
+fn arrivals(config: &Config, rng: &mut ChaCha8Rng) -> Vec<(f64, Origin)> {
+    let sc = &config.scenario;
+    let horizon = sc.steps as f64 * sc.dt;
+    let last_step = sc.steps.saturating_sub(1) as f64 * sc.dt;
+    let rate_main = sc.lambda * (1.0 - config.demand.ramp_share) / 3600.0;
+    let rate_ramp = sc.lambda * config.demand.ramp_share / 3600.0;
+    let main = arrival_times(rng, rate_main, horizon);
+    let ramp = arrival_times(rng, rate_ramp, horizon);
+    let mut events: Vec<(f64, Origin)> = main
+        .into_iter()
+        .map(|t| (t, Origin::Main))
+        .chain(ramp.into_iter().map(|t| (t, Origin::Ramp)))
+        .collect();
+    events.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+    let on_grid = |t: f64| ((t / sc.dt).ceil() * sc.dt * 1e6).round() / 1e6;
+    events.retain_mut(|(t, _)| {
+        *t = on_grid(*t);
+        *t <= last_step + 1e-9
+    });
+    events
+}
+
+/// With `demand.cav_share = exact`, which of `n` vehicles are CAVs: round(α·n) of them, chosen
+/// uniformly at random from a stream of their own; `None` in the probability mode.
+fn exact_cavs(config: &Config, n: usize) -> Option<Vec<bool>> {
+    if config.demand.cav_share != CavShare::Exact {
+        return None;
+    }
+    let mut rng = ChaCha8Rng::seed_from_u64(config.scenario.seed);
+    rng.set_stream(CAV_PLACEMENT_STREAM);
+    let k = (config.scenario.alpha * n as f64).round() as usize;
+    let mut chosen = vec![false; n];
+    for i in rand::seq::index::sample(&mut rng, n, k.min(n)) {
+        chosen[i] = true;
+    }
+    Some(chosen)
 }
 
 /// Event times of a Poisson process of `rate` (1/s) on [0, horizon).
@@ -192,6 +234,55 @@ mod tests {
             assert!((steps - steps.round()).abs() < 1e-6);
             assert!(v.depart < 80.0 + 1e-9);
         }
+    }
+
+    #[test]
+    fn departures_end_at_the_last_simulated_step() {
+        // Regression: departures drawn in (79.8, 80) were rounded up to 80.0, a step the episode
+        // never simulates, and counted as undeparted.
+        let mut latest: f64 = 0.0;
+        for seed in 0..200 {
+            for v in generate(&config(0.5, 3000.0, seed)) {
+                latest = latest.max(v.depart);
+            }
+        }
+        assert!((latest - 79.8).abs() < 1e-9, "latest departure {latest}");
+    }
+
+    #[test]
+    fn exact_share_makes_round_alpha_n_cavs() {
+        for (alpha, seed) in [(0.5, 1), (0.4, 2), (0.8, 3), (0.6, 4)] {
+            let d = generate(&config(alpha, 3000.0, seed));
+            let cavs = d.iter().filter(|v| v.kind == Kind::Cav).count();
+            assert_eq!(cavs, (alpha * d.len() as f64).round() as usize, "α {alpha}");
+        }
+    }
+
+    #[test]
+    fn probability_share_changes_only_who_is_a_cav() {
+        let exact = config(0.5, 3000.0, 11);
+        let mut prob = exact.clone();
+        prob.demand.cav_share = CavShare::Probability;
+        let (a, b) = (generate(&exact), generate(&prob));
+        assert_eq!(a.len(), b.len());
+        for (x, y) in a.iter().zip(&b) {
+            assert_eq!(
+                (&x.id, x.depart, x.depart_lane, x.depart_speed),
+                (&y.id, y.depart, y.depart_lane, y.depart_speed)
+            );
+        }
+        let cavs = |d: &[PlannedVehicle]| d.iter().filter(|v| v.kind == Kind::Cav).count();
+        assert_eq!(cavs(&a), (0.5 * a.len() as f64).round() as usize);
+        // Over many seeds the probability mode averages α but single episodes vary.
+        let shares: Vec<f64> = (0..50)
+            .map(|seed| {
+                let mut c = config(0.5, 3000.0, seed);
+                c.demand.cav_share = CavShare::Probability;
+                let d = generate(&c);
+                cavs(&d) as f64 / d.len() as f64
+            })
+            .collect();
+        assert!(shares.iter().any(|s| (s - 0.5).abs() > 0.05), "{shares:?}");
     }
 
     #[test]

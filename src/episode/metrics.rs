@@ -62,6 +62,17 @@ impl VehicleRecord {
             .map(|t| t - self.scheduled_depart - self.t_star)
     }
 
+    /// Travel time t_f from the scheduled departure to the arrival (s): what the delay compares
+    /// with t*.
+    pub fn travel_time(&self) -> Option<f64> {
+        self.arrival_time.map(|t| t - self.scheduled_depart)
+    }
+
+    /// Time from insertion into SUMO to the arrival (s): the travel time without the entry delay.
+    pub fn time_in_network(&self) -> Option<f64> {
+        self.arrival_time.map(|t| t - self.insert_time)
+    }
+
     /// Time the vehicle waited at the entry for room (s).
     pub fn entry_delay(&self) -> f64 {
         (self.insert_time - self.scheduled_depart).max(0.0)

@@ -117,7 +117,7 @@ fn timing_row(t: &Timing) -> Vec<String> {
 }
 
 /// Columns of `vehicles.csv`.
-pub const VEHICLE_COLUMNS: [&str; 19] = [
+pub const VEHICLE_COLUMNS: [&str; 20] = [
     "id",
     "type",
     "origin",
@@ -133,6 +133,7 @@ pub const VEHICLE_COLUMNS: [&str; 19] = [
     "outcome",
     "arrival_time_s",
     "travel_time_s",
+    "time_in_network_s",
     "delay_s",
     "crash_time_s",
     "crashed_with",
@@ -155,7 +156,8 @@ fn vehicle_row(r: &VehicleRecord) -> Vec<String> {
         format!("{:.4}", r.t_star),
         r.outcome.as_str().into(),
         opt(r.arrival_time, 4),
-        opt(r.arrival_time.map(|t| t - r.insert_time), 4),
+        opt(r.travel_time(), 4),
+        opt(r.time_in_network(), 4),
         opt(r.delay(), 4),
         opt(r.crash_time, 2),
         r.crashed_with.join(" "),

@@ -8,7 +8,7 @@ use std::collections::HashMap;
 use std::sync::Arc;
 use std::time::Instant;
 
-use crate::config::{Config, ConfigError};
+use crate::config::{Config, ConfigError, TStarSpeed};
 use crate::controller::{self, BuildError, CavHandling, Command, Controller, PlanStats};
 use crate::episode::demand::{self, PlannedVehicle};
 use crate::episode::entry::EntryControl;
@@ -256,10 +256,12 @@ impl<'a> Episode<'a> {
 
     /// One SUMO step and, unless it is the last, one planning round.
     fn step(&mut self, sim: &mut Simulation, plan: bool) -> Result<(), SumoError> {
-        for a in self
-            .entry
-            .admit(self.sumo_scene.scene.time, &self.sumo_scene.scene)
-        {
+        // The time of the state this step produces, on SUMO's clock: SUMO's own outputs (FCD,
+        // tripinfo, collisions) label the state after a step with the time the step started,
+        // and a vehicle added now departs at this time. `sim.time()` after the step is one
+        // step later.
+        let now = sim.time()?;
+        for a in self.entry.admit(now, &self.sumo_scene.scene) {
             let v = &a.vehicle;
             sim.add_vehicle(
                 &v.id,
@@ -272,11 +274,12 @@ impl<'a> Episode<'a> {
         let t0 = Instant::now();
         sim.step()?;
         self.sumo_s += t0.elapsed().as_secs_f64();
-        let now = sim.time()?;
         self.book_departures(sim, now)?;
+        // Read before the collided vehicles are removed: their state at this time counts, as
+        // in SUMO's own outputs (a vehicle may collide in the step it was inserted).
+        sim.read_vehicles(&mut self.readings)?;
         self.book_collisions(sim, now)?;
         self.book_arrivals(sim, now)?;
-        sim.read_vehicles(&mut self.readings)?;
         self.build_scene(now);
         self.observer.observe(&self.sumo_scene.scene);
         if !plan {
@@ -447,12 +450,19 @@ impl<'a> Episode<'a> {
             if t.record.insert_lane < 0 {
                 t.record.insert_lane = lane;
                 t.record.insert_speed = raw.speed;
+                if self.config.metrics.t_star_speed == TStarSpeed::Inserted {
+                    let r = &mut t.record;
+                    r.t_star = free_flow_time(r.distance, raw.speed, sc.free_flow_accel, sc.v_max);
+                }
             }
             t.last_time = now;
             t.last_front = front;
             t.last_speed = raw.speed;
             self.speed_sum += raw.speed;
             self.speed_samples += 1;
+            if t.record.outcome == Outcome::Crashed {
+                continue; // removed from SUMO after this reading: not in the scene
+            }
             let who = frame::Identity {
                 id: t.id.clone(),
                 kind: t.record.kind,
