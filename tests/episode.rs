@@ -3,7 +3,7 @@
 mod common;
 
 use bkpbs::config::Config;
-use bkpbs::controller::{CavHandling, Command, Controller, Maneuver};
+use bkpbs::controller::{CavHandling, Command, Controller, Maneuver, Source};
 use bkpbs::episode::demand::PlannedVehicle;
 use bkpbs::episode::metrics::Outcome;
 use bkpbs::episode::{self, EpisodeResult};
@@ -95,6 +95,7 @@ impl Controller for StopFirstKeepOthers {
                         speed,
                         lane_change: None,
                     },
+                    source: Source::Rule,
                 });
             }
         }

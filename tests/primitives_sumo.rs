@@ -8,7 +8,7 @@ use std::cell::RefCell;
 use std::rc::Rc;
 
 use bkpbs::config::Config;
-use bkpbs::controller::{CavHandling, Command, Controller, LaneChange, Maneuver};
+use bkpbs::controller::{CavHandling, Command, Controller, LaneChange, Maneuver, Source};
 use bkpbs::episode;
 use bkpbs::episode::demand::PlannedVehicle;
 use bkpbs::model::kinematics::BicycleState;
@@ -86,6 +86,7 @@ impl Controller for Probe {
         out.push(Command {
             vehicle: i,
             maneuver: Maneuver { speed, lane_change },
+            source: Source::Rule,
         });
     }
 }

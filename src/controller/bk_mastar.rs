@@ -4,7 +4,7 @@
 //! executed; a CAV without a plan in either phase brakes at the emergency deceleration, and the
 //! step records a fallback.
 
-use super::{execute, CavHandling, Command, Controller, PlanStats};
+use super::{execute, CavBelief, CavHandling, Command, Controller, PlanStats, Source};
 use crate::config::Config;
 use crate::model::road::Road;
 use crate::model::scene::{Kind, Scene};
@@ -21,6 +21,8 @@ pub struct BkMastar {
     planner: Mastar,
     lane_changes: LaneChanges,
     stats: PlanStats,
+    tracing: bool,
+    beliefs: Vec<CavBelief>,
 }
 
 impl BkMastar {
@@ -33,6 +35,8 @@ impl BkMastar {
             planner: Mastar::from_config(config, road.clone()),
             lane_changes: LaneChanges::default(),
             stats: PlanStats::default(),
+            tracing: false,
+            beliefs: Vec::new(),
         }
     }
 }
@@ -63,6 +67,7 @@ impl Controller for BkMastar {
             .collect();
         let now = scene.time;
         self.lane_changes.forget_finished(now);
+        self.beliefs.clear();
         let mut stats = PlanStats::default();
         for (i, v) in scene.vehicles.iter().enumerate() {
             if v.kind != Kind::Cav {
@@ -84,9 +89,18 @@ impl Controller for BkMastar {
                 self.lane_changes
                     .start(&v.id, now, lc_steps as f64 * dt, target);
             }
+            let changing = req.ongoing.is_some();
+            let source = execute::source_of(Source::Plan, result.is_ok(), changing);
+            if self.tracing {
+                let others = predictions.iter().enumerate();
+                let planned = result.as_ref().ok().map(|p| &p.trajectory);
+                self.beliefs
+                    .push(execute::belief(scene, i, planned, others));
+            }
             out.push(Command {
                 vehicle: i,
                 maneuver,
+                source,
             });
         }
         self.stats = stats;
@@ -94,5 +108,13 @@ impl Controller for BkMastar {
 
     fn last_stats(&self) -> PlanStats {
         self.stats
+    }
+
+    fn set_tracing(&mut self, on: bool) {
+        self.tracing = on;
+    }
+
+    fn beliefs(&self) -> Vec<CavBelief> {
+        self.beliefs.clone()
     }
 }

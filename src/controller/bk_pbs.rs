@@ -6,7 +6,7 @@
 
 use std::sync::Arc;
 
-use super::{execute, CavHandling, Command, Controller, PlanStats};
+use super::{execute, CavBelief, CavHandling, Command, Controller, PlanStats, Source};
 use crate::config::Config;
 use crate::model::road::Road;
 use crate::model::scene::{Kind, Scene};
@@ -23,6 +23,8 @@ pub struct BkPbs {
     planner: Mastar,
     lane_changes: LaneChanges,
     stats: PlanStats,
+    tracing: bool,
+    beliefs: Vec<CavBelief>,
 }
 
 impl BkPbs {
@@ -34,6 +36,8 @@ impl BkPbs {
             planner: Mastar::from_config(config, road.clone()),
             lane_changes: LaneChanges::default(),
             stats: PlanStats::default(),
+            tracing: false,
+            beliefs: Vec::new(),
         }
     }
 }
@@ -62,12 +66,20 @@ impl Controller for BkPbs {
         let solution = problem.solve();
         let mut stats = search_stats(&solution.stats);
         let mut starts = Vec::new();
+        let mut beliefs = Vec::new();
         for (i, v) in scene.vehicles.iter().enumerate() {
             if v.kind != Kind::Cav {
                 continue;
             }
-            let plan = executed_plan(&problem, &solution, &requests, i, &mut stats);
+            let (plan, planned_by) = executed_plan(&problem, &solution, &requests, i, &mut stats);
             let lane = self.lane_changes.planning_lane(scene, i, dt);
+            let changing = self.lane_changes.ongoing(&v.id, now, dt).is_some();
+            let source = execute::source_of(planned_by, plan.is_some(), changing);
+            if self.tracing {
+                let others = solution.trajectories.iter().map(|t| &**t).enumerate();
+                let planned = plan.as_ref().map(|p| &p.trajectory);
+                beliefs.push(execute::belief(scene, i, planned, others));
+            }
             let (maneuver, target) =
                 execute::maneuver_for(plan.as_deref(), v, lane, decel, dt, &mut stats);
             if let Some(target) = target {
@@ -76,8 +88,10 @@ impl Controller for BkPbs {
             out.push(Command {
                 vehicle: i,
                 maneuver,
+                source,
             });
         }
+        self.beliefs = beliefs;
         // Recorded after the loop: `requests` reads the changes under way while CAVs are planned.
         for (id, target) in starts {
             self.lane_changes
@@ -88,6 +102,14 @@ impl Controller for BkPbs {
 
     fn last_stats(&self) -> PlanStats {
         self.stats
+    }
+
+    fn set_tracing(&mut self, on: bool) {
+        self.tracing = on;
+    }
+
+    fn beliefs(&self) -> Vec<CavBelief> {
+        self.beliefs.clone()
     }
 }
 
@@ -126,21 +148,26 @@ fn search_stats(s: &PbsStats) -> PlanStats {
     }
 }
 
-/// The plan CAV `i` executes: the chosen node's, or a repair when the node left it without one
-/// or, after a fallback, still in conflict: planned alone against every other trajectory of the
-/// node. `None` when even the repair finds no plan.
+/// The plan CAV `i` executes and where it came from: the chosen node's, or a repair when the
+/// node left it without one or, after a fallback, still in conflict: planned alone against every
+/// other trajectory of the node. `None` when even the repair finds no plan.
 fn executed_plan(
     problem: &Problem<'_>,
     solution: &Solution,
     requests: &SceneRequests<'_>,
     i: usize,
     stats: &mut PlanStats,
-) -> Option<Arc<Plan>> {
+) -> (Option<Arc<Plan>>, Source) {
     let n = problem.scene.vehicles.len();
     let in_conflict = solution.stats.fallback
         && (0..n).any(|j| j != i && problem.conflict_between(i, j, &solution.trajectories));
     if !in_conflict && solution.plans[i].is_some() {
-        return solution.plans[i].clone();
+        let source = if solution.stats.fallback {
+            Source::PbsBestNode
+        } else {
+            Source::PbsSolution
+        };
+        return (solution.plans[i].clone(), source);
     }
     let others: Vec<&Trajectory> = solution
         .trajectories
@@ -151,7 +178,7 @@ fn executed_plan(
         .collect();
     let result = requests.plan(problem.planner, i, &others);
     execute::count_search(stats, result.as_ref());
-    result.ok().map(Arc::new)
+    (result.ok().map(Arc::new), Source::Repair)
 }
 
 #[cfg(test)]

@@ -1,8 +1,10 @@
 //! Turning planner output into the maneuvers SUMO executes: shared by the search-based
 //! controllers (`bk-mastar`, `bk-pbs`), so both execute a plan, and the lack of one, alike.
 
-use super::{LaneChange, Maneuver, PlanStats};
+use super::{CavBelief, LaneChange, Maneuver, PlanStats, Source};
+use crate::model::scene::Scene;
 use crate::model::scene::VehicleState;
+use crate::model::trajectory::Trajectory;
 use crate::planner::mastar::{FirstMove, NoPlan, Phase, Plan};
 
 /// Counts one M-A* call and the nodes it expanded, whether or not it found a plan.
@@ -65,5 +67,38 @@ pub fn emergency_brake(v: &VehicleState, decel: f64, dt: f64) -> Maneuver {
     Maneuver {
         speed: (v.speed - decel * dt).max(0.0),
         lane_change: None,
+    }
+}
+
+/// The source a trace reports for a CAV's maneuver: braking without a plan, the continuation of
+/// a lane change under way, else where the plan came from.
+pub fn source_of(planned: Source, has_plan: bool, changing_lanes: bool) -> Source {
+    match (has_plan, changing_lanes) {
+        (false, _) => Source::Brake,
+        (true, true) => Source::Continuation,
+        (true, false) => planned,
+    }
+}
+
+/// Range (m, along the road) within which a trace lists the trajectories a CAV was checked
+/// against.
+pub const BELIEF_RANGE: f64 = 60.0;
+
+/// What the planner believed about CAV `i`: its planned trajectory and the trajectories of the
+/// vehicles within [`BELIEF_RANGE`] of it.
+pub fn belief<'a>(
+    scene: &Scene,
+    i: usize,
+    planned: Option<&Trajectory>,
+    others: impl Iterator<Item = (usize, &'a Trajectory)>,
+) -> CavBelief {
+    let s = scene.vehicles[i].s;
+    CavBelief {
+        vehicle: i,
+        planned: planned.cloned(),
+        others: others
+            .filter(|&(j, _)| j != i && (scene.vehicles[j].s - s).abs() <= BELIEF_RANGE)
+            .map(|(j, t)| (j, t.clone()))
+            .collect(),
     }
 }

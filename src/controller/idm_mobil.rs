@@ -4,7 +4,7 @@
 use std::collections::HashMap;
 use std::sync::Arc;
 
-use super::{idm, mobil, CavHandling, Command, Controller, LaneChange, Maneuver};
+use super::{idm, mobil, CavHandling, Command, Controller, LaneChange, Maneuver, Source};
 use crate::config::{Config, Idm, Mobil};
 use crate::model::road::MERGE_LANE;
 use crate::model::scene::{Kind, Scene};
@@ -114,6 +114,7 @@ impl Controller for IdmMobil {
                     speed: (v.speed + a * self.dt).clamp(0.0, self.v_max),
                     lane_change,
                 },
+                source: Source::Rule,
             });
         }
         if self.last_change.len() > 4 * scene.vehicles.len() + 64 {

@@ -15,6 +15,7 @@ pub mod sumo_native;
 use crate::config::Config;
 use crate::model::road::Road;
 use crate::model::scene::Scene;
+use crate::model::trajectory::Trajectory;
 use crate::predict::PredictorError;
 
 /// A lateral move to the neighbouring lane.
@@ -48,6 +49,59 @@ pub struct Maneuver {
 pub struct Command {
     pub vehicle: usize,
     pub maneuver: Maneuver,
+    /// Where the maneuver came from (traces and collision forensics).
+    pub source: Source,
+}
+
+/// Where a CAV's maneuver came from, so a trace can say why a CAV did what it did.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Source {
+    /// BK-PBS: the plan of the conflict-free node.
+    PbsSolution,
+    /// BK-PBS: the plan of the best node of a round that found no conflict-free one.
+    PbsBestNode,
+    /// BK-PBS: planned alone against every other trajectory after the round left it without
+    /// a plan or in conflict.
+    Repair,
+    /// BK-M-A*: the CAV's own M-A* plan.
+    Plan,
+    /// No plan at all: braking at the emergency deceleration.
+    Brake,
+    /// The safety shield replaced the planned first move.
+    Shield,
+    /// A lane change under way, continued.
+    Continuation,
+    /// A rule-based controller (idm-mobil, test controllers).
+    Rule,
+}
+
+impl Source {
+    /// The name used in traces.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Source::PbsSolution => "pbs-solution",
+            Source::PbsBestNode => "pbs-best-node",
+            Source::Repair => "repair",
+            Source::Plan => "plan",
+            Source::Brake => "brake",
+            Source::Shield => "shield",
+            Source::Continuation => "continuation",
+            Source::Rule => "rule",
+        }
+    }
+}
+
+/// What a planner believed about one CAV in its last round: the trajectory it planned for it
+/// and the trajectories it predicted (or planned) for the vehicles it checked it against.
+/// Collected only while tracing ([`Controller::set_tracing`]).
+#[derive(Debug, Clone)]
+pub struct CavBelief {
+    /// Scene index of the CAV.
+    pub vehicle: usize,
+    pub planned: Option<Trajectory>,
+    /// (scene index, trajectory) of the other vehicles.
+    pub others: Vec<(usize, Trajectory)>,
 }
 
 /// Who drives the CAVs in SUMO.
@@ -111,6 +165,15 @@ pub trait Controller {
     /// The effort of the last `plan` call (none for rule-based controllers).
     fn last_stats(&self) -> PlanStats {
         PlanStats::default()
+    }
+
+    /// Asks the controller to keep what it believed in each round, for [`Controller::beliefs`].
+    fn set_tracing(&mut self, _on: bool) {}
+
+    /// What the last `plan` call believed about each CAV (empty unless tracing, and for
+    /// controllers that do not plan trajectories).
+    fn beliefs(&self) -> Vec<CavBelief> {
+        Vec::new()
     }
 }
 

@@ -90,6 +90,15 @@ pub fn run(config: &Config, planner: &str) -> Result<EpisodeResult, EpisodeError
 /// predictor's training set) without touching the runner.
 pub trait Observer {
     fn observe(&mut self, scene: &Scene);
+
+    /// Sees what the controller decided in the step whose scene was just observed, and what it
+    /// believed (when tracing; see [`Controller::set_tracing`]).
+    fn planned(&mut self, _scene: &Scene, _commands: &[Command], _controller: &dyn Controller) {}
+
+    /// Whether [`Observer::planned`] needs the controller's beliefs (turns its tracing on).
+    fn wants_beliefs(&self) -> bool {
+        false
+    }
 }
 
 /// An observer that looks away.
@@ -143,6 +152,7 @@ pub fn run_observed(
             }
             Driver::Given(c) => c,
         };
+        controller.set_tracing(observer.wants_beliefs());
         Episode::new(config, controller, planned, road, observer).run(sim)
     })();
     let sumo_log = capture.map(StderrCapture::finish).unwrap_or_default();
@@ -298,6 +308,8 @@ impl<'a> Episode<'a> {
             .plan(&self.sumo_scene.scene, &mut self.commands);
         self.plan_ms.push(t1.elapsed().as_secs_f64() * 1e3);
         self.plan_stats += self.controller.last_stats();
+        self.observer
+            .planned(&self.sumo_scene.scene, &self.commands, &*self.controller);
         if self.controller.handling() == CavHandling::Commanded {
             self.apply(sim)?;
         }
