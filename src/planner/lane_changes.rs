@@ -9,7 +9,7 @@ use std::sync::Arc;
 
 use crate::model::kinematics::BicycleState;
 use crate::model::math::Point;
-use crate::model::road::MERGE_LANE;
+use crate::model::road::{MAIN_LANES, MERGE_LANE};
 use crate::model::scene::{Origin, Scene};
 use crate::model::trajectory::Trajectory;
 use crate::planner::mastar::{Mastar, NoPlan, OngoingLaneChange, Plan, Request};
@@ -61,6 +61,11 @@ impl LaneChanges {
         let w = scene.road.lane_width;
         let ongoing = self.ongoing(&v.id, scene.time, dt);
         let lane = ongoing.map_or(v.lane, |o| o.target_lane);
+        // A merge under way is still a merge: the body overlaps the merge lane until it ends,
+        // so the search must allow that (it once rejected every continuation, and the CAV
+        // braked hard while SUMO kept moving it sideways).
+        let merging = ongoing.is_some_and(|o| o.target_lane == MAIN_LANES[0])
+            && (v.lane == MERGE_LANE || v.lateral < 0.0);
         let cos = v.heading.cos().max(0.5);
         Request {
             start: BicycleState {
@@ -70,7 +75,7 @@ impl LaneChanges {
             },
             lane,
             ongoing,
-            must_merge: v.origin == Origin::Ramp && lane == MERGE_LANE,
+            must_merge: v.origin == Origin::Ramp && (lane == MERGE_LANE || merging),
             length: v.length,
             width: v.width,
             obstacles,
@@ -115,5 +120,67 @@ mod tests {
         assert!(lc.ongoing("cav.1", 11.0, 0.2).is_none());
         lc.forget_finished(11.0);
         assert!(lc.under_way.is_empty());
+    }
+
+    use crate::config::PlannerSettings;
+    use crate::model::road::Road;
+    use crate::model::scene::{Kind, VehicleState};
+    use crate::planner::mastar::{FirstMove, Mastar};
+
+    fn planner() -> Mastar {
+        Mastar::new(
+            &PlannerSettings::default(),
+            Road::paper_default(),
+            0.2,
+            1.0,
+            35.0,
+        )
+    }
+
+    fn ramp_cav(s: f64, lane: i32, lateral: f64, speed: f64) -> VehicleState {
+        VehicleState {
+            lateral,
+            ..VehicleState::on_lane("ramp.1", Kind::Cav, Origin::Ramp, s, lane, speed)
+        }
+    }
+
+    #[test]
+    fn a_merge_under_way_keeps_a_continuation_plan() {
+        // R1 regression: a ramp CAV two steps into its merge (still on the merge lane, moving
+        // left) had no plan at all, because the search took the merge for finished and refused
+        // every state overlapping the merge lane; it braked while SUMO moved it sideways.
+        let scene = Scene::on_paper_road(10.0, vec![ramp_cav(250.0, 0, 1.8, 25.0)]);
+        let mut lc = LaneChanges::default();
+        lc.start(&scene.vehicles[0].id, 9.6, 1.0, 1);
+        let req = lc.request(&scene, 0, 0.2, &[]);
+        assert!(req.must_merge && req.ongoing.is_some());
+        let plan = planner().plan(&req).expect("the merge continues");
+        assert_eq!(plan.first, FirstMove::Continue);
+        // Past the lane's centre line SUMO reports the target lane with a negative offset.
+        let scene = Scene::on_paper_road(10.0, vec![ramp_cav(250.0, 1, -1.5, 25.0)]);
+        let req = lc.request(&scene, 0, 0.2, &[]);
+        assert!(req.must_merge);
+        assert!(planner().plan(&req).is_ok());
+    }
+
+    #[test]
+    fn no_lane_change_starts_on_the_ramp_edge() {
+        // R3 regression: a change started while the front was still on SUMO's one-lane ramp
+        // edge was never sent, yet the controller continued it for four steps of braking.
+        let m = planner();
+        let lc = LaneChanges::default();
+        for front in [140.0, 146.0, 149.9] {
+            let scene = Scene::on_paper_road(0.0, vec![ramp_cav(front - 2.5, 0, 0.0, 30.0)]);
+            let plan = m.plan(&lc.request(&scene, 0, 0.2, &[])).unwrap();
+            assert!(
+                !matches!(plan.first, FirstMove::Start(p) if p.is_lane_change()),
+                "front at {front}: {:?}",
+                plan.first
+            );
+        }
+        // On the acceleration lane with the main road free, the merge starts at once.
+        let scene = Scene::on_paper_road(0.0, vec![ramp_cav(200.0, 0, 0.0, 30.0)]);
+        let plan = m.plan(&lc.request(&scene, 0, 0.2, &[])).unwrap();
+        assert!(matches!(plan.first, FirstMove::Start(p) if p.is_lane_change()));
     }
 }

@@ -18,7 +18,7 @@
 use crate::config::PlannerSettings;
 use crate::model::kinematics::{free_flow_time, BicycleState};
 use crate::model::math::Point;
-use crate::model::road::{Road, MAIN_LANES, MERGE_LANE};
+use crate::model::road::{Road, LANES, MAIN_LANES, MERGE_LANE};
 use crate::model::trajectory::{Pose, Trajectory};
 use crate::planner::primitives::{Library, Primitive, Throttle};
 use crate::planner::safety::{Body, SafetyRule};
@@ -483,7 +483,7 @@ impl<'p> PhaseSearch<'p> {
                         continue;
                     }
                     let lane = n.lane + p.lane_offset();
-                    if !(MERGE_LANE..=MAIN_LANES[1]).contains(&lane) {
+                    if !LANES.contains(&lane) || !self.can_start(p, n) {
                         continue;
                     }
                     let seg = if n.step == 0 {
@@ -496,6 +496,14 @@ impl<'p> PhaseSearch<'p> {
                 moves
             }
         }
+    }
+
+    /// Whether primitive `p` may start at `n`: a lane change out of the merge lane only once the
+    /// front is on the acceleration lane. On SUMO's ramp edge there is no lane to change to, so
+    /// a change started there would not be executed while the plan counted on it.
+    fn can_start(&self, p: Primitive, n: &Node) -> bool {
+        let front = n.state.pos.x + 0.5 * self.req.length;
+        !(p.is_lane_change() && n.lane == MERGE_LANE && front < self.planner.road.merge_start)
     }
 
     /// The rest of the lane change under way from `st`: forward speed held, lateral position
