@@ -104,6 +104,11 @@ impl RequestFor for SceneRequests<'_> {
                 .request(self.scene, agent, self.dt, obstacles),
         )
     }
+
+    fn fallback(&self, planner: &Mastar, agent: usize, horizon: usize) -> Trajectory {
+        let req = self.lane_changes.request(self.scene, agent, self.dt, &[]);
+        planner.fallback_trajectory(&req, horizon)
+    }
 }
 
 #[cfg(test)]
@@ -126,6 +131,7 @@ mod tests {
     use crate::model::road::Road;
     use crate::model::scene::{Kind, VehicleState};
     use crate::planner::mastar::{FirstMove, Mastar};
+    use crate::planner::pbs::RequestFor;
 
     fn planner() -> Mastar {
         Mastar::new(
@@ -182,5 +188,39 @@ mod tests {
         let scene = Scene::on_paper_road(0.0, vec![ramp_cav(200.0, 0, 0.0, 30.0)]);
         let plan = m.plan(&lc.request(&scene, 0, 0.2, &[])).unwrap();
         assert!(matches!(plan.first, FirstMove::Start(p) if p.is_lane_change()));
+    }
+
+    #[test]
+    fn without_a_plan_others_see_the_brake_and_the_lane_change_completing() {
+        // What PBS checks the other agents against when a CAV has no plan is what it will do:
+        // brake at the emergency deceleration while SUMO completes its merge (it once was a
+        // constant-speed, fixed-lateral guess).
+        let scene = Scene::on_paper_road(10.0, vec![ramp_cav(250.0, 0, 1.8, 25.0)]);
+        let mut lc = LaneChanges::default();
+        lc.start(&scene.vehicles[0].id, 9.6, 1.0, 1);
+        let requests = SceneRequests {
+            scene: &scene,
+            lane_changes: &lc,
+            dt: 0.2,
+        };
+        let m = planner();
+        let t = requests.fallback(&m, 0, 20);
+        assert_eq!(t.poses.len(), 21);
+        assert!(
+            (t.poses[1].speed - (25.0 - 6.0 * 0.2)).abs() < 0.05,
+            "{:?}",
+            t.poses[1]
+        );
+        assert!(
+            t.poses[20].speed < 25.0 - 6.0 * 4.0 + 0.05,
+            "braked for 4 s"
+        );
+        let y = |k: usize| t.poses[k].y;
+        // Sideways on SUMO's schedule (3 steps left), tracked by the bicycle model's steering.
+        assert!(
+            y(1) > y(0) && y(3) > 4.0 && (y(20) - 4.5).abs() < 0.05,
+            "{:?}",
+            t.poses
+        );
     }
 }

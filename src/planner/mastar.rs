@@ -200,6 +200,35 @@ impl Mastar {
         Ok(assemble(req, phase, &result))
     }
 
+    /// What the CAV of `req` does without a plan, over `horizon` steps: it brakes at the
+    /// emergency deceleration while a lane change under way completes (SUMO keeps moving it
+    /// sideways). The trajectory every other agent must be checked against, not a guess.
+    pub fn fallback_trajectory(&self, req: &Request, horizon: usize) -> Trajectory {
+        let y0 = req.start.pos.y;
+        let (y1, total) = match req.ongoing {
+            Some(lc) => (
+                self.lane_y(lc.target_lane),
+                lc.steps_left as f64 * self.library.dt,
+            ),
+            None => (y0, 0.0),
+        };
+        let brake = Throttle::Accel(-self.library.emergency_decel);
+        let seg = self.library.track(&req.start, brake, horizon, |t| {
+            if t < total {
+                (y0 + (y1 - y0) * t / total, (y1 - y0) / total)
+            } else {
+                (y1, 0.0)
+            }
+        });
+        let mut poses = vec![pose(&req.start)];
+        poses.extend(seg.iter().map(pose));
+        Trajectory {
+            poses,
+            length: req.length,
+            width: req.width,
+        }
+    }
+
     /// Whether the (un-inflated) body stays on drivable road.
     fn on_road(&self, st: &BicycleState, req: &Request) -> bool {
         let w = self.road.lane_width;

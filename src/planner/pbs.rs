@@ -49,6 +49,9 @@ pub trait RequestFor: Sync {
         agent: usize,
         obstacles: &[&Trajectory],
     ) -> Result<Plan, NoPlan>;
+
+    /// What `agent` executes without a plan ([`Mastar::fallback_trajectory`]).
+    fn fallback(&self, planner: &Mastar, agent: usize, horizon: usize) -> Trajectory;
 }
 
 /// One planning problem: a scene and how to plan and predict in it.
@@ -350,8 +353,8 @@ impl Problem<'_> {
         }
     }
 
-    /// Agent `a` at the root: a CAV planned by M-A* without obstacles (predicted, without a
-    /// plan, if even that fails), an HDV predicted unconditioned.
+    /// Agent `a` at the root: a CAV planned by M-A* without obstacles (its braking fallback,
+    /// without a plan, if even that fails), an HDV predicted unconditioned.
     fn root_plan(&self, a: usize) -> RootPlan {
         if self.is_cav(a) {
             match self.requests.plan(self.planner, a, &[]) {
@@ -361,7 +364,12 @@ impl Problem<'_> {
                     1,
                     p.expanded as u64,
                 ),
-                Err(e) => (self.predict(a, &[]), None, 1, e.expanded as u64),
+                Err(e) => (
+                    Arc::new(self.requests.fallback(self.planner, a, self.horizon)),
+                    None,
+                    1,
+                    e.expanded as u64,
+                ),
             }
         } else {
             (self.predict(a, &[]), None, 0, 0)
