@@ -22,6 +22,7 @@ pub struct BkPbs {
     predictor: Box<dyn Predictor>,
     planner: Mastar,
     lane_changes: LaneChanges,
+    commitments: Commitments,
     stats: PlanStats,
     tracing: bool,
     beliefs: Vec<CavBelief>,
@@ -35,6 +36,7 @@ impl BkPbs {
             predictor,
             planner: Mastar::from_config(config, road.clone()),
             lane_changes: LaneChanges::default(),
+            commitments: Commitments::default(),
             stats: PlanStats::default(),
             tracing: false,
             beliefs: Vec::new(),
@@ -62,7 +64,8 @@ impl Controller for BkPbs {
             lane_changes: &self.lane_changes,
             dt,
         };
-        let problem = self.problem(scene, &requests);
+        let committed = self.commitments.in_scene(scene, now);
+        let problem = self.problem(scene, &requests, &committed);
         let solution = problem.solve();
         let mut stats = search_stats(&solution.stats);
         let mut starts = Vec::new();
@@ -83,7 +86,7 @@ impl Controller for BkPbs {
             let (maneuver, target) =
                 execute::maneuver_for(plan.as_deref(), v, lane, decel, dt, &mut stats);
             if let Some(target) = target {
-                starts.push((v.id.clone(), target));
+                starts.push((i, v.id.clone(), target));
             }
             out.push(Command {
                 vehicle: i,
@@ -92,10 +95,12 @@ impl Controller for BkPbs {
             });
         }
         self.beliefs = beliefs;
+        let lc_duration = lc_steps as f64 * dt;
+        self.commitments
+            .record(scene, &solution.edges, &starts, now + lc_duration);
         // Recorded after the loop: `requests` reads the changes under way while CAVs are planned.
-        for (id, target) in starts {
-            self.lane_changes
-                .start(&id, now, lc_steps as f64 * dt, target);
+        for (_, id, target) in starts {
+            self.lane_changes.start(&id, now, lc_duration, target);
         }
         self.stats = stats;
     }
@@ -116,13 +121,19 @@ impl Controller for BkPbs {
 impl BkPbs {
     /// This step's BK-PBS problem: every CAV of `scene`, planned with M-A* and judged by the
     /// same safety rule M-A* plans with.
-    fn problem<'a>(&'a self, scene: &'a Scene, requests: &'a SceneRequests<'a>) -> Problem<'a> {
+    fn problem<'a>(
+        &'a self,
+        scene: &'a Scene,
+        requests: &'a SceneRequests<'a>,
+        committed: &'a [(usize, usize)],
+    ) -> Problem<'a> {
         let pbs = &self.config.pbs;
         Problem {
             scene,
             planner: &self.planner,
             predictor: self.predictor.as_ref(),
             requests,
+            committed,
             rule: &self.planner.rule,
             horizon: self.config.planner.horizon + self.config.scenario.lane_change_steps(),
             dt: self.config.scenario.dt,
@@ -179,6 +190,60 @@ fn executed_plan(
     let result = requests.plan(problem.planner, i, &others);
     execute::count_search(stats, result.as_ref());
     (result.ok().map(Arc::new), Source::Repair)
+}
+
+/// Priority edges carried across rounds: recursive feasibility of cut-ins.
+///
+/// A CAV that starts a lane change in front of another CAV may rely on that CAV yielding (the
+/// round's priority `hi ≺ lo`). Only the first step of the plan is executed and the next round
+/// starts afresh, so without memory nothing would hold `lo` to it while the change, which
+/// cannot be undone, is under way. The invariant kept: while a lane change started in a round
+/// is under way, every CAV that had to yield to it in that round keeps yielding in later rounds,
+/// as long as it can plan so (else the commitment is dropped and PBS resolves the conflict
+/// afresh, the repair and braking still apply).
+#[derive(Debug, Clone, Default)]
+struct Commitments {
+    /// (higher id, lower id, until time).
+    edges: Vec<(Arc<str>, Arc<str>, f64)>,
+}
+
+impl Commitments {
+    /// The commitments still running at `now` between CAVs of `scene`, as scene indices.
+    fn in_scene(&mut self, scene: &Scene, now: f64) -> Vec<(usize, usize)> {
+        self.edges.retain(|(_, _, until)| *until > now + 1e-6);
+        let index = |id: &Arc<str>| {
+            scene
+                .vehicles
+                .iter()
+                .position(|v| v.id == *id && v.kind == Kind::Cav)
+        };
+        self.edges
+            .iter()
+            .filter_map(|(hi, lo, _)| Some((index(hi)?, index(lo)?)))
+            .collect()
+    }
+
+    /// Records, for each CAV that starts a lane change now, the CAVs the round made yield to it,
+    /// until the change ends.
+    fn record(
+        &mut self,
+        scene: &Scene,
+        edges: &[(usize, usize)],
+        starts: &[(usize, Arc<str>, i32)],
+        until: f64,
+    ) {
+        for &(i, _, _) in starts {
+            for &(hi, lo) in edges.iter().filter(|&&(hi, _)| hi == i) {
+                if scene.vehicles[lo].kind != Kind::Cav {
+                    continue;
+                }
+                let (h, l) = (&scene.vehicles[hi].id, &scene.vehicles[lo].id);
+                if !self.edges.iter().any(|(a, b, _)| a == h && b == l) {
+                    self.edges.push((h.clone(), l.clone(), until));
+                }
+            }
+        }
+    }
 }
 
 #[cfg(test)]

@@ -60,6 +60,10 @@ pub struct Problem<'a> {
     pub planner: &'a Mastar,
     pub predictor: &'a dyn Predictor,
     pub requests: &'a dyn RequestFor,
+    /// Priority edges `(hi, lo)` carried over from earlier rounds (commitments: `lo` yields to a
+    /// cut-in of `hi` that relied on it). The root starts from them where they are still
+    /// feasible.
+    pub committed: &'a [(usize, usize)],
     pub rule: &'a SafetyRule,
     /// Steps checked for conflicts (and predicted).
     pub horizon: usize,
@@ -94,6 +98,8 @@ pub struct PbsStats {
 pub struct Solution {
     pub trajectories: Vec<Arc<Trajectory>>,
     pub plans: Vec<Option<Arc<Plan>>>,
+    /// The priority edges `(hi, lo)` of the chosen node, the commitments included.
+    pub edges: Vec<(usize, usize)>,
     pub stats: PbsStats,
 }
 
@@ -346,10 +352,36 @@ impl Problem<'_> {
             trajectories.push(t);
             plans.push(p);
         }
-        State {
+        let mut state = State {
             graph: PriorityGraph::new(n),
             trajectories,
             plans,
+        };
+        self.keep_commitments(&mut state, stats);
+        state
+    }
+
+    /// Adds each committed edge whose lower agent can still plan (or be predicted) around its
+    /// higher ones, replanning it as a child would; a commitment that has become infeasible is
+    /// dropped, and the state is left as it was.
+    fn keep_commitments(&self, state: &mut State, stats: &mut PbsStats) {
+        for &(hi, lo) in self.committed {
+            let mut next = State {
+                graph: state.graph.clone(),
+                trajectories: state.trajectories.clone(),
+                plans: state.plans.clone(),
+            };
+            if !next.graph.add(hi, lo) {
+                continue;
+            }
+            let mut effort = Effort::default();
+            let kept = self.update_plan(&mut next, lo, &mut effort).is_some();
+            stats.mastar_calls += effort.mastar_calls;
+            stats.mastar_nodes += effort.mastar_nodes;
+            stats.predictions += effort.predictions;
+            if kept {
+                *state = next;
+            }
         }
     }
 
@@ -457,6 +489,7 @@ impl Problem<'_> {
         stats.conflicts_left = nodes[chosen].conflicts.len() as u64;
         let state = self.materialize(nodes, chosen, root_state);
         Solution {
+            edges: state.graph.edges(),
             trajectories: state.trajectories,
             plans: state.plans,
             stats,
@@ -607,6 +640,7 @@ mod tests {
             planner: &planner,
             predictor: spy,
             requests: &requests,
+            committed: &[],
             rule: &rule,
             horizon: 20,
             dt: 0.2,
@@ -642,6 +676,7 @@ mod tests {
             planner: &planner,
             predictor: &predictor,
             requests: &requests,
+            committed: &[],
             rule: &rule,
             horizon: 20,
             dt: 0.2,

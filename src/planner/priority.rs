@@ -50,6 +50,13 @@ impl PriorityGraph {
         true
     }
 
+    /// Every direct edge `(hi, lo)`, in agent order.
+    pub fn edges(&self) -> Vec<(usize, usize)> {
+        (0..self.len())
+            .flat_map(|hi| self.lower[hi].iter().map(move |&lo| (hi, lo)))
+            .collect()
+    }
+
     /// Whether `a` has priority over `b`, directly or through others.
     pub fn reaches(&self, a: usize, b: usize) -> bool {
         self.closure(a, &self.lower)[b]
