@@ -28,6 +28,7 @@ fn main() -> ExitCode {
 fn run(command: Command) -> Result<()> {
     match command {
         Command::Episode(a) => cli::episode::run(a.resolve()?),
+        Command::Explain(a) => cli::explain::run(a),
         Command::Config(a) => cli::config::run(a.resolve()?),
         Command::Bench(a) => cli::bench::run(a.resolve()?),
         Command::Demand(a) => cli::demand::run(a.resolve()?),

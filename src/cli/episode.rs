@@ -6,6 +6,8 @@ use anyhow::{Context, Result};
 use clap::Args;
 
 use bkpbs::config::{Config, PredictorKind, Scenario};
+use bkpbs::episode::trace::Tracer;
+use bkpbs::episode::Driver;
 use bkpbs::{controller, episode};
 
 use super::scenario::ScenarioArgs;
@@ -23,6 +25,11 @@ pub struct EpisodeArgs {
     /// HDV predictor of the planners (overrides predictor.kind of the config).
     #[arg(long, value_enum)]
     predictor: Option<PredictorKind>,
+    /// Also write trace.jsonl: per step and CAV, SUMO's state, the maneuver sent and its source,
+    /// the planned trajectory and the predictions it was checked against (see `bkpbs explain`;
+    /// empty with `--planner sumo`, which leaves the CAVs to SUMO).
+    #[arg(long)]
+    trace: bool,
 }
 
 /// A checked episode: the planner exists for this configuration and the output place is known.
@@ -30,6 +37,7 @@ pub struct Episode {
     config: Config,
     planner: String,
     out: PathBuf,
+    trace: bool,
 }
 
 impl EpisodeArgs {
@@ -49,6 +57,7 @@ impl EpisodeArgs {
             config,
             planner: self.planner,
             out,
+            trace: self.trace,
         })
     }
 }
@@ -63,13 +72,25 @@ fn default_out(planner: &str, s: &Scenario) -> PathBuf {
 
 /// Runs the episode, writes its files and prints its summary and where the files are.
 pub fn run(e: Episode) -> Result<()> {
-    let result = episode::run(&e.config, &e.planner)?;
-    result.write(&e.out).with_context(|| {
+    let saving = || {
         format!(
             "episode finished but its results could not be saved in {}",
             e.out.display()
         )
-    })?;
+    };
+    let result = if e.trace {
+        let demand = episode::demand::generate(&e.config);
+        let mut tracer = Tracer::new(&e.config);
+        let planner = Driver::Named(&e.planner);
+        let result = episode::run_observed(&e.config, planner, &demand, &mut tracer)?;
+        result.write(&e.out).with_context(saving)?;
+        tracer.write(&e.out).with_context(saving)?;
+        result
+    } else {
+        let result = episode::run(&e.config, &e.planner)?;
+        result.write(&e.out).with_context(saving)?;
+        result
+    };
     let m = &result.summary;
     println!(
         "{} α={} λ={} seed={}: inserted {}, arrived {}, crashed {} (controllable rate {:.4}), mean delay {} s",
@@ -84,5 +105,12 @@ pub fn run(e: Episode) -> Result<()> {
         m.mean_delay_s.map_or("n/a".into(), |d| format!("{d:.2}"))
     );
     println!("results: {}", e.out.join("episode.csv").display());
+    if e.trace {
+        println!(
+            "trace: {} (`bkpbs explain {}` tells the story of each collision)",
+            e.out.join(episode::trace::TRACE_FILE).display(),
+            e.out.display()
+        );
+    }
     Ok(())
 }

@@ -7,6 +7,7 @@ pub mod campaign;
 pub mod config;
 pub mod demand;
 pub mod episode;
+pub mod explain;
 pub mod report;
 pub mod scenario;
 pub mod train;
@@ -28,8 +29,11 @@ pub struct Cli {
 /// One variant per subcommand; the doc comments are the help texts clap shows.
 #[derive(Subcommand)]
 pub enum Command {
-    /// Run one episode and write episode.csv, vehicles.csv, collisions.csv and timing.csv.
+    /// Run one episode and write episode.csv, vehicles.csv, collisions.csv and timing.csv
+    /// (and trace.jsonl with --trace).
     Episode(episode::EpisodeArgs),
+    /// Tell the story of each collision of a traced episode (`episode --trace`), step by step.
+    Explain(explain::ExplainArgs),
     /// Show the configuration (defaults = the paper's) or the SUMO vehicle types it implies.
     Config(config::ConfigArgs),
     /// Time SUMO alone against the same episode with controllers, side by side.

@@ -1,6 +1,6 @@
 //! One episode and what it needs: the demand, SUMO's entry gate, the ramp HDVs' merge rule, the
 //! runner that keeps SUMO and a controller in lock-step, the metrics and the CSV files it writes,
-//! and the side-by-side benchmark.
+//! the side-by-side benchmark, and the trace of what the planner saw and did (`trace.jsonl`).
 
 pub mod bench;
 pub mod demand;
@@ -9,6 +9,7 @@ pub mod merge_rule;
 pub mod metrics;
 pub mod output;
 pub mod runner;
+pub mod trace;
 
 pub use runner::{
     run, run_observed, run_with_demand, Driver, EpisodeError, EpisodeResult, NoObserver, Observer,

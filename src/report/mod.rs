@@ -6,6 +6,7 @@
 //! `timings.csv` and `failures.csv` are written to the output directory. Tables and figures go
 //! to `<out>/report/`.
 
+pub mod explain;
 pub mod plot;
 pub mod stats;
 pub mod summary;

@@ -567,3 +567,170 @@ impl Painter for Scatter {
         Ok(())
     }
 }
+
+/// One curve of a [`LinePanel`]: points joined in order, in the colour of series `colour`;
+/// thin curves are drawn lighter (e.g. one per planning step).
+pub struct Curve {
+    pub points: Vec<(f64, f64)>,
+    pub colour: usize,
+    pub thick: bool,
+}
+
+/// One panel of line charts.
+pub struct LinePanel {
+    pub title: String,
+    pub x_label: String,
+    pub y_label: String,
+    pub curves: Vec<Curve>,
+    /// x positions of vertical red marks (e.g. a collision).
+    pub marks: Vec<f64>,
+    /// The x axis (default: the curves' and marks' range).
+    pub x_range: Option<std::ops::Range<f64>>,
+}
+
+/// Line-chart panels in rows of two, with a legend of curve colours on the right.
+pub struct LinePanels {
+    pub panels: Vec<LinePanel>,
+    /// Legend: (series colour index, name, thick).
+    pub legend: Vec<(usize, String, bool)>,
+}
+
+const LINE_PANEL_W: u32 = 520;
+const LINE_PANEL_H: u32 = 340;
+const LINE_LEGEND_W: u32 = 260;
+
+/// The range of `values` padded by 5 % (at least 0.5 each side); 0 to 1 without values.
+fn padded_range(values: impl Iterator<Item = f64>) -> std::ops::Range<f64> {
+    let (lo, hi) = values
+        .filter(|v| v.is_finite())
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+            (lo.min(v), hi.max(v))
+        });
+    if !lo.is_finite() {
+        return 0.0..1.0;
+    }
+    let pad = ((hi - lo) * 0.05).max(0.5);
+    lo - pad..hi + pad
+}
+
+/// The style of a curve: its series colour, full and 2 px wide when thick, light when thin.
+fn curve_style(c: &Curve) -> ShapeStyle {
+    let colour = series_colour(c.colour);
+    if c.thick {
+        colour.stroke_width(3)
+    } else {
+        colour.mix(0.35).stroke_width(1)
+    }
+}
+
+impl LinePanels {
+    /// Renders the figure.
+    pub fn render(&self) -> Result<Figure, PlotError> {
+        render(self, "line panels")
+    }
+
+    fn layout(&self) -> (usize, usize) {
+        (self.panels.len().max(1).div_ceil(2), 2)
+    }
+
+    fn paint_panel<DB: DrawingBackend>(
+        panel: &LinePanel,
+        area: &DrawingArea<DB, Shift>,
+    ) -> Result<(), String>
+    where
+        DB::ErrorType: 'static,
+    {
+        let all = || panel.curves.iter().flat_map(|c| c.points.iter());
+        let xs = panel
+            .x_range
+            .clone()
+            .unwrap_or_else(|| padded_range(all().map(|p| p.0).chain(panel.marks.iter().copied())));
+        let ys = padded_range(all().map(|p| p.1));
+        let mut chart = ChartBuilder::on(area)
+            .caption(&panel.title, (FONT, 20))
+            .margin(12)
+            .x_label_area_size(44)
+            .y_label_area_size(64)
+            .build_cartesian_2d(xs, ys.clone())
+            .map_err(drawing_failed)?;
+        chart
+            .configure_mesh()
+            .x_desc(&panel.x_label)
+            .y_desc(&panel.y_label)
+            .label_style((FONT, 14))
+            .axis_desc_style((FONT, 15))
+            .max_light_lines(1)
+            .light_line_style(RGBColor(240, 240, 240))
+            .bold_line_style(RGBColor(215, 215, 215))
+            .draw()
+            .map_err(drawing_failed)?;
+        // Thin curves first, so the thick ones stay on top.
+        for thick in [false, true] {
+            let curves = panel.curves.iter().filter(|c| c.thick == thick);
+            chart
+                .draw_series(curves.map(|c| PathElement::new(c.points.clone(), curve_style(c))))
+                .map_err(drawing_failed)?;
+        }
+        let red = RGBColor(214, 39, 40).stroke_width(2);
+        chart
+            .draw_series(
+                panel
+                    .marks
+                    .iter()
+                    .map(|&x| PathElement::new(vec![(x, ys.start), (x, ys.end)], red)),
+            )
+            .map_err(drawing_failed)?;
+        Ok(())
+    }
+}
+
+impl Painter for LinePanels {
+    fn size(&self) -> (u32, u32) {
+        let (rows, cols) = self.layout();
+        (
+            cols as u32 * LINE_PANEL_W + LINE_LEGEND_W,
+            rows as u32 * LINE_PANEL_H,
+        )
+    }
+
+    fn side_width(&self) -> u32 {
+        LINE_LEGEND_W
+    }
+
+    fn paint_main<DB: DrawingBackend>(&self, area: &DrawingArea<DB, Shift>) -> Result<(), String>
+    where
+        DB::ErrorType: 'static,
+    {
+        for (panel, area) in self.panels.iter().zip(area.split_evenly(self.layout())) {
+            Self::paint_panel(panel, &area)?;
+        }
+        Ok(())
+    }
+
+    /// The legend: a short line in each curve colour and its name.
+    fn paint_side<DB: DrawingBackend>(&self, area: &DrawingArea<DB, Shift>) -> Result<(), String>
+    where
+        DB::ErrorType: 'static,
+    {
+        let text = TextStyle::from((FONT, 15).into_font()).pos(Pos::new(HPos::Left, VPos::Center));
+        let mut y = 60;
+        for (colour, name, thick) in &self.legend {
+            let c = Curve {
+                points: Vec::new(),
+                colour: *colour,
+                thick: *thick,
+            };
+            area.draw(&PathElement::new(vec![(8, y), (36, y)], curve_style(&c)))
+                .map_err(drawing_failed)?;
+            area.draw(&Text::new(name.clone(), (44, y), text.clone()))
+                .map_err(drawing_failed)?;
+            y += 24;
+        }
+        let red = TextStyle::from((FONT, 15).into_font())
+            .color(&RGBColor(214, 39, 40))
+            .pos(Pos::new(HPos::Left, VPos::Center));
+        area.draw(&Text::new("| collision", (10, y + 10), red))
+            .map_err(drawing_failed)?;
+        Ok(())
+    }
+}
