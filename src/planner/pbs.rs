@@ -621,6 +621,15 @@ mod tests {
     }
 
     fn solve_within(vehicles: Vec<VehicleState>, spy: &Spy, budget: Budget) -> (Solution, Scene) {
+        solve_committed(vehicles, spy, budget, &[])
+    }
+
+    fn solve_committed(
+        vehicles: Vec<VehicleState>,
+        spy: &Spy,
+        budget: Budget,
+        committed: &[(usize, usize)],
+    ) -> (Solution, Scene) {
         let config = Config::default();
         let scene = Scene {
             time: 0.0,
@@ -640,7 +649,7 @@ mod tests {
             planner: &planner,
             predictor: spy,
             requests: &requests,
-            committed: &[],
+            committed,
             rule: &rule,
             horizon: 20,
             dt: 0.2,
@@ -809,5 +818,25 @@ mod tests {
         for (x, y) in a.trajectories.iter().zip(&b.trajectories) {
             assert_eq!(x.poses, y.poses);
         }
+    }
+
+    #[test]
+    fn a_committed_yield_carries_into_the_next_round() {
+        // R2: a CAV that started a cut-in relying on another CAV yielding keeps that priority
+        // next round (it once started afresh, and the follower could take the gap back).
+        // Two main-road CAVs in one lane, the follower faster: committed "0 ≺ 1", the follower
+        // plans around the leader from the root on, and the edge is in the answer.
+        let sp = spy();
+        let vehicles = vec![
+            vehicle("main.1", Kind::Cav, Origin::Main, 130.0, 1, 25.0),
+            vehicle("main.2", Kind::Cav, Origin::Main, 112.0, 1, 33.0),
+        ];
+        let budget = Budget {
+            nodes: 200,
+            time_ms: None,
+        };
+        let (sol, scene) = solve_committed(vehicles, &sp, budget, &[(0, 1)]);
+        assert!(sol.edges.contains(&(0, 1)), "{:?}", sol.edges);
+        assert!(conflict_free(&sol, &scene));
     }
 }
