@@ -104,12 +104,14 @@ fn lanes_of_cav(v: &VehicleState, m: &Maneuver) -> u64 {
 }
 
 /// One vehicle's worst-case longitudinal motion: `first` as the speed at the end of the first
-/// step (none: braking from the start), then braking at `decel` to a stop.
+/// step (none: braking from the start), then braking at `decel` to a stop, or stopped dead after
+/// `reach` metres (the end of the acceleration lane, where SUMO halts a vehicle on the spot).
 #[derive(Debug, Clone, Copy)]
 struct Motion {
     speed: f64,
     first: Option<f64>,
     decel: f64,
+    reach: f64,
 }
 
 impl Motion {
@@ -124,11 +126,13 @@ impl Motion {
 /// Whether `back`, `gap` metres (bumper to bumper) behind `front`, stays at least `margin` behind
 /// it at every step end until it stands, both moving as SUMO steps them.
 fn stays_clear(back: Motion, front: Motion, gap: f64, b: &Bounds) -> bool {
-    let (mut vb, mut vf, mut gap) = (back.speed, front.speed, gap);
+    let (mut vb, mut vf, mut gap, mut moved) = (back.speed, front.speed, gap, 0.0);
     for step in 1..=10_000 {
         vb = back.speed_after(step, vb, b.dt);
         vf = front.speed_after(step, vf, b.dt);
-        gap += (vf - vb) * b.dt;
+        let advance = (vf * b.dt).min(front.reach - moved).max(0.0);
+        moved += advance;
+        gap += advance - vb * b.dt;
         if gap < b.margin {
             return false;
         }
@@ -146,28 +150,65 @@ fn cav_motion(v: &VehicleState, m: &Maneuver, b: &Bounds) -> Motion {
         speed: v.speed,
         first: Some(m.speed),
         decel: b.cav_decel,
+        reach: f64::INFINITY,
     }
 }
 
-/// Whether CAV `i` executing `m` stays clear of every vehicle ahead of it in a lane it occupies.
+/// How far `v` can drive before its lane ends: to the end of the acceleration lane for a vehicle
+/// on it, else without limit.
+fn reach(scene: &Scene, v: &VehicleState) -> f64 {
+    if v.lane == MERGE_LANE {
+        (scene.road.merge_end - v.front()).max(0.0)
+    } else {
+        f64::INFINITY
+    }
+}
+
+/// The end of the acceleration lane, as a standing vehicle in front of a CAV that occupies that
+/// lane alone: the CAV must be able to stop before it.
+fn clear_of_lane_end(scene: &Scene, v: &VehicleState, m: &Maneuver, b: &Bounds) -> bool {
+    if lanes_of_cav(v, m) != bit(MERGE_LANE) {
+        return true;
+    }
+    let wall = Motion {
+        speed: 0.0,
+        first: None,
+        decel: b.cav_decel,
+        reach: 0.0,
+    };
+    stays_clear(
+        cav_motion(v, m, b),
+        wall,
+        scene.road.merge_end - v.front(),
+        b,
+    )
+}
+
+/// Whether CAV `i` executing `m` stays clear of every vehicle ahead of it in a lane it occupies
+/// (vehicles on the acceleration lane stop dead at its end), and of that lane's end when it
+/// occupies that lane alone.
 pub fn clear_of_leaders(scene: &Scene, i: usize, m: &Maneuver, b: &Bounds) -> bool {
     let me = &scene.vehicles[i];
     let lanes = lanes_of_cav(me, m);
     let horizon = b.dt + m.speed / b.cav_decel;
     let motion = cav_motion(me, m, b);
-    scene
-        .vehicles
-        .iter()
-        .enumerate()
-        .filter(|&(j, o)| j != i && o.s > me.s && lanes_of_other(scene, o, horizon) & lanes != 0)
-        .all(|(_, o)| {
-            let worst = Motion {
-                speed: o.speed,
-                first: None,
-                decel: b.emergency_decel(o.kind),
-            };
-            stays_clear(motion, worst, o.rear() - me.front(), b)
-        })
+    clear_of_lane_end(scene, me, m, b)
+        && scene
+            .vehicles
+            .iter()
+            .enumerate()
+            .filter(|&(j, o)| {
+                j != i && o.s > me.s && lanes_of_other(scene, o, horizon) & lanes != 0
+            })
+            .all(|(_, o)| {
+                let worst = Motion {
+                    speed: o.speed,
+                    first: None,
+                    decel: b.emergency_decel(o.kind),
+                    reach: reach(scene, o),
+                };
+                stays_clear(motion, worst, o.rear() - me.front(), b)
+            })
 }
 
 /// Whether a lane change `m` starts leaves the nearest vehicle behind CAV `i` in the target lane
@@ -190,6 +231,7 @@ pub fn clear_of_new_follower(scene: &Scene, i: usize, m: &Maneuver, b: &Bounds) 
             speed: f.speed,
             first: None,
             decel: b.follower_decel,
+            reach: f64::INFINITY,
         };
         stays_clear(back, cav_motion(me, m, b), me.rear() - f.front(), b)
     })
@@ -423,6 +465,27 @@ mod tests {
         far.on_ramp = true;
         let scene = Scene::on_paper_road(0.0, vec![cav(18.0, 1, 25.0), far]);
         assert!(is_safe(&scene, 0, &planned, &b));
+    }
+
+    #[test]
+    fn the_end_of_the_acceleration_lane_stops_everyone_on_it() {
+        let b = bounds();
+        let ramp_cav = |s, speed| VehicleState::on_lane("c", Kind::Cav, Origin::Ramp, s, 0, speed);
+        // 47.5 m before the lane's end at 25 m/s: the CAV could not stop before it.
+        let scene = Scene::on_paper_road(0.0, vec![ramp_cav(280.0, 25.0)]);
+        assert!(!is_safe(&scene, 0, &go(25.0, None), &b));
+        // Starting its merge it no longer occupies the acceleration lane alone.
+        assert!(is_safe(&scene, 0, &go(25.0, Some(LaneChange::Left)), &b));
+        let scene = Scene::on_paper_road(0.0, vec![ramp_cav(200.0, 25.0)]);
+        assert!(is_safe(&scene, 0, &go(25.0, None), &b));
+        // A vehicle ahead 5 m before the end halts there, not after braking at 6 m/s².
+        let ahead = VehicleState::on_lane("a", Kind::Cav, Origin::Ramp, 322.5, 0, 25.0);
+        let scene = Scene::on_paper_road(0.0, vec![cav(280.0, 1, 25.0), ahead.clone()]);
+        let mut me = cav(280.0, 0, 25.0);
+        me.lateral = 1.0;
+        let changing = Scene::on_paper_road(0.0, vec![me, ahead]);
+        assert!(is_safe(&scene, 0, &go(25.0, None), &b));
+        assert!(!is_safe(&changing, 0, &go(25.0, None), &b));
     }
 
     /// Returns fixed commands and records the lane changes it is told were cancelled.
