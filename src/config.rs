@@ -46,6 +46,23 @@ pub struct Config {
     pub sumo: SumoSettings,
     /// Choices in how the episode metrics are computed.
     pub metrics: MetricsSettings,
+    /// The safety shield in front of the search-based planners.
+    pub safety: SafetySettings,
+}
+
+/// The safety shield (README: "Safety shield"): every CAV's next step of bk-mastar and bk-pbs
+/// checked against bounded worst-case behaviour of the others, and replaced when unsafe.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct SafetySettings {
+    /// Shield bk-mastar and bk-pbs (idm-mobil and sumo are never shielded).
+    pub shield: bool,
+}
+
+impl Default for SafetySettings {
+    fn default() -> Self {
+        SafetySettings { shield: true }
+    }
 }
 
 /// The episode's setting: which traffic, how long, on which road.
@@ -680,6 +697,14 @@ mod tests {
         let c: Config = toml::from_str("[scenario]\nalpha = 0.8\n").unwrap();
         assert_eq!(c.scenario.alpha, 0.8);
         assert_eq!(c.scenario.lambda, 3000.0);
+    }
+
+    #[test]
+    fn the_shield_is_on_by_default_and_can_be_switched_off() {
+        assert!(Config::default().safety.shield);
+        let c: Config = toml::from_str("[safety]\nshield = false\n").unwrap();
+        assert!(!c.safety.shield);
+        assert!(toml::from_str::<Config>("[safety]\nsheild = false\n").is_err());
     }
 
     #[test]

@@ -44,3 +44,40 @@ fn same_seed_same_csv_despite_parallel_search() {
     assert_eq!(a.episode_csv(), b.episode_csv());
     assert_eq!(a.vehicles_csv(), b.vehicles_csv());
 }
+
+/// The `episode.csv` value of `column`.
+fn csv_value(r: &episode::EpisodeResult, column: &str) -> String {
+    let text = String::from_utf8(r.episode_csv()).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let row: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let at = header.iter().position(|h| *h == column).unwrap();
+    row[at].to_string()
+}
+
+#[test]
+fn the_shield_counts_its_overrides_and_is_silent_when_off() {
+    let mut c = bkpbs::config::Config::default();
+    c.scenario.alpha = 0.8;
+    c.scenario.lambda = 3000.0;
+    c.scenario.seed = 4;
+    let on = episode::run(&c, "bk-pbs").unwrap();
+    let text = String::from_utf8(on.episode_csv()).unwrap();
+    assert!(
+        text.starts_with("planner,") && text.contains(",time_budget_hits,shield_overrides\n"),
+        "{text}"
+    );
+    let overrides = on.summary.plan_stats.shield_overrides;
+    assert!(overrides > 0, "{:?}", on.summary);
+    assert_eq!(csv_value(&on, "shield_overrides"), overrides.to_string());
+    c.safety.shield = false;
+    let off = episode::run(&c, "bk-pbs").unwrap();
+    assert_eq!(csv_value(&off, "shield_overrides"), "0");
+    eprintln!(
+        "bk-pbs α=0.8 λ=3000 seed 4: shield on: {overrides} overrides, {} controllable crashes, delay {:?}; off: {} controllable crashes, delay {:?}",
+        on.summary.controllable_crashed,
+        on.summary.mean_delay_s,
+        off.summary.controllable_crashed,
+        off.summary.mean_delay_s
+    );
+}

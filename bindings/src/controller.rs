@@ -166,6 +166,7 @@ impl PyController {
             ("predictions", s.predictions),
             ("pbs_fallbacks", s.pbs_fallbacks),
             ("time_budget_hits", s.time_budget_hits),
+            ("shield_overrides", s.shield_overrides),
         ] {
             d.set_item(k, v)?;
         }

@@ -117,4 +117,8 @@ impl Controller for BkMastar {
     fn beliefs(&self) -> Vec<CavBelief> {
         self.beliefs.clone()
     }
+
+    fn lane_change_cancelled(&mut self, id: &str) {
+        self.lane_changes.cancel(id);
+    }
 }

@@ -116,6 +116,10 @@ impl Controller for BkPbs {
     fn beliefs(&self) -> Vec<CavBelief> {
         self.beliefs.clone()
     }
+
+    fn lane_change_cancelled(&mut self, id: &str) {
+        self.lane_changes.cancel(id);
+    }
 }
 
 impl BkPbs {

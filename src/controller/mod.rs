@@ -10,6 +10,7 @@ pub mod execute;
 pub mod idm;
 pub mod idm_mobil;
 pub mod mobil;
+pub mod shield;
 pub mod sumo_native;
 
 use crate::config::Config;
@@ -135,6 +136,8 @@ pub struct PlanStats {
     pub pbs_fallbacks: u64,
     /// BK-PBS rounds stopped by the optional wall-time budget.
     pub time_budget_hits: u64,
+    /// CAV maneuvers the safety shield replaced ([`shield::Shielded`]).
+    pub shield_overrides: u64,
 }
 
 impl std::ops::AddAssign for PlanStats {
@@ -148,6 +151,7 @@ impl std::ops::AddAssign for PlanStats {
         self.predictions += o.predictions;
         self.pbs_fallbacks += o.pbs_fallbacks;
         self.time_budget_hits += o.time_budget_hits;
+        self.shield_overrides += o.shield_overrides;
     }
 }
 
@@ -175,6 +179,10 @@ pub trait Controller {
     fn beliefs(&self) -> Vec<CavBelief> {
         Vec::new()
     }
+
+    /// Tells the controller that the lane change it started for vehicle `id` in its last `plan`
+    /// call was withdrawn (by the safety shield) and will not happen: the vehicle keeps its lane.
+    fn lane_change_cancelled(&mut self, _id: &str) {}
 }
 
 /// Names accepted by [`by_name`].
@@ -196,7 +204,8 @@ pub enum BuildError {
 }
 
 /// Builds the controller called `name` for the road SUMO runs; planners predict HDVs with the
-/// predictor `config.predictor` selects ([`crate::predict::configured`]).
+/// predictor `config.predictor` selects ([`crate::predict::configured`]). The search-based
+/// planners (bk-mastar, bk-pbs) sit behind the safety shield when `config.safety.shield` is on.
 ///
 /// # Errors
 /// An unknown name, or a predictor model file that cannot be used.
@@ -205,21 +214,26 @@ pub fn by_name(
     config: &Config,
     road: &Road,
 ) -> Result<Box<dyn Controller>, BuildError> {
-    match name {
-        "sumo" => Ok(Box::new(sumo_native::SumoNative)),
-        "idm-mobil" => Ok(Box::new(idm_mobil::IdmMobil::new(config))),
-        "bk-mastar" => Ok(Box::new(bk_mastar::BkMastar::new(
+    let searched: Box<dyn Controller> = match name {
+        "sumo" => return Ok(Box::new(sumo_native::SumoNative)),
+        "idm-mobil" => return Ok(Box::new(idm_mobil::IdmMobil::new(config))),
+        "bk-mastar" => Box::new(bk_mastar::BkMastar::new(
             config,
             crate::predict::configured(config)?,
             road,
-        ))),
-        "bk-pbs" => Ok(Box::new(bk_pbs::BkPbs::new(
+        )),
+        "bk-pbs" => Box::new(bk_pbs::BkPbs::new(
             config,
             crate::predict::configured(config)?,
             road,
-        ))),
-        other => Err(UnknownPlanner(other.to_string()).into()),
-    }
+        )),
+        other => return Err(UnknownPlanner(other.to_string()).into()),
+    };
+    Ok(if config.safety.shield {
+        Box::new(shield::Shielded::new(searched, config))
+    } else {
+        searched
+    })
 }
 
 /// Checks, before any SUMO starts, that [`by_name`] will build `name` under `config`: the name is

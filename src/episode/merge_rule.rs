@@ -29,7 +29,7 @@ pub const MERGE_STREAM: u64 = 2;
 /// Slower than this (m/s) a ramp HDV counts as standing.
 const STANDING: f64 = 0.5;
 /// Within this distance (m) of the acceleration lane's end a standing HDV forces its way in.
-const END_ZONE: f64 = 10.0;
+const END_ZONE: f64 = crate::model::road::FORCED_MERGE_ZONE;
 
 /// A merge request of one ramp HDV this step.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -21,7 +21,7 @@ fn csv_bytes(header: &[&str], rows: impl Iterator<Item = Vec<String>>) -> Vec<u8
 }
 
 /// Columns of `episode.csv`.
-pub const EPISODE_COLUMNS: [&str; 31] = [
+pub const EPISODE_COLUMNS: [&str; 32] = [
     "planner",
     "alpha",
     "lambda",
@@ -53,6 +53,7 @@ pub const EPISODE_COLUMNS: [&str; 31] = [
     "predictions",
     "pbs_fallbacks",
     "time_budget_hits",
+    "shield_overrides",
 ];
 
 /// The summary as one `episode.csv` row.
@@ -89,6 +90,7 @@ pub fn episode_row(s: &Summary) -> Vec<String> {
         s.plan_stats.predictions.to_string(),
         s.plan_stats.pbs_fallbacks.to_string(),
         s.plan_stats.time_budget_hits.to_string(),
+        s.plan_stats.shield_overrides.to_string(),
     ]
 }
 

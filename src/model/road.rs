@@ -18,6 +18,10 @@ pub const MAIN_OUT: usize = 3;
 pub const MERGE_LANE: i32 = 0;
 /// Road-frame lanes of the main road, right then left.
 pub const MAIN_LANES: [i32; 2] = [1, 2];
+/// Within this distance (m) of the acceleration lane's end a ramp HDV that has come to a stop
+/// forces its way into the main road (the episode's merge rule), so a CAV must expect it there.
+pub const FORCED_MERGE_ZONE: f64 = 10.0;
+
 /// Every road-frame lane, lowest (the merge lane) to highest (the main road's left lane).
 pub const LANES: std::ops::RangeInclusive<i32> = MERGE_LANE..=MAIN_LANES[1];
 

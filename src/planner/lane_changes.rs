@@ -27,6 +27,11 @@ impl LaneChanges {
         self.under_way.insert(id.clone(), (now + duration, target));
     }
 
+    /// Forgets the change of `id`, which was withdrawn before SUMO started it.
+    pub fn cancel(&mut self, id: &str) {
+        self.under_way.remove(id);
+    }
+
     /// Forgets the changes that have ended by `now`.
     pub fn forget_finished(&mut self, now: f64) {
         self.under_way.retain(|_, (end, _)| *end > now + 1e-6);
