@@ -7,7 +7,8 @@ step, read vehicles, command them); bkpbs only plans. Each step:
 1. ``simulationStep``, then remove the vehicles of any collision (SUMO only reports them with
    the scenario's options, as in bkpbs's own runner);
 2. ``bkpbs.read_vehicles``: every vehicle's type, angle, speed, acceleration, lane and road,
-   read through one subscription per vehicle;
+   read through one subscription per vehicle; only vehicles SUMO still knows, so not those
+   just removed (their subscriptions end);
 3. ``Controller.plan``: one maneuver per CAV, computed by the Rust core;
 4. ``bkpbs.apply``: ``setSpeed`` / ``changeLane`` with SUMO's own checks off for CAVs.
 

@@ -9,7 +9,7 @@ use pyo3::types::{PyDict, PyList};
 use bkpbs::config::Config;
 use bkpbs::controller::{self, CavHandling, Command, Controller, LaneChange, PLANNERS};
 use bkpbs::model::road::Road;
-use bkpbs::model::scene::Origin;
+use bkpbs::model::scene::{Kind, Origin};
 use bkpbs::sumo::frame;
 
 use crate::errors::bad_input;
@@ -52,7 +52,8 @@ pub struct PyController {
     inner: Box<dyn Controller>,
     config: Config,
     road: Road,
-    /// Where each vehicle seen in the last call entered.
+    /// Where each vehicle seen in the last call entered; replaced by every call, so a vehicle
+    /// absent from one call (removed, arrived) is forgotten.
     origins: HashMap<String, Origin>,
     calls: u64,
     commands: Vec<Command>,
@@ -93,8 +94,10 @@ impl PyController {
     }
 
     /// Plans one step for `vehicles` (what the caller's loop read after `simulationStep`) and
-    /// returns a `Maneuver` per CAV on the merge section, keyed by vehicle id. `time` is the
-    /// simulation time (default: one step of `dt` per call).
+    /// returns a `Maneuver` per CAV on the merge section, keyed by vehicle id: only vehicles of
+    /// this call's `vehicles` (the core's commands index this call's scene), nothing for a
+    /// vehicle of an earlier call. `time` is the simulation time (default: one step of `dt` per
+    /// call).
     #[pyo3(signature = (vehicles, time = None))]
     fn plan<'py>(
         &mut self,
@@ -112,6 +115,7 @@ impl PyController {
         let out = PyDict::new(py);
         for c in &self.commands {
             let v = &scene.vehicles[c.vehicle];
+            debug_assert_eq!(v.kind, Kind::Cav, "a command for HDV {}", v.id);
             let m = c.maneuver;
             let target = v.lane + m.lane_change.map_or(0, LaneChange::offset);
             let maneuver = PyManeuver {

@@ -32,6 +32,35 @@ def test_every_cav_gets_a_maneuver(planner, scene):
                 assert man.sumo_lane_index == lane + (1 if man.lane_change == "left" else -1)
 
 
+@pytest.mark.parametrize("planner", COMMANDING)
+def test_maneuvers_only_for_the_cavs_of_this_call(planner, scene):
+    # Vehicles leave (removed after a collision, arrived) and come back: each call commands
+    # exactly the CAVs it was given, never one remembered from an earlier call.
+    c = bkpbs.Controller(planner)
+    gone = {"main.0", "ramp.6", "main.1"}
+    calls = [scene, [v for v in scene if v["id"] not in gone], [], scene[:1], scene]
+    for step, vehicles in enumerate(calls):
+        m = c.plan(vehicles, time=0.2 * (step + 1))
+        assert set(m) == {v["id"] for v in vehicles if v["type"] == "cav"}, step
+
+
+def test_origin_of_a_vehicle_that_left_is_forgotten():
+    # "x" has no origin in its id: first seen on the ramp, it is a ramp vehicle that must merge
+    # once on the acceleration lane. Absent from one call, it is forgotten: seen next on the
+    # acceleration lane, it counts as from the main road, as for a fresh controller.
+    on_ramp = [vehicle("x", "cav", "ramp", 0, 120.0, 25.0)]
+    on_acc = [vehicle("x", "cav", "acc", 0, 60.0, 25.0)]
+    fresh = bkpbs.Controller("bk-pbs").plan(on_acc, time=0.6)["x"]
+    remembered = bkpbs.Controller("bk-pbs")
+    remembered.plan(on_ramp, time=0.2)
+    forgot = bkpbs.Controller("bk-pbs")
+    forgot.plan(on_ramp, time=0.2)
+    forgot.plan([], time=0.4)
+    assert remembered.plan(on_acc, time=0.6)["x"].lane_change == "left"
+    assert forgot.plan(on_acc, time=0.6)["x"] == fresh
+    assert fresh.lane_change is None
+
+
 def test_sumo_planner_leaves_cavs_to_sumo(scene):
     c = bkpbs.Controller("sumo")
     assert not c.commands_cavs
@@ -90,6 +119,44 @@ def test_apply_issues_traci_calls_once_per_cav_mode():
     bkpbs.apply(c.plan(scene), traci, dt=0.2)
     assert not any(name in ("setSpeedMode", "setLaneChangeMode") for name, *_ in calls)
     assert sum(name == "setSpeed" for name, *_ in calls) == 2
+
+
+class VanishingVehicle:
+    """TraCI's vehicle domain where "gone" was removed after it was read and "bad" refuses
+    every command for another reason."""
+
+    class Error(Exception):
+        pass
+
+    def __init__(self):
+        self.calls = []
+
+    def getIDList(self):
+        return ("ramp.1", "bad")
+
+    def __getattr__(self, name):
+        def call(vid, *args):
+            self.calls.append((name, vid, *args))
+            if name != "unsubscribe" and vid == "gone":
+                raise self.Error(f"Vehicle '{vid}' is not known")
+            if vid == "bad":
+                raise self.Error("Invalid speed")
+
+        return call
+
+
+def test_apply_skips_vanished_vehicles_and_raises_other_errors():
+    traci = SimpleNamespace(vehicle=VanishingVehicle())
+    c = bkpbs.Controller("idm-mobil")
+    scene = [vehicle("ramp.1", "cav", "acc", 0, 150.0, 25.0), vehicle("gone", "cav", "main_in", 1, 10.0, 30.0)]
+    commanded = set()
+    bkpbs.apply(c.plan(scene), traci, dt=0.2, commanded=commanded)
+    assert commanded == {"ramp.1"}
+    assert ("setSpeed", "ramp.1", c.plan(scene)["ramp.1"].speed) in traci.vehicle.calls
+    assert ("unsubscribe", "gone") in traci.vehicle.calls  # or the next libsumo step fails on it
+    scene.append(vehicle("bad", "cav", "main_in", 0, 60.0, 30.0))
+    with pytest.raises(VanishingVehicle.Error, match="Invalid speed"):
+        bkpbs.apply(c.plan(scene), traci, dt=0.2, commanded=commanded)
 
 
 def test_predictor_constant_speed(scene):

@@ -57,16 +57,30 @@ def _variables(traci_module: Any) -> Dict[str, int]:
 def read_vehicles(traci_module: Any) -> List[Dict[str, Any]]:
     """The vehicles in the network as :meth:`bkpbs.Controller.plan` takes them.
 
-    Call once per step, after ``simulationStep``: vehicles that departed in the step get a
+    Call once per step, after ``simulationStep`` and after removing any vehicle (of a
+    collision, say). Only vehicles SUMO still knows (``vehicle.getIDList()``) are returned:
+    the step's subscription results still hold a vehicle removed since, and it is dropped and
+    unsubscribed (libsumo would otherwise fail the next step on it); arrived vehicles are gone
+    from the results already. Each vehicle not yet subscribed (departed in the step) gets a
     subscription to the variables the controller needs, so all are read in one exchange.
     """
     codes = _variables(traci_module)
-    wanted = list(codes.values())
     vehicle = traci_module.vehicle
-    for vid in traci_module.simulation.getDepartedIDList():
-        vehicle.subscribe(vid, wanted)
+    known = vehicle.getIDList()
+    known_set = set(known)
+    # traci returns its live dict, which subscribe and unsubscribe below change: copy first.
+    results = dict(vehicle.getAllSubscriptionResults())
+    for vid in [v for v in results if v not in known_set]:
+        _unsubscribe(vehicle, vid)
+        del results[vid]
+    new = [v for v in known if v not in results]
+    if new:
+        wanted = list(codes.values())
+        for vid in new:
+            vehicle.subscribe(vid, wanted)
+            results[vid] = vehicle.getSubscriptionResults(vid)
     out = []
-    for vid, r in vehicle.getAllSubscriptionResults().items():
+    for vid, r in results.items():
         x, y = r[codes["position"]]
         out.append(
             {
@@ -112,16 +126,43 @@ def apply(
     ``changeLane(id, sumo_lane_index, dt)`` when its maneuver starts a lane change.
     ``commanded`` is the set of vehicles already switched (default: one per ``traci_module``);
     vehicles absent from ``maneuvers`` are dropped from it, so a reused id is switched again.
+    A vehicle SUMO no longer knows (removed or arrived since it was read) is skipped, dropped
+    from ``commanded`` and unsubscribed; any other error of a command is raised.
     """
     seen = commanded if commanded is not None else _commanded(traci_module)
     vehicle = traci_module.vehicle
     for vid, m in maneuvers.items():
-        if vid not in seen:
-            vehicle.setSpeedMode(vid, 0)
-            vehicle.setLaneChangeMode(vid, 0)
-            seen.add(vid)
-        vehicle.setSpeed(vid, m.speed)
-        if m.lane_change is not None and m.sumo_lane_index is not None:
-            vehicle.changeLane(vid, m.sumo_lane_index, dt)
+        try:
+            if vid not in seen:
+                vehicle.setSpeedMode(vid, 0)
+                vehicle.setLaneChangeMode(vid, 0)
+                seen.add(vid)
+            vehicle.setSpeed(vid, m.speed)
+            if m.lane_change is not None and m.sumo_lane_index is not None:
+                vehicle.changeLane(vid, m.sumo_lane_index, dt)
+        except Exception:
+            if not _vanished(vehicle, vid):
+                raise
+            seen.discard(vid)
     for vid in [v for v in seen if v not in maneuvers]:
         seen.discard(vid)
+
+
+def _vanished(vehicle: Any, vid: str) -> bool:
+    """Whether SUMO no longer knows ``vid`` (removed or arrived); then it is also unsubscribed
+    so that the next step does not fail on it. ``False`` when even that cannot be asked."""
+    try:
+        if vid in vehicle.getIDList():
+            return False
+    except Exception:
+        return False
+    _unsubscribe(vehicle, vid)
+    return True
+
+
+def _unsubscribe(vehicle: Any, vid: str) -> None:
+    """Ends the subscription of a vehicle SUMO no longer knows, if it still has one."""
+    try:
+        vehicle.unsubscribe(vid)
+    except Exception:
+        pass  # never subscribed, or SUMO dropped the subscription itself
