@@ -162,21 +162,21 @@ def test_loop_through_a_staged_collision(tmp_path, backend):
     assert r["read_after"] == 0 and r["commanded_after"] == 0
 
 
-# bk-pbs at α = 0.8, (seed, steps): episodes with a collision (one in 1 and 0, two in 2 when
-# written), whose removed vehicles the loop used to read and command and then fail on.
+# bk-pbs at α = 0.8, (seed, steps): episodes that had a collision when this test was written
+# (before BK-PBS's merge fixes and the safety shield), whose removed vehicles the loop used to
+# read and command and then fail on. The loop must complete whether or not collisions happen;
+# the staged collision above makes sure the loop is exercised through one.
 RUNS = ((1, 200), (2, 250), (0, 150))
 
 
 @pytest.mark.parametrize("backend", ["traci", "libsumo"])
-def test_traci_loop_bk_pbs_through_collisions(tmp_path, backend):
+def test_traci_loop_bk_pbs_completes(tmp_path, backend):
     if backend == "libsumo" and LIBSUMO_PYTHON is None:
         pytest.skip("no Python interpreter with SUMO's libsumo")
     exe, env = (sys.executable, None) if backend == "traci" else (LIBSUMO_PYTHON, _libsumo_env(tmp_path))
-    collisions = 0
     for seed, steps in RUNS:
         args = ["--planner", "bk-pbs", "--alpha", "0.8", "--lambda", "3000", "--seed", str(seed),
                 "--steps", str(steps)] + (["--libsumo"] if backend == "libsumo" else [])
         p = subprocess.run([exe, str(EXAMPLE), *args], capture_output=True, text=True, timeout=300, env=env)
         assert p.returncode == 0, f"seed {seed}: " + p.stdout + p.stderr
-        collisions += int(p.stdout.split(" collisions")[0].rsplit(" ", 1)[1])
-    assert collisions > 0
+        assert " collisions" in p.stdout, p.stdout
