@@ -1,18 +1,11 @@
 //! The `bkpbs` binary: results on disk, and one clear line plus a non-zero exit on bad input.
 
 use std::path::Path;
-use std::process::{Command, Output};
+use std::process::Output;
 
-fn bkpbs(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_bkpbs"))
-        .args(args)
-        .output()
-        .expect("the binary runs")
-}
+mod common;
 
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
+use common::{bkpbs, stderr};
 
 /// Asserts failure with exactly one `error:` line naming `culprit`, and no CSV in `out`.
 fn assert_clear_failure(o: &Output, culprit: &str, out: &Path) {

@@ -2,20 +2,13 @@
 //! `bkpbs explain` tells its story; and the clear errors of `explain` on incomplete directories.
 
 use std::path::Path;
-use std::process::{Command, Output};
+use std::process::Output;
 
 use bkpbs::episode::trace::{self, TRACE_FILE};
 
-fn bkpbs(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_bkpbs"))
-        .args(args)
-        .output()
-        .expect("the binary runs")
-}
+mod common;
 
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
+use common::{bkpbs, stderr};
 
 /// A CAV inserted at t = 15 s, which the planner drives for 3 s, and an HDV inserted at t = 18 s
 /// 4.6 m behind it at 30 m/s without SUMO's insertion checks: it cannot stop in time.

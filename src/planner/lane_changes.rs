@@ -132,20 +132,12 @@ mod tests {
         assert!(lc.under_way.is_empty());
     }
 
-    use crate::config::PlannerSettings;
-    use crate::model::road::Road;
     use crate::model::scene::{Kind, VehicleState};
     use crate::planner::mastar::{FirstMove, Mastar};
     use crate::planner::pbs::RequestFor;
 
     fn planner() -> Mastar {
-        Mastar::new(
-            &PlannerSettings::default(),
-            Road::paper_default(),
-            0.2,
-            1.0,
-            35.0,
-        )
+        Mastar::on_paper_road()
     }
 
     fn ramp_cav(s: f64, lane: i32, lateral: f64, speed: f64) -> VehicleState {

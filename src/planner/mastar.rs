@@ -121,6 +121,12 @@ pub struct Mastar {
 }
 
 impl Mastar {
+    /// The default planner on the shipped network's road: for scenes built by hand (tests,
+    /// planning without SUMO).
+    pub fn on_paper_road() -> Self {
+        Mastar::from_config(&crate::config::Config::default(), Road::paper_default())
+    }
+
     /// The planner of a configuration on `road`.
     pub fn from_config(config: &crate::config::Config, road: Road) -> Self {
         let s = &config.scenario;
@@ -672,13 +678,7 @@ mod tests {
     use super::*;
 
     fn planner() -> Mastar {
-        Mastar::new(
-            &PlannerSettings::default(),
-            Road::paper_default(),
-            0.2,
-            1.0,
-            35.0,
-        )
+        Mastar::on_paper_road()
     }
 
     /// A vehicle driving at constant speed on a lane centre.

@@ -2,6 +2,8 @@
 //! part of it, hence the `dead_code` allowance.
 #![allow(dead_code)]
 
+use std::process::{Command, Output};
+
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 
@@ -45,4 +47,17 @@ pub fn random_obs(rng: &mut ChaCha8Rng) -> Observation {
         }
     }
     o
+}
+
+/// The `bkpbs` binary run with `args`.
+pub fn bkpbs(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_bkpbs"))
+        .args(args)
+        .output()
+        .expect("the binary runs")
+}
+
+/// What a run printed to stderr.
+pub fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
 }
