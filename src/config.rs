@@ -210,8 +210,12 @@ pub struct PlannerSettings {
     pub decel: f64,
     /// Deceleration of the `emergency-brake` primitive (m/s², positive).
     pub emergency_decel: f64,
-    /// Slowest speed from which a lane change is possible (m/s).
+    /// Slowest speed from which the bicycle model steers a lane change (m/s).
     pub min_lane_change_speed: f64,
+    /// Below `min_lane_change_speed`, plan lane changes as SUMO executes them there (a slide:
+    /// one lane per second, the body along the road) instead of not at all. Off by default
+    /// until its cost is understood (see the README, "Merge deadlock").
+    pub low_speed_lane_changes: bool,
     /// The planned CAV's box is inflated by this much along the road (m, each end), to absorb
     /// the small differences between planned and executed motion.
     pub margin_long: f64,
@@ -242,6 +246,7 @@ impl Default for PlannerSettings {
             decel: 2.0,
             emergency_decel: 6.0,
             min_lane_change_speed: 10.0,
+            low_speed_lane_changes: false,
             margin_long: 0.5,
             margin_lat: 0.1,
             safe_gap: 2.0,

@@ -146,6 +146,7 @@ impl Mastar {
         library.decel = settings.decel;
         library.emergency_decel = settings.emergency_decel;
         library.min_lane_change_speed = settings.min_lane_change_speed;
+        library.slides_below_min_speed = settings.low_speed_lane_changes;
         let library = Library::rebuilt(library);
         let rule = SafetyRule::new(settings, road.lane_width);
         Mastar {

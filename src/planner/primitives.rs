@@ -7,8 +7,12 @@
 //! executes for the same command, a constant lateral speed of one lane width per second, and its
 //! throttle keeps the forward (along-road) speed constant as SUMO does, so planner and simulator
 //! agree (tested against SUMO in `tests/primitives_sumo.rs`). Below
-//! `min_lane_change_speed` the bicycle cannot move one lane sideways within that second, so the
-//! lane-change primitives are not available.
+//! `min_lane_change_speed` the bicycle cannot move one lane sideways within that second; SUMO
+//! still executes the change at any speed, standing included (one lane width per second, the car
+//! keeping its forward speed), so there a lane change is a *slide*: the same lateral path with
+//! the body kept along the road. Without it a ramp CAV that had slowed down could never merge and
+//! stood at the end of the acceleration lane while gaps passed. Slides are off by default
+//! (`planner.low_speed_lane_changes`): see the README, "Merge deadlock".
 
 use crate::model::kinematics::{Bicycle, BicycleState, Input};
 use crate::model::math::{wrap_angle, Point};
@@ -76,6 +80,8 @@ pub struct Library {
     pub lane_change_steps: usize,
     pub lane_width: f64,
     pub min_lane_change_speed: f64,
+    /// Whether a lane change below `min_lane_change_speed` is a slide (else unavailable).
+    pub slides_below_min_speed: bool,
     /// Control updates per step of the steering law.
     pub control_substeps: u32,
     /// Left lane changes from a settled state at speeds `min_lane_change_speed + k·TABLE_DV`:
@@ -103,6 +109,7 @@ impl Library {
             lane_change_steps: (lane_change_duration / dt).round().max(1.0) as usize,
             lane_width,
             min_lane_change_speed: 10.0,
+            slides_below_min_speed: false,
             control_substeps: 10,
             table: Vec::new(),
         };
@@ -141,6 +148,10 @@ impl Library {
     pub fn rollout_settled(&self, p: Primitive, start: &BicycleState) -> Vec<BicycleState> {
         if !p.is_lane_change() {
             return vec![self.longitudinal(start, self.accel_of(p), self.dt)];
+        }
+        if self.slides(p, start) {
+            let target_y = start.pos.y + p.lane_offset() as f64 * self.lane_width;
+            return self.slide(start, target_y);
         }
         let v = start
             .speed
@@ -209,9 +220,39 @@ impl Library {
         }
     }
 
-    /// Whether the primitive can start from `state`.
+    /// Whether the primitive can start from `state`: a lane change needs the bicycle's minimum
+    /// speed unless slow changes slide (see the module's doc).
     pub fn available(&self, p: Primitive, state: &BicycleState) -> bool {
-        !p.is_lane_change() || state.speed >= self.min_lane_change_speed
+        self.slides_below_min_speed
+            || !p.is_lane_change()
+            || state.speed >= self.min_lane_change_speed
+    }
+
+    /// Whether a lane change from `state` is a slide: too slow for the bicycle to steer it.
+    fn slides(&self, p: Primitive, state: &BicycleState) -> bool {
+        self.slides_below_min_speed
+            && p.is_lane_change()
+            && state.speed < self.min_lane_change_speed
+    }
+
+    /// A lane change as SUMO executes it at low speed: the forward speed held, the lateral
+    /// position linear to `target_y` over the change's steps, the body along the road.
+    fn slide(&self, start: &BicycleState, target_y: f64) -> Vec<BicycleState> {
+        let steps = self.lane_change_steps;
+        let vx = start.speed * start.heading.cos();
+        (1..=steps)
+            .map(|k| {
+                let f = k as f64 / steps as f64;
+                BicycleState {
+                    pos: Point::new(
+                        start.pos.x + vx * self.dt * k as f64,
+                        start.pos.y + f * (target_y - start.pos.y),
+                    ),
+                    heading: 0.0,
+                    speed: vx,
+                }
+            })
+            .collect()
     }
 
     /// Rolls `p` out from `start`, whose lane centre is at lateral position `lane_y`; returns the
@@ -219,6 +260,9 @@ impl Library {
     pub fn rollout(&self, p: Primitive, start: &BicycleState, lane_y: f64) -> Vec<BicycleState> {
         let steps = self.steps(p);
         let target_y = lane_y + p.lane_offset() as f64 * self.lane_width;
+        if self.slides(p, start) {
+            return self.slide(start, target_y);
+        }
         let total = steps as f64 * self.dt;
         let y0 = start.pos.y;
         let reference = |t: f64| -> (f64, f64) {
@@ -420,11 +464,34 @@ mod tests {
     }
 
     #[test]
-    fn lane_change_needs_speed() {
-        let l = lib();
+    fn a_slow_lane_change_slides_as_sumo_moves_it() {
+        // Measured in SUMO 1.15 (lane-change mode 0, `changeLane` with a 1 s duration): at 3 m/s
+        // and standing alike the car moves 0.9 m sideways per 0.2 s step and keeps its forward
+        // speed; below the bicycle's minimum speed the planner does the same.
+        let mut l = lib();
         assert!(!l.available(Primitive::LaneChangeLeft, &on_lane(0.0, 1, 4.5, 5.0)));
-        assert!(l.available(Primitive::LaneChangeLeft, &on_lane(0.0, 1, 4.5, 15.0)));
-        assert!(l.available(Primitive::EmergencyBrake, &on_lane(0.0, 1, 4.5, 0.0)));
+        l.slides_below_min_speed = true;
+        for v in [0.0, 3.0, 9.9] {
+            let start = on_lane(50.0, 0, 4.5, v);
+            assert!(l.available(Primitive::LaneChangeLeft, &start));
+            for seg in [
+                l.rollout(Primitive::LaneChangeLeft, &start, 0.0),
+                l.rollout_settled(Primitive::LaneChangeLeft, &start),
+            ] {
+                assert_eq!(seg.len(), 5);
+                for (k, st) in seg.iter().enumerate() {
+                    assert!(
+                        (st.pos.y - 0.9 * (k + 1) as f64).abs() < 1e-9,
+                        "{v}: {seg:?}"
+                    );
+                    assert!((st.pos.x - (50.0 + v * 0.2 * (k + 1) as f64)).abs() < 1e-9);
+                    assert_eq!((st.heading, st.speed), (0.0, v));
+                }
+            }
+        }
+        // From the minimum speed on, the bicycle steers the change (heading off the road).
+        let steered = l.rollout(Primitive::LaneChangeLeft, &on_lane(50.0, 0, 4.5, 15.0), 0.0);
+        assert!(steered.iter().any(|st| st.heading.abs() > 0.01));
     }
 
     #[test]
