@@ -81,3 +81,20 @@ fn the_shield_counts_its_overrides_and_is_silent_when_off() {
         off.summary.mean_delay_s
     );
 }
+
+#[test]
+fn the_grid_cell_that_crashed_no_longer_does() {
+    // Regression: bk-pbs at α 0.8, λ 3000, seed 0 (the first reference grid's demand, α drawn
+    // per vehicle) crashed two CAVs in a merge: a merging CAV had no plan while its lane change
+    // was under way. The planner alone (shield off) and with the shield must avoid it.
+    for shield in [false, true] {
+        let mut c = bkpbs::config::Config::default();
+        c.scenario.alpha = 0.8;
+        c.scenario.lambda = 3000.0;
+        c.scenario.seed = 0;
+        c.demand.cav_share = bkpbs::config::CavShare::Probability;
+        c.safety.shield = shield;
+        let s = episode::run(&c, "bk-pbs").unwrap().summary;
+        assert_eq!(s.controllable_crashed, 0, "shield {shield}: {s:?}");
+    }
+}
