@@ -718,6 +718,27 @@ mod tests {
         );
         assert!(conflict_free(&sol, &scene));
         assert!(sol.plans.iter().all(Option::is_some));
+        // The paper's claim: planned BK-M-A*'s way, each CAV alone against the other's
+        // constant-speed prediction, the two plans conflict; BK-PBS (above) resolves it.
+        let m = Mastar::on_paper_road();
+        let lc = LaneChanges::default();
+        let predicted: Vec<Trajectory> = (0..2)
+            .map(|j| ConstantSpeed::new(&Config::default()).predict(&scene, j, &[], 20))
+            .collect();
+        let alone: Vec<Arc<Trajectory>> = (0..2)
+            .map(|i| {
+                let others = [&predicted[1 - i]];
+                let req = lc.request(&scene, i, 0.2, &others);
+                Arc::new(m.plan(&req).expect("a plan alone").trajectory)
+            })
+            .collect();
+        let independent = Solution {
+            trajectories: alone,
+            plans: vec![None, None],
+            edges: Vec::new(),
+            stats: PbsStats::default(),
+        };
+        assert!(!conflict_free(&independent, &scene), "BK-M-A* leaves the conflict");
     }
 
     #[test]
