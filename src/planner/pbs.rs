@@ -738,7 +738,10 @@ mod tests {
             edges: Vec::new(),
             stats: PbsStats::default(),
         };
-        assert!(!conflict_free(&independent, &scene), "BK-M-A* leaves the conflict");
+        assert!(
+            !conflict_free(&independent, &scene),
+            "BK-M-A* leaves the conflict"
+        );
     }
 
     #[test]
