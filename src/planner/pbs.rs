@@ -24,7 +24,8 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 
-use crate::model::scene::{Kind, Scene};
+use crate::model::road::{FORCED_MERGE_ZONE, MERGE_LANE};
+use crate::model::scene::{Kind, Origin, Scene};
 use crate::model::trajectory::{Pose, Trajectory};
 use crate::planner::mastar::{Mastar, NoPlan, Plan};
 use crate::planner::priority::PriorityGraph;
@@ -53,6 +54,11 @@ pub trait RequestFor: Sync {
     /// What `agent` executes without a plan ([`Mastar::fallback_trajectory`]).
     fn fallback(&self, planner: &Mastar, agent: usize, horizon: usize) -> Trajectory;
 }
+
+/// Slower than this (m/s) a ramp HDV counts as standing (as in the episode's merge rule).
+const STANDING: f64 = 0.5;
+/// Lateral offset (m) toward the main road from which a ramp HDV's merge is under way.
+const MERGE_UNDER_WAY: f64 = 0.1;
 
 /// One planning problem: a scene and how to plan and predict in it.
 pub struct Problem<'a> {
@@ -175,6 +181,20 @@ struct Effort {
 impl Problem<'_> {
     fn is_cav(&self, a: usize) -> bool {
         self.scene.vehicles[a].kind == Kind::Cav
+    }
+
+    /// Whether HDV `a` will merge whatever the CAVs do: a ramp HDV whose lane change is under
+    /// way (moving off the merge lane's centre toward the main road), or standing in the zone at
+    /// the lane's end where the merge rule forces it in. A conditioned re-prediction may not
+    /// argue such a merge away: its unconditioned prediction stands (no optimism about HDVs).
+    fn merge_is_certain(&self, a: usize) -> bool {
+        let v = &self.scene.vehicles[a];
+        let road = &self.scene.road;
+        let forced = v.speed < STANDING && v.front() > road.merge_end - FORCED_MERGE_ZONE;
+        v.kind == Kind::Hdv
+            && v.origin == Origin::Ramp
+            && v.lane == MERGE_LANE
+            && (v.lateral > MERGE_UNDER_WAY || forced)
     }
 
     /// The first step at which pair (a, b) conflicts, if any.
@@ -302,8 +322,10 @@ impl Problem<'_> {
                     .filter(|&&h| self.is_cav(h))
                     .map(|&h| &*state.trajectories[h])
                     .collect();
-                effort.predictions += 1;
-                state.trajectories[k] = self.predict(k, &cavs);
+                if !self.merge_is_certain(k) {
+                    effort.predictions += 1;
+                    state.trajectories[k] = self.predict(k, &cavs);
+                }
                 if conflicted(&state.trajectories) {
                     return None;
                 }
@@ -862,5 +884,80 @@ mod tests {
         let (sol, scene) = solve_committed(vehicles, &sp, budget, &[(0, 1)]);
         assert!(sol.edges.contains(&(0, 1)), "{:?}", sol.edges);
         assert!(conflict_free(&sol, &scene));
+    }
+
+    /// Predicts the standing ramp HDV merging into lane 1 — unless conditioned on CAV plans,
+    /// when it (over-optimistically) stays put; CAVs at constant speed.
+    struct Optimist;
+
+    impl Predictor for Optimist {
+        fn name(&self) -> &'static str {
+            "optimist"
+        }
+        fn predict(
+            &self,
+            scene: &Scene,
+            i: usize,
+            on: &[&Trajectory],
+            horizon: usize,
+        ) -> Trajectory {
+            let v = &scene.vehicles[i];
+            let mut t = Trajectory::straight(v.s, v.lane as f64 * 4.5, v.speed, horizon, 0.2);
+            if v.kind == Kind::Hdv && on.is_empty() {
+                for (k, p) in t.poses.iter_mut().enumerate() {
+                    p.y = (k as f64 * 0.9).min(4.5);
+                }
+            }
+            t
+        }
+    }
+
+    #[test]
+    fn a_forced_ramp_merge_survives_conditioned_re_prediction() {
+        // R4: a ramp HDV standing at the lane end will be forced in; a conditioned
+        // re-prediction that has it stay put must not make the CAV beside it drive on.
+        let scene = Scene::on_paper_road(
+            0.0,
+            vec![
+                vehicle("ramp.1", Kind::Hdv, Origin::Ramp, 324.0, 0, 0.0),
+                vehicle("main.2", Kind::Cav, Origin::Main, 300.0, 1, 20.0),
+            ],
+        );
+        let config = Config::default();
+        let planner = Mastar::on_paper_road();
+        let rule = SafetyRule::new(&config.planner, 4.5);
+        let lane_changes = LaneChanges::default();
+        let requests = SceneRequests {
+            scene: &scene,
+            lane_changes: &lane_changes,
+            dt: 0.2,
+        };
+        let problem = Problem {
+            scene: &scene,
+            planner: &planner,
+            predictor: &Optimist,
+            requests: &requests,
+            committed: &[],
+            rule: &rule,
+            horizon: 20,
+            dt: 0.2,
+            budget: Budget {
+                nodes: 200,
+                time_ms: None,
+            },
+        };
+        assert!(problem.merge_is_certain(0));
+        let sol = problem.solve();
+        let hdv = &sol.trajectories[0];
+        assert!(
+            (hdv.poses[20].y - 4.5).abs() < 1e-9,
+            "the merge stands: {:?}",
+            hdv.poses[20]
+        );
+        assert!(
+            !problem.conflict_between(0, 1, &sol.trajectories),
+            "{:?}",
+            sol.stats
+        );
     }
 }
