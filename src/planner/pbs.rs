@@ -598,7 +598,6 @@ mod tests {
 
     use super::*;
     use crate::config::Config;
-    use crate::model::road::Road;
     use crate::model::scene::{Origin, VehicleState};
     use crate::planner::lane_changes::{LaneChanges, SceneRequests};
     use crate::predict::ConstantSpeed;
@@ -646,39 +645,45 @@ mod tests {
         solve_committed(vehicles, spy, budget, &[])
     }
 
-    fn solve_committed(
-        vehicles: Vec<VehicleState>,
-        spy: &Spy,
-        budget: Budget,
+    /// Runs `f` on the test problem of `scene`: the default planner and safety rule, no lane
+    /// change under way, a 20-step horizon.
+    fn with_problem<R>(
+        scene: &Scene,
+        predictor: &dyn Predictor,
         committed: &[(usize, usize)],
-    ) -> (Solution, Scene) {
+        budget: Budget,
+        f: impl FnOnce(&Problem) -> R,
+    ) -> R {
         let config = Config::default();
-        let scene = Scene {
-            time: 0.0,
-            road: Road::paper_default(),
-            vehicles,
-        };
-        let planner = Mastar::new(&config.planner, scene.road.clone(), 0.2, 1.0, 35.0);
+        let planner = Mastar::on_paper_road();
         let rule = SafetyRule::new(&config.planner, 4.5);
         let lane_changes = LaneChanges::default();
         let requests = SceneRequests {
-            scene: &scene,
+            scene,
             lane_changes: &lane_changes,
             dt: 0.2,
         };
-        let problem = Problem {
-            scene: &scene,
+        f(&Problem {
+            scene,
             planner: &planner,
-            predictor: spy,
+            predictor,
             requests: &requests,
             committed,
             rule: &rule,
             horizon: 20,
             dt: 0.2,
             budget,
-        };
-        let solution = problem.solve();
-        // Whatever the outcome, report whether any CAV-involved pair still conflicts.
+        })
+    }
+
+    fn solve_committed(
+        vehicles: Vec<VehicleState>,
+        spy: &Spy,
+        budget: Budget,
+        committed: &[(usize, usize)],
+    ) -> (Solution, Scene) {
+        let scene = Scene::on_paper_road(0.0, vehicles);
+        let solution = with_problem(&scene, spy, committed, budget, |p| p.solve());
         (solution, scene)
     }
 
@@ -692,32 +697,15 @@ mod tests {
     /// Whether no pair of the solution's trajectories conflicts under the safety rule: the one
     /// notion of a conflict, the same the search resolves.
     fn conflict_free(sol: &Solution, scene: &Scene) -> bool {
-        let config = Config::default();
-        let planner = Mastar::new(&config.planner, scene.road.clone(), 0.2, 1.0, 35.0);
-        let rule = SafetyRule::new(&config.planner, 4.5);
-        let lane_changes = LaneChanges::default();
-        let requests = SceneRequests {
-            scene,
-            lane_changes: &lane_changes,
-            dt: 0.2,
-        };
-        let predictor = ConstantSpeed::new(&config);
-        let problem = Problem {
-            scene,
-            planner: &planner,
-            predictor: &predictor,
-            requests: &requests,
-            committed: &[],
-            rule: &rule,
-            horizon: 20,
-            dt: 0.2,
-            budget: Budget {
-                nodes: 1,
-                time_ms: None,
-            },
+        let predictor = ConstantSpeed::new(&Config::default());
+        let budget = Budget {
+            nodes: 1,
+            time_ms: None,
         };
         let ts = &sol.trajectories;
-        (0..ts.len()).all(|a| (a + 1..ts.len()).all(|b| !problem.conflict_between(a, b, ts)))
+        with_problem(scene, &predictor, &[], budget, |problem| {
+            (0..ts.len()).all(|a| (a + 1..ts.len()).all(|b| !problem.conflict_between(a, b, ts)))
+        })
     }
 
     #[test]
@@ -923,41 +911,24 @@ mod tests {
                 vehicle("main.2", Kind::Cav, Origin::Main, 300.0, 1, 20.0),
             ],
         );
-        let config = Config::default();
-        let planner = Mastar::on_paper_road();
-        let rule = SafetyRule::new(&config.planner, 4.5);
-        let lane_changes = LaneChanges::default();
-        let requests = SceneRequests {
-            scene: &scene,
-            lane_changes: &lane_changes,
-            dt: 0.2,
+        let budget = Budget {
+            nodes: 200,
+            time_ms: None,
         };
-        let problem = Problem {
-            scene: &scene,
-            planner: &planner,
-            predictor: &Optimist,
-            requests: &requests,
-            committed: &[],
-            rule: &rule,
-            horizon: 20,
-            dt: 0.2,
-            budget: Budget {
-                nodes: 200,
-                time_ms: None,
-            },
-        };
-        assert!(problem.merge_is_certain(0));
-        let sol = problem.solve();
-        let hdv = &sol.trajectories[0];
-        assert!(
-            (hdv.poses[20].y - 4.5).abs() < 1e-9,
-            "the merge stands: {:?}",
-            hdv.poses[20]
-        );
-        assert!(
-            !problem.conflict_between(0, 1, &sol.trajectories),
-            "{:?}",
-            sol.stats
-        );
+        with_problem(&scene, &Optimist, &[], budget, |problem| {
+            assert!(problem.merge_is_certain(0));
+            let sol = problem.solve();
+            let hdv = &sol.trajectories[0];
+            assert!(
+                (hdv.poses[20].y - 4.5).abs() < 1e-9,
+                "the merge stands: {:?}",
+                hdv.poses[20]
+            );
+            assert!(
+                !problem.conflict_between(0, 1, &sol.trajectories),
+                "{:?}",
+                sol.stats
+            );
+        });
     }
 }
