@@ -26,11 +26,6 @@ use crate::model::scene::{Kind, Origin, Scene};
 /// Random stream of the merge decisions.
 pub const MERGE_STREAM: u64 = 2;
 
-/// Slower than this (m/s) a ramp HDV counts as standing.
-const STANDING: f64 = 0.5;
-/// Within this distance (m) of the acceleration lane's end a standing HDV forces its way in.
-const END_ZONE: f64 = crate::model::road::FORCED_MERGE_ZONE;
-
 /// A merge request of one ramp HDV this step.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct MergeRequest {
@@ -87,7 +82,7 @@ impl RampMergeRule {
                 }
             }
             if self.decided.contains(&v.id) {
-                let forced = v.speed < STANDING && v.front() > road.merge_end - END_ZONE;
+                let forced = road.forces_merge(v.front(), v.speed);
                 out.push(MergeRequest { vehicle: i, forced });
             }
         }

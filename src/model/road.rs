@@ -21,6 +21,8 @@ pub const MAIN_LANES: [i32; 2] = [1, 2];
 /// Within this distance (m) of the acceleration lane's end a ramp HDV that has come to a stop
 /// forces its way into the main road (the episode's merge rule), so a CAV must expect it there.
 pub const FORCED_MERGE_ZONE: f64 = 10.0;
+/// Slower than this (m/s) a ramp HDV counts as standing, for the forced merge.
+pub const STANDING_SPEED: f64 = 0.5;
 
 /// Every road-frame lane, lowest (the merge lane) to highest (the main road's left lane).
 pub const LANES: std::ops::RangeInclusive<i32> = MERGE_LANE..=MAIN_LANES[1];
@@ -117,6 +119,13 @@ impl Road {
             section_end,
             ramp_start,
         })
+    }
+
+    /// Whether a vehicle on the merge lane with its front at `front` and going `speed` stands in
+    /// the zone where the merge rule forces it in: the one definition the rule and the planner
+    /// (which may not predict such a merge away) share.
+    pub fn forces_merge(&self, front: f64, speed: f64) -> bool {
+        speed < STANDING_SPEED && front > self.merge_end - FORCED_MERGE_ZONE
     }
 
     /// The lanes a vehicle at `s` may occupy: the merge lane exists only up to the merge end.

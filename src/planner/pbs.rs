@@ -24,7 +24,7 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 
-use crate::model::road::{FORCED_MERGE_ZONE, MERGE_LANE};
+use crate::model::road::MERGE_LANE;
 use crate::model::scene::{Kind, Origin, Scene};
 use crate::model::trajectory::{Pose, Trajectory};
 use crate::planner::mastar::{Mastar, NoPlan, Plan};
@@ -55,8 +55,6 @@ pub trait RequestFor: Sync {
     fn fallback(&self, planner: &Mastar, agent: usize, horizon: usize) -> Trajectory;
 }
 
-/// Slower than this (m/s) a ramp HDV counts as standing (as in the episode's merge rule).
-const STANDING: f64 = 0.5;
 /// Lateral offset (m) toward the main road from which a ramp HDV's merge is under way.
 const MERGE_UNDER_WAY: f64 = 0.1;
 
@@ -189,8 +187,7 @@ impl Problem<'_> {
     /// argue such a merge away: its unconditioned prediction stands (no optimism about HDVs).
     fn merge_is_certain(&self, a: usize) -> bool {
         let v = &self.scene.vehicles[a];
-        let road = &self.scene.road;
-        let forced = v.speed < STANDING && v.front() > road.merge_end - FORCED_MERGE_ZONE;
+        let forced = self.scene.road.forces_merge(v.front(), v.speed);
         v.kind == Kind::Hdv
             && v.origin == Origin::Ramp
             && v.lane == MERGE_LANE
