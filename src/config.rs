@@ -126,6 +126,19 @@ pub struct MetricsSettings {
     pub t_star_speed: TStarSpeed,
 }
 
+/// Lane changes a CAV may make below the bicycle model's minimum lane-change speed.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum LowSpeedLaneChanges {
+    /// None: a slow CAV keeps its lane.
+    Off,
+    /// Merges out of the acceleration lane only.
+    #[default]
+    Merge,
+    /// Every lane change.
+    All,
+}
+
 /// The insertion speed t* is computed from.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
@@ -204,6 +217,11 @@ pub struct PlannerSettings {
     pub phase1_lane_change_penalty: f64,
     /// Extra cost (in steps) of a lane change in phase 2, which prefers braking.
     pub phase2_lane_change_penalty: f64,
+    /// Extra cost (in steps) per step a lane change is put off within a plan. Without it a
+    /// change possible now and one a second later cost the same, the search may pick the later
+    /// one, and the next round puts it off again: a ramp CAV ran the acceleration lane's length
+    /// beside a gap it kept planning to take (see the README, "Merge deadlock").
+    pub lane_change_deferral_penalty: f64,
     /// Acceleration of the `accelerate` primitive (m/s²).
     pub accel: f64,
     /// Deceleration of the `decelerate` primitive (m/s², positive).
@@ -212,10 +230,11 @@ pub struct PlannerSettings {
     pub emergency_decel: f64,
     /// Slowest speed from which the bicycle model steers a lane change (m/s).
     pub min_lane_change_speed: f64,
-    /// Below `min_lane_change_speed`, plan lane changes as SUMO executes them there (a slide:
-    /// one lane per second, the body along the road) instead of not at all. Off by default
-    /// until its cost is understood (see the README, "Merge deadlock").
-    pub low_speed_lane_changes: bool,
+    /// Which lane changes below `min_lane_change_speed` are planned as SUMO executes them there
+    /// (a slide: one lane per second, the body along the road) instead of not at all: only
+    /// merges out of the acceleration lane by default, so a ramp CAV that had to slow down is
+    /// not stuck at the lane end (see the README, "Merge deadlock").
+    pub low_speed_lane_changes: LowSpeedLaneChanges,
     /// The planned CAV's box is inflated by this much along the road (m, each end), to absorb
     /// the small differences between planned and executed motion.
     pub margin_long: f64,
@@ -242,11 +261,12 @@ impl Default for PlannerSettings {
             phase2_budget: 1000,
             phase1_lane_change_penalty: 0.1,
             phase2_lane_change_penalty: 2.0,
+            lane_change_deferral_penalty: 0.1,
             accel: 2.0,
             decel: 2.0,
             emergency_decel: 6.0,
             min_lane_change_speed: 10.0,
-            low_speed_lane_changes: false,
+            low_speed_lane_changes: LowSpeedLaneChanges::Merge,
             margin_long: 0.5,
             margin_lat: 0.1,
             safe_gap: 2.0,

@@ -428,6 +428,7 @@ fn conditioning_on_a_cav_plan_uses_the_conditioned_model() {
             .collect(),
         length: 5.0,
         width: 2.0,
+        brake: None,
     };
     let u = p.rollout(&s, 0, &[], 20);
     let c = p.rollout(&s, 0, &[&plan], 20);

@@ -83,6 +83,7 @@ fn plans_of(config: &Config, plans: Option<Vec<Vec<PoseTuple>>>) -> Vec<Trajecto
                 .collect(),
             length: sc.vehicle_length,
             width: sc.vehicle_width,
+            brake: None,
         })
         .collect()
 }

@@ -4,13 +4,14 @@
 //! executed; a CAV without a plan in either phase brakes at the emergency deceleration, and the
 //! step records a fallback.
 
+use super::shield::{self, Bounds};
 use super::{execute, CavBelief, CavHandling, Command, Controller, PlanStats, Source};
 use crate::config::Config;
 use crate::model::road::Road;
 use crate::model::scene::{Kind, Scene};
 use crate::model::trajectory::Trajectory;
 use crate::planner::lane_changes::LaneChanges;
-use crate::planner::mastar::Mastar;
+use crate::planner::mastar::{Mastar, StartGuard};
 use crate::predict::{ConstantSpeed, Predictor};
 
 /// Decentralised M-A* planner.
@@ -20,6 +21,8 @@ pub struct BkMastar {
     others: ConstantSpeed,
     planner: Mastar,
     lane_changes: LaneChanges,
+    /// The shield's check of lane-change starts, when the shield is on.
+    guard: Option<Bounds>,
     stats: PlanStats,
     tracing: bool,
     beliefs: Vec<CavBelief>,
@@ -34,6 +37,7 @@ impl BkMastar {
             others: ConstantSpeed::new(config),
             planner: Mastar::from_config(config, road.clone()),
             lane_changes: LaneChanges::default(),
+            guard: shield::start_guard(config),
             stats: PlanStats::default(),
             tracing: false,
             beliefs: Vec::new(),
@@ -79,7 +83,8 @@ impl Controller for BkMastar {
                 .filter(|(j, _)| *j != i)
                 .map(|(_, t)| t)
                 .collect();
-            let req = self.lane_changes.request(scene, i, dt, &obstacles);
+            let guard = self.guard.as_ref().map(|g| g as &dyn StartGuard);
+            let req = self.lane_changes.request(scene, i, dt, &obstacles, guard);
             let result = planner.plan(&req);
             execute::count_search(&mut stats, result.as_ref());
             let decel = self.config.planner.emergency_decel;

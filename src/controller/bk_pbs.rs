@@ -6,13 +6,14 @@
 
 use std::sync::Arc;
 
+use super::shield::{self, Bounds};
 use super::{execute, CavBelief, CavHandling, Command, Controller, PlanStats, Source};
 use crate::config::Config;
 use crate::model::road::Road;
 use crate::model::scene::{Kind, Scene};
 use crate::model::trajectory::Trajectory;
 use crate::planner::lane_changes::{LaneChanges, SceneRequests};
-use crate::planner::mastar::{Mastar, Plan};
+use crate::planner::mastar::{Mastar, Plan, StartGuard};
 use crate::planner::pbs::{Budget, PbsStats, Problem, RequestFor, Solution};
 use crate::predict::Predictor;
 
@@ -23,6 +24,8 @@ pub struct BkPbs {
     planner: Mastar,
     lane_changes: LaneChanges,
     commitments: Commitments,
+    /// The shield's check of lane-change starts, when the shield is on.
+    guard: Option<Bounds>,
     stats: PlanStats,
     tracing: bool,
     beliefs: Vec<CavBelief>,
@@ -36,6 +39,7 @@ impl BkPbs {
             predictor,
             planner: Mastar::from_config(config, road.clone()),
             lane_changes: LaneChanges::default(),
+            guard: shield::start_guard(config),
             commitments: Commitments::default(),
             stats: PlanStats::default(),
             tracing: false,
@@ -63,6 +67,7 @@ impl Controller for BkPbs {
             scene,
             lane_changes: &self.lane_changes,
             dt,
+            guard: self.guard.as_ref().map(|g| g as &dyn StartGuard),
         };
         let committed = self.commitments.in_scene(scene, now);
         let problem = self.problem(scene, &requests, &committed);

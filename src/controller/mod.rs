@@ -166,6 +166,12 @@ pub trait Controller {
     /// Appends one command per CAV it controls to `out` (which arrives empty).
     fn plan(&mut self, scene: &Scene, out: &mut Vec<Command>);
 
+    /// Wall time the safety shield took within the last `plan` call (ms; 0 unshielded): its
+    /// cost, measured apart from the planner's.
+    fn last_shield_ms(&self) -> f64 {
+        0.0
+    }
+
     /// The effort of the last `plan` call (none for rule-based controllers).
     fn last_stats(&self) -> PlanStats {
         PlanStats::default()

@@ -16,10 +16,11 @@
 //! start is cancelled; one under way is left to finish), at the highest safe speed between the
 //! strongest braking and the planned speed, else the strongest braking.
 
-use super::{CavBelief, CavHandling, Command, Controller, Maneuver, PlanStats, Source};
+use super::{CavBelief, CavHandling, Command, Controller, LaneChange, Maneuver, PlanStats, Source};
 use crate::config::Config;
 use crate::model::road::{FORCED_MERGE_ZONE, MAIN_LANES, MERGE_LANE};
 use crate::model::scene::{Kind, Origin, Scene, VehicleState};
+use crate::planner::mastar::StartGuard;
 
 /// Lateral offset (m) from the lane centre beyond which a vehicle counts as changing lanes.
 pub const CHANGING_LATERAL: f64 = 0.1;
@@ -33,6 +34,9 @@ pub struct Bounds {
     pub cav_decel: f64,
     /// Hardest braking of an HDV (m/s², positive).
     pub hdv_decel: f64,
+    /// Strongest acceleration of an HDV (m/s²): how soon a ramp HDV can reach the forced-merge
+    /// zone.
+    pub hdv_accel: f64,
     /// Braking a lane change may ask of the new follower at most (m/s², positive).
     pub follower_decel: f64,
     /// Smallest bumper gap kept at every step end (m).
@@ -47,6 +51,7 @@ impl Bounds {
             dt: config.scenario.dt,
             cav_decel: config.planner.emergency_decel,
             hdv_decel: config.idm.max_decel,
+            hdv_accel: config.idm.accel,
             follower_decel: config.idm.decel,
             margin: config.planner.margin_long,
         }
@@ -80,23 +85,39 @@ fn lanes_now(v: &VehicleState) -> u64 {
 }
 
 /// A ramp HDV whose merge will happen whatever the CAVs do: on the acceleration lane within
-/// [`FORCED_MERGE_ZONE`] of its end (or reaching that zone within `horizon` seconds), where
-/// the merge rule forces it in once it stops. Merges already under way count through the
-/// lateral offset ([`changing_toward`]). Other ramp HDVs are not assumed to merge at any
-/// moment: that assumption cost a fifth of the throughput and no collision it prevented was
-/// seen.
-pub fn may_merge(scene: &Scene, v: &VehicleState, horizon: f64) -> bool {
+/// [`FORCED_MERGE_ZONE`] of its end, or able to come to a stand there within `horizon` seconds
+/// (accelerating at `b.hdv_accel`, then braking at `b.hdv_decel`), where the merge rule forces
+/// it in once it stands. A creeping HDV a metre short of the zone is one such. Merges already
+/// under way count through the lateral offset ([`changing_toward`]). Other ramp HDVs are not
+/// assumed to merge at any moment: that assumption cost a fifth of the throughput and no
+/// collision it prevented was seen.
+pub fn may_merge(scene: &Scene, v: &VehicleState, horizon: f64, b: &Bounds) -> bool {
     let zone = scene.road.merge_end - FORCED_MERGE_ZONE;
+    let can_stand_in_zone = || {
+        farthest_stand(v.speed, horizon, b.hdv_accel, b.hdv_decel)
+            .is_some_and(|reach| v.front() + reach >= zone)
+    };
     v.kind == Kind::Hdv
         && v.origin == Origin::Ramp
         && v.lane == MERGE_LANE
         && !v.on_ramp
-        && v.front() + v.speed * horizon >= zone
+        && (v.front() + v.speed * horizon >= zone || can_stand_in_zone())
+}
+
+/// How far ahead a vehicle at `speed` can be standing within `horizon` seconds, accelerating
+/// at `accel` and then braking at `decel` (none if it cannot stop within the horizon).
+fn farthest_stand(speed: f64, horizon: f64, accel: f64, decel: f64) -> Option<f64> {
+    if speed > decel * horizon {
+        return None;
+    }
+    let t_accel = (horizon * decel - speed) / (accel + decel);
+    let peak = speed + accel * t_accel;
+    Some(0.5 * (speed + peak) * t_accel + peak * peak / (2.0 * decel))
 }
 
 /// Lanes another vehicle may occupy within `horizon` seconds under the worst cases.
-fn lanes_of_other(scene: &Scene, v: &VehicleState, horizon: f64) -> u64 {
-    let merge = if may_merge(scene, v, horizon) {
+fn lanes_of_other(scene: &Scene, v: &VehicleState, horizon: f64, b: &Bounds) -> u64 {
+    let merge = if may_merge(scene, v, horizon, b) {
         bit(MAIN_LANES[0])
     } else {
         0
@@ -193,7 +214,13 @@ fn clear_of_lane_end(scene: &Scene, v: &VehicleState, m: &Maneuver, b: &Bounds) 
 /// Whether CAV `i` executing `m` stays clear of every vehicle ahead of it in a lane it occupies
 /// (vehicles on the acceleration lane stop dead at its end), and of that lane's end when it
 /// occupies that lane alone.
-pub fn clear_of_leaders(scene: &Scene, i: usize, m: &Maneuver, b: &Bounds) -> bool {
+pub fn clear_of_leaders(
+    scene: &Scene,
+    i: usize,
+    m: &Maneuver,
+    b: &Bounds,
+    entering: &[u64],
+) -> bool {
     let me = &scene.vehicles[i];
     let lanes = lanes_of_cav(me, m);
     let horizon = b.dt + m.speed / b.cav_decel;
@@ -204,7 +231,10 @@ pub fn clear_of_leaders(scene: &Scene, i: usize, m: &Maneuver, b: &Bounds) -> bo
             .iter()
             .enumerate()
             .filter(|&(j, o)| {
-                j != i && o.s > me.s && lanes_of_other(scene, o, horizon) & lanes != 0
+                let entered = entering.get(j).copied().unwrap_or(0);
+                j != i
+                    && o.s > me.s
+                    && (lanes_of_other(scene, o, horizon, b) | entered) & lanes != 0
             })
             .all(|(_, o)| {
                 let worst = Motion {
@@ -219,7 +249,13 @@ pub fn clear_of_leaders(scene: &Scene, i: usize, m: &Maneuver, b: &Bounds) -> bo
 
 /// Whether a lane change `m` starts leaves the nearest vehicle behind CAV `i` in the target lane
 /// able to stay clear braking at `follower_decel` (true when `m` starts none).
-pub fn clear_of_new_follower(scene: &Scene, i: usize, m: &Maneuver, b: &Bounds) -> bool {
+pub fn clear_of_new_follower(
+    scene: &Scene,
+    i: usize,
+    m: &Maneuver,
+    b: &Bounds,
+    entering: &[u64],
+) -> bool {
     let Some(lc) = m.lane_change else {
         return true;
     };
@@ -229,7 +265,10 @@ pub fn clear_of_new_follower(scene: &Scene, i: usize, m: &Maneuver, b: &Bounds) 
         .vehicles
         .iter()
         .enumerate()
-        .filter(|&(j, o)| j != i && o.s <= me.s && lanes_now(o) & target != 0)
+        .filter(|&(j, o)| {
+            let entered = entering.get(j).copied().unwrap_or(0);
+            j != i && o.s <= me.s && (lanes_now(o) | entered) & target != 0
+        })
         .map(|(_, o)| o)
         .max_by(|a, c| a.s.total_cmp(&c.s));
     follower.map_or(true, |f| {
@@ -243,24 +282,33 @@ pub fn clear_of_new_follower(scene: &Scene, i: usize, m: &Maneuver, b: &Bounds) 
     })
 }
 
-/// Whether CAV `i` may execute `m` under the shield's worst cases.
-pub fn is_safe(scene: &Scene, i: usize, m: &Maneuver, b: &Bounds) -> bool {
-    clear_of_leaders(scene, i, m, b) && clear_of_new_follower(scene, i, m, b)
+/// Whether CAV `i` may execute `m` under the shield's worst cases, `entering[j]` being the lanes
+/// scene vehicle `j` enters by a lane change sent this same step (CAVs the shield already let
+/// start one: two CAVs may not change into the same lane at once, as bk-mastar's, planned
+/// apart, once did).
+pub fn is_safe(scene: &Scene, i: usize, m: &Maneuver, b: &Bounds, entering: &[u64]) -> bool {
+    clear_of_leaders(scene, i, m, b, entering) && clear_of_new_follower(scene, i, m, b, entering)
 }
 
 /// The least intrusive safe replacement of CAV `i`'s maneuver `m`, or `None` when `m` is safe
 /// (or when even the replacement would be `m` itself). Keeps the lane (cancels a lane-change
 /// start; a change under way continues, as SUMO is already moving the car) at the highest safe
 /// speed in [strongest braking, planned speed], else brakes as hard as the CAV can.
-pub fn replacement(scene: &Scene, i: usize, m: &Maneuver, b: &Bounds) -> Option<Maneuver> {
-    if is_safe(scene, i, m, b) {
+pub fn replacement(
+    scene: &Scene,
+    i: usize,
+    m: &Maneuver,
+    b: &Bounds,
+    entering: &[u64],
+) -> Option<Maneuver> {
+    if is_safe(scene, i, m, b, entering) {
         return None;
     }
     let keep = |speed| Maneuver {
         speed,
         lane_change: None,
     };
-    let safe = |speed| clear_of_leaders(scene, i, &keep(speed), b);
+    let safe = |speed| clear_of_leaders(scene, i, &keep(speed), b, entering);
     let v = &scene.vehicles[i];
     let strongest = (v.speed - b.cav_decel * b.dt).max(0.0).min(m.speed);
     let speed = if m.lane_change.is_some() && safe(m.speed) {
@@ -284,12 +332,37 @@ pub fn replacement(scene: &Scene, i: usize, m: &Maneuver, b: &Bounds) -> Option<
     (out != *m).then_some(out)
 }
 
+/// The shield as the search's [`StartGuard`]: a lane change may be planned only if the shield
+/// would let it start, so no plan (which other CAVs are planned against) counts on a start the
+/// shield would then withdraw.
+impl StartGuard for Bounds {
+    fn admits(&self, scene: &Scene, agent: usize, lane_offset: i32, first_speed: f64) -> bool {
+        let lane_change = match lane_offset {
+            1 => LaneChange::Left,
+            -1 => LaneChange::Right,
+            _ => return true,
+        };
+        let m = Maneuver {
+            speed: first_speed,
+            lane_change: Some(lane_change),
+        };
+        is_safe(scene, agent, &m, self, &[])
+    }
+}
+
+/// The shield's bounds as the lane-change guard of the search, when `config` turns it on.
+pub fn start_guard(config: &Config) -> Option<Bounds> {
+    config.safety.shield.then(|| Bounds::from_config(config))
+}
+
 /// Any controller with the shield between it and SUMO: its commands checked and, when unsafe,
 /// replaced (marked [`Source::Shield`], counted in [`PlanStats::shield_overrides`]).
 pub struct Shielded {
     inner: Box<dyn Controller>,
     bounds: Bounds,
     overrides: u64,
+    /// Wall time of the last step's checks (ms).
+    last_ms: f64,
 }
 
 impl Shielded {
@@ -299,6 +372,7 @@ impl Shielded {
             inner,
             bounds: Bounds::from_config(config),
             overrides: 0,
+            last_ms: 0.0,
         }
     }
 }
@@ -315,19 +389,29 @@ impl Controller for Shielded {
     fn plan(&mut self, scene: &Scene, out: &mut Vec<Command>) {
         let start = out.len();
         self.inner.plan(scene, out);
+        let started = std::time::Instant::now();
         self.overrides = 0;
+        // Lanes entered by the lane changes let through so far this step, per scene vehicle.
+        let mut entering = vec![0u64; scene.vehicles.len()];
         for c in &mut out[start..] {
-            let Some(m) = replacement(scene, c.vehicle, &c.maneuver, &self.bounds) else {
-                continue;
-            };
-            if c.maneuver.lane_change.is_some() && m.lane_change.is_none() {
-                self.inner
-                    .lane_change_cancelled(&scene.vehicles[c.vehicle].id);
+            if let Some(m) = replacement(scene, c.vehicle, &c.maneuver, &self.bounds, &entering) {
+                if c.maneuver.lane_change.is_some() && m.lane_change.is_none() {
+                    self.inner
+                        .lane_change_cancelled(&scene.vehicles[c.vehicle].id);
+                }
+                c.maneuver = m;
+                c.source = Source::Shield;
+                self.overrides += 1;
             }
-            c.maneuver = m;
-            c.source = Source::Shield;
-            self.overrides += 1;
+            if let Some(lc) = c.maneuver.lane_change {
+                entering[c.vehicle] |= bit(scene.vehicles[c.vehicle].lane + lc.offset());
+            }
         }
+        self.last_ms = started.elapsed().as_secs_f64() * 1e3;
+    }
+
+    fn last_shield_ms(&self) -> f64 {
+        self.last_ms
     }
 
     fn last_stats(&self) -> PlanStats {
@@ -353,7 +437,6 @@ impl Controller for Shielded {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::controller::LaneChange;
     use crate::model::scene::{Kind, Origin, VehicleState};
 
     fn cav(s: f64, lane: i32, speed: f64) -> VehicleState {
@@ -379,15 +462,15 @@ mod tests {
         // in full.
         let scene = Scene::on_paper_road(0.0, vec![cav(100.0, 1, 30.0), hdv("h", 180.0, 1, 0.0)]);
         let planned = go(30.4, None);
-        assert!(!is_safe(&scene, 0, &planned, &b));
-        let m = replacement(&scene, 0, &planned, &b).unwrap();
+        assert!(!is_safe(&scene, 0, &planned, &b, &[]));
+        let m = replacement(&scene, 0, &planned, &b, &[]).unwrap();
         let strongest = 30.0 - b.cav_decel * b.dt;
         assert!(m.speed > strongest && m.speed < 30.4, "{m:?}");
-        assert!(is_safe(&scene, 0, &m, &b));
-        assert!(!is_safe(&scene, 0, &go(m.speed + 0.01, None), &b));
+        assert!(is_safe(&scene, 0, &m, &b, &[]));
+        assert!(!is_safe(&scene, 0, &go(m.speed + 0.01, None), &b, &[]));
         // 35 m: nothing is safe, so the CAV brakes as hard as it can.
         let scene = Scene::on_paper_road(0.0, vec![cav(100.0, 1, 30.0), hdv("h", 140.0, 1, 0.0)]);
-        let m = replacement(&scene, 0, &planned, &b).unwrap();
+        let m = replacement(&scene, 0, &planned, &b, &[]).unwrap();
         assert!((m.speed - strongest).abs() < 1e-9, "{m:?}");
     }
 
@@ -397,8 +480,8 @@ mod tests {
         // 60 m behind an HDV at the same speed: it stops in 35 m braking at 9 m/s², the CAV in
         // 5 m + 52 m at 6 m/s².
         let scene = Scene::on_paper_road(0.0, vec![cav(100.0, 1, 25.0), hdv("h", 165.0, 1, 25.0)]);
-        assert!(is_safe(&scene, 0, &go(25.0, None), &b));
-        assert_eq!(replacement(&scene, 0, &go(25.0, None), &b), None);
+        assert!(is_safe(&scene, 0, &go(25.0, None), &b, &[]));
+        assert_eq!(replacement(&scene, 0, &go(25.0, None), &b, &[]), None);
         // Vehicles behind, and ahead in a lane the CAV does not occupy, are not its business.
         let scene = Scene::on_paper_road(
             0.0,
@@ -408,7 +491,7 @@ mod tests {
                 hdv("beside", 110.0, 2, 0.0),
             ],
         );
-        assert_eq!(replacement(&scene, 0, &go(25.4, None), &b), None);
+        assert_eq!(replacement(&scene, 0, &go(25.4, None), &b, &[]), None);
     }
 
     #[test]
@@ -418,12 +501,15 @@ mod tests {
         // (25 m/s) braked at 6 m/s² in front of it.
         let scene = Scene::on_paper_road(0.0, vec![cav(100.0, 1, 25.0), hdv("f", 90.0, 2, 30.0)]);
         let planned = go(25.0, Some(LaneChange::Left));
-        assert!(clear_of_leaders(&scene, 0, &planned, &b));
-        assert!(!clear_of_new_follower(&scene, 0, &planned, &b));
-        assert_eq!(replacement(&scene, 0, &planned, &b), Some(go(25.0, None)));
+        assert!(clear_of_leaders(&scene, 0, &planned, &b, &[]));
+        assert!(!clear_of_new_follower(&scene, 0, &planned, &b, &[]));
+        assert_eq!(
+            replacement(&scene, 0, &planned, &b, &[]),
+            Some(go(25.0, None))
+        );
         // 60 m behind, the same follower can stop: the change goes ahead.
         let scene = Scene::on_paper_road(0.0, vec![cav(100.0, 1, 25.0), hdv("f", 40.0, 2, 30.0)]);
-        assert_eq!(replacement(&scene, 0, &planned, &b), None);
+        assert_eq!(replacement(&scene, 0, &planned, &b, &[]), None);
     }
 
     #[test]
@@ -435,18 +521,60 @@ mod tests {
         me.lateral = -1.5;
         let scene = Scene::on_paper_road(0.0, vec![me.clone(), hdv("h", 130.0, 1, 0.0)]);
         let planned = go(25.0, None);
-        let m = replacement(&scene, 0, &planned, &b).unwrap();
+        let m = replacement(&scene, 0, &planned, &b, &[]).unwrap();
         assert_eq!(m.lane_change, None);
         assert!(m.speed < 25.0);
         // Back on its lane centre, the car in lane 1 no longer matters.
         me.lateral = 0.0;
         let scene = Scene::on_paper_road(0.0, vec![me, hdv("h", 130.0, 1, 0.0)]);
-        assert_eq!(replacement(&scene, 0, &planned, &b), None);
+        assert_eq!(replacement(&scene, 0, &planned, &b, &[]), None);
         // An HDV changing lanes into the CAV's lane occupies it as well.
         let mut other = hdv("h", 130.0, 2, 0.0);
         other.lateral = -1.0;
         let scene = Scene::on_paper_road(0.0, vec![cav(100.0, 1, 25.0), other]);
-        assert!(replacement(&scene, 0, &planned, &b).is_some());
+        assert!(replacement(&scene, 0, &planned, &b, &[]).is_some());
+    }
+
+    #[test]
+    fn as_the_search_guard_it_refuses_the_starts_it_would_cancel() {
+        let b = bounds();
+        // The lane-2 follower (30 m/s, 5 m behind) could not stop behind the CAV: refused, as
+        // the shield would cancel it; with that lane empty, admitted.
+        let crowded = Scene::on_paper_road(0.0, vec![cav(100.0, 1, 25.0), hdv("f", 90.0, 2, 30.0)]);
+        assert!(!b.admits(&crowded, 0, 1, 25.0));
+        assert!(replacement(&crowded, 0, &go(25.0, Some(LaneChange::Left)), &b, &[]).is_some());
+        let empty = Scene::on_paper_road(0.0, vec![cav(100.0, 1, 25.0)]);
+        assert!(b.admits(&empty, 0, 1, 25.0));
+        assert!(replacement(&empty, 0, &go(25.0, Some(LaneChange::Left)), &b, &[]).is_none());
+    }
+
+    #[test]
+    fn two_cavs_may_not_change_into_the_same_lane_at_once() {
+        // A ramp CAV standing at the lane end slides into lane 1 while a CAV in lane 2, 55 m
+        // behind at 28 m/s, changes into lane 1 too (bk-mastar, α 0.8, λ 3000, seed 209): each
+        // start is safe alone; the second one sent must see the first.
+        let b = bounds();
+        let ramp = VehicleState::on_lane("r", Kind::Cav, Origin::Ramp, 327.0, 0, 0.0);
+        let scene = Scene::on_paper_road(0.0, vec![cav(268.0, 2, 28.0), ramp]);
+        let (main_in, ramp_in) = (
+            go(28.0, Some(LaneChange::Right)),
+            go(0.0, Some(LaneChange::Left)),
+        );
+        assert!(is_safe(&scene, 0, &main_in, &b, &[]));
+        assert!(is_safe(&scene, 1, &ramp_in, &b, &[]));
+        let mut entering = vec![0u64; 2];
+        entering[1] = bit(1);
+        assert!(!is_safe(&scene, 0, &main_in, &b, &entering));
+        entering = vec![bit(1), 0];
+        assert!(!is_safe(&scene, 1, &ramp_in, &b, &entering));
+    }
+
+    #[test]
+    fn farthest_stand_hand_computed() {
+        // From rest, 2 s, +3 then −9 m/s²: 1.5 s up to 4.5 m/s (3.375 m), 0.5 s down (1.125 m).
+        assert!((farthest_stand(0.0, 2.0, 3.0, 9.0).unwrap() - 4.5).abs() < 1e-12);
+        // 20 m/s cannot stop within a second at 9 m/s².
+        assert_eq!(farthest_stand(20.0, 1.0, 3.0, 9.0), None);
     }
 
     #[test]
@@ -456,26 +584,33 @@ mod tests {
         let b = bounds();
         let early = VehicleState::on_lane("r", Kind::Hdv, Origin::Ramp, 203.0, 0, 20.0);
         let scene = Scene::on_paper_road(0.0, vec![cav(200.0, 1, 25.0), early.clone()]);
-        assert!(!may_merge(&scene, &early, 1.0));
+        assert!(!may_merge(&scene, &early, 1.0, &b));
         let ramp = VehicleState::on_lane("r", Kind::Hdv, Origin::Ramp, 318.0, 0, 5.0);
         let planned = go(25.0, None);
         let scene = Scene::on_paper_road(0.0, vec![cav(312.0, 1, 25.0), ramp.clone()]);
-        assert!(may_merge(&scene, &ramp, 1.0));
-        assert!(!is_safe(&scene, 0, &planned, &b));
-        let m = replacement(&scene, 0, &planned, &b).unwrap();
+        assert!(may_merge(&scene, &ramp, 1.0, &b));
+        // Creeping a metre short of the zone, it can be standing in it within a second; ten
+        // metres short, not.
+        let zone = scene.road.merge_end - FORCED_MERGE_ZONE;
+        let creeping = VehicleState::on_lane("r", Kind::Hdv, Origin::Ramp, zone - 3.5, 0, 0.1);
+        assert!(may_merge(&scene, &creeping, 1.0, &b));
+        let further = VehicleState::on_lane("r", Kind::Hdv, Origin::Ramp, zone - 12.5, 0, 0.1);
+        assert!(!may_merge(&scene, &further, 1.0, &b));
+        assert!(!is_safe(&scene, 0, &planned, &b, &[]));
+        let m = replacement(&scene, 0, &planned, &b, &[]).unwrap();
         assert!(m.speed < 25.0);
         // In lane 2 the CAV is out of its reach; a main-road HDV on lane 0 would not merge.
         let scene = Scene::on_paper_road(0.0, vec![cav(312.0, 2, 25.0), ramp.clone()]);
-        assert!(is_safe(&scene, 0, &planned, &b));
+        assert!(is_safe(&scene, 0, &planned, &b, &[]));
         let main = VehicleState::on_lane("m", Kind::Hdv, Origin::Main, 318.0, 0, 5.0);
         let scene = Scene::on_paper_road(0.0, vec![cav(312.0, 1, 25.0), main]);
-        assert!(is_safe(&scene, 0, &planned, &b));
+        assert!(is_safe(&scene, 0, &planned, &b, &[]));
         // Still far up the ramp edge, it cannot reach the acceleration lane within the horizon.
         let mut far = ramp;
         far.s = 20.0;
         far.on_ramp = true;
         let scene = Scene::on_paper_road(0.0, vec![cav(18.0, 1, 25.0), far]);
-        assert!(is_safe(&scene, 0, &planned, &b));
+        assert!(is_safe(&scene, 0, &planned, &b, &[]));
     }
 
     #[test]
@@ -484,19 +619,25 @@ mod tests {
         let ramp_cav = |s, speed| VehicleState::on_lane("c", Kind::Cav, Origin::Ramp, s, 0, speed);
         // 47.5 m before the lane's end at 25 m/s: the CAV could not stop before it.
         let scene = Scene::on_paper_road(0.0, vec![ramp_cav(280.0, 25.0)]);
-        assert!(!is_safe(&scene, 0, &go(25.0, None), &b));
+        assert!(!is_safe(&scene, 0, &go(25.0, None), &b, &[]));
         // Starting its merge it no longer occupies the acceleration lane alone.
-        assert!(is_safe(&scene, 0, &go(25.0, Some(LaneChange::Left)), &b));
+        assert!(is_safe(
+            &scene,
+            0,
+            &go(25.0, Some(LaneChange::Left)),
+            &b,
+            &[]
+        ));
         let scene = Scene::on_paper_road(0.0, vec![ramp_cav(200.0, 25.0)]);
-        assert!(is_safe(&scene, 0, &go(25.0, None), &b));
+        assert!(is_safe(&scene, 0, &go(25.0, None), &b, &[]));
         // A vehicle ahead 5 m before the end halts there, not after braking at 6 m/s².
         let ahead = VehicleState::on_lane("a", Kind::Cav, Origin::Ramp, 322.5, 0, 25.0);
         let scene = Scene::on_paper_road(0.0, vec![cav(280.0, 1, 25.0), ahead.clone()]);
         let mut me = cav(280.0, 0, 25.0);
         me.lateral = 1.0;
         let changing = Scene::on_paper_road(0.0, vec![me, ahead]);
-        assert!(is_safe(&scene, 0, &go(25.0, None), &b));
-        assert!(!is_safe(&changing, 0, &go(25.0, None), &b));
+        assert!(is_safe(&scene, 0, &go(25.0, None), &b, &[]));
+        assert!(!is_safe(&changing, 0, &go(25.0, None), &b, &[]));
     }
 
     /// Returns fixed commands and records the lane changes it is told were cancelled.

@@ -22,6 +22,9 @@ pub struct BenchRow {
     pub plan_ms_max: f64,
     /// Nodes expanded per step, all CAVs together.
     pub nodes_per_step: f64,
+    /// The safety shield's part of the planning time per step: median and maximum (ms).
+    pub shield_ms_median: f64,
+    pub shield_ms_max: f64,
 }
 
 /// SUMO stepping the episode's demand (as a plain route file, inserted by SUMO itself) with
@@ -70,7 +73,7 @@ pub fn run(
     repeats: usize,
 ) -> Result<Vec<BenchRow>, EpisodeError> {
     let mut alone = Vec::new();
-    let mut samples: Vec<Vec<[f64; 5]>> = vec![Vec::new(); planners.len()];
+    let mut samples: Vec<Vec<[f64; 7]>> = vec![Vec::new(); planners.len()];
     for _ in 0..repeats.max(1) {
         alone.push(sumo_alone_ms_per_step(config)?);
         for (k, name) in planners.iter().enumerate() {
@@ -83,6 +86,8 @@ pub fn run(
                 t.plan_ms_p99,
                 t.plan_ms_max,
                 nodes,
+                t.shield_ms_median,
+                t.shield_ms_max,
             ]);
         }
     }
@@ -101,6 +106,8 @@ pub fn run(
             plan_ms_p99: median(2),
             plan_ms_max: median(3),
             nodes_per_step: median(4),
+            shield_ms_median: median(5),
+            shield_ms_max: median(6),
         });
     }
     Ok(rows)
@@ -110,21 +117,32 @@ pub fn run(
 pub fn table(rows: &[BenchRow]) -> String {
     let base = rows.first().map_or(1.0, |r| r.ms_per_step);
     let mut out = format!(
-        "{:<12} {:>10} {:>8} {:>12} {:>10} {:>10} {:>11}\n",
-        "run", "ms/step", "ratio", "plan median", "plan p99", "plan max", "nodes/step"
+        "{:<12} {:>10} {:>8} {:>12} {:>10} {:>10} {:>11} {:>13} {:>11}\n",
+        "run",
+        "ms/step",
+        "ratio",
+        "plan median",
+        "plan p99",
+        "plan max",
+        "nodes/step",
+        "shield median",
+        "shield max"
     );
     for r in rows {
         out += &format!(
-            "{:<12} {:>10.4} {:>7.2}x {:>12.4} {:>10.4} {:>10.4} {:>11.1}\n",
+            "{:<12} {:>10.4} {:>7.2}x {:>12.4} {:>10.4} {:>10.4} {:>11.1} {:>13.4} {:>11.4}\n",
             r.what,
             r.ms_per_step,
             r.ms_per_step / base,
             r.plan_ms_median,
             r.plan_ms_p99,
             r.plan_ms_max,
-            r.nodes_per_step
+            r.nodes_per_step,
+            r.shield_ms_median,
+            r.shield_ms_max
         );
     }
-    out += "(ms; planning figures are per step for all CAVs together, medians over the repeats)\n";
+    out += "(ms; planning figures are per step for all CAVs together, the shield's part of it \
+            apart, medians over the repeats)\n";
     out
 }

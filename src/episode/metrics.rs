@@ -226,6 +226,10 @@ pub struct Timing {
     pub episode_ms_per_step: f64,
     /// Whole episode including SUMO start and close (s).
     pub wall_s: f64,
+    /// Time inside the safety shield per step, part of the planning time (ms; 0 unshielded).
+    pub shield_ms_median: f64,
+    pub shield_ms_p99: f64,
+    pub shield_ms_max: f64,
 }
 
 /// Nearest-rank percentile of `samples` (sorted in place); 0 for none.

@@ -95,13 +95,16 @@ pub fn episode_row(s: &Summary) -> Vec<String> {
 }
 
 /// Columns of `timing.csv`.
-pub const TIMING_COLUMNS: [&str; 6] = [
+pub const TIMING_COLUMNS: [&str; 9] = [
     "plan_ms_median",
     "plan_ms_p99",
     "plan_ms_max",
     "sumo_ms_per_step",
     "episode_ms_per_step",
     "wall_s",
+    "shield_ms_median",
+    "shield_ms_p99",
+    "shield_ms_max",
 ];
 
 fn timing_row(t: &Timing) -> Vec<String> {
@@ -112,6 +115,9 @@ fn timing_row(t: &Timing) -> Vec<String> {
         t.sumo_ms_per_step,
         t.episode_ms_per_step,
         t.wall_s,
+        t.shield_ms_median,
+        t.shield_ms_p99,
+        t.shield_ms_max,
     ]
     .iter()
     .map(|x| format!("{x:.4}"))

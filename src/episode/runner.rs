@@ -191,6 +191,7 @@ struct Episode<'a> {
     sumo_scene: SumoScene,
     commands: Vec<Command>,
     plan_ms: Vec<f64>,
+    shield_ms: Vec<f64>,
     plan_stats: PlanStats,
     sumo_s: f64,
     speed_sum: f64,
@@ -223,6 +224,7 @@ impl<'a> Episode<'a> {
             slots_generation: u64::MAX,
             commands: Vec::new(),
             plan_ms: Vec::with_capacity(config.scenario.steps as usize),
+            shield_ms: Vec::with_capacity(config.scenario.steps as usize),
             plan_stats: PlanStats::default(),
             sumo_s: 0.0,
             speed_sum: 0.0,
@@ -307,6 +309,7 @@ impl<'a> Episode<'a> {
         self.controller
             .plan(&self.sumo_scene.scene, &mut self.commands);
         self.plan_ms.push(t1.elapsed().as_secs_f64() * 1e3);
+        self.shield_ms.push(self.controller.last_shield_ms());
         self.plan_stats += self.controller.last_stats();
         self.observer
             .planned(&self.sumo_scene.scene, &self.commands, &*self.controller);
@@ -524,6 +527,7 @@ impl<'a> Episode<'a> {
             plan_stats: self.plan_stats,
         });
         let mut plan = std::mem::take(&mut self.plan_ms);
+        let mut shield = std::mem::take(&mut self.shield_ms);
         let plan_ms_total = plan.iter().sum();
         let timing = Timing {
             plan_ms_median: percentile(&mut plan, 50.0),
@@ -533,6 +537,9 @@ impl<'a> Episode<'a> {
             sumo_ms_per_step: self.sumo_s * 1e3 / sc.steps as f64,
             episode_ms_per_step: loop_s * 1e3 / sc.steps as f64,
             wall_s: 0.0,
+            shield_ms_median: percentile(&mut shield, 50.0),
+            shield_ms_p99: percentile(&mut shield, 99.0),
+            shield_ms_max: shield.last().copied().unwrap_or(0.0),
         };
         EpisodeResult {
             summary,

@@ -21,6 +21,10 @@ pub struct Trajectory {
     pub poses: Vec<Pose>,
     pub length: f64,
     pub width: f64,
+    /// Hardest braking (m/s², positive) of the vehicle driving it, where it differs from a CAV's
+    /// (an HDV may brake at SUMO's emergencyDecel): the gap a CAV keeps behind it must let the
+    /// CAV stop if it does. `None`: as hard as the planner's CAVs.
+    pub brake: Option<f64>,
 }
 
 impl Trajectory {
@@ -39,6 +43,7 @@ impl Trajectory {
             poses,
             length: 5.0,
             width: 2.0,
+            brake: None,
         }
     }
 

@@ -12,7 +12,7 @@ use crate::model::math::Point;
 use crate::model::road::{MAIN_LANES, MERGE_LANE};
 use crate::model::scene::{Origin, Scene};
 use crate::model::trajectory::Trajectory;
-use crate::planner::mastar::{Mastar, NoPlan, OngoingLaneChange, Plan, Request};
+use crate::planner::mastar::{Guard, Mastar, NoPlan, OngoingLaneChange, Plan, Request, StartGuard};
 use crate::planner::pbs::RequestFor;
 
 /// Commanded lane changes: vehicle → (time the change ends, target lane).
@@ -54,13 +54,15 @@ impl LaneChanges {
             .map_or(v.lane, |o| o.target_lane)
     }
 
-    /// The M-A* request of scene vehicle `i` among `obstacles`.
+    /// The M-A* request of scene vehicle `i` among `obstacles`, its lane-change starts passing
+    /// `guard`.
     pub fn request<'a>(
         &self,
-        scene: &Scene,
+        scene: &'a Scene,
         i: usize,
         dt: f64,
         obstacles: &'a [&'a Trajectory],
+        guard: Option<&'a dyn StartGuard>,
     ) -> Request<'a> {
         let v = &scene.vehicles[i];
         let w = scene.road.lane_width;
@@ -84,16 +86,22 @@ impl LaneChanges {
             length: v.length,
             width: v.width,
             obstacles,
+            guard: guard.map(|check| Guard {
+                check,
+                scene,
+                agent: i,
+            }),
         }
     }
 }
 
 /// How BK-PBS plans each agent of a scene: the M-A* request of its current state, continuing
-/// the lane change it has under way.
+/// the lane change it has under way, its starts passing `guard`.
 pub struct SceneRequests<'a> {
     pub scene: &'a Scene,
     pub lane_changes: &'a LaneChanges,
     pub dt: f64,
+    pub guard: Option<&'a dyn StartGuard>,
 }
 
 impl RequestFor for SceneRequests<'_> {
@@ -106,12 +114,14 @@ impl RequestFor for SceneRequests<'_> {
         planner.plan(
             &self
                 .lane_changes
-                .request(self.scene, agent, self.dt, obstacles),
+                .request(self.scene, agent, self.dt, obstacles, self.guard),
         )
     }
 
     fn fallback(&self, planner: &Mastar, agent: usize, horizon: usize) -> Trajectory {
-        let req = self.lane_changes.request(self.scene, agent, self.dt, &[]);
+        let req = self
+            .lane_changes
+            .request(self.scene, agent, self.dt, &[], self.guard);
         planner.fallback_trajectory(&req, horizon)
     }
 }
@@ -155,13 +165,13 @@ mod tests {
         let scene = Scene::on_paper_road(10.0, vec![ramp_cav(250.0, 0, 1.8, 25.0)]);
         let mut lc = LaneChanges::default();
         lc.start(&scene.vehicles[0].id, 9.6, 1.0, 1);
-        let req = lc.request(&scene, 0, 0.2, &[]);
+        let req = lc.request(&scene, 0, 0.2, &[], None);
         assert!(req.must_merge && req.ongoing.is_some());
         let plan = planner().plan(&req).expect("the merge continues");
         assert_eq!(plan.first, FirstMove::Continue);
         // Past the lane's centre line SUMO reports the target lane with a negative offset.
         let scene = Scene::on_paper_road(10.0, vec![ramp_cav(250.0, 1, -1.5, 25.0)]);
-        let req = lc.request(&scene, 0, 0.2, &[]);
+        let req = lc.request(&scene, 0, 0.2, &[], None);
         assert!(req.must_merge);
         assert!(planner().plan(&req).is_ok());
     }
@@ -174,7 +184,7 @@ mod tests {
         let lc = LaneChanges::default();
         for front in [140.0, 146.0, 149.9] {
             let scene = Scene::on_paper_road(0.0, vec![ramp_cav(front - 2.5, 0, 0.0, 30.0)]);
-            let plan = m.plan(&lc.request(&scene, 0, 0.2, &[])).unwrap();
+            let plan = m.plan(&lc.request(&scene, 0, 0.2, &[], None)).unwrap();
             assert!(
                 !matches!(plan.first, FirstMove::Start(p) if p.is_lane_change()),
                 "front at {front}: {:?}",
@@ -183,7 +193,7 @@ mod tests {
         }
         // On the acceleration lane with the main road free, the merge starts at once.
         let scene = Scene::on_paper_road(0.0, vec![ramp_cav(200.0, 0, 0.0, 30.0)]);
-        let plan = m.plan(&lc.request(&scene, 0, 0.2, &[])).unwrap();
+        let plan = m.plan(&lc.request(&scene, 0, 0.2, &[], None)).unwrap();
         assert!(matches!(plan.first, FirstMove::Start(p) if p.is_lane_change()));
     }
 
@@ -199,6 +209,7 @@ mod tests {
             scene: &scene,
             lane_changes: &lc,
             dt: 0.2,
+            guard: None,
         };
         let m = planner();
         let t = requests.fallback(&m, 0, 20);

@@ -15,10 +15,11 @@
 //! distance d', lane changes penalised so braking is preferred. Goals: a main-road CAV must get
 //! d ahead on a main-road lane; a ramp CAV must reach a main-road lane (within the merge zone).
 
-use crate::config::PlannerSettings;
+use crate::config::{LowSpeedLaneChanges, PlannerSettings};
 use crate::model::kinematics::{free_flow_time, BicycleState};
 use crate::model::math::Point;
 use crate::model::road::{Road, LANES, MAIN_LANES, MERGE_LANE};
+use crate::model::scene::Scene;
 use crate::model::trajectory::{Pose, Trajectory};
 use crate::planner::primitives::{Library, Primitive, Throttle};
 use crate::planner::safety::{Body, SafetyRule};
@@ -47,6 +48,36 @@ pub struct OngoingLaneChange {
     pub steps_left: usize,
 }
 
+/// A check every lane-change start must pass before the search may plan it. The controllers
+/// pass the safety shield's, so that no plan counts on a start the shield would withdraw: other
+/// CAVs are planned against that plan, so it must be what will be executed.
+pub trait StartGuard: Sync {
+    /// Whether scene vehicle `agent` may start a change of `lane_offset` lanes that has it at
+    /// forward speed `first_speed` after the first step.
+    fn admits(&self, scene: &Scene, agent: usize, lane_offset: i32, first_speed: f64) -> bool;
+}
+
+/// A [`StartGuard`] bound to one CAV of one scene.
+#[derive(Clone, Copy)]
+pub struct Guard<'a> {
+    pub check: &'a dyn StartGuard,
+    pub scene: &'a Scene,
+    pub agent: usize,
+}
+
+impl Guard<'_> {
+    fn admits(&self, lane_offset: i32, first_speed: f64) -> bool {
+        self.check
+            .admits(self.scene, self.agent, lane_offset, first_speed)
+    }
+}
+
+impl std::fmt::Debug for Guard<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "Guard(agent {})", self.agent)
+    }
+}
+
 /// One planning problem.
 #[derive(Debug, Clone)]
 pub struct Request<'a> {
@@ -61,6 +92,8 @@ pub struct Request<'a> {
     pub width: f64,
     /// Other vehicles' trajectories, step 0 = now.
     pub obstacles: &'a [&'a Trajectory],
+    /// The check a lane change started now must pass (none: every start the search finds free).
+    pub guard: Option<Guard<'a>>,
 }
 
 /// A plan found by M-A*.
@@ -146,7 +179,8 @@ impl Mastar {
         library.decel = settings.decel;
         library.emergency_decel = settings.emergency_decel;
         library.min_lane_change_speed = settings.min_lane_change_speed;
-        library.slides_below_min_speed = settings.low_speed_lane_changes;
+        library.slides_below_min_speed =
+            settings.low_speed_lane_changes != LowSpeedLaneChanges::Off;
         let library = Library::rebuilt(library);
         let rule = SafetyRule::new(settings, road.lane_width);
         Mastar {
@@ -233,6 +267,7 @@ impl Mastar {
             poses,
             length: req.length,
             width: req.width,
+            brake: None,
         }
     }
 
@@ -282,6 +317,7 @@ impl Mastar {
             pose: pose(st),
             length: req.length,
             width: req.width,
+            brake: None,
         };
         let (me, me_now) = (body(st), body(&req.start));
         obstacles.iter().all(|t| {
@@ -527,6 +563,9 @@ impl<'p> PhaseSearch<'p> {
                     } else {
                         library.rollout_settled(p, &n.state)
                     };
+                    if n.step == 0 && !self.guard_admits(p, &seg) {
+                        continue;
+                    }
                     moves.push((FirstMove::Start(p), lane, seg));
                 }
                 moves
@@ -535,11 +574,32 @@ impl<'p> PhaseSearch<'p> {
     }
 
     /// Whether primitive `p` may start at `n`: a lane change out of the merge lane only once the
-    /// front is on the acceleration lane. On SUMO's ramp edge there is no lane to change to, so
-    /// a change started there would not be executed while the plan counted on it.
+    /// front is on the acceleration lane (on SUMO's ramp edge there is no lane to change to, so
+    /// a change started there would not be executed while the plan counted on it), and a slow
+    /// one (a slide) only where `low_speed_lane_changes` allows it.
     fn can_start(&self, p: Primitive, n: &Node) -> bool {
+        if !p.is_lane_change() {
+            return true;
+        }
+        let settings = &self.planner.settings;
         let front = n.state.pos.x + 0.5 * self.req.length;
-        !(p.is_lane_change() && n.lane == MERGE_LANE && front < self.planner.road.merge_start)
+        let slow = n.state.speed < settings.min_lane_change_speed;
+        let slide_allowed = match settings.low_speed_lane_changes {
+            LowSpeedLaneChanges::Off => false,
+            LowSpeedLaneChanges::Merge => n.lane == MERGE_LANE,
+            LowSpeedLaneChanges::All => true,
+        };
+        !(n.lane == MERGE_LANE && front < self.planner.road.merge_start) && (!slow || slide_allowed)
+    }
+
+    /// Whether the request's guard lets primitive `p`, rolled out as `seg` from the root, start.
+    fn guard_admits(&self, p: Primitive, seg: &[BicycleState]) -> bool {
+        match (self.req.guard, seg.first()) {
+            (Some(g), Some(first)) if p.is_lane_change() => {
+                g.admits(p.lane_offset(), first.speed * first.heading.cos())
+            }
+            _ => true,
+        }
     }
 
     /// The rest of the lane change under way from `st`: forward speed held, lateral position
@@ -587,7 +647,8 @@ impl<'p> PhaseSearch<'p> {
         state.heading = 0.0;
         let mut cost = steps as f64;
         if matches!(mv, FirstMove::Start(p) if p.is_lane_change()) {
-            cost += self.spec.lane_change_penalty;
+            let deferral = self.planner.settings.lane_change_deferral_penalty;
+            cost += self.spec.lane_change_penalty + deferral * n.step as f64;
         }
         let next = Node {
             step: n.step + steps,
@@ -649,6 +710,7 @@ fn assemble(req: &Request, phase: Phase, result: &Search<Node>) -> Plan {
             poses,
             length: req.length,
             width: req.width,
+            brake: None,
         },
         phase,
         expanded: result.expanded,
@@ -703,6 +765,7 @@ mod tests {
             length: 5.0,
             width: 2.0,
             obstacles,
+            guard: None,
         }
     }
 
@@ -750,6 +813,105 @@ mod tests {
         assert_eq!(changes, vec![Primitive::LaneChangeLeft], "{plan:?}");
         assert!(collision_free(&plan, &obs));
         assert!(plan.trajectory.poses.last().unwrap().y == 9.0);
+    }
+
+    #[test]
+    fn a_lane_change_possible_now_is_not_put_off() {
+        // The slow leader of `slow_leader_makes_it_change_lane`: changing now and a second later
+        // reach the goal equally soon; only the deferral penalty makes the plan change now (the
+        // first move, the one executed), instead of promising a change the next round may put
+        // off again.
+        let leader = other(80.0, 1, 20.0);
+        let obs = [&leader];
+        let first_move = |deferral: f64| {
+            let settings = PlannerSettings {
+                lane_change_deferral_penalty: deferral,
+                ..PlannerSettings::default()
+            };
+            let m = Mastar::new(&settings, Road::paper_default(), 0.2, 1.0, 35.0);
+            m.plan(&request(&m, 20.0, 1, 28.0, false, &obs))
+                .unwrap()
+                .first
+        };
+        assert_eq!(
+            first_move(PlannerSettings::default().lane_change_deferral_penalty),
+            FirstMove::Start(Primitive::LaneChangeLeft)
+        );
+        assert_ne!(first_move(0.0), FirstMove::Start(Primitive::LaneChangeLeft));
+    }
+
+    fn with_slides(slides: LowSpeedLaneChanges) -> Mastar {
+        let settings = PlannerSettings {
+            low_speed_lane_changes: slides,
+            ..PlannerSettings::default()
+        };
+        Mastar::new(&settings, Road::paper_default(), 0.2, 1.0, 35.0)
+    }
+
+    fn starts_lane_change(plan: &Plan) -> bool {
+        matches!(plan.first, FirstMove::Start(p) if p.is_lane_change())
+    }
+
+    #[test]
+    fn a_standing_ramp_cav_merges_by_a_slide_only_where_allowed() {
+        // Standing 5 m before the lane end, the main lane free: below the bicycle's minimum
+        // lane-change speed only a slide (as SUMO executes it) gets it out.
+        for (slides, merges) in [
+            (LowSpeedLaneChanges::Merge, true),
+            (LowSpeedLaneChanges::All, true),
+            (LowSpeedLaneChanges::Off, false),
+        ] {
+            let m = with_slides(slides);
+            let plan = m.plan(&request(&m, 322.5, 0, 0.0, true, &[])).unwrap();
+            assert_eq!(starts_lane_change(&plan), merges, "{slides:?}: {plan:?}");
+        }
+    }
+
+    #[test]
+    fn a_slow_main_road_cav_slides_only_when_all_slides_are_allowed() {
+        // Standing 3 m behind a standing car, lane 2 free: only a slide gets it going.
+        let queue = other(183.0, 1, 0.0);
+        let obs = [&queue];
+        for (slides, changes) in [
+            (LowSpeedLaneChanges::Merge, false),
+            (LowSpeedLaneChanges::All, true),
+        ] {
+            let m = with_slides(slides);
+            let plan = m.plan(&request(&m, 175.0, 1, 0.0, false, &obs)).unwrap();
+            assert_eq!(starts_lane_change(&plan), changes, "{slides:?}: {plan:?}");
+        }
+    }
+
+    /// A guard that admits no lane-change start.
+    struct Closed;
+
+    impl StartGuard for Closed {
+        fn admits(&self, _: &Scene, _: usize, _: i32, _: f64) -> bool {
+            false
+        }
+    }
+
+    #[test]
+    fn a_guard_that_refuses_the_start_keeps_the_lane_now() {
+        // The slow leader of `slow_leader_makes_it_change_lane`: the plan changes lanes at once,
+        // unless the guard (the shield, in the controllers) refuses; then it waits in lane.
+        let m = planner();
+        let leader = other(80.0, 1, 20.0);
+        let obs = [&leader];
+        let open = request(&m, 20.0, 1, 28.0, false, &obs);
+        assert!(starts_lane_change(&m.plan(&open).unwrap()));
+        let scene = Scene::on_paper_road(0.0, Vec::new());
+        let closed = Request {
+            guard: Some(Guard {
+                check: &Closed,
+                scene: &scene,
+                agent: 0,
+            }),
+            ..open
+        };
+        let plan = m.plan(&closed).unwrap();
+        assert!(!starts_lane_change(&plan), "{plan:?}");
+        assert!(plan.primitives.iter().any(|p| p.is_lane_change()));
     }
 
     #[test]

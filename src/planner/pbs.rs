@@ -582,6 +582,7 @@ fn body(t: &Trajectory, pose: Pose) -> Body {
         pose,
         length: t.length,
         width: t.width,
+        brake: t.brake,
     }
 }
 
@@ -659,6 +660,7 @@ mod tests {
             scene,
             lane_changes: &lane_changes,
             dt: 0.2,
+            guard: None,
         };
         f(&Problem {
             scene,
@@ -735,7 +737,7 @@ mod tests {
         let alone: Vec<Arc<Trajectory>> = (0..2)
             .map(|i| {
                 let others = [&predicted[1 - i]];
-                let req = lc.request(&scene, i, 0.2, &others);
+                let req = lc.request(&scene, i, 0.2, &others, None);
                 Arc::new(m.plan(&req).expect("a plan alone").trajectory)
             })
             .collect();

@@ -4,8 +4,11 @@
 //! Clear means: the bodies do not overlap (the CAV's inflated by the planner's margins), and in
 //! its lane the CAV keeps a safe gap to the vehicle in front, and, after it changed lanes (a cut
 //! in), to the vehicle behind: gap ≥ `safe_gap` + v_back·`reaction_time` +
-//! (v_back² − v_front²)⁺ / (2·b), so that either could stop if the one in front brakes at the
-//! emergency deceleration b. The vehicle behind in its own lane is that vehicle's business, even
+//! (v_back²/(2·b) − v_front²/(2·b_front))⁺, so that either could stop if the one in front
+//! brakes as hard as it can. b is the CAVs' emergency deceleration; b_front is the front
+//! vehicle's, b too unless its trajectory says otherwise (an HDV may brake at SUMO's
+//! emergencyDecel, harder than a CAV: the safety shield assumes it, and a plan that did not
+//! would be overridden by the shield step after step). The vehicle behind in its own lane is that vehicle's business, even
 //! when a constant-speed prediction drives it into the CAV: a follower brakes (SUMO's IDM does),
 //! and only a CAV that cut in is responsible for the gap behind it.
 
@@ -26,12 +29,14 @@ pub struct SafetyRule {
     pub lane_width: f64,
 }
 
-/// A vehicle at one step: where it is and how big it is.
+/// A vehicle at one step: where it is, how big it is and how hard it may brake.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Body {
     pub pose: Pose,
     pub length: f64,
     pub width: f64,
+    /// See [`Trajectory::brake`].
+    pub brake: Option<f64>,
 }
 
 impl Body {
@@ -41,6 +46,7 @@ impl Body {
             pose: t.at(step, dt),
             length: t.length,
             width: t.width,
+            brake: t.brake,
         }
     }
 
@@ -64,11 +70,16 @@ impl SafetyRule {
         }
     }
 
-    /// Gap the vehicle behind needs to the one in front (m).
+    /// Gap the vehicle behind needs to the one in front (m), both braking as hard as a CAV.
     pub fn needed_gap(&self, v_back: f64, v_front: f64) -> f64 {
-        self.safe_gap
-            + v_back * self.reaction_time
-            + (v_back * v_back - v_front * v_front).max(0.0) / (2.0 * self.brake)
+        self.needed_gap_to(v_back, v_front, self.brake)
+    }
+
+    /// Gap the vehicle behind (braking as hard as a CAV) needs to one in front that may brake at
+    /// `front_brake` (m).
+    pub fn needed_gap_to(&self, v_back: f64, v_front: f64, front_brake: f64) -> f64 {
+        let stops = v_back * v_back / (2.0 * self.brake) - v_front * v_front / (2.0 * front_brake);
+        self.safe_gap + v_back * self.reaction_time + stops.max(0.0)
     }
 
     /// Whether the CAV `me`, `t` seconds into its plan, is clear of `other`; `me_now` and
@@ -106,7 +117,7 @@ impl SafetyRule {
         }
         let (v, vo) = (me.forward_speed(), other.forward_speed());
         if ahead {
-            let required = self.needed_gap(v, vo);
+            let required = self.needed_gap_to(v, vo, other.brake.unwrap_or(self.brake));
             gap(me, other) >= self.relaxed(required, me_now, other_now, other, t)
         } else if cut_in {
             gap(other, me) >= self.needed_gap(vo, v)
@@ -133,7 +144,10 @@ impl SafetyRule {
             return required;
         }
         let v0 = back_now.forward_speed();
-        if gap(back_now, front_now) >= self.needed_gap(v0, front_now.forward_speed()) {
+        let front_brake = front_now.brake.unwrap_or(self.brake);
+        if gap(back_now, front_now)
+            >= self.needed_gap_to(v0, front_now.forward_speed(), front_brake)
+        {
             return required;
         }
         let t_stop = (v0 / self.brake).min(t);
@@ -168,6 +182,7 @@ mod tests {
             },
             length: 5.0,
             width: 2.0,
+            brake: None,
         }
     }
 
@@ -210,6 +225,29 @@ mod tests {
         // Other lane: only the bodies matter.
         assert!(r.clear(&me, &from_lane(4.5), &body(104.0, 9.0, 10.0), &far, 1.0));
         assert!(!r.clear(&me, &from_lane(4.5), &body(104.0, 6.0, 10.0), &far, 1.0));
+    }
+
+    #[test]
+    fn an_hdv_in_front_may_brake_harder_than_a_cav() {
+        let r = rule();
+        // Both at 30 m/s, the front one braking at 9 m/s²: 2 + 6 + 900/12 − 900/18 = 33 m;
+        // braking like a CAV (6 m/s²), only 8 m.
+        assert!((r.needed_gap_to(30.0, 30.0, 9.0) - 33.0).abs() < 1e-9);
+        assert!((r.needed_gap_to(30.0, 30.0, 6.0) - 8.0).abs() < 1e-9);
+        let me = body(100.0, 4.5, 30.0);
+        let cav_like = body(125.0, 4.5, 30.0); // gap 20 m
+        let hdv = Body {
+            brake: Some(9.0),
+            ..cav_like
+        };
+        // (A second ago both were 50 m further back, the CAV 70 m behind: no gap to repair.)
+        let (me_then, cav_then) = (body(50.0, 4.5, 30.0), body(95.0, 4.5, 30.0));
+        let hdv_then = Body {
+            brake: Some(9.0),
+            ..cav_then
+        };
+        assert!(r.clear(&me, &me_then, &cav_like, &cav_then, 1.0));
+        assert!(!r.clear(&me, &me_then, &hdv, &hdv_then, 1.0));
     }
 
     #[test]

@@ -15,6 +15,8 @@ pub struct ConstantSpeed {
     dt: f64,
     lane_change_steps: usize,
     merge_exponent: f64,
+    /// Hardest braking of an HDV (SUMO's emergencyDecel), carried by its predictions.
+    hdv_brake: f64,
 }
 
 impl ConstantSpeed {
@@ -24,6 +26,7 @@ impl ConstantSpeed {
             dt: s.dt,
             lane_change_steps: s.lane_change_steps(),
             merge_exponent: config.ramp_merge.exponent,
+            hdv_brake: config.idm.max_decel,
         }
     }
 
@@ -90,6 +93,7 @@ impl Predictor for ConstantSpeed {
             poses,
             length: v.length,
             width: v.width,
+            brake: (v.kind == Kind::Hdv).then_some(self.hdv_brake),
         }
     }
 }

@@ -38,6 +38,8 @@ pub struct Learned {
     unconditioned: Arc<LaneChangeModel>,
     dt: f64,
     lane_change_steps: usize,
+    /// Hardest braking of an HDV (SUMO's emergencyDecel), carried by its predictions.
+    hdv_brake: f64,
     decision_probability: f64,
 }
 
@@ -85,6 +87,7 @@ impl Learned {
             dt: s.dt,
             lane_change_steps: (s.lane_change_duration / s.dt).round().max(1.0) as usize,
             decision_probability: config.predictor.decision_probability,
+            hdv_brake: config.idm.max_decel,
         }
     }
 
@@ -265,6 +268,7 @@ impl Learned {
             poses,
             length: v.length,
             width: v.width,
+            brake: (v.kind == Kind::Hdv).then_some(self.hdv_brake),
         }
     }
 }
