@@ -115,6 +115,14 @@ fn farthest_stand(speed: f64, horizon: f64, accel: f64, decel: f64) -> Option<f6
     Some(0.5 * (speed + peak) * t_accel + peak * peak / (2.0 * decel))
 }
 
+/// A ramp HDV on the acceleration lane: it may start its merge at any moment (SUMO's lane-change
+/// model decides when). A CAV changing into lane 1 beside it must let it (a CAV in lane 2 and a
+/// ramp HDV 16 m ahead of it once moved into lane 1 in the same step: each saw the lane free);
+/// a CAV already driving in lane 1 is not asked to, see [`may_merge`].
+fn on_acceleration_lane(v: &VehicleState) -> bool {
+    v.kind == Kind::Hdv && v.origin == Origin::Ramp && v.lane == MERGE_LANE && !v.on_ramp
+}
+
 /// Lanes another vehicle may occupy within `horizon` seconds under the worst cases.
 fn lanes_of_other(scene: &Scene, v: &VehicleState, horizon: f64, b: &Bounds) -> u64 {
     let merge = if may_merge(scene, v, horizon, b) {
@@ -225,17 +233,24 @@ pub fn clear_of_leaders(
     let lanes = lanes_of_cav(me, m);
     let horizon = b.dt + m.speed / b.cav_decel;
     let motion = cav_motion(me, m, b);
+    let into_lane_1 = m
+        .lane_change
+        .is_some_and(|lc| me.lane + lc.offset() == MAIN_LANES[0]);
+    let lanes_of = |j: usize, o: &VehicleState| {
+        let entered = entering.get(j).copied().unwrap_or(0);
+        let merging = if into_lane_1 && on_acceleration_lane(o) {
+            bit(MAIN_LANES[0])
+        } else {
+            0
+        };
+        lanes_of_other(scene, o, horizon, b) | entered | merging
+    };
     clear_of_lane_end(scene, me, m, b)
         && scene
             .vehicles
             .iter()
             .enumerate()
-            .filter(|&(j, o)| {
-                let entered = entering.get(j).copied().unwrap_or(0);
-                j != i
-                    && o.s > me.s
-                    && (lanes_of_other(scene, o, horizon, b) | entered) & lanes != 0
-            })
+            .filter(|&(j, o)| j != i && o.s > me.s && lanes_of(j, o) & lanes != 0)
             .all(|(_, o)| {
                 let worst = Motion {
                     speed: o.speed,
@@ -567,6 +582,35 @@ mod tests {
         assert!(!is_safe(&scene, 0, &main_in, &b, &entering));
         entering = vec![bit(1), 0];
         assert!(!is_safe(&scene, 1, &ramp_in, &b, &entering));
+    }
+
+    #[test]
+    fn a_cav_changing_into_lane_1_lets_a_ramp_hdv_ahead_merge_first() {
+        // bk-pbs, α 0.6, λ 3000, seed 17: a CAV in lane 2 at 35 m/s changed into lane 1 as a
+        // ramp HDV 16 m ahead (22.9 m/s) started its merge into it.
+        let b = bounds();
+        let ramp = VehicleState::on_lane("r", Kind::Hdv, Origin::Ramp, 165.5, 0, 22.9);
+        let scene = Scene::on_paper_road(0.0, vec![cav(149.4, 2, 35.0), ramp.clone()]);
+        assert!(!is_safe(
+            &scene,
+            0,
+            &go(34.75, Some(LaneChange::Right)),
+            &b,
+            &[]
+        ));
+        // Driving on in lane 2, or already in lane 1, it is not asked to expect that merge.
+        assert!(is_safe(&scene, 0, &go(35.0, None), &b, &[]));
+        let in_lane_1 = Scene::on_paper_road(0.0, vec![cav(149.4, 1, 35.0), ramp]);
+        assert!(is_safe(&in_lane_1, 0, &go(35.0, None), &b, &[]));
+        // With the acceleration lane empty the change is safe.
+        let alone = Scene::on_paper_road(0.0, vec![cav(149.4, 2, 35.0)]);
+        assert!(is_safe(
+            &alone,
+            0,
+            &go(34.75, Some(LaneChange::Right)),
+            &b,
+            &[]
+        ));
     }
 
     #[test]

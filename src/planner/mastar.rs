@@ -163,7 +163,9 @@ impl Mastar {
     /// The planner of a configuration on `road`.
     pub fn from_config(config: &crate::config::Config, road: Road) -> Self {
         let s = &config.scenario;
-        Mastar::new(&config.planner, road, s.dt, s.lane_change_duration, s.v_max)
+        let mut planner = Mastar::new(&config.planner, road, s.dt, s.lane_change_duration, s.v_max);
+        planner.rule.follower_brake = config.idm.decel;
+        planner
     }
 
     /// A planner for steps of `dt` on `road`, lane changes taking `lane_change_duration`.
@@ -864,6 +866,20 @@ mod tests {
             let m = with_slides(slides);
             let plan = m.plan(&request(&m, 322.5, 0, 0.0, true, &[])).unwrap();
             assert_eq!(starts_lane_change(&plan), merges, "{slides:?}: {plan:?}");
+        }
+    }
+
+    #[test]
+    fn a_standing_ramp_cav_merges_in_front_of_traffic_that_can_stop_for_it() {
+        // Standing at the lane end; a car on the main lane at 25 m/s, predicted to keep its
+        // speed. 80 m back it can stop behind the CAV braking at 5 m/s² (the cut-in rule takes
+        // it to, as RSS does), so the CAV slides in now; 40 m back it cannot, so the CAV waits.
+        let m = Mastar::from_config(&crate::config::Config::default(), Road::paper_default());
+        for (back, merges) in [(80.0, true), (40.0, false)] {
+            let follower = other(322.5 - back, 1, 25.0);
+            let obs = [&follower];
+            let plan = m.plan(&request(&m, 322.5, 0, 0.0, true, &obs)).unwrap();
+            assert_eq!(starts_lane_change(&plan), merges, "{back} m: {plan:?}");
         }
     }
 

@@ -8,9 +8,16 @@
 //! brakes as hard as it can. b is the CAVs' emergency deceleration; b_front is the front
 //! vehicle's, b too unless its trajectory says otherwise (an HDV may brake at SUMO's
 //! emergencyDecel, harder than a CAV: the safety shield assumes it, and a plan that did not
-//! would be overridden by the shield step after step). The vehicle behind in its own lane is that vehicle's business, even
-//! when a constant-speed prediction drives it into the CAV: a follower brakes (SUMO's IDM does),
-//! and only a CAV that cut in is responsible for the gap behind it.
+//! would be overridden by the shield step after step).
+//!
+//! The vehicle behind in its own lane is that vehicle's business, even when a constant-speed
+//! prediction drives it into the CAV: a follower brakes (SUMO's IDM does), and only a CAV that
+//! cut in is responsible for the gap behind it. That follower is checked as braking at
+//! `follower_brake` from the start of the plan (responsibility-sensitive safety: it sees the
+//! change begin), the same braking the safety shield asks of it at most; checked at its
+//! predicted constant speed instead, it would close on a slow merger until no gap behind was
+//! ever enough, and a ramp CAV that had slowed down could not merge in front of traffic however
+//! far back.
 
 use crate::config::PlannerSettings;
 use crate::model::geometry::{intersection_test_obb_obb, OrientedBox};
@@ -26,6 +33,10 @@ pub struct SafetyRule {
     pub reaction_time: f64,
     /// Emergency deceleration b (m/s², positive).
     pub brake: f64,
+    /// Braking (m/s², positive) a CAV's cut-in may ask of the vehicle it cuts in front of, which
+    /// is taken to brake so from the start of the plan (it sees the change begin); the safety
+    /// shield asks no more of it (`idm.decel`, set by [`crate::planner::mastar::Mastar::from_config`]).
+    pub follower_brake: f64,
     pub lane_width: f64,
 }
 
@@ -66,6 +77,7 @@ impl SafetyRule {
             safe_gap: settings.safe_gap,
             reaction_time: settings.reaction_time,
             brake: settings.emergency_decel,
+            follower_brake: settings.emergency_decel,
             lane_width,
         }
     }
@@ -95,6 +107,18 @@ impl SafetyRule {
         }
         let same_lane = self.same_lane(me, other);
         let cut_in = (p.y - me_now.pose.y).abs() > 0.5 * self.lane_width;
+        // The vehicle the CAV cuts in front of brakes (RSS): it is checked braking from the
+        // start of the plan, not driven on at its predicted speed into (or through) the CAV,
+        // which would forbid every slow merge in front of traffic however far back it is. One
+        // predicted clear ahead by then was merged in behind, and is a leader like any other.
+        let passed = o.s - p.s > 0.5 * (me.length + other.length) + self.margin_long;
+        let braked;
+        let (other, o) = if same_lane && cut_in && other_now.pose.s <= me_now.pose.s && !passed {
+            braked = self.braking(other_now, other, t);
+            (&braked, &braked.pose)
+        } else {
+            (other, o)
+        };
         // In front: now, or at the start (so driving through a vehicle between two steps still
         // counts as hitting it).
         let ahead = o.s > p.s || other_now.pose.s > me_now.pose.s;
@@ -123,6 +147,23 @@ impl SafetyRule {
             gap(other, me) >= self.needed_gap(vo, v)
         } else {
             true
+        }
+    }
+
+    /// `later` (the predicted pose at `t`) moved along the road as if braking at
+    /// `follower_brake` from `now` instead.
+    fn braking(&self, now: &Body, later: &Body, t: f64) -> Body {
+        let v0 = now.forward_speed();
+        let t_stop = (v0 / self.follower_brake).min(t);
+        let speed = v0 - self.follower_brake * t_stop;
+        Body {
+            pose: Pose {
+                s: now.pose.s + v0 * t_stop - 0.5 * self.follower_brake * t_stop * t_stop,
+                speed,
+                heading: 0.0,
+                ..later.pose
+            },
+            ..*later
         }
     }
 
@@ -206,14 +247,16 @@ mod tests {
         // Leader 50 m ahead (gap 45) at 20 m/s: needs 49.67 → not clear; 55 m ahead → clear.
         assert!(!r.clear(&me, &from_lane(4.5), &body(150.0, 4.5, 20.0), &far, 1.0));
         assert!(r.clear(&me, &from_lane(4.5), &body(155.0, 4.5, 20.0), &far, 1.0));
-        // A faster car close behind in the same lane: its business, unless the CAV cut in;
-        // even a predicted rear-end overlap.
+        // A faster car close behind in the same lane: its business, even a predicted rear-end
+        // overlap. After a cut-in, the CAV's, checked as braking (6 m/s² here) from the plan's
+        // start: from 55 m at 35 m/s it is at 87 m at 29 m/s after 1 s, 8 m behind (needs 7.8);
+        // from 62 m, 1 m behind.
         let (behind, was_behind) = (body(90.0, 4.5, 35.0), body(55.0, 4.5, 35.0));
         assert!(r.clear(&me, &from_lane(4.5), &behind, &was_behind, 1.0));
-        assert!(!r.clear(&me, &from_lane(0.0), &behind, &was_behind, 1.0));
-        let rear_end = body(97.0, 4.5, 35.0);
-        assert!(r.clear(&me, &from_lane(4.5), &rear_end, &was_behind, 1.0));
-        assert!(!r.clear(&me, &from_lane(0.0), &rear_end, &was_behind, 1.0));
+        assert!(r.clear(&me, &from_lane(0.0), &behind, &was_behind, 1.0));
+        let (rear_end, was_close) = (body(97.0, 4.5, 35.0), body(62.0, 4.5, 35.0));
+        assert!(r.clear(&me, &from_lane(4.5), &rear_end, &was_close, 1.0));
+        assert!(!r.clear(&me, &from_lane(0.0), &rear_end, &was_close, 1.0));
         // But a car that was in front and is now "behind" was driven through: not clear.
         assert!(!r.clear(
             &me,
