@@ -453,12 +453,26 @@ impl Config {
     }
 }
 
+/// Highest arrival rate accepted (veh/h): the demand of an episode is drawn in full before it
+/// starts, so the rate bounds its memory.
+pub const MAX_RATE: f64 = 20_000.0;
+
+/// Why counts and sizes are bounded: each bound keeps an episode's memory and time finite.
+const STEPS_RANGE: &str = "must be 1 to 100000 steps (longer episodes only fill memory)";
+const V_MAX_RANGE: &str = "must lie in [1, 100] m/s (the lane-change table grows with it)";
+const FREE_FLOW_ACCEL_RANGE: &str =
+    "must lie in [0.1, 20] m/s² (the free-flow time t* grows without bound near 0)";
+const HORIZON_RANGE: &str = "must be 1 to 100 steps (the search grows exponentially with it)";
+const SEARCH_BUDGET_RANGE: &str = "must be 1 to 1000000 node expansions";
+const PBS_BUDGET_RANGE: &str = "must be 1 to 100000 priority-tree nodes";
+
 /// What a number in the settings must satisfy. Each rule owns its error text, so settings alike
 /// are rejected alike.
 #[derive(Debug, Clone, Copy)]
 enum Rule {
-    /// A count: at least 1.
-    AtLeastOne,
+    /// Within [low, high], both included: a bound that keeps memory and run time finite, or a
+    /// value physics allows, which the reason names.
+    Between(f64, f64, &'static str),
     /// Above zero; unlike [`Rule::Rate`], infinity passes.
     Positive,
     NonNegative,
@@ -468,7 +482,7 @@ enum Rule {
     OpenUnitInterval,
     /// The step length: (0, 1] s.
     StepLength,
-    /// An arrival rate: positive and finite.
+    /// An arrival rate: positive and at most [`MAX_RATE`].
     Rate,
     /// A time budget: 0 (off) or positive and finite.
     TimeBudget,
@@ -479,13 +493,13 @@ enum Rule {
 impl Rule {
     fn holds(self, v: f64) -> bool {
         match self {
-            Rule::AtLeastOne => v >= 1.0,
+            Rule::Between(low, high, _) => (low..=high).contains(&v),
             Rule::Positive => v > 0.0,
             Rule::NonNegative => v >= 0.0,
             Rule::UnitInterval => (0.0..=1.0).contains(&v),
             Rule::OpenUnitInterval => v > 0.0 && v < 1.0,
             Rule::StepLength => v > 0.0 && v <= 1.0,
-            Rule::Rate => v > 0.0 && v.is_finite(),
+            Rule::Rate => v > 0.0 && v <= MAX_RATE,
             Rule::TimeBudget => v >= 0.0 && v.is_finite(),
             Rule::AtLeast(bound, _) => v >= bound,
         }
@@ -493,13 +507,16 @@ impl Rule {
 
     fn reason(self) -> &'static str {
         match self {
-            Rule::AtLeastOne => "must be at least 1",
+            Rule::Between(_, _, reason) => reason,
             Rule::Positive => "must be positive",
             Rule::NonNegative => "must not be negative",
             Rule::UnitInterval => "must lie in [0, 1]",
             Rule::OpenUnitInterval => "must lie in (0, 1)",
             Rule::StepLength => "must lie in (0, 1] s",
-            Rule::Rate => "must be a positive rate in veh/h",
+            Rule::Rate => {
+                "must be a positive rate of at most 20000 veh/h (two lanes carry about 4000; \
+                 more only queues vehicles at the entry and fills memory)"
+            }
             Rule::TimeBudget => "must be 0 (off) or a positive time in ms",
             Rule::AtLeast(_, reason) => reason,
         }
@@ -578,10 +595,10 @@ fn check_scenario(s: &Scenario) -> Result<(), ConfigError> {
     check_rows(&rows!(scenario: s;
         alpha => UnitInterval,
         lambda => Rate,
-        steps => AtLeastOne,
+        steps => Between(1.0, 100_000.0, STEPS_RANGE),
         dt => StepLength,
-        v_max => Positive,
-        free_flow_accel => Positive,
+        v_max => Between(1.0, 100.0, V_MAX_RANGE),
+        free_flow_accel => Between(0.1, 20.0, FREE_FLOW_ACCEL_RANGE),
         vehicle_length => Positive,
         vehicle_width => Positive,
         lane_change_duration => AtLeast(s.dt, "must be at least one step"),
@@ -611,7 +628,7 @@ fn check_idm(i: &Idm) -> Result<(), ConfigError> {
         accel => Positive,
         decel => Positive,
         min_gap => NonNegative,
-        time_headway => NonNegative,
+        time_headway => Positive,
         delta => Positive,
         max_decel => AtLeast(i.decel, "must be at least idm.decel"),
     ))
@@ -630,7 +647,7 @@ fn check_mobil(m: &Mobil) -> Result<(), ConfigError> {
 
 fn check_pbs(p: &PbsSettings) -> Result<(), ConfigError> {
     check_rows(&rows!(pbs: p;
-        node_budget => Rule::AtLeastOne,
+        node_budget => Rule::Between(1.0, 100_000.0, PBS_BUDGET_RANGE),
         time_budget_ms => Rule::TimeBudget,
     ))
 }
@@ -638,9 +655,9 @@ fn check_pbs(p: &PbsSettings) -> Result<(), ConfigError> {
 fn check_planner(p: &PlannerSettings) -> Result<(), ConfigError> {
     use Rule::*;
     check_rows(&rows!(planner: p;
-        horizon => AtLeastOne,
-        phase1_budget => AtLeastOne,
-        phase2_budget => AtLeastOne,
+        horizon => Between(1.0, 100.0, HORIZON_RANGE),
+        phase1_budget => Between(1.0, 1e6, SEARCH_BUDGET_RANGE),
+        phase2_budget => Between(1.0, 1e6, SEARCH_BUDGET_RANGE),
         goal_distance => Positive,
         fallback_goal_distance => Positive,
         accel => Positive,
@@ -650,6 +667,7 @@ fn check_planner(p: &PlannerSettings) -> Result<(), ConfigError> {
         v_bin => Positive,
         phase1_lane_change_penalty => NonNegative,
         phase2_lane_change_penalty => NonNegative,
+        lane_change_deferral_penalty => NonNegative,
         min_lane_change_speed => NonNegative,
         margin_long => NonNegative,
         margin_lat => NonNegative,
@@ -750,8 +768,8 @@ mod tests {
     type Case = (&'static str, &'static str, &'static str, fn(&mut Config));
 
     const UNIT: &str = "must lie in [0, 1]";
-    const RATE: &str = "must be a positive rate in veh/h";
-    const COUNT: &str = "must be at least 1";
+    const RATE: &str = "must be a positive rate of at most 20000 veh/h (two lanes carry about \
+                        4000; more only queues vehicles at the entry and fills memory)";
     const STEP: &str = "must lie in (0, 1] s";
     const POSITIVE: &str = "must be positive";
     const ONE_STEP: &str = "must be at least one step";
@@ -763,15 +781,20 @@ mod tests {
     const MODEL_FILE: &str = "no such model file";
 
     /// Every rule, in the order `validate` checks them.
-    const CASES: [Case; 46] = [
+    const CASES: [Case; 47] = [
         ("scenario.alpha", "1.5", UNIT, |c| c.scenario.alpha = 1.5),
         ("scenario.lambda", "0", RATE, |c| c.scenario.lambda = 0.0),
-        ("scenario.steps", "0", COUNT, |c| c.scenario.steps = 0),
+        ("scenario.steps", "0", STEPS_RANGE, |c| c.scenario.steps = 0),
         ("scenario.dt", "0", STEP, |c| c.scenario.dt = 0.0),
-        ("scenario.v_max", "0", POSITIVE, |c| c.scenario.v_max = 0.0),
-        ("scenario.free_flow_accel", "0", POSITIVE, |c| {
-            c.scenario.free_flow_accel = 0.0
+        ("scenario.v_max", "0", V_MAX_RANGE, |c| {
+            c.scenario.v_max = 0.0
         }),
+        (
+            "scenario.free_flow_accel",
+            "0",
+            FREE_FLOW_ACCEL_RANGE,
+            |c| c.scenario.free_flow_accel = 0.0,
+        ),
         ("scenario.vehicle_length", "0", POSITIVE, |c| {
             c.scenario.vehicle_length = 0.0
         }),
@@ -796,7 +819,7 @@ mod tests {
         ("idm.accel", "0", POSITIVE, |c| c.idm.accel = 0.0),
         ("idm.decel", "0", POSITIVE, |c| c.idm.decel = 0.0),
         ("idm.min_gap", "-1", NON_NEGATIVE, |c| c.idm.min_gap = -1.0),
-        ("idm.time_headway", "-1", NON_NEGATIVE, |c| {
+        ("idm.time_headway", "-1", POSITIVE, |c| {
             c.idm.time_headway = -1.0
         }),
         ("idm.delta", "0", POSITIVE, |c| c.idm.delta = 0.0),
@@ -816,15 +839,19 @@ mod tests {
         ("mobil.decision_interval", "-1", NON_NEGATIVE, |c| {
             c.mobil.decision_interval = -1.0
         }),
-        ("pbs.node_budget", "0", COUNT, |c| c.pbs.node_budget = 0),
+        ("pbs.node_budget", "0", PBS_BUDGET_RANGE, |c| {
+            c.pbs.node_budget = 0
+        }),
         ("pbs.time_budget_ms", "-1", TIME_BUDGET, |c| {
             c.pbs.time_budget_ms = -1.0
         }),
-        ("planner.horizon", "0", COUNT, |c| c.planner.horizon = 0),
-        ("planner.phase1_budget", "0", COUNT, |c| {
+        ("planner.horizon", "0", HORIZON_RANGE, |c| {
+            c.planner.horizon = 0
+        }),
+        ("planner.phase1_budget", "0", SEARCH_BUDGET_RANGE, |c| {
             c.planner.phase1_budget = 0
         }),
-        ("planner.phase2_budget", "0", COUNT, |c| {
+        ("planner.phase2_budget", "0", SEARCH_BUDGET_RANGE, |c| {
             c.planner.phase2_budget = 0
         }),
         ("planner.goal_distance", "0", POSITIVE, |c| {
@@ -851,6 +878,12 @@ mod tests {
             "-1",
             NON_NEGATIVE,
             |c| c.planner.phase2_lane_change_penalty = -1.0,
+        ),
+        (
+            "planner.lane_change_deferral_penalty",
+            "-1",
+            NON_NEGATIVE,
+            |c| c.planner.lane_change_deferral_penalty = -1.0,
         ),
         ("planner.min_lane_change_speed", "-1", NON_NEGATIVE, |c| {
             c.planner.min_lane_change_speed = -1.0
@@ -937,13 +970,47 @@ mod tests {
     #[test]
     fn rate_rule() {
         assert_eq!(assert_rule_rejects(RATE), 1);
-        assert_bounds(Rule::Rate, &[1e-9, 1e6], &[0.0, f64::INFINITY, f64::NAN]);
+        assert_bounds(
+            Rule::Rate,
+            &[1e-9, MAX_RATE],
+            &[0.0, 20_000.5, 1e12, f64::INFINITY, f64::NAN],
+        );
     }
 
     #[test]
-    fn count_rule() {
-        assert_eq!(assert_rule_rejects(COUNT), 5);
-        assert_bounds(Rule::AtLeastOne, &[1.0], &[0.0]);
+    fn bounded_counts_and_sizes() {
+        for (reason, n, low, high) in [
+            (STEPS_RANGE, 1, 1.0, 100_000.0),
+            (V_MAX_RANGE, 1, 1.0, 100.0),
+            (FREE_FLOW_ACCEL_RANGE, 1, 0.1, 20.0),
+            (HORIZON_RANGE, 1, 1.0, 100.0),
+            (SEARCH_BUDGET_RANGE, 2, 1.0, 1e6),
+            (PBS_BUDGET_RANGE, 1, 1.0, 100_000.0),
+        ] {
+            assert_eq!(assert_rule_rejects(reason), n, "{reason}");
+            let rule = Rule::Between(low, high, reason);
+            let above = high * (1.0 + 1e-9);
+            assert_bounds(rule, &[low, high], &[low * 0.99, above, 1e300, f64::NAN]);
+        }
+    }
+
+    #[test]
+    fn absurd_sizes_are_refused_before_anything_runs() {
+        // The values that once exhausted memory or hung a worker: each is one error naming its
+        // key, at once.
+        type Breaker = fn(&mut Config);
+        let cases: [(&str, Breaker); 4] = [
+            ("scenario.lambda", |c| c.scenario.lambda = 1e12),
+            ("scenario.steps", |c| c.scenario.steps = u32::MAX),
+            ("scenario.v_max", |c| c.scenario.v_max = 1e300),
+            ("planner.horizon", |c| c.planner.horizon = 100_000),
+        ];
+        for (field, break_it) in cases {
+            let mut c = Config::default();
+            break_it(&mut c);
+            let e = c.validate().unwrap_err().to_string();
+            assert!(e.starts_with(&format!("invalid setting {field} = ")), "{e}");
+        }
     }
 
     #[test]
@@ -954,7 +1021,7 @@ mod tests {
 
     #[test]
     fn positive_rule() {
-        assert_eq!(assert_rule_rejects(POSITIVE), 17);
+        assert_eq!(assert_rule_rejects(POSITIVE), 16);
         assert_bounds(Rule::Positive, &[1e-9, f64::INFINITY], &[0.0, f64::NAN]);
     }
 

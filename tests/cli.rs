@@ -132,6 +132,63 @@ fn alpha_outside_the_unit_interval_is_refused() {
 }
 
 #[test]
+fn a_negative_number_is_a_value_refused_with_its_range() {
+    // Once parsed as a flag: "unexpected argument '-0' found", exit code 2.
+    let d = tmp();
+    let o = episode_into(d.path(), &["--alpha", "-0.1"]);
+    assert_clear_failure(&o, "scenario.alpha", d.path());
+    assert_eq!(o.status.code(), Some(1));
+}
+
+#[test]
+fn a_usage_error_is_one_line_and_exit_code_1() {
+    let d = tmp();
+    let o = episode_into(d.path(), &["--bogus"]);
+    assert_clear_failure(&o, "--bogus", d.path());
+    assert_eq!(o.status.code(), Some(1));
+    // clap names a missing argument on the line after its message: still one line.
+    let o = bkpbs(&["demand", "--lambda", "2000"]);
+    assert_clear_failure(&o, "--out", d.path());
+    assert_eq!(o.status.code(), Some(1));
+}
+
+/// Settings that once exhausted memory (11–14 GB) or hung: one error naming the key, before
+/// anything runs. The elapsed-time bound only catches a hang; the refusal takes milliseconds.
+#[test]
+fn absurd_sizes_are_refused_before_anything_runs() {
+    let d = tmp();
+    let flag_cases: [(&[&str], &str); 2] = [
+        (&["--lambda", "1e12", "--steps", "10"], "scenario.lambda"),
+        (&["--steps", "4294967295"], "scenario.steps"),
+    ];
+    for (flags, key) in flag_cases {
+        let start = std::time::Instant::now();
+        let o = episode_into(d.path(), flags);
+        assert_clear_failure(&o, key, d.path());
+        assert!(
+            start.elapsed().as_secs() < 10,
+            "{key}: took {:?}",
+            start.elapsed()
+        );
+    }
+    for (text, key) in [
+        ("[scenario]\nv_max = 1e300\n", "scenario.v_max"),
+        ("[planner]\nhorizon = 100000\n", "planner.horizon"),
+        ("[idm]\ntime_headway = 0\n", "idm.time_headway"),
+    ] {
+        let (cfg, out) = config_file(d.path(), "absurd.toml", text);
+        let start = std::time::Instant::now();
+        let o = episode_into(&out, &["--config", &cfg]);
+        assert_clear_failure(&o, key, &out);
+        assert!(
+            start.elapsed().as_secs() < 10,
+            "{key}: took {:?}",
+            start.elapsed()
+        );
+    }
+}
+
+#[test]
 fn missing_config_file_is_refused() {
     let d = tmp();
     let o = episode_into(d.path(), &["--config", "no/such.toml"]);

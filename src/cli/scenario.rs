@@ -29,16 +29,16 @@ pub struct ScenarioArgs {
     #[arg(long)]
     config: Option<PathBuf>,
     /// CAV penetration α in [0, 1].
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     alpha: Option<f64>,
     /// Arrival rate λ (veh/h).
-    #[arg(long = "lambda")]
+    #[arg(long = "lambda", allow_negative_numbers = true)]
     lambda: Option<f64>,
     /// Seed of the demand and of the HDVs' merge decisions.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     seed: Option<u64>,
     /// Episode length in steps (default 400 of 0.2 s).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     steps: Option<u32>,
     /// Network file to use instead of the embedded merge network.
     #[arg(long)]

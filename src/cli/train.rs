@@ -28,16 +28,16 @@ pub struct CollectArgs {
     #[arg(long, value_delimiter = ',')]
     planners: Option<Vec<String>>,
     /// CAV penetrations α, cycled [default: 0.2,0.4,0.6,0.8].
-    #[arg(long, value_delimiter = ',')]
+    #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
     alphas: Option<Vec<f64>>,
     /// Arrival rates λ (veh/h), cycled [default: 2500,3000].
-    #[arg(long = "lambdas", value_delimiter = ',')]
+    #[arg(long = "lambdas", value_delimiter = ',', allow_hyphen_values = true)]
     lambdas: Option<Vec<f64>>,
     /// Episode length in steps [default: 400].
     #[arg(long)]
     steps: Option<u32>,
     /// Probability of keeping a main-road sample without a lane change [default: 0.1].
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     main_negative_keep: Option<f64>,
     /// TOML file with scenario settings (α, λ, seed and steps are set per episode).
     #[arg(long)]
