@@ -189,6 +189,49 @@ fn absurd_sizes_are_refused_before_anything_runs() {
 }
 
 #[test]
+fn an_output_place_that_cannot_be_written_is_refused_before_the_episode_runs() {
+    // Its parent is a file: once found only after the whole episode had run.
+    let d = tmp();
+    std::fs::write(d.path().join("file"), "x").unwrap();
+    let out = d.path().join("file").join("run");
+    let start = std::time::Instant::now();
+    let o = episode_into(&out, &["--steps", "400"]);
+    assert_clear_failure(&o, out.to_str().unwrap(), &out);
+    assert!(
+        start.elapsed().as_secs() < 10,
+        "refused only after {:?}",
+        start.elapsed()
+    );
+}
+
+#[test]
+fn sumo_s_own_reason_is_in_the_error_and_its_output_is_kept() {
+    // libsumo says only "Process Error"; the reason is on SUMO's console, captured.
+    let d = tmp();
+    let (cfg, out) = config_file(
+        d.path(),
+        "add.toml",
+        "[sumo]\nadditional_files = [\"no/such/extra.add.xml\"]\n",
+    );
+    let o = episode_into(&out, &["--config", &cfg, "--steps", "5"]);
+    assert_clear_failure(&o, "is not accessible", &out);
+    assert!(
+        stderr(&o).contains("no/such/extra.add.xml"),
+        "{}",
+        stderr(&o)
+    );
+    let log = std::fs::read_to_string(out.join("sumo.log")).unwrap();
+    assert!(log.contains("Error: File"), "{log}");
+    // A net that is not XML at all.
+    let net = d.path().join("garbage.net.xml");
+    std::fs::write(&net, "garbage").unwrap();
+    let out = d.path().join("garbage");
+    let o = episode_into(&out, &["--net", net.to_str().unwrap(), "--steps", "5"]);
+    assert_clear_failure(&o, "garbage.net.xml", &out);
+    assert!(stderr(&o).contains("SUMO said:"), "{}", stderr(&o));
+}
+
+#[test]
 fn missing_config_file_is_refused() {
     let d = tmp();
     let o = episode_into(d.path(), &["--config", "no/such.toml"]);

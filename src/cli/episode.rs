@@ -53,6 +53,7 @@ impl EpisodeArgs {
         let out = self
             .out
             .unwrap_or_else(|| default_out(&self.planner, &config.scenario));
+        bkpbs::io::ensure_writable_dir(&out)?;
         Ok(Episode {
             config,
             planner: self.planner,
@@ -70,6 +71,18 @@ fn default_out(planner: &str, s: &Scenario) -> PathBuf {
     ))
 }
 
+/// The error of a failed episode; when SUMO said why, all it printed is kept as `sumo.log` in
+/// `out` (the error names the file).
+fn keep_sumo_log(err: episode::EpisodeError, out: &std::path::Path) -> anyhow::Error {
+    let path = out.join("sumo.log");
+    match err.sumo_log() {
+        Some(log) if bkpbs::io::write_atomic(&path, log.as_bytes()).is_ok() => {
+            anyhow::anyhow!("{err} (SUMO's output: {})", path.display())
+        }
+        _ => err.into(),
+    }
+}
+
 /// Runs the episode, writes its files and prints its summary and where the files are.
 pub fn run(e: Episode) -> Result<()> {
     let saving = || {
@@ -82,12 +95,14 @@ pub fn run(e: Episode) -> Result<()> {
         let demand = episode::demand::generate(&e.config);
         let mut tracer = Tracer::new(&e.config);
         let planner = Driver::Named(&e.planner);
-        let result = episode::run_observed(&e.config, planner, &demand, &mut tracer)?;
+        let result = episode::run_observed(&e.config, planner, &demand, &mut tracer)
+            .map_err(|err| keep_sumo_log(err, &e.out))?;
         result.write(&e.out).with_context(saving)?;
         tracer.write(&e.out).with_context(saving)?;
         result
     } else {
-        let result = episode::run(&e.config, &e.planner)?;
+        let result =
+            episode::run(&e.config, &e.planner).map_err(|err| keep_sumo_log(err, &e.out))?;
         result.write(&e.out).with_context(saving)?;
         result
     };

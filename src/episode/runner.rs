@@ -56,6 +56,55 @@ pub enum EpisodeError {
         time: f64,
         cause: SumoError,
     },
+    /// A failure with SUMO's own reason: libsumo reports only "Process Error", the reason goes
+    /// to SUMO's (captured) console.
+    #[error("{cause}; SUMO said: {said}")]
+    Sumo {
+        cause: Box<EpisodeError>,
+        said: String,
+        /// All SUMO printed, for `sumo.log`.
+        log: String,
+    },
+}
+
+impl EpisodeError {
+    /// This error with SUMO's error messages from `log` (what it printed meanwhile), if any.
+    pub fn with_sumo_log(self, log: String) -> EpisodeError {
+        match sumo_errors(&log) {
+            Some(said) => EpisodeError::Sumo {
+                cause: Box::new(self),
+                said,
+                log,
+            },
+            None => self,
+        }
+    }
+
+    /// What SUMO printed before the failure, when it said why.
+    pub fn sumo_log(&self) -> Option<&str> {
+        match self {
+            EpisodeError::Sumo { log, .. } => Some(log),
+            _ => None,
+        }
+    }
+}
+
+/// SUMO's `Error:` messages in `log`, with their indented continuation lines ("In file …"), on
+/// one line.
+pub fn sumo_errors(log: &str) -> Option<String> {
+    let mut parts: Vec<&str> = Vec::new();
+    let mut in_error = false;
+    for line in log.lines() {
+        if let Some(message) = line.strip_prefix("Error: ") {
+            parts.push(message.trim());
+            in_error = true;
+        } else if in_error && line.starts_with(' ') && !line.trim().is_empty() {
+            parts.push(line.trim());
+        } else {
+            in_error = false;
+        }
+    }
+    (!parts.is_empty()).then(|| parts.join(" "))
 }
 
 /// What an episode produced.
@@ -156,7 +205,7 @@ pub fn run_observed(
         Episode::new(config, controller, planned, road, observer).run(sim)
     })();
     let sumo_log = capture.map(StderrCapture::finish).unwrap_or_default();
-    let mut result = outcome?;
+    let mut result = outcome.map_err(|e| e.with_sumo_log(sumo_log.clone()))?;
     result.sumo_log = sumo_log;
     result.timing.wall_s = wall.elapsed().as_secs_f64();
     Ok(result)
@@ -548,5 +597,21 @@ impl<'a> Episode<'a> {
             timing,
             sumo_log: String::new(),
         }
+    }
+}
+
+#[cfg(test)]
+mod sumo_error_tests {
+    use super::*;
+
+    #[test]
+    fn sumo_errors_are_read_off_sumo_s_console() {
+        let log = "Warning: something\nError: invalid document structure\n In file 'x.net.xml'\n \
+                   At line/column 2/1.\n\nQuitting (on error).\n";
+        assert_eq!(
+            sumo_errors(log).unwrap(),
+            "invalid document structure In file 'x.net.xml' At line/column 2/1."
+        );
+        assert_eq!(sumo_errors("Warning: only this\n"), None);
     }
 }

@@ -14,6 +14,21 @@ pub struct WriteError {
     pub cause: std::io::Error,
 }
 
+/// Creates directory `dir` if needed and checks that files can be written in it, so that a
+/// run whose results could not be saved is refused before it starts, not after.
+pub fn ensure_writable_dir(dir: &Path) -> Result<(), WriteError> {
+    let err = |cause| WriteError {
+        path: dir.to_path_buf(),
+        cause,
+    };
+    std::fs::create_dir_all(dir).map_err(err)?;
+    tempfile::Builder::new()
+        .prefix(".bkpbs-probe-")
+        .tempfile_in(dir)
+        .map(drop)
+        .map_err(err)
+}
+
 /// Writes `bytes` to `path` through a temporary file in the same directory and a rename.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), WriteError> {
     let err = |cause| WriteError {
@@ -25,13 +40,42 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), WriteError> {
         .filter(|p| !p.as_os_str().is_empty())
         .unwrap_or(Path::new("."));
     std::fs::create_dir_all(dir).map_err(err)?;
+    // Readable by whoever the umask allows (0644 typically), like any file a tool writes; a
+    // temporary file's own default, 0600, left shared results unreadable to colleagues.
     let mut tmp = tempfile::Builder::new()
         .prefix(".bkpbs-")
         .suffix(".tmp")
+        .permissions(std::os::unix::fs::PermissionsExt::from_mode(0o666))
         .tempfile_in(dir)
         .map_err(err)?;
     tmp.write_all(bytes).map_err(err)?;
     tmp.as_file().sync_all().map_err(err)?;
     tmp.persist(path).map_err(|e| err(e.error))?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::os::unix::fs::PermissionsExt;
+
+    #[test]
+    fn files_get_the_umask_s_modes() {
+        // SAFETY: reading the umask means setting it; it is put back at once.
+        let umask = unsafe {
+            let m = libc::umask(0o022);
+            libc::umask(m);
+            m
+        };
+        let d = tempfile::tempdir().unwrap();
+        let path = d.path().join("a.csv");
+        write_atomic(&path, b"x\n").unwrap();
+        let mode = std::fs::metadata(&path).unwrap().permissions().mode() & 0o777;
+        assert_eq!(
+            mode,
+            0o666 & !(umask as u32),
+            "mode {mode:o}, umask {umask:o}"
+        );
+        assert_eq!(std::fs::read(&path).unwrap(), b"x\n");
+    }
 }
