@@ -290,6 +290,87 @@ fn shards_merged_by_report_equal_the_unsharded_run() {
     );
 }
 
+#[test]
+fn two_shards_running_at_once_into_one_directory_finish_every_cell() {
+    // Each start once removed every temporary file in the directory, the other shard's
+    // in-flight ones too, and about half the trials lost cells ("cannot write …/campaign.toml").
+    for trial in 0..10 {
+        let d = tempfile::tempdir().unwrap();
+        let spawn = |k: &str| {
+            Command::new(BIN)
+                .arg("campaign")
+                .arg("--out")
+                .arg(d.path())
+                .args(grid("2", "30"))
+                .args(["--workers", "1", "--shard", k])
+                .env_remove(bkpbs::campaign::worker::FAULT_ENV)
+                .stdout(std::process::Stdio::piped())
+                .stderr(std::process::Stdio::piped())
+                .spawn()
+                .unwrap()
+        };
+        let (a, b) = (spawn("1/2"), spawn("2/2"));
+        for child in [a, b] {
+            assert_ok(&child.wait_with_output().unwrap());
+        }
+        // The unsharded command finds every cell done.
+        let o = campaign(d.path(), &grid("2", "30"));
+        assert_ok(&o);
+        assert_eq!(already_done(&o), 8, "trial {trial}: {}", text(&o.stdout));
+    }
+}
+
+/// Processes whose environment holds `marker` (the campaign's workers inherit it).
+fn processes_marked(marker: &str) -> Vec<u32> {
+    let needle = format!("BKPBS_TEST_MARK={marker}");
+    std::fs::read_dir("/proc")
+        .unwrap()
+        .flatten()
+        .filter_map(|e| e.file_name().to_str()?.parse::<u32>().ok())
+        .filter(|pid| {
+            std::fs::read(format!("/proc/{pid}/environ"))
+                .map(|env| env.split(|&b| b == 0).any(|v| v == needle.as_bytes()))
+                .unwrap_or(false)
+        })
+        .collect()
+}
+
+#[test]
+fn workers_die_with_a_campaign_killed_at_any_moment() {
+    // Killed in its first milliseconds, the campaign once left its workers running their
+    // episodes to the end; they must die with it, however early the kill.
+    for delay_ms in [0u64, 5, 10, 20, 50, 100] {
+        let d = tempfile::tempdir().unwrap();
+        let marker = format!("{}-{delay_ms}", std::process::id());
+        let mut child = Command::new(BIN)
+            .arg("campaign")
+            .arg("--out")
+            .arg(d.path())
+            // Episodes long enough that an orphan would still run at the deadline.
+            .args(grid("2", "100000"))
+            .args(["--workers", "2"])
+            .env("BKPBS_TEST_MARK", &marker)
+            .env_remove(bkpbs::campaign::worker::FAULT_ENV)
+            .stdout(std::process::Stdio::null())
+            .stderr(std::process::Stdio::null())
+            .spawn()
+            .unwrap();
+        std::thread::sleep(std::time::Duration::from_millis(delay_ms));
+        child.kill().unwrap();
+        child.wait().unwrap();
+        // The kernel kills the workers at once; give it a moment.
+        let deadline = std::time::Instant::now() + std::time::Duration::from_secs(5);
+        while !processes_marked(&marker).is_empty() && std::time::Instant::now() < deadline {
+            std::thread::sleep(std::time::Duration::from_millis(50));
+        }
+        assert_eq!(
+            processes_marked(&marker),
+            Vec::<u32>::new(),
+            "killed after {delay_ms} ms"
+        );
+    }
+}
+
 /// Finished cells (their episode.csv) and modification times.
 fn finished(out: &Path) -> BTreeMap<PathBuf, SystemTime> {
     let mut m = BTreeMap::new();

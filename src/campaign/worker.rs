@@ -77,7 +77,6 @@ static IN_EPISODE: AtomicBool = AtomicBool::new(false);
 
 /// Runs the worker on the process's stdin/stdout until stdin closes.
 pub fn serve_stdio() -> Result<(), WorkerError> {
-    die_with_parent();
     let channel = protocol_channel().map_err(WorkerError::Channel)?;
     panic::set_hook(Box::new(|info| {
         if IN_EPISODE.load(Ordering::SeqCst) {
@@ -177,18 +176,28 @@ pub(crate) fn run_cell(req: &Request) -> Result<(), String> {
     Ok(())
 }
 
-/// Removes the temporary files an earlier, killed write may have left in `dir`.
+/// Removes the temporary files an earlier, killed write left in `dir`: those whose writer
+/// (the process id in their name) is gone. Another campaign writing into the same directory
+/// (a shard, or the same command twice) keeps its own in-flight files; removing them made its
+/// rename fail ("cannot write …/campaign.toml: No such file or directory").
 pub(crate) fn remove_stale_temporaries(dir: &Path) {
     let Ok(entries) = std::fs::read_dir(dir) else {
         return;
     };
     for e in entries.flatten() {
         let name = e.file_name();
-        let name = name.to_string_lossy();
-        if name.starts_with(".bkpbs-") && name.ends_with(".tmp") {
+        if crate::io::temporary_writer(&name.to_string_lossy()).is_some_and(|pid| !alive(pid)) {
             let _ = std::fs::remove_file(e.path());
         }
     }
+}
+
+/// Whether process `pid` exists (a zombie counts: its files are no longer being written, but
+/// it cannot be told apart cheaply, and leaving a stale file for the next start is harmless).
+fn alive(pid: u32) -> bool {
+    // SAFETY: signal 0 only checks that the process exists.
+    let r = unsafe { libc::kill(pid as libc::pid_t, 0) };
+    r == 0 || std::io::Error::last_os_error().raw_os_error() == Some(libc::EPERM)
 }
 
 /// The reply channel: a duplicate of the original stdout, with fd 1 itself pointed at stderr,
@@ -208,21 +217,5 @@ fn protocol_channel() -> std::io::Result<std::fs::File> {
             return Err(e);
         }
         Ok(std::fs::File::from_raw_fd(fd))
-    }
-}
-
-/// On Linux, asks the kernel to kill this worker when the campaign process dies, so a killed
-/// campaign leaves no orphan finishing an episode behind it. Elsewhere the worker ends when
-/// its stdin closes.
-fn die_with_parent() {
-    #[cfg(target_os = "linux")]
-    // SAFETY: prctl with PR_SET_PDEATHSIG and a signal number has no memory effects.
-    unsafe {
-        let parent = libc::getppid();
-        libc::prctl(libc::PR_SET_PDEATHSIG, libc::SIGKILL);
-        // The parent may have died before the call: then nobody will signal us.
-        if libc::getppid() != parent {
-            std::process::exit(1);
-        }
     }
 }

@@ -29,6 +29,19 @@ pub fn ensure_writable_dir(dir: &Path) -> Result<(), WriteError> {
         .map_err(err)
 }
 
+/// Temporary files are `.bkpbs-<pid>-<random>.tmp`: the writer's process id tells a stale one
+/// (its writer is gone) from one another process is writing right now.
+const TEMPORARY_PREFIX: &str = ".bkpbs-";
+const TEMPORARY_SUFFIX: &str = ".tmp";
+
+/// The process id of the writer of temporary file `name`, if it is one of ours.
+pub fn temporary_writer(name: &str) -> Option<u32> {
+    let rest = name
+        .strip_prefix(TEMPORARY_PREFIX)?
+        .strip_suffix(TEMPORARY_SUFFIX)?;
+    rest.split_once('-')?.0.parse().ok()
+}
+
 /// Writes `bytes` to `path` through a temporary file in the same directory and a rename.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), WriteError> {
     let err = |cause| WriteError {
@@ -43,8 +56,8 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), WriteError> {
     // Readable by whoever the umask allows (0644 typically), like any file a tool writes; a
     // temporary file's own default, 0600, left shared results unreadable to colleagues.
     let mut tmp = tempfile::Builder::new()
-        .prefix(".bkpbs-")
-        .suffix(".tmp")
+        .prefix(&format!("{TEMPORARY_PREFIX}{}-", std::process::id()))
+        .suffix(TEMPORARY_SUFFIX)
         .permissions(std::os::unix::fs::PermissionsExt::from_mode(0o666))
         .tempfile_in(dir)
         .map_err(err)?;
@@ -58,6 +71,13 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), WriteError> {
 mod tests {
     use super::*;
     use std::os::unix::fs::PermissionsExt;
+
+    #[test]
+    fn temporaries_name_their_writer() {
+        assert_eq!(temporary_writer(".bkpbs-1234-abcDEF.tmp"), Some(1234));
+        assert_eq!(temporary_writer(".bkpbs-abcDEF.tmp"), None);
+        assert_eq!(temporary_writer("episodes.csv"), None);
+    }
 
     #[test]
     fn files_get_the_umask_s_modes() {
