@@ -320,6 +320,29 @@ fn two_shards_running_at_once_into_one_directory_finish_every_cell() {
     }
 }
 
+#[test]
+fn a_corrupt_episode_file_does_not_count_as_finished() {
+    let whole = reference();
+    let d = tempfile::tempdir().unwrap();
+    let args = [&grid("2", "60")[..], &["--workers", "1"]].concat();
+    assert_ok(&campaign(d.path(), &args));
+    // One cell's episode.csv garbled, another's holding a different cell's row.
+    let cells = d.path().join("episodes/sumo");
+    let (a, b) = (cells.join("a0.4_l3000_s0"), cells.join("a0.4_l3000_s1"));
+    std::fs::write(a.join("episode.csv"), "garbage\n").unwrap();
+    std::fs::copy(
+        a.with_file_name("a0.8_l3000_s0").join("episode.csv"),
+        b.join("episode.csv"),
+    )
+    .unwrap();
+    let o = campaign(d.path(), &args);
+    assert_ok(&o);
+    assert_eq!(already_done(&o), 6, "{}", text(&o.stdout));
+    for f in ["episodes.csv", "vehicles.csv"] {
+        assert_eq!(read(&whole.join(f)), read(&d.path().join(f)), "{f}");
+    }
+}
+
 /// Processes whose environment holds `marker` (the campaign's workers inherit it).
 fn processes_marked(marker: &str) -> Vec<u32> {
     let needle = format!("BKPBS_TEST_MARK={marker}");

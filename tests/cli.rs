@@ -146,6 +146,10 @@ fn a_usage_error_is_one_line_and_exit_code_1() {
     let o = episode_into(d.path(), &["--bogus"]);
     assert_clear_failure(&o, "--bogus", d.path());
     assert_eq!(o.status.code(), Some(1));
+    // A count of nothing to evaluate: once printed tables of 0.0 %.
+    let o = bkpbs(&["eval-predictor", "--episodes", "0"]);
+    assert_clear_failure(&o, "--episodes", d.path());
+    assert_eq!(o.status.code(), Some(1));
     // clap names a missing argument on the line after its message: still one line.
     let o = bkpbs(&["demand", "--lambda", "2000"]);
     assert_clear_failure(&o, "--out", d.path());

@@ -254,6 +254,14 @@ fn model_file_round_trips_and_bad_files_are_clear_errors() {
     claimed.write(&p).unwrap();
     let e = ModelFile::read(&p).unwrap_err();
     assert!(matches!(e, ModelError::Shape { .. }), "{e}");
+    // Absurd weights (1e30 was once accepted, and saturated every probability).
+    let mut huge = m.clone();
+    huge.params[0] = 1e30;
+    let p = dir.path().join("huge.json");
+    huge.write(&p).unwrap();
+    let e = ModelFile::read(&p).unwrap_err();
+    assert!(matches!(e, ModelError::Shape { .. }), "{e}");
+    assert!(named(&e, "huge.json").contains("magnitude"));
     // Another feature layout.
     let mut layout = m.clone();
     layout.layout.features_a += 1;

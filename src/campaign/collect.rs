@@ -20,9 +20,19 @@ pub fn cell_dir(out: &Path, cell: &Cell) -> PathBuf {
     out.join(EPISODES_DIR).join(cell.dir_name())
 }
 
-/// Has this cell's episode finished (its `episode.csv` exists)?
+/// Has this cell's episode finished: its `episode.csv` exists and holds the one row of this
+/// cell? A corrupt or foreign one does not count, so the cell is run again.
 pub fn is_done(out: &Path, cell: &Cell) -> bool {
-    cell_dir(out, cell).join(DONE_FILE).is_file()
+    finished_row(&cell_dir(out, cell), cell).is_some()
+}
+
+/// The row of `cell`'s `episode.csv` in `dir`, if the file holds exactly that.
+fn finished_row(dir: &Path, cell: &Cell) -> Option<csv::StringRecord> {
+    let rows = results::read_records(&dir.join(DONE_FILE), &episodes_header()).ok()?;
+    let [row] = rows.as_slice() else {
+        return None;
+    };
+    (results::cell_of(row).map(|c| key(&c)) == Ok(key(cell))).then(|| row.clone())
 }
 
 fn strings(cols: &[&str]) -> Vec<String> {
@@ -39,21 +49,8 @@ pub fn collect(out: &Path, grid: &Grid, shard: Shard) -> Result<Results, Results
     };
     for (position, cell) in grid.cells().into_iter().enumerate() {
         let dir = cell_dir(out, &cell);
-        if dir.join(DONE_FILE).is_file() {
-            let path = dir.join(DONE_FILE);
-            let rows = results::read_records(&path, &episodes_header())?;
-            let [row] = rows.as_slice() else {
-                return Err(ResultsError::Mismatch {
-                    path,
-                    cell: cell.to_string(),
-                });
-            };
-            if results::cell_of(row).map(|c| key(&c)) != Ok(key(&cell)) {
-                return Err(ResultsError::Mismatch {
-                    path,
-                    cell: cell.to_string(),
-                });
-            }
+        if let Some(row) = finished_row(&dir, &cell) {
+            let row = &row;
             // The cell columns exactly as the episode wrote them.
             let lead: Vec<&str> = row.iter().take(CELL_COLUMNS.len()).collect();
             res.episodes.rows.push(Row {

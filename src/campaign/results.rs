@@ -32,8 +32,6 @@ pub enum ResultsError {
         line: u64,
         value: String,
     },
-    #[error("{path} does not hold the results of cell {cell}")]
-    Mismatch { path: PathBuf, cell: String },
     #[error("cell {cell} has different results in {first} and {second}")]
     Conflict {
         cell: String,

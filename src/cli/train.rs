@@ -154,8 +154,9 @@ pub struct EvalPredictorArgs {
     /// First seed of fresh evaluation episodes [default: 90000, never used in training].
     #[arg(long, conflicts_with = "data")]
     seed_base: Option<u64>,
-    /// Fresh evaluation episodes to collect.
-    #[arg(long, default_value_t = 500, conflicts_with = "data")]
+    /// Fresh evaluation episodes to collect (at least 1).
+    #[arg(long, default_value_t = 500, conflicts_with = "data",
+          value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(1..))]
     episodes: usize,
     /// Seed of the draw of the 4000 + 4000 samples.
     #[arg(long, default_value_t = 1)]

@@ -66,6 +66,10 @@ pub struct ModelFile {
 }
 
 /// Why a model file cannot be used.
+/// Largest parameter magnitude a model file may hold: the committed models stay below 20, and
+/// weights of 1e30 (accepted once) make every probability 0 or 1 and every sum overflow.
+pub const MAX_PARAMETER: f32 = 1e4;
+
 #[derive(Debug, thiserror::Error)]
 pub enum ModelError {
     #[error("cannot read model file {path}: {cause}")]
@@ -184,9 +188,12 @@ impl ModelFile {
             .params
             .iter()
             .chain(&self.baseline.params)
-            .any(|x| !x.is_finite())
+            .any(|x| !x.is_finite() || x.abs() > MAX_PARAMETER)
         {
-            return Err(shape("a parameter is not a finite number".into()));
+            return Err(shape(format!(
+                "a parameter is not a finite number of magnitude at most {MAX_PARAMETER:e} \
+                 (trained models stay below 100; larger ones saturate every probability)"
+            )));
         }
         for c in [&self.calibration, &self.baseline.calibration] {
             let ok = |t: f64| t > 0.0 && t <= 1.0;
