@@ -343,6 +343,32 @@ fn a_corrupt_episode_file_does_not_count_as_finished() {
     }
 }
 
+#[test]
+fn a_smaller_grid_is_refused_where_a_larger_one_was_recorded() {
+    // It once rewrote episodes.csv, the report and campaign.toml for the small grid only: the
+    // earlier episodes stayed on disk but were recorded nowhere.
+    let d = tempfile::tempdir().unwrap();
+    let big = [&grid("2", "30")[..], &["--workers", "1"]].concat();
+    assert_ok(&campaign(d.path(), &big));
+    let before = read(&d.path().join("episodes.csv"));
+    let small = [
+        &grid("1", "30")[..],
+        &["--seed-base", "100", "--workers", "1"],
+    ]
+    .concat();
+    let o = campaign(d.path(), &small);
+    assert!(!o.status.success());
+    let err = text(&o.stderr);
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(err.contains("8 episodes outside this grid"), "{err}");
+    assert_eq!(read(&d.path().join("episodes.csv")), before);
+    // The grid may grow.
+    let more = [&grid("3", "30")[..], &["--workers", "1"]].concat();
+    let o = campaign(d.path(), &more);
+    assert_ok(&o);
+    assert_eq!(already_done(&o), 8);
+}
+
 /// Processes whose environment holds `marker` (the campaign's workers inherit it).
 fn processes_marked(marker: &str) -> Vec<u32> {
     let needle = format!("BKPBS_TEST_MARK={marker}");

@@ -26,6 +26,21 @@ pub fn is_done(out: &Path, cell: &Cell) -> bool {
     finished_row(&cell_dir(out, cell), cell).is_some()
 }
 
+/// The episodes `out`'s `episodes.csv` records that a collection for `grid` would leave out:
+/// cells outside the grid (an earlier, larger grid; episodes merged in by `bkpbs report`).
+/// Cells of the grid are run again if they are not finished on disk, so none of them is lost.
+/// An unreadable `episodes.csv` records nothing.
+pub fn recorded_outside(out: &Path, grid: &Grid) -> Vec<Cell> {
+    let Ok(rows) = results::read_records(&out.join("episodes.csv"), &episodes_header()) else {
+        return Vec::new();
+    };
+    let in_grid: std::collections::HashSet<_> = grid.cells().iter().map(key).collect();
+    rows.iter()
+        .filter_map(|row| results::cell_of(row).ok())
+        .filter(|c| !in_grid.contains(&key(c)))
+        .collect()
+}
+
 /// The row of `cell`'s `episode.csv` in `dir`, if the file holds exactly that.
 fn finished_row(dir: &Path, cell: &Cell) -> Option<csv::StringRecord> {
     let rows = results::read_records(&dir.join(DONE_FILE), &episodes_header()).ok()?;

@@ -47,6 +47,16 @@ pub enum CampaignError {
         "{dir} holds a campaign with other settings ({key} differs); use another --out or remove it"
     )]
     OtherSettings { dir: PathBuf, key: String },
+    #[error(
+        "{dir}/episodes.csv records {count} episodes outside this grid, which this run would \
+         drop (first: {first}): an earlier, larger grid or results merged in by `bkpbs report`; \
+         run a grid that includes them, or use another --out"
+    )]
+    WouldDrop {
+        dir: PathBuf,
+        count: usize,
+        first: String,
+    },
     #[error(transparent)]
     Write(#[from] WriteError),
     #[error(transparent)]

@@ -39,6 +39,14 @@ pub fn prepare(settings: &Settings, out: &Path) -> Result<Plan, CampaignError> {
             });
         }
     }
+    let dropped = collect::recorded_outside(out, &settings.grid);
+    if let Some(first) = dropped.first() {
+        return Err(CampaignError::WouldDrop {
+            dir: out.to_path_buf(),
+            count: dropped.len(),
+            first: first.to_string(),
+        });
+    }
     output::write_atomic(&settings_path, settings.to_toml().as_bytes())?;
     // Left by a campaign killed while collecting.
     worker::remove_stale_temporaries(out);
