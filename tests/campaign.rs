@@ -369,6 +369,46 @@ fn a_smaller_grid_is_refused_where_a_larger_one_was_recorded() {
     assert_eq!(already_done(&o), 8);
 }
 
+#[test]
+fn report_refuses_damaged_episode_rows_naming_file_and_line() {
+    let whole = reference();
+    let original = read(&whole.join("episodes.csv"));
+    let lines: Vec<&str> = original.lines().collect();
+    // Column 13 (0-based) is controllable_collision_rate, 16 mean_delay_s.
+    let with_field = |line: usize, col: usize, value: &str| {
+        let mut out: Vec<String> = lines.iter().map(|l| l.to_string()).collect();
+        let mut f: Vec<&str> = lines[line].split(',').collect();
+        f[col] = value;
+        out[line] = f.join(",");
+        out.join("\n") + "\n"
+    };
+    let duplicated = format!("{original}{}\n", lines[3]);
+    for (damaged, expected) in [
+        (duplicated, "line 10: cell"),
+        (with_field(2, 16, "NaN"), "line 3: mean_delay_s = 'NaN'"),
+        (with_field(2, 16, "-999"), "line 3: mean_delay_s = '-999'"),
+        (
+            with_field(4, 13, "7.5"),
+            "line 5: controllable_collision_rate = '7.5'",
+        ),
+    ] {
+        let d = tempfile::tempdir().unwrap();
+        std::fs::write(d.path().join("episodes.csv"), &damaged).unwrap();
+        std::fs::copy(whole.join("vehicles.csv"), d.path().join("vehicles.csv")).unwrap();
+        let o = Command::new(BIN)
+            .args(["report", d.path().to_str().unwrap()])
+            .output()
+            .unwrap();
+        assert!(!o.status.success());
+        let err = text(&o.stderr);
+        assert_eq!(err.lines().count(), 1, "{err}");
+        assert!(
+            err.contains("episodes.csv") && err.contains(expected),
+            "{err}"
+        );
+    }
+}
+
 /// Processes whose environment holds `marker` (the campaign's workers inherit it).
 fn processes_marked(marker: &str) -> Vec<u32> {
     let needle = format!("BKPBS_TEST_MARK={marker}");

@@ -22,6 +22,7 @@ pub mod pool;
 pub mod results;
 pub mod settings;
 pub mod tasks;
+pub mod validate;
 pub mod worker;
 
 use std::io::IsTerminal;

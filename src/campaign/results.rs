@@ -40,6 +40,8 @@ pub enum ResultsError {
     },
     #[error(transparent)]
     Write(#[from] WriteError),
+    #[error(transparent)]
+    Row(#[from] super::validate::RowError),
 }
 
 /// One CSV row and the cell it belongs to.
@@ -195,9 +197,12 @@ impl Results {
     /// missing. `planners` gives the grid's planner order (planners seen only in the rows follow
     /// in order of appearance).
     pub fn read(dir: &Path, planners: &[String]) -> Result<Results, ResultsError> {
+        let episodes_path = dir.join("episodes.csv");
+        let episodes = read_table(&episodes_path, &episodes_header())?;
+        super::validate::check_episodes(&episodes_path, &episodes)?;
         let mut res = Results {
             planners: planners.to_vec(),
-            episodes: read_table(&dir.join("episodes.csv"), &episodes_header())?,
+            episodes,
             vehicles: read_table(&dir.join("vehicles.csv"), &vehicles_header())?,
             ..Results::default()
         };

@@ -1,0 +1,102 @@
+//! Checks of a collected `episodes.csv` before `bkpbs report` counts it: a hand-edited or
+//! damaged file once went into the tables as it was (a row twice counted twice, `NaN` shown as
+//! `NaN ± NaN`, a delay of −999 s bolded as the best, a collision rate of 7.5).
+
+use std::collections::HashSet;
+use std::path::{Path, PathBuf};
+
+use super::results::{key, Table};
+use crate::episode::output::EPISODE_COLUMNS;
+
+/// The first thing wrong with a collected `episodes.csv`.
+#[derive(Debug, thiserror::Error)]
+pub enum RowError {
+    #[error("{path}, line {line}: cell {cell} appears twice")]
+    Duplicate {
+        path: PathBuf,
+        line: u64,
+        cell: String,
+    },
+    #[error("{path}, line {line}: {column} = '{value}' {reason}")]
+    Value {
+        path: PathBuf,
+        line: u64,
+        column: &'static str,
+        value: String,
+        reason: &'static str,
+    },
+}
+
+/// Mean delays may be empty (an episode without arrivals) and slightly negative (a vehicle
+/// inserted faster than its drawn speed beats t* by rounding), never by a second.
+const DELAYS: [&str; 3] = ["mean_delay_s", "mean_delay_cav_s", "mean_delay_hdv_s"];
+const LOWEST_DELAY: f64 = -1.0;
+
+/// What `column` may hold, as a reason if `value` breaks it.
+fn problem(column: &str, value: &str) -> Option<&'static str> {
+    let delay = DELAYS.contains(&column);
+    if value.is_empty() {
+        return (!delay).then_some("is empty");
+    }
+    let Ok(x) = value.parse::<f64>() else {
+        return Some("is not a number");
+    };
+    if !x.is_finite() {
+        Some("is not a finite number")
+    } else if delay && x < LOWEST_DELAY {
+        Some("is below -1 s, shorter than the free-flow time allows")
+    } else if !delay && x < 0.0 {
+        Some("is negative")
+    } else if column == "controllable_collision_rate" && x > 1.0 {
+        Some("is a rate above 1")
+    } else {
+        None
+    }
+}
+
+/// Checks every row of `table`, read from `path`: each cell once, every value in range.
+pub fn check_episodes(path: &Path, table: &Table) -> Result<(), RowError> {
+    let mut seen = HashSet::new();
+    for row in &table.rows {
+        let line = row.fields.position().map_or(0, |p| p.line());
+        if !seen.insert(key(&row.cell)) {
+            return Err(RowError::Duplicate {
+                path: path.to_path_buf(),
+                line,
+                cell: row.cell.to_string(),
+            });
+        }
+        // The cell columns are checked when the row is read.
+        for (column, value) in EPISODE_COLUMNS.iter().zip(row.fields.iter()).skip(4) {
+            if let Some(reason) = problem(column, value) {
+                return Err(RowError::Value {
+                    path: path.to_path_buf(),
+                    line,
+                    column,
+                    value: value.to_string(),
+                    reason,
+                });
+            }
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn values_out_of_range_are_named() {
+        assert_eq!(problem("mean_delay_s", ""), None);
+        assert_eq!(problem("mean_delay_s", "-0.002"), None);
+        assert!(problem("mean_delay_s", "-999").is_some());
+        assert!(problem("mean_delay_s", "NaN").is_some());
+        assert!(problem("arrived", "").is_some());
+        assert!(problem("arrived", "-1").is_some());
+        assert!(problem("controllable_collision_rate", "7.5").is_some());
+        assert_eq!(problem("controllable_collision_rate", "0.025"), None);
+        assert!(problem("throughput_veh_h", "inf").is_some());
+        assert!(problem("steps", "many").is_some());
+    }
+}
