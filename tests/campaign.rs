@@ -409,6 +409,60 @@ fn report_refuses_damaged_episode_rows_naming_file_and_line() {
     }
 }
 
+#[test]
+fn report_refuses_to_merge_campaigns_of_other_settings_unless_told() {
+    let d = tempfile::tempdir().unwrap();
+    let (a, b, m) = (d.path().join("a"), d.path().join("b"), d.path().join("m"));
+    assert_ok(&campaign(
+        &a,
+        &[
+            "--planners",
+            "sumo",
+            "--alphas",
+            "0.4",
+            "--seeds",
+            "1",
+            "--steps",
+            "30",
+        ],
+    ));
+    let other = [
+        "--planners",
+        "sumo",
+        "--alphas",
+        "0.4",
+        "--seeds",
+        "1",
+        "--seed-base",
+        "5",
+        "--steps",
+        "40",
+    ];
+    assert_ok(&campaign(&b, &other));
+    let report = |extra: &[&str]| {
+        Command::new(BIN)
+            .arg("report")
+            .args([&a, &b])
+            .arg("--out")
+            .arg(&m)
+            .args(extra)
+            .output()
+            .unwrap()
+    };
+    let o = report(&[]);
+    assert!(!o.status.success());
+    let err = text(&o.stderr);
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(
+        err.contains("campaign.steps") && err.contains("--allow-mixed"),
+        "{err}"
+    );
+    assert!(!m.join("episodes.csv").exists());
+    assert_ok(&report(&["--allow-mixed"]));
+    // Two λ per campaign by default: four episodes and the header.
+    assert_eq!(read(&m.join("episodes.csv")).lines().count(), 5);
+}
+
 /// Processes whose environment holds `marker` (the campaign's workers inherit it).
 fn processes_marked(marker: &str) -> Vec<u32> {
     let needle = format!("BKPBS_TEST_MARK={marker}");

@@ -253,7 +253,7 @@ impl PyCampaignTask {
 #[pyfunction]
 #[pyo3(signature = (dirs, out = None))]
 pub fn report(dirs: Vec<PathBuf>, out: Option<PathBuf>) -> PyResult<String> {
-    let r = core_report::run(&dirs, out.as_deref()).map_err(|e| match e {
+    let r = core_report::run(&dirs, out.as_deref(), false).map_err(|e| match e {
         ReportError::Write(_) => pyo3::exceptions::PyOSError::new_err(e.to_string()),
         _ => bad_input(e),
     })?;

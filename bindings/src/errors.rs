@@ -33,18 +33,24 @@ pub fn bad_input(message: impl std::fmt::Display) -> PyErr {
     BkpbsError::new_err(message.to_string())
 }
 
-/// The Python exception of an episode's error.
+/// The Python exception of an episode's error (one with SUMO's own reason is classed by its
+/// cause, and says what SUMO said).
 pub fn episode_error(e: &EpisodeError) -> PyErr {
     let message = e.to_string();
+    let e = match e {
+        EpisodeError::Sumo { cause, .. } => cause.as_ref(),
+        other => other,
+    };
     match e {
         EpisodeError::Config(_)
         | EpisodeError::Controller(_)
         | EpisodeError::Input(InputError::MissingNet(_))
         | EpisodeError::Road(NetworkError::Shape(_)) => BkpbsError::new_err(message),
         EpisodeError::Input(InputError::Write { .. }) => PyOSError::new_err(message),
-        EpisodeError::Start { .. } | EpisodeError::Step { .. } | EpisodeError::Road(_) => {
-            SumoError::new_err(message)
-        }
+        EpisodeError::Start { .. }
+        | EpisodeError::Step { .. }
+        | EpisodeError::Road(_)
+        | EpisodeError::Sumo { .. } => SumoError::new_err(message),
     }
 }
 

@@ -16,16 +16,19 @@ pub struct ReportArgs {
     /// Where to write [default: the first directory].
     #[arg(long)]
     out: Option<PathBuf>,
+    /// Merge directories whose campaigns ran with different settings (refused otherwise).
+    #[arg(long)]
+    allow_mixed: bool,
 }
 
 /// Writes the report of the directories.
 pub fn run(a: ReportArgs) -> Result<()> {
-    print_report(&a.dirs, a.out.as_deref())
+    print_report(&a.dirs, a.out.as_deref(), a.allow_mixed)
 }
 
 /// Writes a report and prints its tables and where the files are; `campaign` ends with it too.
-pub fn print_report(dirs: &[PathBuf], out: Option<&Path>) -> Result<()> {
-    let r = report::run(dirs, out)?;
+pub fn print_report(dirs: &[PathBuf], out: Option<&Path>, allow_mixed: bool) -> Result<()> {
+    let r = report::run(dirs, out, allow_mixed)?;
     print!("{}", r.markdown);
     println!(
         "results in {}: episodes.csv, vehicles.csv, timings.csv, failures.csv",

@@ -15,7 +15,7 @@ pub mod tables;
 use std::path::{Path, PathBuf};
 
 use crate::campaign::results::{Results, ResultsError};
-use crate::campaign::SETTINGS_FILE;
+use crate::campaign::{Settings, SETTINGS_FILE};
 use crate::episode::output::{self, WriteError};
 use crate::report::plot::{HeatPanel, Heatmap, PlotError, Scatter, ScatterSeries};
 pub use summary::{Summary, SummaryError};
@@ -32,6 +32,15 @@ pub enum ReportError {
     NotACampaign { dir: PathBuf },
     #[error("malformed {path}: {message}")]
     Settings { path: PathBuf, message: String },
+    #[error(
+        "{other} was run with other settings than {first} ({key} differs): its episodes would \
+         mix into the same tables; pass --allow-mixed to merge them anyway"
+    )]
+    MixedSettings {
+        first: PathBuf,
+        other: PathBuf,
+        key: String,
+    },
     #[error(transparent)]
     Results(#[from] ResultsError),
     #[error(transparent)]
@@ -53,6 +62,36 @@ pub struct Report {
 }
 
 /// The planner order a campaign directory was run with (from its `campaign.toml`), or none.
+/// Refuses directories whose campaigns ran with different settings (steps, any scenario or
+/// model setting; the grid may differ): merged, their episodes would be averaged as one. A
+/// directory without `campaign.toml` has nothing to compare.
+fn same_settings(dirs: &[PathBuf]) -> Result<(), ReportError> {
+    let mut first: Option<(&PathBuf, Settings)> = None;
+    for dir in dirs {
+        let path = dir.join(SETTINGS_FILE);
+        if !path.is_file() {
+            continue;
+        }
+        let settings = Settings::from_campaign_file(&path).map_err(|e| ReportError::Settings {
+            path: path.clone(),
+            message: e.to_string(),
+        })?;
+        match &first {
+            None => first = Some((dir, settings)),
+            Some((first_dir, earlier)) => {
+                if let Some(key) = settings.scenario_difference(earlier) {
+                    return Err(ReportError::MixedSettings {
+                        first: (*first_dir).clone(),
+                        other: dir.clone(),
+                        key,
+                    });
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
 fn planner_order(dir: &Path) -> Result<Vec<String>, ReportError> {
     let path = dir.join(SETTINGS_FILE);
     let Ok(text) = std::fs::read_to_string(&path) else {
@@ -78,8 +117,11 @@ fn planner_order(dir: &Path) -> Result<Vec<String>, ReportError> {
 
 /// Reads (and merges) the campaign directories, writes tables and figures into
 /// `out` (default: the first directory), and returns the Markdown tables.
-pub fn run(dirs: &[PathBuf], out: Option<&Path>) -> Result<Report, ReportError> {
+pub fn run(dirs: &[PathBuf], out: Option<&Path>, allow_mixed: bool) -> Result<Report, ReportError> {
     let first = dirs.first().ok_or(ReportError::NoDirs)?;
+    if !allow_mixed {
+        same_settings(dirs)?;
+    }
     let out = out.unwrap_or(first).to_path_buf();
     let mut parts = Vec::new();
     for dir in dirs {
