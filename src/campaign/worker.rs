@@ -181,23 +181,7 @@ pub(crate) fn run_cell(req: &Request) -> Result<(), String> {
 /// (a shard, or the same command twice) keeps its own in-flight files; removing them made its
 /// rename fail ("cannot write …/campaign.toml: No such file or directory").
 pub(crate) fn remove_stale_temporaries(dir: &Path) {
-    let Ok(entries) = std::fs::read_dir(dir) else {
-        return;
-    };
-    for e in entries.flatten() {
-        let name = e.file_name();
-        if crate::io::temporary_writer(&name.to_string_lossy()).is_some_and(|pid| !alive(pid)) {
-            let _ = std::fs::remove_file(e.path());
-        }
-    }
-}
-
-/// Whether process `pid` exists (a zombie counts: its files are no longer being written, but
-/// it cannot be told apart cheaply, and leaving a stale file for the next start is harmless).
-fn alive(pid: u32) -> bool {
-    // SAFETY: signal 0 only checks that the process exists.
-    let r = unsafe { libc::kill(pid as libc::pid_t, 0) };
-    r == 0 || std::io::Error::last_os_error().raw_os_error() == Some(libc::EPERM)
+    crate::io::sweep_stale(dir, crate::io::TEMPORARY_PREFIX);
 }
 
 /// The reply channel: a duplicate of the original stdout, with fd 1 itself pointed at stderr,

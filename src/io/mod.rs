@@ -29,18 +29,43 @@ pub fn ensure_writable_dir(dir: &Path) -> Result<(), WriteError> {
         .map_err(err)
 }
 
+/// Whether process `pid` exists (a zombie counts; leaving its files for a later sweep is
+/// harmless): how a temporary file or directory naming its writer is told stale.
+pub fn process_alive(pid: u32) -> bool {
+    // SAFETY: signal 0 only checks that the process exists.
+    let r = unsafe { libc::kill(pid as libc::pid_t, 0) };
+    r == 0 || std::io::Error::last_os_error().raw_os_error() == Some(libc::EPERM)
+}
+
+/// Removes the entries of `dir` named `<prefix><pid>-…` whose process `pid` is gone: the
+/// temporary files and directories of runs that were killed.
+pub fn sweep_stale(dir: &Path, prefix: &str) {
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return;
+    };
+    for e in entries.flatten() {
+        let name = e.file_name();
+        let Some(rest) = name.to_str().and_then(|n| n.strip_prefix(prefix)) else {
+            continue;
+        };
+        let pid = rest
+            .split_once('-')
+            .and_then(|(p, _)| p.parse::<u32>().ok());
+        if pid.is_some_and(|p| !process_alive(p)) {
+            let path = e.path();
+            let _ = if path.is_dir() {
+                std::fs::remove_dir_all(&path)
+            } else {
+                std::fs::remove_file(&path)
+            };
+        }
+    }
+}
+
 /// Temporary files are `.bkpbs-<pid>-<random>.tmp`: the writer's process id tells a stale one
 /// (its writer is gone) from one another process is writing right now.
-const TEMPORARY_PREFIX: &str = ".bkpbs-";
+pub const TEMPORARY_PREFIX: &str = ".bkpbs-";
 const TEMPORARY_SUFFIX: &str = ".tmp";
-
-/// The process id of the writer of temporary file `name`, if it is one of ours.
-pub fn temporary_writer(name: &str) -> Option<u32> {
-    let rest = name
-        .strip_prefix(TEMPORARY_PREFIX)?
-        .strip_suffix(TEMPORARY_SUFFIX)?;
-    rest.split_once('-')?.0.parse().ok()
-}
 
 /// Writes `bytes` to `path` through a temporary file in the same directory and a rename.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), WriteError> {
@@ -73,10 +98,28 @@ mod tests {
     use std::os::unix::fs::PermissionsExt;
 
     #[test]
-    fn temporaries_name_their_writer() {
-        assert_eq!(temporary_writer(".bkpbs-1234-abcDEF.tmp"), Some(1234));
-        assert_eq!(temporary_writer(".bkpbs-abcDEF.tmp"), None);
-        assert_eq!(temporary_writer("episodes.csv"), None);
+    fn only_the_leftovers_of_dead_processes_are_swept() {
+        let dead = {
+            let mut child = std::process::Command::new("true").spawn().unwrap();
+            let pid = child.id();
+            child.wait().unwrap();
+            pid
+        };
+        let me = std::process::id();
+        let d = tempfile::tempdir().unwrap();
+        let file = |pid: u32| d.path().join(format!(".bkpbs-{pid}-abc.tmp"));
+        let dir = |pid: u32| d.path().join(format!("bkpbs-episode-{pid}-xyz"));
+        for pid in [dead, me] {
+            std::fs::write(file(pid), "x").unwrap();
+            std::fs::create_dir(dir(pid)).unwrap();
+            std::fs::write(dir(pid).join("merge.net.xml"), "x").unwrap();
+        }
+        std::fs::write(d.path().join(".bkpbs-probe-abc"), "x").unwrap();
+        sweep_stale(d.path(), TEMPORARY_PREFIX);
+        sweep_stale(d.path(), "bkpbs-episode-");
+        assert!(!file(dead).exists() && !dir(dead).exists());
+        assert!(file(me).exists() && dir(me).exists());
+        assert!(d.path().join(".bkpbs-probe-abc").exists());
     }
 
     #[test]

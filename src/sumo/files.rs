@@ -37,6 +37,9 @@ pub fn vehicle_types(config: &Config) -> String {
     )
 }
 
+/// Prefix of an episode's input directory in the temporary directory: `bkpbs-episode-<pid>-…`.
+pub const INPUT_DIR_PREFIX: &str = "bkpbs-episode-";
+
 /// The files of one episode, kept in a directory that lives as long as this value.
 pub struct EpisodeInput {
     _dir: tempfile::TempDir,
@@ -48,8 +51,11 @@ pub struct EpisodeInput {
 impl EpisodeInput {
     /// Writes the network (unless the config names one), vehicle types and routes.
     pub fn write(config: &Config) -> Result<Self, InputError> {
+        // Directories of killed runs (SIGINT, SIGKILL) are swept here, by the next run: their
+        // names carry their process id.
+        crate::io::sweep_stale(&std::env::temp_dir(), INPUT_DIR_PREFIX);
         let dir = tempfile::Builder::new()
-            .prefix("bkpbs-episode-")
+            .prefix(&format!("{INPUT_DIR_PREFIX}{}-", std::process::id()))
             .tempdir()
             .map_err(|cause| InputError::Write {
                 path: std::env::temp_dir(),
