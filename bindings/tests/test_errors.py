@@ -42,7 +42,7 @@ def test_alpha_outside_unit_interval(alpha):
         ({"config": "[scenario\n"}, r"malformed TOML configuration"),
         ({"config": "no/such/file.toml"}, r"cannot read config file no/such/file.toml"),
         ({"steps": "many"}, r"invalid type: string \"many\""),
-        ({"steps": 0}, r"scenario.steps = 0: must be at least 1"),
+        ({"steps": 0}, r"scenario.steps = 0: must be 1 to 100000 steps"),
         ({"dt": object()}, r"config key 'scenario.dt': unsupported value"),
     ],
 )
