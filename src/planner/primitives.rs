@@ -11,8 +11,9 @@
 //! still executes the change at any speed, standing included (one lane width per second, the car
 //! keeping its forward speed), so there a lane change is a *slide*: the same lateral path with
 //! the body kept along the road. Without it a ramp CAV that had slowed down could never merge and
-//! stood at the end of the acceleration lane while gaps passed. Slides are off by default
-//! (`planner.low_speed_lane_changes`): see the README, "Merge deadlock".
+//! stood at the end of the acceleration lane while gaps passed. By default only merges out of
+//! the acceleration lane may slide (`planner.low_speed_lane_changes`): see the README, "Merge
+//! deadlock".
 
 use crate::model::kinematics::{Bicycle, BicycleState, Input};
 use crate::model::math::{wrap_angle, Point};
