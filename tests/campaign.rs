@@ -413,32 +413,23 @@ fn report_refuses_damaged_episode_rows_naming_file_and_line() {
 fn report_refuses_to_merge_campaigns_of_other_settings_unless_told() {
     let d = tempfile::tempdir().unwrap();
     let (a, b, m) = (d.path().join("a"), d.path().join("b"), d.path().join("m"));
-    assert_ok(&campaign(
-        &a,
-        &[
+    // One sumo cell per λ, from `seed_base`, of `steps` steps.
+    let tiny = |seed_base: &'static str, steps: &'static str| {
+        [
             "--planners",
             "sumo",
             "--alphas",
             "0.4",
             "--seeds",
             "1",
+            "--seed-base",
+            seed_base,
             "--steps",
-            "30",
-        ],
-    ));
-    let other = [
-        "--planners",
-        "sumo",
-        "--alphas",
-        "0.4",
-        "--seeds",
-        "1",
-        "--seed-base",
-        "5",
-        "--steps",
-        "40",
-    ];
-    assert_ok(&campaign(&b, &other));
+            steps,
+        ]
+    };
+    assert_ok(&campaign(&a, &tiny("0", "30")));
+    assert_ok(&campaign(&b, &tiny("5", "40")));
     let report = |extra: &[&str]| {
         Command::new(BIN)
             .arg("report")

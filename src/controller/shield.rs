@@ -84,6 +84,14 @@ fn lanes_now(v: &VehicleState) -> u64 {
     bit(v.lane) | changing_toward(v).map_or(0, bit)
 }
 
+/// A ramp HDV on the acceleration lane: it may start its merge at any moment (SUMO's lane-change
+/// model decides when). A CAV changing into lane 1 beside it must let it (a CAV in lane 2 and a
+/// ramp HDV 16 m ahead of it once moved into lane 1 in the same step: each saw the lane free);
+/// a CAV already driving in lane 1 is not asked to, see [`may_merge`].
+fn on_acceleration_lane(v: &VehicleState) -> bool {
+    v.kind == Kind::Hdv && v.origin == Origin::Ramp && v.lane == MERGE_LANE && !v.on_ramp
+}
+
 /// A ramp HDV whose merge will happen whatever the CAVs do: on the acceleration lane within
 /// [`FORCED_MERGE_ZONE`] of its end, or able to come to a stand there within `horizon` seconds
 /// (accelerating at `b.hdv_accel`, then braking at `b.hdv_decel`), where the merge rule forces
@@ -97,11 +105,7 @@ pub fn may_merge(scene: &Scene, v: &VehicleState, horizon: f64, b: &Bounds) -> b
         farthest_stand(v.speed, horizon, b.hdv_accel, b.hdv_decel)
             .is_some_and(|reach| v.front() + reach >= zone)
     };
-    v.kind == Kind::Hdv
-        && v.origin == Origin::Ramp
-        && v.lane == MERGE_LANE
-        && !v.on_ramp
-        && (v.front() + v.speed * horizon >= zone || can_stand_in_zone())
+    on_acceleration_lane(v) && (v.front() + v.speed * horizon >= zone || can_stand_in_zone())
 }
 
 /// How far ahead a vehicle at `speed` can be standing within `horizon` seconds, accelerating
@@ -113,14 +117,6 @@ fn farthest_stand(speed: f64, horizon: f64, accel: f64, decel: f64) -> Option<f6
     let t_accel = (horizon * decel - speed) / (accel + decel);
     let peak = speed + accel * t_accel;
     Some(0.5 * (speed + peak) * t_accel + peak * peak / (2.0 * decel))
-}
-
-/// A ramp HDV on the acceleration lane: it may start its merge at any moment (SUMO's lane-change
-/// model decides when). A CAV changing into lane 1 beside it must let it (a CAV in lane 2 and a
-/// ramp HDV 16 m ahead of it once moved into lane 1 in the same step: each saw the lane free);
-/// a CAV already driving in lane 1 is not asked to, see [`may_merge`].
-fn on_acceleration_lane(v: &VehicleState) -> bool {
-    v.kind == Kind::Hdv && v.origin == Origin::Ramp && v.lane == MERGE_LANE && !v.on_ramp
 }
 
 /// Lanes another vehicle may occupy within `horizon` seconds under the worst cases.

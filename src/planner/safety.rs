@@ -153,13 +153,11 @@ impl SafetyRule {
     /// `later` (the predicted pose at `t`) moved along the road as if braking at
     /// `follower_brake` from `now` instead.
     fn braking(&self, now: &Body, later: &Body, t: f64) -> Body {
-        let v0 = now.forward_speed();
-        let t_stop = (v0 / self.follower_brake).min(t);
-        let speed = v0 - self.follower_brake * t_stop;
+        let stopping = braked(now, self.follower_brake, t);
         Body {
             pose: Pose {
-                s: now.pose.s + v0 * t_stop - 0.5 * self.follower_brake * t_stop * t_stop,
-                speed,
+                s: stopping.pose.s,
+                speed: stopping.pose.speed,
                 heading: 0.0,
                 ..later.pose
             },
@@ -191,16 +189,24 @@ impl SafetyRule {
         {
             return required;
         }
-        let t_stop = (v0 / self.brake).min(t);
-        let braked = Body {
-            pose: Pose {
-                s: back_now.pose.s + v0 * t_stop - 0.5 * self.brake * t_stop * t_stop,
-                ..back_now.pose
-            },
-            ..*back_now
-        };
+        let stopping = braked(back_now, self.brake, t);
         // A hair below, so the braking plan itself passes despite rounding.
-        required.min(gap(&braked, front) - 1e-6)
+        required.min(gap(&stopping, front) - 1e-6)
+    }
+}
+
+/// `body` after braking at `decel` for `t` seconds from its forward speed (standing once
+/// stopped): where it is and how fast it goes.
+fn braked(body: &Body, decel: f64, t: f64) -> Body {
+    let v0 = body.forward_speed();
+    let t_stop = (v0 / decel).min(t);
+    Body {
+        pose: Pose {
+            s: body.pose.s + v0 * t_stop - 0.5 * decel * t_stop * t_stop,
+            speed: v0 - decel * t_stop,
+            ..body.pose
+        },
+        ..*body
     }
 }
 
