@@ -288,6 +288,41 @@ fn shards_merged_by_report_equal_the_unsharded_run() {
         read(&whole.join("episodes.csv")),
         read(&merged.join("episodes.csv"))
     );
+    // A copy whose episode rows agree but one vehicle row differs is refused, naming the
+    // file; one of the two was once kept without a word.
+    let copy = d.path().join("a-copy");
+    copy_tree(&a, &copy);
+    let vehicles = read(&copy.join("vehicles.csv"));
+    let mut lines: Vec<String> = vehicles.lines().map(String::from).collect();
+    let last = lines.last_mut().unwrap();
+    *last = format!("{},9", last.rsplit_once(',').unwrap().0);
+    std::fs::write(copy.join("vehicles.csv"), lines.join("\n") + "\n").unwrap();
+    let o = Command::new(BIN)
+        .args(["report", a.to_str().unwrap(), copy.to_str().unwrap()])
+        .arg("--out")
+        .arg(d.path().join("m2"))
+        .output()
+        .unwrap();
+    assert!(!o.status.success());
+    let err = text(&o.stderr);
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(
+        err.contains("different results") && err.contains("a-copy/vehicles.csv"),
+        "{err}"
+    );
+}
+
+/// Copies a directory tree (files and directories only).
+fn copy_tree(from: &Path, to: &Path) {
+    std::fs::create_dir_all(to).unwrap();
+    for e in std::fs::read_dir(from).unwrap().flatten() {
+        let target = to.join(e.file_name());
+        if e.file_type().unwrap().is_dir() {
+            copy_tree(&e.path(), &target);
+        } else {
+            std::fs::copy(e.path(), &target).unwrap();
+        }
+    }
 }
 
 #[test]
@@ -666,6 +701,55 @@ fn failed_episodes_are_recorded_others_go_on_and_a_rerun_repairs_them() {
     assert_eq!(read(&out.join("episodes.csv")).lines().count(), 1 + 4);
 }
 
+#[test]
+fn an_episode_over_the_timeout_is_stopped_and_recorded_as_failed() {
+    // Without a limit, one hanging episode held its worker, and so the campaign, forever.
+    let d = tempfile::tempdir().unwrap();
+    let out = d.path();
+    let args = [
+        "--planners",
+        "idm-mobil",
+        "--alphas",
+        "0.5",
+        "--lambdas",
+        "3000",
+        "--seeds",
+        "3",
+        "--steps",
+        "40",
+        "--workers",
+        "2",
+        "--episode-timeout",
+        "4",
+    ];
+    let started = std::time::Instant::now();
+    let o = Command::new(BIN)
+        .arg("campaign")
+        .arg("--out")
+        .arg(out)
+        .args(args)
+        .env(bkpbs::campaign::worker::FAULT_ENV, "hang:1")
+        .output()
+        .unwrap();
+    assert!(!o.status.success());
+    assert!(
+        started.elapsed().as_secs() < 120,
+        "the hanging episode was not stopped"
+    );
+    assert_eq!(finished(out).len(), 2);
+    let failures = read(&out.join("failures.csv"));
+    let rows: Vec<&str> = failures.lines().skip(1).collect();
+    assert_eq!(rows.len(), 1, "{failures}");
+    assert!(rows[0].starts_with("idm-mobil,0.5,3000,1,"), "{failures}");
+    assert!(rows[0].contains("episode timeout of 4 s"), "{failures}");
+    // The limit is not a result setting: campaign.toml does not record it, and a rerun
+    // without the fault finishes the cell.
+    assert!(!read(&out.join("campaign.toml")).contains("timeout"));
+    let o = campaign(out, &args);
+    assert_ok(&o);
+    assert_eq!(already_done(&o), 2);
+}
+
 /// Runs the binary and checks for one `error:` line naming `culprit` and a non-zero exit.
 fn assert_clear_failure(args: &[&str], culprit: &str) {
     let o = Command::new(BIN).args(args).output().unwrap();
@@ -698,6 +782,10 @@ fn bad_input_ends_with_one_error_line_and_nothing_written() {
     run(&["--lambdas", "2500,-5"], "λ -5");
     run(&["--shard", "3/2"], "3/2");
     run(&["--shard", "1-2"], "1-2");
+    run(&["--episode-timeout", "0"], "--episode-timeout");
+    run(&["--episode-timeout", "-3"], "(0, 604800]");
+    run(&["--episode-timeout", "1e9"], "1000000000");
+    run(&["--episode-timeout", "nan"], "--episode-timeout");
     run(&["--seeds", "0"], "--seeds");
     run(&["--workers", "0"], "--workers");
     let cfg = d.path().join("c.toml");

@@ -85,6 +85,8 @@ impl PyCampaign {
             seed_base,
             steps,
             workers: None,
+            // Ray schedules the tasks; a wall-clock limit is its business (`ray.get(timeout=…)`).
+            episode_timeout: None,
             shard,
         };
         let settings = Settings::resolve(config.as_deref(), &overrides).map_err(settings_error)?;

@@ -111,7 +111,11 @@ pub fn run(settings: &Settings, out: &Path, exe: &Path) -> Result<RunSummary, Ca
     let bar = progress_bar(requests.len() as u64);
     let mut failed_now = 0;
     let ran = requests.len();
-    pool::run(exe, requests, settings.workers, |reply| {
+    let options = pool::PoolOptions {
+        workers: settings.workers,
+        episode_timeout: settings.episode_timeout,
+    };
+    pool::run(exe, requests, options, |reply| {
         if let Outcome::Failed { error } = &reply.outcome {
             failed_now += 1;
             let line = format!(

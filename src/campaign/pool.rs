@@ -5,12 +5,18 @@
 //! that dies (crash, kill, a planner aborting the process) fails the episode it was running,
 //! which is recorded in the cell directory like any failure, and a fresh child takes its place.
 //! Children stay in the campaign's process group and end when their stdin closes.
+//!
+//! With a wall-clock limit per episode, a worker that has not replied in time is killed and
+//! the episode recorded as failed ("exceeded the episode timeout"), so one runaway episode
+//! cannot hold a campaign forever. Replies are read on a thread of their own per worker, so
+//! that the wait can end.
 
 use std::collections::VecDeque;
 use std::io::{BufRead, BufReader, Write};
 use std::path::Path;
 use std::process::{Child, ChildStdin, ChildStdout, Command, Stdio};
 use std::sync::{mpsc, Mutex};
+use std::time::Duration;
 
 use super::worker::{record_failure, Outcome, Reply, Request};
 
@@ -20,7 +26,34 @@ pub const WORKER_SUBCOMMAND: &str = "worker";
 struct Worker {
     child: Child,
     stdin: ChildStdin,
-    stdout: BufReader<ChildStdout>,
+    /// The worker's reply lines, read by [`forward_lines`]; closed when its stdout ends.
+    replies: mpsc::Receiver<std::io::Result<String>>,
+}
+
+/// Forwards each line of `stdout` to `tx` until it ends (end or error), then stops.
+fn forward_lines(mut stdout: BufReader<ChildStdout>, tx: mpsc::Sender<std::io::Result<String>>) {
+    loop {
+        let mut line = String::new();
+        let read = stdout.read_line(&mut line);
+        let stop = !matches!(read, Ok(n) if n > 0);
+        if stop {
+            if let Err(e) = read {
+                let _ = tx.send(Err(e));
+            }
+            return;
+        }
+        if tx.send(Ok(line)).is_err() {
+            return;
+        }
+    }
+}
+
+/// Why an exchange with a worker went wrong.
+enum ExchangeError {
+    /// The worker is gone or sent something unreadable.
+    Broken(String),
+    /// No reply within the episode timeout.
+    TimedOut(Duration),
 }
 
 /// On Linux, the kernel kills the worker when the campaign dies, set up in the child before it
@@ -61,37 +94,45 @@ impl Worker {
         let mut child = command.spawn()?;
         let stdin = child.stdin.take().expect("piped stdin");
         let stdout = BufReader::new(child.stdout.take().expect("piped stdout"));
+        let (tx, replies) = mpsc::channel();
+        std::thread::spawn(move || forward_lines(stdout, tx));
         Ok(Worker {
             child,
             stdin,
-            stdout,
+            replies,
         })
     }
 
-    /// Sends one request and waits for its reply; `Err` if the worker is gone or garbled.
-    fn exchange(&mut self, req: &Request) -> Result<Reply, String> {
+    /// Sends one request and waits for its reply, at most `timeout` if one is given.
+    fn exchange(
+        &mut self,
+        req: &Request,
+        timeout: Option<Duration>,
+    ) -> Result<Reply, ExchangeError> {
+        let broken = ExchangeError::Broken;
         let mut line = serde_json::to_string(req).expect("request serialises");
         line.push('\n');
         self.stdin
             .write_all(line.as_bytes())
             .and_then(|()| self.stdin.flush())
-            .map_err(|e| format!("cannot send the episode: {e}"))?;
-        line.clear();
-        match self.stdout.read_line(&mut line) {
-            Ok(0) => Err("no reply".into()),
-            Ok(_) => {
-                let reply: Reply = serde_json::from_str(&line)
-                    .map_err(|e| format!("malformed reply ({e}): {}", line.trim()))?;
-                if reply.position != req.position {
-                    return Err(format!(
-                        "reply for cell {} while waiting for cell {}",
-                        reply.position, req.position
-                    ));
-                }
-                Ok(reply)
-            }
-            Err(e) => Err(format!("cannot read the reply: {e}")),
+            .map_err(|e| broken(format!("cannot send the episode: {e}")))?;
+        let received = match timeout {
+            Some(t) => self.replies.recv_timeout(t).map_err(|e| match e {
+                mpsc::RecvTimeoutError::Timeout => ExchangeError::TimedOut(t),
+                mpsc::RecvTimeoutError::Disconnected => broken("no reply".into()),
+            })?,
+            None => self.replies.recv().map_err(|_| broken("no reply".into()))?,
+        };
+        let line = received.map_err(|e| broken(format!("cannot read the reply: {e}")))?;
+        let reply: Reply = serde_json::from_str(&line)
+            .map_err(|e| broken(format!("malformed reply ({e}): {}", line.trim())))?;
+        if reply.position != req.position {
+            return Err(broken(format!(
+                "reply for cell {} while waiting for cell {}",
+                reply.position, req.position
+            )));
         }
+        Ok(reply)
     }
 
     /// Kills the worker (if still alive) and says how it ended.
@@ -113,10 +154,24 @@ impl Worker {
     }
 }
 
-/// Runs every request on up to `workers` child processes of `exe`, calling `on_reply` on the
-/// calling thread as episodes finish (in completion order). Every request gets exactly one
-/// reply; failures to start or keep a worker are failed replies, never errors.
-pub fn run(exe: &Path, requests: Vec<Request>, workers: usize, mut on_reply: impl FnMut(Reply)) {
+/// How the pool runs: how many workers, and how long one episode may take.
+#[derive(Debug, Clone, Copy)]
+pub struct PoolOptions {
+    pub workers: usize,
+    pub episode_timeout: Option<Duration>,
+}
+
+/// Runs every request on up to `options.workers` child processes of `exe`, calling `on_reply`
+/// on the calling thread as episodes finish (in completion order). Every request gets exactly
+/// one reply; failures to start or keep a worker, and episodes over the timeout, are failed
+/// replies, never errors.
+pub fn run(
+    exe: &Path,
+    requests: Vec<Request>,
+    options: PoolOptions,
+    mut on_reply: impl FnMut(Reply),
+) {
+    let workers = options.workers;
     let threads = workers.max(1).min(requests.len());
     let queue = Mutex::new(VecDeque::from(requests));
     let (tx, rx) = mpsc::channel::<Reply>();
@@ -124,7 +179,7 @@ pub fn run(exe: &Path, requests: Vec<Request>, workers: usize, mut on_reply: imp
         for _ in 0..threads {
             let tx = tx.clone();
             let queue = &queue;
-            scope.spawn(move || drive(exe, queue, &tx));
+            scope.spawn(move || drive(exe, queue, options.episode_timeout, &tx));
         }
         drop(tx);
         for reply in rx {
@@ -134,7 +189,12 @@ pub fn run(exe: &Path, requests: Vec<Request>, workers: usize, mut on_reply: imp
 }
 
 /// One thread's loop: keep one worker busy until the queue is empty.
-fn drive(exe: &Path, queue: &Mutex<VecDeque<Request>>, tx: &mpsc::Sender<Reply>) {
+fn drive(
+    exe: &Path,
+    queue: &Mutex<VecDeque<Request>>,
+    timeout: Option<Duration>,
+    tx: &mpsc::Sender<Reply>,
+) {
     let mut worker: Option<Worker> = None;
     loop {
         let next = queue.lock().unwrap_or_else(|e| e.into_inner()).pop_front();
@@ -160,15 +220,22 @@ fn drive(exe: &Path, queue: &Mutex<VecDeque<Request>>, tx: &mpsc::Sender<Reply>)
             },
         };
         let mut w = w;
-        let reply = match w.exchange(&req) {
+        let reply = match w.exchange(&req, timeout) {
             Ok(reply) => {
                 worker = Some(w);
                 reply
             }
-            Err(why) => {
+            Err(ExchangeError::Broken(why)) => {
                 let status = w.kill();
                 failed(format!(
                     "worker process died during the episode ({why}; {status})"
+                ))
+            }
+            Err(ExchangeError::TimedOut(t)) => {
+                w.kill();
+                failed(format!(
+                    "episode exceeded the episode timeout of {} s and was stopped",
+                    t.as_secs_f64()
                 ))
             }
         };

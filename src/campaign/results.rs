@@ -182,14 +182,26 @@ pub fn read_table(path: &Path, header: &[String]) -> Result<Table, ResultsError>
     Ok(table)
 }
 
+/// Identity of a cell for lookups: planner, α and λ (by value), seed.
+pub type CellKey = (String, u64, u64, u64);
+
 /// Identity of a cell for lookups (α and λ by value).
-pub fn key(c: &Cell) -> (String, u64, u64, u64) {
+pub fn key(c: &Cell) -> CellKey {
     (
         c.planner.clone(),
         c.alpha.to_bits(),
         c.lambda.to_bits(),
         c.seed,
     )
+}
+
+/// A table's rows grouped by cell, in file order within a cell.
+fn rows_by_cell(table: &Table) -> HashMap<CellKey, Vec<&csv::StringRecord>> {
+    let mut by_cell: HashMap<CellKey, Vec<&csv::StringRecord>> = HashMap::new();
+    for r in &table.rows {
+        by_cell.entry(key(&r.cell)).or_default().push(&r.fields);
+    }
+    by_cell
 }
 
 impl Results {
@@ -262,12 +274,17 @@ impl Results {
     }
 
     /// Merges the results of several directories (shards). A cell present in more than one must
-    /// have identical `episodes.csv` rows (it is then taken once, from the first directory);
-    /// differing rows are an error. A failure is kept only for cells nobody finished.
+    /// have identical `episodes.csv` rows and identical `vehicles.csv` rows (it is then taken
+    /// once, from the first directory); any difference is an error naming the file. Timings may
+    /// differ (they are wall-clock). A failure is kept only for cells nobody finished.
     pub fn merge(parts: &[(PathBuf, Results)]) -> Result<Results, ResultsError> {
         let mut merged = Results::default();
         // Which part supplies each cell.
-        let mut owner: HashMap<(String, u64, u64, u64), usize> = HashMap::new();
+        let mut owner: HashMap<CellKey, usize> = HashMap::new();
+        let vehicles: Vec<HashMap<CellKey, Vec<&csv::StringRecord>>> = parts
+            .iter()
+            .map(|(_, part)| rows_by_cell(&part.vehicles))
+            .collect();
         for (i, (dir, part)) in parts.iter().enumerate() {
             for p in &part.planners {
                 if !merged.planners.contains(p) {
@@ -276,27 +293,28 @@ impl Results {
             }
             for row in &part.episodes.rows {
                 let k = key(&row.cell);
-                match owner.get(&k) {
-                    None => {
-                        owner.insert(k, i);
-                        merged.episodes.rows.push(row.clone());
-                    }
-                    Some(&j) => {
-                        let first = parts[j]
-                            .1
-                            .episodes
-                            .rows
-                            .iter()
-                            .find(|r| key(&r.cell) == k)
-                            .expect("owner holds the cell");
-                        if first.fields != row.fields {
-                            return Err(ResultsError::Conflict {
-                                cell: row.cell.to_string(),
-                                first: parts[j].0.join("episodes.csv"),
-                                second: dir.join("episodes.csv"),
-                            });
-                        }
-                    }
+                let Some(&j) = owner.get(&k) else {
+                    owner.insert(k, i);
+                    merged.episodes.rows.push(row.clone());
+                    continue;
+                };
+                let first = parts[j]
+                    .1
+                    .episodes
+                    .rows
+                    .iter()
+                    .find(|r| key(&r.cell) == k)
+                    .expect("owner holds the cell");
+                let conflict = |file: &str| ResultsError::Conflict {
+                    cell: row.cell.to_string(),
+                    first: parts[j].0.join(file),
+                    second: dir.join(file),
+                };
+                if first.fields != row.fields {
+                    return Err(conflict("episodes.csv"));
+                }
+                if vehicles[j].get(&k) != vehicles[i].get(&k) {
+                    return Err(conflict("vehicles.csv"));
                 }
             }
         }

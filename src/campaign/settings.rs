@@ -12,6 +12,7 @@
 //! seed_base = 0
 //! steps = 400
 //! workers = 2
+//! episode_timeout = 600   # seconds; optional
 //!
 //! [idm]
 //! time_headway = 1.2
@@ -21,6 +22,7 @@
 //! so a campaign file must not set them.
 
 use std::path::{Path, PathBuf};
+use std::time::Duration;
 
 use serde::{Deserialize, Serialize};
 
@@ -88,6 +90,10 @@ pub struct CampaignTable {
     /// Worker processes; default: the number of cores. Does not change results.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub workers: Option<usize>,
+    /// Wall-clock limit of one episode in seconds; an episode that takes longer is stopped and
+    /// recorded as failed. Default: none. Does not change the results of episodes that finish.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub episode_timeout: Option<f64>,
 }
 
 impl Default for CampaignTable {
@@ -100,6 +106,7 @@ impl Default for CampaignTable {
             seed_base: 0,
             steps: 400,
             workers: None,
+            episode_timeout: None,
         }
     }
 }
@@ -116,6 +123,8 @@ pub struct Overrides {
     pub steps: Option<u32>,
     pub workers: Option<usize>,
     pub shard: Option<String>,
+    /// `--episode-timeout` in seconds.
+    pub episode_timeout: Option<f64>,
 }
 
 /// Validated settings of one campaign run.
@@ -126,6 +135,8 @@ pub struct Settings {
     pub grid: Grid,
     pub shard: Shard,
     pub workers: usize,
+    /// Wall-clock limit of one episode, if any.
+    pub episode_timeout: Option<Duration>,
     /// Scenario settings shared by all cells; `scenario.steps` already set.
     pub config: Config,
 }
@@ -216,6 +227,7 @@ fn apply_overrides(table: &mut CampaignTable, o: &Overrides) -> Result<(), Setti
     table.seed_base = o.seed_base.unwrap_or(table.seed_base);
     table.steps = o.steps.unwrap_or(table.steps);
     table.workers = o.workers.or(table.workers);
+    table.episode_timeout = o.episode_timeout.or(table.episode_timeout);
     Ok(())
 }
 
@@ -246,6 +258,7 @@ impl Settings {
         };
         check_table(&table, o, file)?;
         let workers = worker_count(&table, o, file)?;
+        let episode_timeout = episode_timeout(&table, o, file)?;
         config.scenario.steps = table.steps;
         let grid = Grid::new(
             &table.planners,
@@ -260,6 +273,7 @@ impl Settings {
             grid,
             shard,
             workers,
+            episode_timeout,
             config,
         })
     }
@@ -279,6 +293,7 @@ impl Settings {
     pub fn to_toml(&self) -> String {
         let mut table = self.table.clone();
         table.workers = None;
+        table.episode_timeout = None;
         let mut doc = scenario_table(&self.config);
         doc.insert(
             "campaign".into(),
@@ -389,6 +404,30 @@ fn worker_count(
         }
         None => Ok(std::thread::available_parallelism().map_or(1, |n| n.get())),
     }
+}
+
+/// Longest accepted episode timeout: a week, far beyond any episode, and small enough to be a
+/// valid `Duration`.
+pub const MAX_EPISODE_TIMEOUT_S: f64 = 7.0 * 24.0 * 3600.0;
+
+/// The table's episode timeout, checked: positive seconds, at most [`MAX_EPISODE_TIMEOUT_S`].
+fn episode_timeout(
+    table: &CampaignTable,
+    o: &Overrides,
+    file: Option<&Path>,
+) -> Result<Option<Duration>, SettingsError> {
+    let Some(t) = table.episode_timeout else {
+        return Ok(None);
+    };
+    let flag_set = o.episode_timeout.is_some();
+    check_values(
+        &origin(flag_set, "--episode-timeout", "episode_timeout", file),
+        "episode timeout",
+        &[t],
+        |t| t > 0.0 && t <= MAX_EPISODE_TIMEOUT_S,
+        "must lie in (0, 604800] seconds (a week)",
+    )?;
+    Ok(Some(Duration::from_secs_f64(t)))
 }
 
 /// Every (α, λ) of the grid must make a valid episode configuration, so that no cell fails on

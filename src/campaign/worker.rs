@@ -27,8 +27,9 @@ pub const ERROR_FILE: &str = "error.txt";
 pub const DONE_FILE: &str = "episode.csv";
 
 /// Test hook: `BKPBS_WORKER_FAULT=panic:<seed>` makes the planner "panic" in every episode
-/// with that seed, `exit:<seed>` makes the worker process die there. Used by the test suite to
-/// exercise failure handling; unset in normal use.
+/// with that seed, `exit:<seed>` makes the worker process die there, `hang:<seed>` makes the
+/// episode never end (for the episode timeout). Used by the test suite to exercise failure
+/// handling; unset in normal use.
 pub const FAULT_ENV: &str = "BKPBS_WORKER_FAULT";
 
 /// One episode to run.
@@ -133,6 +134,9 @@ fn injected_fault(req: &Request) {
     match spec.split_once(':') {
         Some(("panic", s)) if s == seed => panic!("injected planner fault ({FAULT_ENV})"),
         Some(("exit", s)) if s == seed => std::process::exit(101),
+        Some(("hang", s)) if s == seed => loop {
+            std::thread::sleep(std::time::Duration::from_secs(3600));
+        },
         _ => {}
     }
 }

@@ -41,6 +41,10 @@ pub struct CampaignArgs {
     /// Run only slice k of n (1-based; cell i of the grid belongs to slice i mod n + 1).
     #[arg(long, value_name = "K/N")]
     shard: Option<String>,
+    /// Wall-clock limit of one episode in seconds; a longer one is stopped and recorded in
+    /// failures.csv [default: none].
+    #[arg(long, value_name = "SECONDS", allow_hyphen_values = true)]
+    episode_timeout: Option<f64>,
 }
 
 /// A checked campaign: the grid, shard and scenario settings, and where results go.
@@ -62,6 +66,7 @@ impl CampaignArgs {
             steps: self.steps,
             workers: self.workers,
             shard: self.shard,
+            episode_timeout: self.episode_timeout,
         };
         Ok(Campaign {
             settings: Settings::resolve(self.config.as_deref(), &overrides)?,
