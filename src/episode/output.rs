@@ -227,27 +227,27 @@ impl EpisodeResult {
         csv_bytes(&TIMING_COLUMNS, std::iter::once(timing_row(&self.timing)))
     }
 
-    /// Writes the four CSV files into `dir`; returns their paths.
+    /// Writes the four CSV files (and SUMO's log, if any) into `dir` as one set, `episode.csv`
+    /// last: its presence marks a complete episode directory. An earlier episode's files are
+    /// replaced together (an old `sumo.log` the new run lacks is removed); returns the paths.
     pub fn write(&self, dir: &Path) -> Result<Vec<PathBuf>, WriteError> {
-        let files = [
-            ("vehicles.csv", self.vehicles_csv()),
-            ("collisions.csv", self.collisions_csv()),
-            ("timing.csv", self.timing_csv()),
-            // Last: its presence marks a complete episode directory.
-            ("episode.csv", self.episode_csv()),
-        ];
-        let mut paths = Vec::new();
-        if !self.sumo_log.is_empty() {
-            let p = dir.join("sumo.log");
-            write_atomic(&p, self.sumo_log.as_bytes())?;
-            paths.push(p);
-        }
-        for (name, bytes) in files {
-            let p = dir.join(name);
-            write_atomic(&p, &bytes)?;
-            paths.push(p);
-        }
-        Ok(paths)
+        let (vehicles, collisions, timing, episode) = (
+            self.vehicles_csv(),
+            self.collisions_csv(),
+            self.timing_csv(),
+            self.episode_csv(),
+        );
+        let log = (!self.sumo_log.is_empty()).then_some(self.sumo_log.as_bytes());
+        crate::io::replace_together(
+            dir,
+            &[
+                ("sumo.log", log),
+                ("vehicles.csv", Some(&vehicles)),
+                ("collisions.csv", Some(&collisions)),
+                ("timing.csv", Some(&timing)),
+                ("episode.csv", Some(&episode)),
+            ],
+        )
     }
 }
 
