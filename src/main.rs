@@ -7,6 +7,8 @@ use std::process::ExitCode;
 use anyhow::Result;
 use clap::Parser;
 
+use bkpbs::io::interrupt;
+
 use cli::{Cli, Command};
 
 fn main() -> ExitCode {
@@ -19,12 +21,16 @@ fn main() -> ExitCode {
         Ok(cli) => cli,
         Err(e) => return usage_error(e),
     };
-    match run(cli.command) {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("error: {e:#}");
-            ExitCode::FAILURE
-        }
+    let result = run(cli.command);
+    if let Err(e) = &result {
+        eprintln!("error: {e:#}");
+    }
+    // A run stopped by a signal exits as the shell expects of one (130 for Ctrl-C), after it
+    // tidied up; otherwise 1 for any error.
+    match (result, interrupt::requested()) {
+        (_, Some(signal)) => ExitCode::from(interrupt::exit_code(signal)),
+        (Ok(()), None) => ExitCode::SUCCESS,
+        (Err(_), None) => ExitCode::FAILURE,
     }
 }
 
@@ -61,19 +67,32 @@ fn usage_error(e: clap::Error) -> ExitCode {
 }
 
 /// Each subcommand in its two stages: the flags resolved into checked options, then the run.
+/// The commands that run SUMO take stop signals as requests, so that they tidy up (SUMO's
+/// input directory, a campaign's workers and collected files); the others keep the default.
 fn run(command: Command) -> Result<()> {
     match command {
-        Command::Episode(a) => cli::episode::run(a.resolve()?),
+        Command::Episode(a) => {
+            let episode = a.resolve()?;
+            interrupt::install(true);
+            cli::episode::run(episode)
+        }
         Command::Explain(a) => cli::explain::run(a),
         Command::Config(a) => cli::config::run(a.resolve()?),
         Command::Bench(a) => cli::bench::run(a.resolve()?),
         Command::Demand(a) => cli::demand::run(a.resolve()?),
-        Command::Campaign(a) => cli::campaign::run(a.resolve()?),
+        Command::Campaign(a) => {
+            let campaign = a.resolve()?;
+            interrupt::install(true);
+            cli::campaign::run(campaign)
+        }
         Command::Report(a) => cli::report::run(a),
         Command::Collect(a) => cli::train::collect(a.resolve()?),
         Command::Train(a) => cli::train::train(a.resolve()),
         Command::EvalPredictor(a) => cli::train::eval_predictor(a.resolve()),
         Command::BenchPredictor(a) => cli::train::bench_predictor(a.resolve()?),
-        Command::Worker => cli::campaign::worker(),
+        Command::Worker => {
+            interrupt::install(false);
+            cli::campaign::worker()
+        }
     }
 }

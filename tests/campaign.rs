@@ -12,6 +12,8 @@ use bkpbs::campaign::grid::{Cell, Grid, Shard};
 use bkpbs::episode::metrics::mean;
 use bkpbs::report::stats::{sample_std, t_975, Estimate};
 
+mod common;
+
 // ---------------------------------------------------------------- statistics, grid, shards
 
 #[test]
@@ -538,6 +540,94 @@ fn workers_die_with_a_campaign_killed_at_any_moment() {
             "killed after {delay_ms} ms"
         );
     }
+}
+
+#[test]
+fn a_campaign_stopped_by_ctrl_c_keeps_what_finished_and_resumes() {
+    // Ctrl-C reaches the campaign and its workers (one process group): the finished cells are
+    // collected, the running one stays unfinished (not failed), no worker is left.
+    let (d, tmpdir) = (tempfile::tempdir().unwrap(), tempfile::tempdir().unwrap());
+    let out = d.path();
+    let marker = format!("{}-ctrl-c", std::process::id());
+    let args = [
+        "--planners",
+        "idm-mobil",
+        "--alphas",
+        "0.5",
+        "--lambdas",
+        "3000",
+        "--seeds",
+        "3",
+        "--steps",
+        "40",
+        "--workers",
+        "1",
+    ];
+    let child = Command::new(BIN)
+        .arg("campaign")
+        .arg("--out")
+        .arg(out)
+        .args(args)
+        .env(bkpbs::campaign::worker::FAULT_ENV, "hang:2")
+        .env("BKPBS_TEST_MARK", &marker)
+        .env("TMPDIR", tmpdir.path())
+        .process_group(0)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    common::wait_for("two finished cells", 60, || finished(out).len() == 2);
+    std::thread::sleep(Duration::from_millis(300));
+    common::send_signal(-(child.id() as i32), libc::SIGINT);
+    let o = child.wait_with_output().unwrap();
+    assert_eq!(o.status.code(), Some(130), "{}", text(&o.stderr));
+    let err = text(&o.stderr);
+    assert!(
+        err.lines()
+            .last()
+            .unwrap()
+            .starts_with("error: interrupted by SIGINT: 2 of 3"),
+        "{err}"
+    );
+    assert_eq!(read(&out.join("episodes.csv")).lines().count(), 1 + 2);
+    assert!(!out
+        .join("episodes/idm-mobil/a0.5_l3000_s2/error.txt")
+        .exists());
+    assert_eq!(processes_marked(&marker), Vec::<u32>::new());
+    assert_eq!(common::input_dirs(tmpdir.path()), Vec::<PathBuf>::new());
+    let o = campaign(out, &args);
+    assert_ok(&o);
+    assert_eq!(already_done(&o), 2);
+}
+
+#[test]
+fn sigterm_to_the_campaign_alone_stops_its_workers_and_removes_their_input() {
+    // Only the campaign gets the signal (`kill PID`); it passes it on to its workers, which
+    // end their episodes and remove their input directories.
+    let (d, tmpdir) = (tempfile::tempdir().unwrap(), tempfile::tempdir().unwrap());
+    let marker = format!("{}-sigterm", std::process::id());
+    let child = Command::new(BIN)
+        .arg("campaign")
+        .arg("--out")
+        .arg(d.path())
+        .args(["--planners", "sumo", "--alphas", "0.5", "--lambdas", "3000"])
+        .args(["--seeds", "2", "--steps", "100000", "--workers", "2"])
+        .env_remove(bkpbs::campaign::worker::FAULT_ENV)
+        .env("BKPBS_TEST_MARK", &marker)
+        .env("TMPDIR", tmpdir.path())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    common::wait_for("both workers' input", 60, || {
+        common::input_dirs(tmpdir.path()).len() == 2
+    });
+    common::send_signal(child.id() as i32, libc::SIGTERM);
+    let o = child.wait_with_output().unwrap();
+    assert_eq!(o.status.code(), Some(143), "{}", text(&o.stderr));
+    assert_eq!(processes_marked(&marker), Vec::<u32>::new());
+    assert_eq!(common::input_dirs(tmpdir.path()), Vec::<PathBuf>::new());
+    assert_eq!(read(&d.path().join("failures.csv")).lines().count(), 1 + 2);
 }
 
 /// Finished cells (their episode.csv) and modification times.

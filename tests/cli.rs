@@ -333,3 +333,35 @@ fn config_print_shows_the_defaults_and_round_trips() {
     let again = bkpbs(&["config", "--print", "--config", p.to_str().unwrap()]);
     assert_eq!(String::from_utf8(again.stdout).unwrap(), text);
 }
+
+#[test]
+fn an_interrupted_episode_removes_its_input_and_writes_nothing() {
+    // Ctrl-C once left the episode's input directory in the temporary directory (46 after
+    // one afternoon); a stop signal now ends the episode at its next step, tidied up.
+    for (signal, code) in [(libc::SIGINT, 130), (libc::SIGTERM, 143)] {
+        let (tmpdir, d) = (tmp(), tmp());
+        let out = d.path().join("out");
+        let child = std::process::Command::new(env!("CARGO_BIN_EXE_bkpbs"))
+            .args(["episode", "--planner", "sumo", "--steps", "100000", "--out"])
+            .arg(&out)
+            .env("TMPDIR", tmpdir.path())
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .unwrap();
+        common::wait_for("the input directory", 60, || {
+            !common::input_dirs(tmpdir.path()).is_empty()
+        });
+        common::send_signal(child.id() as i32, signal);
+        let o = child.wait_with_output().unwrap();
+        assert_eq!(o.status.code(), Some(code), "{}", stderr(&o));
+        let err = stderr(&o);
+        assert_eq!(err.lines().count(), 1, "{err}");
+        assert!(err.starts_with("error: interrupted by SIG"), "{err}");
+        assert_eq!(
+            common::input_dirs(tmpdir.path()),
+            Vec::<std::path::PathBuf>::new()
+        );
+        assert!(!out.join("episode.csv").exists());
+    }
+}

@@ -80,6 +80,9 @@ pub struct RunSummary {
     /// Rows of the collected `episodes.csv`.
     pub collected: usize,
     pub wall_s: f64,
+    /// The stop signal that ended the run early, if one did (the finished episodes are still
+    /// collected; re-running resumes).
+    pub interrupted: Option<i32>,
 }
 
 /// Runs (or resumes) a campaign in `out` with worker processes of `exe` (the `bkpbs` binary),
@@ -110,12 +113,13 @@ pub fn run(settings: &Settings, out: &Path, exe: &Path) -> Result<RunSummary, Ca
 
     let bar = progress_bar(requests.len() as u64);
     let mut failed_now = 0;
-    let ran = requests.len();
+    let mut ran = 0;
     let options = pool::PoolOptions {
         workers: settings.workers,
         episode_timeout: settings.episode_timeout,
     };
     pool::run(exe, requests, options, |reply| {
+        ran += 1;
         if let Outcome::Failed { error } = &reply.outcome {
             failed_now += 1;
             let line = format!(
@@ -142,6 +146,7 @@ pub fn run(settings: &Settings, out: &Path, exe: &Path) -> Result<RunSummary, Ca
         failed: results.failures.rows.len(),
         collected: results.episodes.rows.len(),
         wall_s: start.elapsed().as_secs_f64(),
+        interrupted: crate::io::interrupt::requested(),
     };
     println!(
         "campaign: ran {} episodes ({} failed) in {:.1} s; {} episodes collected in {}",

@@ -6,17 +6,23 @@
 //! which is recorded in the cell directory like any failure, and a fresh child takes its place.
 //! Children stay in the campaign's process group and end when their stdin closes.
 //!
-//! With a wall-clock limit per episode, a worker that has not replied in time is killed and
-//! the episode recorded as failed ("exceeded the episode timeout"), so one runaway episode
+//! With a wall-clock limit per episode, a worker that has not replied in time is stopped (and
+//! killed if it does not stop) and the episode recorded as failed ("exceeded the episode timeout"), so one runaway episode
 //! cannot hold a campaign forever. Replies are read on a thread of their own per worker, so
 //! that the wait can end.
+//!
+//! A stop signal to the campaign ([`crate::io::interrupt`]) stops the queue: each worker is
+//! passed the signal, ends its episode early (removing its input) and exits; its cell stays
+//! unfinished, not failed. A worker that does not exit within [`STOP_GRACE`] is killed.
 
 use std::collections::VecDeque;
 use std::io::{BufRead, BufReader, Write};
 use std::path::Path;
 use std::process::{Child, ChildStdin, ChildStdout, Command, Stdio};
 use std::sync::{mpsc, Mutex};
-use std::time::Duration;
+use std::time::{Duration, Instant};
+
+use crate::io::interrupt;
 
 use super::worker::{record_failure, Outcome, Reply, Request};
 
@@ -54,7 +60,14 @@ enum ExchangeError {
     Broken(String),
     /// No reply within the episode timeout.
     TimedOut(Duration),
+    /// The campaign was asked to stop (and passed the signal on).
+    Stopped,
 }
+
+/// How long a worker passed a stop signal may take to end its episode and exit.
+pub const STOP_GRACE: Duration = Duration::from_secs(10);
+/// How often a wait for a reply looks at the clock and for stop signals.
+const POLL: Duration = Duration::from_millis(100);
 
 /// On Linux, the kernel kills the worker when the campaign dies, set up in the child before it
 /// runs the binary, so there is no moment in which a killed campaign can leave it orphaned (a
@@ -116,13 +129,7 @@ impl Worker {
             .write_all(line.as_bytes())
             .and_then(|()| self.stdin.flush())
             .map_err(|e| broken(format!("cannot send the episode: {e}")))?;
-        let received = match timeout {
-            Some(t) => self.replies.recv_timeout(t).map_err(|e| match e {
-                mpsc::RecvTimeoutError::Timeout => ExchangeError::TimedOut(t),
-                mpsc::RecvTimeoutError::Disconnected => broken("no reply".into()),
-            })?,
-            None => self.replies.recv().map_err(|_| broken("no reply".into()))?,
-        };
+        let received = self.wait_for_reply(timeout)?;
         let line = received.map_err(|e| broken(format!("cannot read the reply: {e}")))?;
         let reply: Reply = serde_json::from_str(&line)
             .map_err(|e| broken(format!("malformed reply ({e}): {}", line.trim())))?;
@@ -133,6 +140,54 @@ impl Worker {
             )));
         }
         Ok(reply)
+    }
+
+    /// The next line from the worker, waiting at most `timeout`; a stop signal to the campaign
+    /// is passed on, and the wait ends when the worker exits or [`STOP_GRACE`] is over.
+    fn wait_for_reply(
+        &self,
+        timeout: Option<Duration>,
+    ) -> Result<std::io::Result<String>, ExchangeError> {
+        let start = Instant::now();
+        let mut stop_passed_on: Option<Instant> = None;
+        loop {
+            match self.replies.recv_timeout(POLL) {
+                Ok(line) => return Ok(line),
+                Err(mpsc::RecvTimeoutError::Disconnected) if stop_passed_on.is_some() => {
+                    return Err(ExchangeError::Stopped)
+                }
+                Err(mpsc::RecvTimeoutError::Disconnected) => {
+                    return Err(ExchangeError::Broken("no reply".into()))
+                }
+                Err(mpsc::RecvTimeoutError::Timeout) => {}
+            }
+            if let Some(signal) = interrupt::requested() {
+                match stop_passed_on {
+                    None => {
+                        interrupt::forward(self.child.id(), signal);
+                        stop_passed_on = Some(Instant::now());
+                    }
+                    Some(at) if at.elapsed() > STOP_GRACE => return Err(ExchangeError::Stopped),
+                    Some(_) => {}
+                }
+            }
+            if let Some(t) = timeout.filter(|&t| start.elapsed() >= t) {
+                return Err(ExchangeError::TimedOut(t));
+            }
+        }
+    }
+
+    /// Asks the worker to stop (SIGTERM: it ends its episode at the next step and removes the
+    /// episode's input), kills it if it has not exited within [`STOP_GRACE`].
+    fn stop(mut self) {
+        if matches!(self.child.try_wait(), Ok(None)) {
+            interrupt::forward(self.child.id(), libc::SIGTERM);
+            let start = Instant::now();
+            while matches!(self.child.try_wait(), Ok(None)) && start.elapsed() < STOP_GRACE {
+                std::thread::sleep(Duration::from_millis(20));
+            }
+        }
+        self.kill();
     }
 
     /// Kills the worker (if still alive) and says how it ended.
@@ -163,8 +218,8 @@ pub struct PoolOptions {
 
 /// Runs every request on up to `options.workers` child processes of `exe`, calling `on_reply`
 /// on the calling thread as episodes finish (in completion order). Every request gets exactly
-/// one reply; failures to start or keep a worker, and episodes over the timeout, are failed
-/// replies, never errors.
+/// one reply, unless a stop signal ends the run first; failures to start or keep a worker, and
+/// episodes over the timeout, are failed replies, never errors.
 pub fn run(
     exe: &Path,
     requests: Vec<Request>,
@@ -197,6 +252,9 @@ fn drive(
 ) {
     let mut worker: Option<Worker> = None;
     loop {
+        if interrupt::requested().is_some() {
+            break;
+        }
         let next = queue.lock().unwrap_or_else(|e| e.into_inner()).pop_front();
         let Some(req) = next else { break };
         let failed = |error: String| {
@@ -225,6 +283,14 @@ fn drive(
                 worker = Some(w);
                 reply
             }
+            Err(ExchangeError::Stopped) => {
+                w.stop();
+                break;
+            }
+            Err(ExchangeError::Broken(_)) if interrupt::requested().is_some() => {
+                w.kill();
+                break;
+            }
             Err(ExchangeError::Broken(why)) => {
                 let status = w.kill();
                 failed(format!(
@@ -232,7 +298,7 @@ fn drive(
                 ))
             }
             Err(ExchangeError::TimedOut(t)) => {
-                w.kill();
+                w.stop();
                 failed(format!(
                     "episode exceeded the episode timeout of {} s and was stopped",
                     t.as_secs_f64()

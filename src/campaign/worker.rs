@@ -8,7 +8,8 @@
 //! The worker writes the episode's files into the cell directory itself, atomically, with
 //! `episode.csv` last: its presence marks a finished cell. A failed episode (SUMO error, planner
 //! panic) leaves `error.txt` with the message instead. Either way the worker goes on with the
-//! next request.
+//! next request. A stop signal ends the episode early (its input removed) and the worker with
+//! it, without a reply: the cell is unfinished and runs again next time.
 
 use std::io::{BufRead, Write};
 use std::panic::{self, AssertUnwindSafe};
@@ -28,7 +29,7 @@ pub const DONE_FILE: &str = "episode.csv";
 
 /// Test hook: `BKPBS_WORKER_FAULT=panic:<seed>` makes the planner "panic" in every episode
 /// with that seed, `exit:<seed>` makes the worker process die there, `hang:<seed>` makes the
-/// episode never end (for the episode timeout). Used by the test suite to exercise failure
+/// episode wait for a stop signal (for the episode timeout and stop tests). Used by the test suite to exercise failure
 /// handling; unset in normal use.
 pub const FAULT_ENV: &str = "BKPBS_WORKER_FAULT";
 
@@ -101,7 +102,13 @@ pub fn serve(mut input: impl BufRead, mut output: impl Write) -> Result<(), Work
             continue;
         }
         let req: Request = serde_json::from_str(&line).map_err(WorkerError::Request)?;
-        let outcome = match run_cell(&req) {
+        let result = run_cell(&req);
+        if crate::io::interrupt::requested().is_some() {
+            // Stopped by a signal (the campaign's, passed on): the cell is simply unfinished,
+            // neither done nor failed, and the worker ends without a reply.
+            return Ok(());
+        }
+        let outcome = match result {
             Ok(()) => Outcome::Done,
             Err(error) => {
                 record_failure(&req.dir, &error);
@@ -134,9 +141,12 @@ fn injected_fault(req: &Request) {
     match spec.split_once(':') {
         Some(("panic", s)) if s == seed => panic!("injected planner fault ({FAULT_ENV})"),
         Some(("exit", s)) if s == seed => std::process::exit(101),
-        Some(("hang", s)) if s == seed => loop {
-            std::thread::sleep(std::time::Duration::from_secs(3600));
-        },
+        Some(("hang", s)) if s == seed => {
+            // Until stopped; the episode then starts and ends at its first step.
+            while crate::io::interrupt::requested().is_none() {
+                std::thread::sleep(std::time::Duration::from_millis(20));
+            }
+        }
         _ => {}
     }
 }

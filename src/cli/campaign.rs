@@ -83,6 +83,15 @@ pub fn run(c: Campaign) -> Result<()> {
     if done.collected > 0 {
         print_report(std::slice::from_ref(&c.out), None, false)?;
     }
+    if let Some(signal) = done.interrupted {
+        anyhow::bail!(
+            "interrupted by {}: {} of {} episodes of this shard finished (see {}); rerun the same command to resume",
+            bkpbs::io::interrupt::name(signal),
+            done.shard - done.failed,
+            done.shard,
+            c.out.join("episodes.csv").display()
+        );
+    }
     if done.failed > 0 {
         anyhow::bail!(
             "{} of {} episodes failed (see {})",

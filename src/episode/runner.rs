@@ -56,6 +56,10 @@ pub enum EpisodeError {
         time: f64,
         cause: SumoError,
     },
+    /// A stop signal (Ctrl-C, `kill`) arrived: the episode ended early, SUMO was closed and
+    /// its input removed; nothing was written.
+    #[error("interrupted by {} at step {step}; nothing written", crate::io::interrupt::name(*.signal))]
+    Interrupted { step: u32, signal: i32 },
     /// A failure with SUMO's own reason: libsumo reports only "Process Error", the reason goes
     /// to SUMO's (captured) console.
     #[error("{cause}; SUMO said: {said}")]
@@ -291,6 +295,9 @@ impl<'a> Episode<'a> {
                 cause,
             })?;
         for step in 0..steps {
+            if let Some(signal) = crate::io::interrupt::requested() {
+                return Err(EpisodeError::Interrupted { step, signal });
+            }
             let at = |cause| EpisodeError::Step {
                 step,
                 time: step as f64 * self.config.scenario.dt,

@@ -1,7 +1,10 @@
 //! Files written whole or not at all: a temporary file in the same directory, synced, then
 //! renamed over the target. A crash or a kill never leaves a half-written result, and an
 //! earlier result stays until it is replaced whole. The lowest layer: results, model files and
-//! data sets all go through it.
+//! data sets all go through it. [`interrupt`]: stop signals as requests, so that a run
+//! interrupted by them tidies up.
+
+pub mod interrupt;
 
 use std::io::Write;
 use std::path::{Path, PathBuf};

@@ -61,3 +61,39 @@ pub fn bkpbs(args: &[&str]) -> Output {
 pub fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
 }
+
+/// The episode input directories (`bkpbs-episode-…`) in the temporary directory `tmp`.
+pub fn input_dirs(tmp: &std::path::Path) -> Vec<std::path::PathBuf> {
+    std::fs::read_dir(tmp)
+        .unwrap()
+        .flatten()
+        .filter(|e| {
+            e.file_name()
+                .to_string_lossy()
+                .starts_with("bkpbs-episode-")
+        })
+        .map(|e| e.path())
+        .collect()
+}
+
+/// Waits until `done` holds, polling; panics naming `what` after `seconds`.
+pub fn wait_for(what: &str, seconds: u64, mut done: impl FnMut() -> bool) {
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(seconds);
+    while !done() {
+        assert!(
+            std::time::Instant::now() < deadline,
+            "timed out waiting for {what}"
+        );
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+}
+
+/// Sends `signal` to process `pid` (a negative `pid`: to its process group).
+pub fn send_signal(pid: i32, signal: i32) {
+    // SAFETY: plain kill(2) on a process the test started.
+    assert_eq!(
+        unsafe { libc::kill(pid, signal) },
+        0,
+        "kill({pid}, {signal})"
+    );
+}
