@@ -2,7 +2,7 @@
 //! busy SUMO a `RuntimeError`, so callers can catch what they can fix apart from what they
 //! cannot. Messages are the core's own, unchanged.
 
-use pyo3::exceptions::{PyOSError, PyRuntimeError, PyValueError};
+use pyo3::exceptions::{PyKeyboardInterrupt, PyOSError, PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 
 use bkpbs::episode::EpisodeError;
@@ -47,6 +47,8 @@ pub fn episode_error(e: &EpisodeError) -> PyErr {
         | EpisodeError::Input(InputError::MissingNet(_))
         | EpisodeError::Road(NetworkError::Shape(_)) => BkpbsError::new_err(message),
         EpisodeError::Input(InputError::Write { .. }) => PyOSError::new_err(message),
+        // Only the bkpbs binary takes stop signals as requests; kept exhaustive all the same.
+        EpisodeError::Interrupted { .. } => PyKeyboardInterrupt::new_err(message),
         EpisodeError::Start { .. }
         | EpisodeError::Step { .. }
         | EpisodeError::Road(_)
