@@ -404,6 +404,24 @@ fn a_smaller_grid_is_refused_where_a_larger_one_was_recorded() {
     let o = campaign(d.path(), &more);
     assert_ok(&o);
     assert_eq!(already_done(&o), 8);
+    // Results merged in by `report` (into the first directory) are recorded too: re-running
+    // the directory's own campaign once dropped them without a word.
+    let other = tempfile::tempdir().unwrap();
+    assert_ok(&campaign(other.path(), &small));
+    let o = Command::new(BIN)
+        .arg("report")
+        .args([d.path(), other.path()])
+        .output()
+        .unwrap();
+    assert_ok(&o);
+    assert_eq!(
+        read(&d.path().join("episodes.csv")).lines().count(),
+        1 + 12 + 4
+    );
+    let o = campaign(d.path(), &more);
+    assert!(!o.status.success());
+    let err = text(&o.stderr);
+    assert!(err.contains("4 episodes outside this grid"), "{err}");
 }
 
 #[test]

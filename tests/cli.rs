@@ -365,3 +365,37 @@ fn an_interrupted_episode_removes_its_input_and_writes_nothing() {
         assert!(!out.join("episode.csv").exists());
     }
 }
+
+#[test]
+fn an_episode_that_cannot_replace_every_file_leaves_the_earlier_set_whole() {
+    // An episode.csv that had become a directory once left new vehicles.csv and timing.csv
+    // next to the old collisions.csv: a mixed set. Now nothing is replaced.
+    let d = tmp();
+    let out = d.path().join("out");
+    let first = episode_into(&out, &["--planner", "sumo", "--steps", "30"]);
+    assert!(first.status.success(), "{}", stderr(&first));
+    let before: Vec<Vec<u8>> = ["vehicles.csv", "collisions.csv", "timing.csv"]
+        .iter()
+        .map(|f| std::fs::read(out.join(f)).unwrap())
+        .collect();
+    std::fs::remove_file(out.join("episode.csv")).unwrap();
+    std::fs::create_dir(out.join("episode.csv")).unwrap();
+    let o = episode_into(&out, &["--planner", "sumo", "--steps", "40"]);
+    let err = stderr(&o);
+    assert!(!o.status.success());
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(
+        err.contains("episode.csv") && err.contains("directory"),
+        "{err}"
+    );
+    for (f, old) in ["vehicles.csv", "collisions.csv", "timing.csv"]
+        .iter()
+        .zip(&before)
+    {
+        assert_eq!(
+            &std::fs::read(out.join(f)).unwrap(),
+            old,
+            "{f} was replaced"
+        );
+    }
+}
