@@ -48,6 +48,30 @@ pub struct Config {
     pub metrics: MetricsSettings,
     /// The safety shield in front of the search-based planners.
     pub safety: SafetySettings,
+    /// Optional per-episode outputs; they do not change any result.
+    pub output: OutputSettings,
+}
+
+/// Optional outputs of an episode. A campaign does not record them in its settings: they do
+/// not change results, so runs with and without them may share a directory.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct OutputSettings {
+    /// One row per vehicle and step (README: "Trajectories").
+    pub trajectories: TrajectoryFormat,
+}
+
+/// Whether and how an episode writes its trajectories.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum TrajectoryFormat {
+    /// None written.
+    #[default]
+    None,
+    /// `trajectories.csv`: SUMO's and the road frame's view, and the maneuvers sent.
+    Csv,
+    /// `trajectories.fcd.xml`: SUMO's floating-car-data format.
+    Fcd,
 }
 
 /// The safety shield (README: "Safety shield"): every CAV's next step of bk-mastar and bk-pbs

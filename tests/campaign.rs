@@ -943,3 +943,39 @@ fn a_campaign_file_sets_the_grid_and_scenario_and_a_changed_scenario_is_refused(
     );
     assert_eq!(read(&out.join("campaign.toml")), saved);
 }
+
+#[test]
+fn campaign_trajectories_are_written_per_cell_and_are_no_setting() {
+    let d = tempfile::tempdir().unwrap();
+    let args = [
+        "--planners",
+        "idm-mobil",
+        "--alphas",
+        "0.5",
+        "--lambdas",
+        "3000",
+        "--seeds",
+        "2",
+        "--steps",
+        "40",
+        "--workers",
+        "2",
+    ];
+    assert_ok(&campaign(
+        d.path(),
+        &[&args[..], &["--trajectories"]].concat(),
+    ));
+    for seed in 0..2 {
+        let cell = d
+            .path()
+            .join(format!("episodes/idm-mobil/a0.5_l3000_s{seed}"));
+        let text = read(&cell.join("trajectories.csv"));
+        assert!(text.starts_with("time,id,type,origin"), "{text}");
+    }
+    let settings = read(&d.path().join("campaign.toml"));
+    assert!(!settings.contains("trajectories"), "{settings}");
+    // Outputs do not change results: the same grid without them finds every cell done.
+    let o = campaign(d.path(), &args);
+    assert_ok(&o);
+    assert_eq!(already_done(&o), 2);
+}

@@ -87,6 +87,8 @@ impl PyCampaign {
             workers: None,
             // Ray schedules the tasks; a wall-clock limit is its business (`ray.get(timeout=…)`).
             episode_timeout: None,
+            // From the config file's `[output]` table, if any.
+            trajectories: None,
             shard,
         };
         let settings = Settings::resolve(config.as_deref(), &overrides).map_err(settings_error)?;

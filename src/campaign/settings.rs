@@ -27,7 +27,7 @@ use std::time::Duration;
 use serde::{Deserialize, Serialize};
 
 use super::grid::{Cell, Grid, Shard, ShardError};
-use crate::config::{Config, ConfigError};
+use crate::config::{Config, ConfigError, TrajectoryFormat};
 use crate::controller::{UnknownPlanner, PLANNERS};
 
 /// Scenario keys a campaign sets itself.
@@ -125,6 +125,8 @@ pub struct Overrides {
     pub shard: Option<String>,
     /// `--episode-timeout` in seconds.
     pub episode_timeout: Option<f64>,
+    /// `--trajectories[-format]`: replaces the file's `output.trajectories`.
+    pub trajectories: Option<TrajectoryFormat>,
 }
 
 /// Validated settings of one campaign run.
@@ -260,6 +262,9 @@ impl Settings {
         let workers = worker_count(&table, o, file)?;
         let episode_timeout = episode_timeout(&table, o, file)?;
         config.scenario.steps = table.steps;
+        if let Some(format) = o.trajectories {
+            config.output.trajectories = format;
+        }
         let grid = Grid::new(
             &table.planners,
             &table.alphas,
@@ -467,12 +472,15 @@ fn check_values(
     }
 }
 
-/// The configuration as a TOML table without the per-cell scenario keys.
+/// The configuration as a TOML table without the per-cell scenario keys and without the
+/// optional outputs, which do not change results (runs with and without trajectories may
+/// share a directory).
 fn scenario_table(config: &Config) -> toml::Table {
     let mut doc = match toml::Value::try_from(config).expect("config serialises") {
         toml::Value::Table(t) => t,
         _ => unreachable!("a struct serialises to a table"),
     };
+    doc.remove("output");
     if let Some(toml::Value::Table(s)) = doc.get_mut("scenario") {
         for key in PER_CELL_KEYS {
             s.remove(key);

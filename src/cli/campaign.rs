@@ -8,6 +8,7 @@ use clap::Args;
 use bkpbs::campaign::{self, Overrides, Settings};
 
 use super::report::print_report;
+use super::scenario::TrajectoryArgs;
 
 #[derive(Args)]
 pub struct CampaignArgs {
@@ -45,6 +46,8 @@ pub struct CampaignArgs {
     /// failures.csv [default: none].
     #[arg(long, value_name = "SECONDS", allow_hyphen_values = true)]
     episode_timeout: Option<f64>,
+    #[command(flatten)]
+    trajectories: TrajectoryArgs,
 }
 
 /// A checked campaign: the grid, shard and scenario settings, and where results go.
@@ -67,6 +70,7 @@ impl CampaignArgs {
             workers: self.workers,
             shard: self.shard,
             episode_timeout: self.episode_timeout,
+            trajectories: self.trajectories.format(),
         };
         Ok(Campaign {
             settings: Settings::resolve(self.config.as_deref(), &overrides)?,

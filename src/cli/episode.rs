@@ -10,7 +10,7 @@ use bkpbs::episode::trace::Tracer;
 use bkpbs::episode::Driver;
 use bkpbs::{controller, episode};
 
-use super::scenario::ScenarioArgs;
+use super::scenario::{ScenarioArgs, TrajectoryArgs};
 
 #[derive(Args)]
 pub struct EpisodeArgs {
@@ -30,6 +30,8 @@ pub struct EpisodeArgs {
     /// empty with `--planner sumo`, which leaves the CAVs to SUMO).
     #[arg(long)]
     trace: bool,
+    #[command(flatten)]
+    trajectories: TrajectoryArgs,
 }
 
 /// A checked episode: the planner exists for this configuration and the output place is known.
@@ -44,9 +46,13 @@ impl EpisodeArgs {
     /// Checks the configuration and the planner before SUMO starts.
     pub fn resolve(self) -> Result<Episode> {
         let predictor = self.predictor;
+        let trajectories = self.trajectories.format();
         let config = self.scenario.resolve_with(|c| {
             if let Some(kind) = predictor {
                 c.predictor.kind = kind;
+            }
+            if let Some(format) = trajectories {
+                c.output.trajectories = format;
             }
         })?;
         controller::check(&self.planner, &config)?;
@@ -120,6 +126,13 @@ pub fn run(e: Episode) -> Result<()> {
         m.mean_delay_s.map_or("n/a".into(), |d| format!("{d:.2}"))
     );
     println!("results: {}", e.out.join("episode.csv").display());
+    if let Some(t) = &result.trajectories {
+        println!(
+            "trajectories: {} (`bkpbs plot {}` draws them)",
+            e.out.join(t.name).display(),
+            e.out.display()
+        );
+    }
     if e.trace {
         println!(
             "trace: {} (`bkpbs explain {}` tells the story of each collision)",

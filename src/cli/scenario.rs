@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 use anyhow::Result;
 use clap::Args;
 
-use bkpbs::config::Config;
+use bkpbs::config::{Config, TrajectoryFormat};
 
 /// The configuration from `file` (the paper's defaults without one) with `flags` applied, then
 /// validated. One helper, so that a config file is read, overridden and checked the same way
@@ -82,5 +82,28 @@ impl ScenarioArgs {
             s.net_file = Some(n.clone());
         }
         c.sumo.verbose |= self.verbose;
+    }
+}
+
+/// The trajectory flags of `episode` and `campaign`.
+#[derive(Args)]
+pub struct TrajectoryArgs {
+    /// Also write the trajectories: one row per vehicle and step (trajectories.csv).
+    #[arg(long)]
+    trajectories: bool,
+    /// Their format: csv (bkpbs's columns, maneuvers included) or fcd (SUMO's FCD XML);
+    /// implies --trajectories.
+    #[arg(long, value_enum, value_name = "FORMAT")]
+    trajectories_format: Option<TrajectoryFormat>,
+}
+
+impl TrajectoryArgs {
+    /// The format asked for, if any (the config file's `output.trajectories` otherwise).
+    pub fn format(&self) -> Option<TrajectoryFormat> {
+        match (self.trajectories_format, self.trajectories) {
+            (Some(f), _) => Some(f),
+            (None, true) => Some(TrajectoryFormat::Csv),
+            (None, false) => None,
+        }
     }
 }

@@ -3,8 +3,10 @@
 
 use std::path::{Path, PathBuf};
 
+use super::trajectories;
 use crate::episode::metrics::{CollisionEvent, Summary, Timing, VehicleRecord};
 use crate::episode::EpisodeResult;
+use crate::io::SetFile;
 pub use crate::io::{write_atomic, WriteError};
 
 fn opt(x: Option<f64>, decimals: usize) -> String {
@@ -227,9 +229,10 @@ impl EpisodeResult {
         csv_bytes(&TIMING_COLUMNS, std::iter::once(timing_row(&self.timing)))
     }
 
-    /// Writes the four CSV files (and SUMO's log, if any) into `dir` as one set, `episode.csv`
-    /// last: its presence marks a complete episode directory. An earlier episode's files are
-    /// replaced together (an old `sumo.log` the new run lacks is removed); returns the paths.
+    /// Writes the four CSV files (and SUMO's log and the trajectories, if any) into `dir` as
+    /// one set, `episode.csv` last: its presence marks a complete episode directory. An earlier
+    /// episode's files are replaced together (an old `sumo.log` or trajectory file the new run
+    /// lacks is removed); returns the paths written.
     pub fn write(&self, dir: &Path) -> Result<Vec<PathBuf>, WriteError> {
         let (vehicles, collisions, timing, episode) = (
             self.vehicles_csv(),
@@ -238,16 +241,18 @@ impl EpisodeResult {
             self.episode_csv(),
         );
         let log = (!self.sumo_log.is_empty()).then_some(self.sumo_log.as_bytes());
-        crate::io::replace_together(
-            dir,
-            &[
-                ("sumo.log", log),
-                ("vehicles.csv", Some(&vehicles)),
-                ("collisions.csv", Some(&collisions)),
-                ("timing.csv", Some(&timing)),
-                ("episode.csv", Some(&episode)),
-            ],
-        )
+        let mut files: Vec<SetFile> = vec![("sumo.log", log)];
+        for name in trajectories::FILE_NAMES {
+            let mine = self.trajectories.as_ref().filter(|t| t.name == name);
+            files.push((name, mine.map(|t| &t.bytes[..])));
+        }
+        files.extend([
+            ("vehicles.csv", Some(&vehicles[..])),
+            ("collisions.csv", Some(&collisions[..])),
+            ("timing.csv", Some(&timing[..])),
+            ("episode.csv", Some(&episode[..])),
+        ]);
+        crate::io::replace_together(dir, &files)
     }
 }
 

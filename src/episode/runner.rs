@@ -16,12 +16,15 @@ use crate::episode::merge_rule::RampMergeRule;
 use crate::episode::metrics::{
     percentile, CollisionEvent, Outcome, Summary, SummaryInput, Timing, VehicleRecord,
 };
+use crate::episode::trajectories::{
+    FrameState, Sent, TrajectoryFile, TrajectoryLog, TrajectoryRow,
+};
 use crate::model::kinematics::free_flow_time;
 use crate::model::road::{Road, EDGES};
 use crate::model::scene::{Kind, Origin, Scene};
 use crate::sumo::files::{EpisodeInput, InputError};
 use crate::sumo::frame::{self, NetworkError, SumoScene};
-use crate::sumo::{Simulation, StderrCapture, SumoError, VehicleReadings};
+use crate::sumo::{RawVehicleState, Simulation, StderrCapture, SumoError, VehicleReadings};
 
 /// SUMO speed mode for commanded CAVs: no checks at all, the commanded speed is the speed.
 const SPEED_MODE_COMMANDED: i32 = 0;
@@ -118,6 +121,8 @@ pub struct EpisodeResult {
     pub vehicles: Vec<VehicleRecord>,
     pub collisions: Vec<CollisionEvent>,
     pub timing: Timing,
+    /// One row per vehicle and step, when `output.trajectories` asks for them.
+    pub trajectories: Option<TrajectoryFile>,
     /// What SUMO printed to stderr (captured unless `sumo.verbose`).
     pub sumo_log: String,
 }
@@ -215,6 +220,38 @@ pub fn run_observed(
     Ok(result)
 }
 
+/// A reading as a trajectory row (without the maneuver, which comes after planning).
+fn trajectory_row(
+    sc: &crate::config::Scenario,
+    id: &Arc<str>,
+    record: &VehicleRecord,
+    raw: &RawVehicleState,
+    position: Option<(f64, i32)>,
+) -> TrajectoryRow {
+    TrajectoryRow {
+        id: id.clone(),
+        kind: record.kind,
+        origin: record.origin,
+        edge: usize::try_from(raw.edge_code)
+            .ok()
+            .and_then(|c| EDGES.get(c).copied()),
+        sumo_lane: raw.lane_index,
+        pos: raw.lane_position,
+        x: raw.x,
+        y: raw.y,
+        angle: raw.angle,
+        frame: position.map(|(front, lane)| FrameState {
+            s: front - 0.5 * sc.vehicle_length,
+            lane,
+            lateral: raw.lateral_offset,
+            heading: (90.0 - raw.angle).to_radians(),
+        }),
+        speed: raw.speed,
+        accel: raw.acceleration,
+        sent: None,
+    }
+}
+
 /// Per-vehicle bookkeeping beyond the record.
 struct Tracked {
     id: Arc<str>,
@@ -249,6 +286,9 @@ struct Episode<'a> {
     sumo_s: f64,
     speed_sum: f64,
     speed_samples: u64,
+    trajectories: Option<TrajectoryLog>,
+    /// The trajectory row of each scene vehicle in the current step.
+    scene_rows: Vec<usize>,
 }
 
 impl<'a> Episode<'a> {
@@ -282,6 +322,8 @@ impl<'a> Episode<'a> {
             sumo_s: 0.0,
             speed_sum: 0.0,
             speed_samples: 0,
+            trajectories: TrajectoryLog::new(config.output.trajectories),
+            scene_rows: Vec::new(),
         }
     }
 
@@ -371,6 +413,7 @@ impl<'a> Episode<'a> {
             .planned(&self.sumo_scene.scene, &self.commands, &*self.controller);
         if self.controller.handling() == CavHandling::Commanded {
             self.apply(sim)?;
+            self.record_sent();
         }
         Ok(())
     }
@@ -512,9 +555,18 @@ impl<'a> Episode<'a> {
         }
         let sc = &self.config.scenario;
         self.sumo_scene.clear(now);
+        self.scene_rows.clear();
+        if let Some(log) = &mut self.trajectories {
+            log.begin_step(now);
+        }
         for (raw, slot) in self.readings.states.iter().zip(&self.slots) {
-            let (Some(k), Some((front, lane))) = (*slot, frame::frame_position(&self.road, raw))
-            else {
+            let Some(k) = *slot else { continue };
+            let position = frame::frame_position(&self.road, raw);
+            let row = self.trajectories.as_mut().map(|log| {
+                let r = &self.tracked[k].record;
+                log.push(trajectory_row(sc, &self.tracked[k].id, r, raw, position))
+            });
+            let Some((front, lane)) = position else {
                 continue;
             };
             let t = &mut self.tracked[k];
@@ -542,6 +594,25 @@ impl<'a> Episode<'a> {
             };
             let vehicle = frame::state_at(sc, who, raw, front, lane);
             self.sumo_scene.push(vehicle, raw.edge_code);
+            self.scene_rows.extend(row);
+        }
+    }
+
+    /// The maneuvers just sent, into the trajectory rows of their CAVs.
+    fn record_sent(&mut self) {
+        let Some(log) = &mut self.trajectories else {
+            return;
+        };
+        let sc = &self.config.scenario;
+        for c in &self.commands {
+            log.set_sent(
+                self.scene_rows[c.vehicle],
+                Sent {
+                    speed: frame::commanded_speed(c.maneuver.speed, sc),
+                    lane_change: c.maneuver.lane_change,
+                    source: c.source,
+                },
+            );
         }
     }
 
@@ -602,6 +673,7 @@ impl<'a> Episode<'a> {
             vehicles,
             collisions: std::mem::take(&mut self.collisions),
             timing,
+            trajectories: self.trajectories.take().map(TrajectoryLog::finish),
             sumo_log: String::new(),
         }
     }
