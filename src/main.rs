@@ -77,6 +77,7 @@ fn run(command: Command) -> Result<()> {
             cli::episode::run(episode)
         }
         Command::Explain(a) => cli::explain::run(a),
+        Command::Plot(a) => cli::plot::run(a),
         Command::Config(a) => cli::config::run(a.resolve()?),
         Command::Bench(a) => cli::bench::run(a.resolve()?),
         Command::Demand(a) => cli::demand::run(a.resolve()?),

@@ -978,4 +978,27 @@ fn campaign_trajectories_are_written_per_cell_and_are_no_setting() {
     let o = campaign(d.path(), &args);
     assert_ok(&o);
     assert_eq!(already_done(&o), 2);
+    // `--plots` draws every finished cell that has trajectories.
+    let o = campaign(d.path(), &[&args[..], &["--plots"]].concat());
+    assert_ok(&o);
+    assert!(
+        text(&o.stdout).contains("speed field of 2 cells"),
+        "{}",
+        text(&o.stdout)
+    );
+    let cell = d.path().join("episodes/idm-mobil/a0.5_l3000_s1");
+    for f in [
+        "time_space.png",
+        "time_space.svg",
+        "speed_field.png",
+        "speed_field.svg",
+    ] {
+        assert!(cell.join(f).is_file(), "{f}");
+    }
+    let o = campaign(
+        d.path(),
+        &[&args[..], &["--plots", "--trajectories-format", "fcd"]].concat(),
+    );
+    assert!(!o.status.success());
+    assert!(text(&o.stderr).contains("--plots"), "{}", text(&o.stderr));
 }

@@ -169,3 +169,55 @@ fn fcd_trajectories_match_sumo_s_own_fcd_output() {
         assert_eq!(a["type"], base, "{k:?}");
     }
 }
+
+#[test]
+fn plot_draws_the_lane_figures_the_same_way_every_time() {
+    let d = tempfile::tempdir().unwrap();
+    let dir = d.path().join("ep");
+    let dir_s = dir.to_str().unwrap();
+    let o = common::bkpbs(&[
+        "episode",
+        "--planner",
+        "bk-pbs",
+        "--steps",
+        "150",
+        "--trajectories",
+        "--out",
+        dir_s,
+    ]);
+    assert!(o.status.success(), "{}", common::stderr(&o));
+    let figures = [
+        "time_space.png",
+        "time_space.svg",
+        "speed_field.png",
+        "speed_field.svg",
+    ];
+    let draw = || {
+        let o = common::bkpbs(&["plot", dir_s]);
+        assert!(o.status.success(), "{}", common::stderr(&o));
+        figures.map(|f| std::fs::read(dir.join(f)).unwrap())
+    };
+    let first = draw();
+    assert!(first[0].starts_with(b"\x89PNG"));
+    let svg = String::from_utf8(first[1].clone()).unwrap();
+    assert!(
+        svg.contains("lane 1 (right main lane)") && svg.contains("bk-pbs"),
+        "{svg:.300}"
+    );
+    assert_eq!(first, draw());
+}
+
+#[test]
+fn plot_without_trajectories_says_how_to_get_them() {
+    let d = tempfile::tempdir().unwrap();
+    let o = common::bkpbs(&["plot", d.path().to_str().unwrap()]);
+    let err = common::stderr(&o);
+    assert_eq!(o.status.code(), Some(1));
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(
+        err.starts_with("error: ") && err.contains("--trajectories"),
+        "{err}"
+    );
+    let o = common::bkpbs(&["plot", "no/such/dir"]);
+    assert!(common::stderr(&o).contains("no/such/dir is not a directory"));
+}

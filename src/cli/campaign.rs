@@ -6,6 +6,8 @@ use anyhow::{Context, Result};
 use clap::Args;
 
 use bkpbs::campaign::{self, Overrides, Settings};
+use bkpbs::config::TrajectoryFormat;
+use bkpbs::report::episode_plots;
 
 use super::report::print_report;
 use super::scenario::TrajectoryArgs;
@@ -48,12 +50,17 @@ pub struct CampaignArgs {
     episode_timeout: Option<f64>,
     #[command(flatten)]
     trajectories: TrajectoryArgs,
+    /// Also draw each finished cell's time–space diagram and speed field (`bkpbs plot`);
+    /// implies --trajectories.
+    #[arg(long)]
+    plots: bool,
 }
 
 /// A checked campaign: the grid, shard and scenario settings, and where results go.
 pub struct Campaign {
     settings: Settings,
     out: PathBuf,
+    plots: bool,
 }
 
 impl CampaignArgs {
@@ -70,11 +77,21 @@ impl CampaignArgs {
             workers: self.workers,
             shard: self.shard,
             episode_timeout: self.episode_timeout,
-            trajectories: self.trajectories.format(),
+            trajectories: self
+                .trajectories
+                .format()
+                .or(self.plots.then_some(TrajectoryFormat::Csv)),
         };
+        let settings = Settings::resolve(self.config.as_deref(), &overrides)?;
+        if self.plots && settings.config.output.trajectories != TrajectoryFormat::Csv {
+            anyhow::bail!(
+                "--plots draws from trajectories.csv: it needs --trajectories-format csv"
+            );
+        }
         Ok(Campaign {
-            settings: Settings::resolve(self.config.as_deref(), &overrides)?,
+            settings,
             out: self.out,
+            plots: self.plots,
         })
     }
 }
@@ -86,6 +103,17 @@ pub fn run(c: Campaign) -> Result<()> {
     let done = campaign::run(&c.settings, &c.out, &exe)?;
     if done.collected > 0 {
         print_report(std::slice::from_ref(&c.out), None, false)?;
+    }
+    if c.plots && done.interrupted.is_none() {
+        let drawn = episode_plots::plot_cells(&c.out, &c.settings)?;
+        println!(
+            "plots: time–space diagram and speed field of {} cells (in each cell's directory){}",
+            drawn.plotted,
+            match drawn.without_trajectories {
+                0 => String::new(),
+                n => format!("; {n} cells finished earlier without trajectories are not drawn"),
+            }
+        );
     }
     if let Some(signal) = done.interrupted {
         anyhow::bail!(

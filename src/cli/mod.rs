@@ -8,6 +8,7 @@ pub mod config;
 pub mod demand;
 pub mod episode;
 pub mod explain;
+pub mod plot;
 pub mod report;
 pub mod scenario;
 pub mod train;
@@ -30,10 +31,12 @@ pub struct Cli {
 #[derive(Subcommand)]
 pub enum Command {
     /// Run one episode and write episode.csv, vehicles.csv, collisions.csv and timing.csv
-    /// (and trace.jsonl with --trace).
+    /// (and trace.jsonl with --trace, trajectories.csv with --trajectories).
     Episode(episode::EpisodeArgs),
     /// Tell the story of each collision of a traced episode (`episode --trace`), step by step.
     Explain(explain::ExplainArgs),
+    /// Draw an episode's time–space diagram and speed field (from `episode --trajectories`).
+    Plot(plot::PlotArgs),
     /// Show the configuration (defaults = the paper's) or the SUMO vehicle types it implies.
     Config(config::ConfigArgs),
     /// Time SUMO alone against the same episode with controllers, side by side.

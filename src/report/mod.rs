@@ -5,12 +5,18 @@
 //! merged first (see [`Results::merge`]) and the merged `episodes.csv`, `vehicles.csv`,
 //! `timings.csv` and `failures.csv` are written to the output directory. Tables and figures go
 //! to `<out>/report/`.
+//!
+//! Figures of one episode: [`episode_plots`] (`bkpbs plot`), from its trajectories
+//! ([`lane_tracks`]) drawn by [`timespace`], and the collision close-ups of [`explain`].
 
+pub mod episode_plots;
 pub mod explain;
+pub mod lane_tracks;
 pub mod plot;
 pub mod stats;
 pub mod summary;
 pub mod tables;
+pub mod timespace;
 
 use std::path::{Path, PathBuf};
 

@@ -22,7 +22,7 @@ const FONT_CANDIDATES: [&str; 3] = [
     "/usr/share/fonts/dejavu/DejaVuSans.ttf",
 ];
 
-const FONT: &str = "sans-serif";
+pub(super) const FONT: &str = "sans-serif";
 
 /// Why a figure could not be made.
 #[derive(Debug, thiserror::Error)]
@@ -67,7 +67,7 @@ fn ensure_font() -> Result<(), PlotError> {
 
 /// Something drawable on any plotters backend: a main area and a strip on its right (colour
 /// bar or legend), so that nothing explaining the plot is ever drawn over it.
-trait Painter {
+pub(super) trait Painter {
     /// Width and height of the whole figure, in pixels.
     fn size(&self) -> (u32, u32);
     /// Width of the strip on the right, in pixels.
@@ -93,11 +93,13 @@ where
 }
 
 /// A plotters drawing error as text, which is all [`PlotError::Draw`] keeps of it.
-fn drawing_failed<E: std::error::Error + Send + Sync>(e: DrawingAreaErrorKind<E>) -> String {
+pub(super) fn drawing_failed<E: std::error::Error + Send + Sync>(
+    e: DrawingAreaErrorKind<E>,
+) -> String {
     e.to_string()
 }
 
-fn render(p: &impl Painter, figure: &'static str) -> Result<Figure, PlotError> {
+pub(super) fn render(p: &impl Painter, figure: &'static str) -> Result<Figure, PlotError> {
     ensure_font()?;
     let err = |message: String| PlotError::Draw { figure, message };
     let (w, h) = p.size();

@@ -1,0 +1,145 @@
+//! `bkpbs plot DIR`: the figures of one episode directory (or one cell of a campaign): the
+//! time–space diagram, the speed field and, when the episode was traced, a close-up of each
+//! collision (`bkpbs explain --plot`).
+
+use std::path::{Path, PathBuf};
+
+use super::explain::{self, ExplainError};
+use super::lane_tracks::{self, TracksError};
+use super::plot::PlotError;
+use super::timespace::{LaneFigure, View};
+use crate::episode::trace::TRACE_FILE;
+use crate::io::{write_atomic, WriteError};
+
+/// File stems of the two lane figures (`.png` and `.svg` each).
+pub const TIME_SPACE: &str = "time_space";
+pub const SPEED_FIELD: &str = "speed_field";
+
+/// Why an episode's figures could not be made.
+#[derive(Debug, thiserror::Error)]
+pub enum EpisodePlotError {
+    #[error("{dir} is not a directory")]
+    NotADirectory { dir: PathBuf },
+    #[error(transparent)]
+    Tracks(#[from] TracksError),
+    #[error(transparent)]
+    Plot(#[from] PlotError),
+    #[error(transparent)]
+    Write(#[from] WriteError),
+    #[error(transparent)]
+    Explain(#[from] ExplainError),
+}
+
+/// What `plot` made.
+#[derive(Debug, Default)]
+pub struct EpisodePlots {
+    pub files: Vec<PathBuf>,
+    /// Collisions seen in the trajectories.
+    pub collisions: usize,
+    /// Whether close-ups were drawn (they need `trace.jsonl`).
+    pub close_ups: bool,
+}
+
+/// Draws the figures of episode directory `dir` into it.
+pub fn plot_dir(dir: &Path) -> Result<EpisodePlots, EpisodePlotError> {
+    if !dir.is_dir() {
+        return Err(EpisodePlotError::NotADirectory {
+            dir: dir.to_path_buf(),
+        });
+    }
+    let tracks = lane_tracks::read(dir)?;
+    let title = episode_title(dir);
+    let mut out = EpisodePlots {
+        collisions: tracks.collisions.len(),
+        ..EpisodePlots::default()
+    };
+    for (view, stem, what) in [
+        (View::TimeSpace, TIME_SPACE, "time–space diagram"),
+        (View::SpeedField, SPEED_FIELD, "speed field"),
+    ] {
+        let fig = LaneFigure {
+            tracks: &tracks,
+            view,
+            title: format!("{what}: {title}"),
+        }
+        .render()?;
+        let (png, svg) = (
+            dir.join(format!("{stem}.png")),
+            dir.join(format!("{stem}.svg")),
+        );
+        write_atomic(&png, &fig.png)?;
+        write_atomic(&svg, fig.svg.as_bytes())?;
+        out.files.extend([png, svg]);
+    }
+    if out.collisions > 0 && dir.join(TRACE_FILE).is_file() {
+        let explanations = explain::explain_dir(dir)?;
+        out.files.extend(explain::write_plots(dir, &explanations)?);
+        out.close_ups = true;
+    }
+    Ok(out)
+}
+
+/// "bk-pbs, α = 0.5, λ = 3000 veh/h, seed 0" from the directory's `episode.csv`; the
+/// directory's name without one.
+fn episode_title(dir: &Path) -> String {
+    let from_csv = || -> Option<String> {
+        let mut r = csv::Reader::from_path(dir.join("episode.csv")).ok()?;
+        let header = r.headers().ok()?.clone();
+        let row = r.records().next()?.ok()?;
+        let get = |name: &str| {
+            header
+                .iter()
+                .position(|h| h == name)
+                .and_then(|i| row.get(i))
+        };
+        Some(format!(
+            "{}, α = {}, λ = {} veh/h, seed {}",
+            get("planner")?,
+            get("alpha")?,
+            get("lambda")?,
+            get("seed")?
+        ))
+    };
+    from_csv().unwrap_or_else(|| dir.display().to_string())
+}
+
+/// What `campaign --plots` drew.
+#[derive(Debug, Default, PartialEq)]
+pub struct CellPlots {
+    /// Cells drawn.
+    pub plotted: usize,
+    /// Finished cells without trajectories (run before `--trajectories` was given).
+    pub without_trajectories: usize,
+}
+
+/// Draws the figures of every finished cell of a campaign run (its shard), in parallel.
+pub fn plot_cells(
+    out: &Path,
+    settings: &crate::campaign::Settings,
+) -> Result<CellPlots, EpisodePlotError> {
+    use rayon::prelude::*;
+    let cells = settings.grid.cells();
+    let dirs: Vec<PathBuf> = cells
+        .iter()
+        .enumerate()
+        .filter(|(i, c)| settings.shard.contains(*i) && crate::campaign::collect::is_done(out, c))
+        .map(|(_, c)| crate::campaign::collect::cell_dir(out, c))
+        .collect();
+    let results: Vec<Result<bool, EpisodePlotError>> = dirs
+        .par_iter()
+        .map(|d| match plot_dir(d) {
+            Ok(_) => Ok(true),
+            Err(EpisodePlotError::Tracks(TracksError::Missing { .. })) => Ok(false),
+            Err(e) => Err(e),
+        })
+        .collect();
+    let mut summary = CellPlots::default();
+    for r in results {
+        if r? {
+            summary.plotted += 1;
+        } else {
+            summary.without_trajectories += 1;
+        }
+    }
+    Ok(summary)
+}
