@@ -454,6 +454,7 @@ pub fn figure(e: &Explanation) -> LinePanels {
                 x_label: "t [s]".into(),
                 y_label: unit.into(),
                 curves,
+                bands: Vec::new(),
                 marks: vec![e.collision.time],
                 x_range: Some(e.collision.time - WINDOW_S - e.dt..e.collision.time + e.dt),
             });

@@ -23,7 +23,11 @@ use std::path::{Path, PathBuf};
 use crate::campaign::results::{Results, ResultsError};
 use crate::campaign::{Settings, SETTINGS_FILE};
 use crate::episode::output::{self, WriteError};
-use crate::report::plot::{HeatPanel, Heatmap, PlotError, Scatter, ScatterSeries};
+use crate::report::plot::{
+    Band, Curve, HeatPanel, Heatmap, LinePanel, LinePanels, PlotError, Scatter, ScatterSeries,
+};
+use crate::report::stats::Estimate;
+use crate::report::summary::Group;
 pub use summary::{Summary, SummaryError};
 
 /// Directory of the tables and figures inside the output directory.
@@ -164,6 +168,7 @@ pub fn run(dirs: &[PathBuf], out: Option<&Path>, allow_mixed: bool) -> Result<Re
     for (name, fig) in [
         ("collision_heatmap", heatmap(&summary).render()?),
         ("delay_vs_collision", scatter(&summary).render()?),
+        ("metrics_vs_alpha", metrics_vs_alpha(&summary).render()?),
     ] {
         for (ext, bytes) in [("png", fig.png.as_slice()), ("svg", fig.svg.as_bytes())] {
             let p = dir.join(format!("{name}.{ext}"));
@@ -250,6 +255,73 @@ pub fn scatter(s: &Summary) -> Scatter {
             .map(|&l| format!("λ = {}", tables::lambda_label(l)))
             .collect(),
         min_x_max: 1.0,
+    }
+}
+
+/// The quantities drawn against α: name, unit, and how to read one from a group.
+type Metric = (&'static str, &'static str, fn(&Group) -> Option<Estimate>);
+
+const METRICS: [Metric; 3] = [
+    ("mean travel delay", "delay (s)", |g| g.delay),
+    ("throughput", "throughput (veh/h)", |g| g.throughput),
+    ("mean speed", "speed (m/s)", |g| g.mean_speed),
+];
+
+/// The paper's tables as a figure: per metric (rows) and λ (columns), each planner's mean over
+/// seeds against α, with its 95 % confidence interval as a band (none for a single seed).
+pub fn metrics_vs_alpha(s: &Summary) -> LinePanels {
+    let (lo, hi) = (
+        s.alphas.first().copied().unwrap_or(0.0),
+        s.alphas.last().copied().unwrap_or(1.0),
+    );
+    let pad = ((hi - lo) * 0.05).max(0.02);
+    let alpha_range = lo - pad..hi + pad;
+    let mut panels = Vec::new();
+    for (name, unit, read) in METRICS {
+        for &lambda in &s.lambdas {
+            let mut curves = Vec::new();
+            let mut bands = Vec::new();
+            for (colour, planner) in s.planners.iter().enumerate() {
+                let estimates: Vec<(f64, Estimate)> = s
+                    .alphas
+                    .iter()
+                    .filter_map(|&a| Some((a, read(s.get(planner, a, lambda)?)?)))
+                    .collect();
+                curves.push(Curve {
+                    points: estimates.iter().map(|(a, e)| (*a, e.mean)).collect(),
+                    colour,
+                    thick: true,
+                });
+                bands.push(Band {
+                    points: estimates
+                        .iter()
+                        .map(|(a, e)| {
+                            let half = e.ci95.unwrap_or(0.0);
+                            (*a, e.mean - half, e.mean + half)
+                        })
+                        .collect(),
+                    colour,
+                });
+            }
+            panels.push(LinePanel {
+                title: format!("{name}, λ = {} veh/h", tables::lambda_label(lambda)),
+                x_label: "CAV penetration α".into(),
+                y_label: unit.into(),
+                curves,
+                bands,
+                marks: Vec::new(),
+                x_range: Some(alpha_range.clone()),
+            });
+        }
+    }
+    LinePanels {
+        panels,
+        legend: s
+            .planners
+            .iter()
+            .enumerate()
+            .map(|(i, p)| (i, p.clone(), true))
+            .collect(),
     }
 }
 

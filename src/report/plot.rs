@@ -578,12 +578,21 @@ pub struct Curve {
     pub thick: bool,
 }
 
+/// A shaded band of a [`LinePanel`] (e.g. a confidence interval): (x, low, high) in order of
+/// x, in the light colour of series `colour`.
+pub struct Band {
+    pub points: Vec<(f64, f64, f64)>,
+    pub colour: usize,
+}
+
 /// One panel of line charts.
 pub struct LinePanel {
     pub title: String,
     pub x_label: String,
     pub y_label: String,
     pub curves: Vec<Curve>,
+    /// Drawn under the curves.
+    pub bands: Vec<Band>,
     /// x positions of vertical red marks (e.g. a collision).
     pub marks: Vec<f64>,
     /// The x axis (default: the curves' and marks' range).
@@ -643,11 +652,15 @@ impl LinePanels {
         DB::ErrorType: 'static,
     {
         let all = || panel.curves.iter().flat_map(|c| c.points.iter());
+        let band_ys = panel
+            .bands
+            .iter()
+            .flat_map(|b| b.points.iter().flat_map(|p| [p.1, p.2]));
         let xs = panel
             .x_range
             .clone()
             .unwrap_or_else(|| padded_range(all().map(|p| p.0).chain(panel.marks.iter().copied())));
-        let ys = padded_range(all().map(|p| p.1));
+        let ys = padded_range(all().map(|p| p.1).chain(band_ys));
         let mut chart = ChartBuilder::on(area)
             .caption(&panel.title, (FONT, 20))
             .margin(12)
@@ -665,6 +678,16 @@ impl LinePanels {
             .light_line_style(RGBColor(240, 240, 240))
             .bold_line_style(RGBColor(215, 215, 215))
             .draw()
+            .map_err(drawing_failed)?;
+        chart
+            .draw_series(panel.bands.iter().map(|b| {
+                let upper = b.points.iter().map(|p| (p.0, p.2));
+                let lower = b.points.iter().rev().map(|p| (p.0, p.1));
+                Polygon::new(
+                    upper.chain(lower).collect::<Vec<_>>(),
+                    series_colour(b.colour).mix(0.18).filled(),
+                )
+            }))
             .map_err(drawing_failed)?;
         // Thin curves first, so the thick ones stay on top.
         for thick in [false, true] {
@@ -728,11 +751,13 @@ impl Painter for LinePanels {
                 .map_err(drawing_failed)?;
             y += 24;
         }
-        let red = TextStyle::from((FONT, 15).into_font())
-            .color(&RGBColor(214, 39, 40))
-            .pos(Pos::new(HPos::Left, VPos::Center));
-        area.draw(&Text::new("| collision", (10, y + 10), red))
-            .map_err(drawing_failed)?;
+        if self.panels.iter().any(|p| !p.marks.is_empty()) {
+            let red = TextStyle::from((FONT, 15).into_font())
+                .color(&RGBColor(214, 39, 40))
+                .pos(Pos::new(HPos::Left, VPos::Center));
+            area.draw(&Text::new("| collision", (10, y + 10), red))
+                .map_err(drawing_failed)?;
+        }
         Ok(())
     }
 }

@@ -33,6 +33,8 @@ pub struct Group {
     pub collision_rate: Option<Estimate>,
     /// Throughput (veh/h).
     pub throughput: Option<Estimate>,
+    /// Mean speed of the vehicles in the network (m/s).
+    pub mean_speed: Option<Estimate>,
 }
 
 /// All groups of a campaign, in grid order, with the axes they span.
@@ -60,7 +62,8 @@ impl Summary {
         let delay_col = column(t, path, "mean_delay_s")?;
         let rate_col = column(t, path, "controllable_collision_rate")?;
         let tp_col = column(t, path, "throughput_veh_h")?;
-        let mut groups: Vec<(Group, [Vec<f64>; 3])> = Vec::new();
+        let speed_col = column(t, path, "mean_speed_mps")?;
+        let mut groups: Vec<(Group, [Vec<f64>; 4])> = Vec::new();
         let mut alphas: Vec<f64> = Vec::new();
         let mut lambdas: Vec<f64> = Vec::new();
         for row in &t.rows {
@@ -81,6 +84,7 @@ impl Summary {
                 value(delay_col, "mean_delay_s")?,
                 value(rate_col, "controllable_collision_rate")?,
                 value(tp_col, "throughput_veh_h")?,
+                value(speed_col, "mean_speed_mps")?,
             ];
             let same =
                 |g: &Group| g.planner == c.planner && g.alpha == c.alpha && g.lambda == c.lambda;
@@ -94,6 +98,7 @@ impl Summary {
                         delay: None,
                         collision_rate: None,
                         throughput: None,
+                        mean_speed: None,
                     },
                     Default::default(),
                 ));
@@ -114,10 +119,11 @@ impl Summary {
         lambdas.sort_by(f64::total_cmp);
         let groups: Vec<Group> = groups
             .into_iter()
-            .map(|(mut g, [d, r, tp])| {
+            .map(|(mut g, [d, r, tp, v])| {
                 g.delay = Estimate::of(&d);
                 g.collision_rate = Estimate::of(&r);
                 g.throughput = Estimate::of(&tp);
+                g.mean_speed = Estimate::of(&v);
                 g
             })
             .collect();

@@ -113,7 +113,7 @@ fn collision_rate_table(s: &Summary, p: &str) -> CsvFile {
     }
 }
 
-const SUMMARY_HEADER: [&str; 13] = [
+const SUMMARY_HEADER: [&str; 16] = [
     "planner",
     "alpha",
     "lambda",
@@ -127,6 +127,9 @@ const SUMMARY_HEADER: [&str; 13] = [
     "throughput_mean_veh_h",
     "throughput_ci95_veh_h",
     "throughput_n",
+    "mean_speed_mps",
+    "mean_speed_ci95_mps",
+    "mean_speed_n",
 ];
 
 /// One long table, a row per (planner, α, λ) with every estimate.
@@ -149,6 +152,7 @@ fn summary_row(g: &Group) -> Vec<String> {
     r.extend(estimate_cells(g.delay.as_ref(), 4, 1.0));
     r.extend(estimate_cells(g.collision_rate.as_ref(), 6, 1.0));
     r.extend(estimate_cells(g.throughput.as_ref(), 2, 1.0));
+    r.extend(estimate_cells(g.mean_speed.as_ref(), 3, 1.0));
     r
 }
 
