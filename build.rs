@@ -1,4 +1,5 @@
-//! Compiles the C++ shim over Debian's libsumo and links `libsumocpp`.
+//! Compiles the C++ shim over Debian's libsumo (and again over libtraci, for sumo-gui) and
+//! links `libsumocpp` and `libtracicpp`.
 use std::path::Path;
 
 fn main() {
@@ -10,6 +11,7 @@ fn main() {
         );
     }
     println!("cargo:rerun-if-changed=src/sumo/shim.cpp");
+    println!("cargo:rerun-if-changed=src/sumo/shim_traci.cpp");
     println!("cargo:rerun-if-changed=build.rs");
     cc::Build::new()
         .cpp(true)
@@ -18,5 +20,14 @@ fn main() {
         .flag_if_supported("-Wno-deprecated-declarations")
         .warnings(false)
         .compile("bkpbs_sumo_shim");
+    // The same shim over libtraci, which drives sumo-gui (`bkpbs episode --gui`).
+    cc::Build::new()
+        .cpp(true)
+        .file("src/sumo/shim_traci.cpp")
+        .flag_if_supported("-std=c++17")
+        .flag_if_supported("-Wno-deprecated-declarations")
+        .warnings(false)
+        .compile("bkpbs_traci_shim");
     println!("cargo:rustc-link-lib=dylib=sumocpp");
+    println!("cargo:rustc-link-lib=dylib=tracicpp");
 }

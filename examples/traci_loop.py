@@ -17,6 +17,7 @@ options come from ``bkpbs.write_scenario``. Unlike ``bkpbs episode``, SUMO inser
 from the route file itself and drives ramp HDVs with its own lane-change model.
 
     python examples/traci_loop.py --planner bk-pbs --steps 400 [--libsumo] [--timing]
+        [--gui [--gui-delay MS]]
 
 ``traci`` comes from ``$SUMO_HOME/tools`` (Debian: /usr/share/sumo/tools, package sumo-tools);
 ``--libsumo`` needs SUMO's Python libsumo, which Debian ships for its own ``/usr/bin/python3``.
@@ -31,7 +32,7 @@ import os
 import sys
 import tempfile
 import time
-from typing import Any, Dict
+from typing import Any, Dict, List
 
 import bkpbs
 
@@ -73,6 +74,17 @@ def remove_collisions(sumo: Any, crashed: set) -> int:
     return len(collisions)
 
 
+def sumo_command(args: argparse.Namespace, files: Dict[str, Any]) -> List[str]:
+    """SUMO's command line: the scenario's, in sumo-gui with ``--gui`` (started at once, closed
+    at the end, paused ``--gui-delay`` ms per step, real time by default)."""
+    cmd = list(files["sumo_args"])
+    if args.gui:
+        delay = args.gui_delay if args.gui_delay is not None else files["dt"] * 1000.0
+        cmd[0] = "sumo-gui"
+        cmd += ["--start", "true", "--quit-on-end", "true", "--delay", f"{delay:g}"]
+    return cmd
+
+
 def run(args: argparse.Namespace, sumo: Any, files: Dict[str, Any]) -> Dict[str, float]:
     """The TraCI loop; returns counts and seconds spent per phase."""
     controller = bkpbs.Controller(args.planner)
@@ -83,7 +95,7 @@ def run(args: argparse.Namespace, sumo: Any, files: Dict[str, Any]) -> Dict[str,
     crashed: set = set()
     speed_sum = speed_samples = 0.0
     t_start = clock()
-    sumo.start(files["sumo_args"])
+    sumo.start(sumo_command(args, files))
     loop_start = clock()
     try:
         for step in range(args.steps):
@@ -139,7 +151,16 @@ def main() -> int:
     p.add_argument("--libsumo", action="store_true", help="libsumo in-process instead of traci")
     p.add_argument("--timing", action="store_true", help="per-step costs vs the Rust runner")
     p.add_argument("--files", help="directory for the scenario files (default: temporary)")
+    p.add_argument("--gui", action="store_true", help="show the run in sumo-gui (traci only)")
+    p.add_argument("--gui-delay", type=float, metavar="MS",
+                   help="sumo-gui's pause per step (default: real time); implies --gui")
     args = p.parse_args()
+    args.gui = args.gui or args.gui_delay is not None
+    if args.gui and args.libsumo:
+        sys.exit("error: --gui needs traci (sumo-gui is a process of its own), not --libsumo")
+    if args.gui and not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
+        sys.exit("error: no display for sumo-gui (DISPLAY is not set); on a machine without one "
+                 "run under a virtual X server: xvfb-run -a python examples/traci_loop.py --gui")
 
     sumo = import_sumo(args.libsumo)
     with tempfile.TemporaryDirectory(prefix="bkpbs-traci-") as tmp:

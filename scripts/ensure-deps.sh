@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Installs what bkpbs needs on a Debian machine, only if missing (idempotent):
 # SUMO with libsumo's C++ library and headers (Debian packages sumo, sumo-tools), a C++ compiler,
-# the DejaVu font for report figures (fonts-dejavu-core), and a Rust toolchain check. Fails with
+# the DejaVu font for report figures (fonts-dejavu-core), a virtual X server for the sumo-gui
+# test (xvfb, xauth), and a Rust toolchain check. Fails with
 # one clear line when something cannot be had.
 set -euo pipefail
 
@@ -17,6 +18,9 @@ command -v c++ >/dev/null 2>&1 || need_apt+=(g++)
 command -v make >/dev/null 2>&1 || need_apt+=(make)
 # The font of the campaign report's figures (read at run time; no fontconfig needed).
 [ -f /usr/share/fonts/truetype/dejavu/DejaVuSans.ttf ] || need_apt+=(fonts-dejavu-core)
+# A virtual X server, so that the test of `episode --gui` (sumo-gui) runs without a display.
+command -v xvfb-run >/dev/null 2>&1 || need_apt+=(xvfb)
+command -v xauth >/dev/null 2>&1 || need_apt+=(xauth)
 
 if [ ${#need_apt[@]} -gt 0 ]; then
     pkgs=$(printf '%s\n' "${need_apt[@]}" sumo sumo-tools | sort -u | tr '\n' ' ')

@@ -370,6 +370,13 @@ pub struct SumoSettings {
     pub additional_files: Vec<PathBuf>,
     /// Extra SUMO command-line options, appended last.
     pub extra_args: Vec<String>,
+    /// Run the episode in SUMO's own sumo-gui (through libtraci) instead of in-process
+    /// libsumo; the results are the same. Needs a display.
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub gui: bool,
+    /// Pause of sumo-gui per step (ms); default: real time (one step length).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub gui_delay_ms: Option<f64>,
 }
 
 impl Scenario {
@@ -473,7 +480,20 @@ impl Config {
         check_pbs(&self.pbs)?;
         check_planner(&self.planner)?;
         check_ramp_merge(&self.ramp_merge)?;
-        check_predictor(&self.predictor)
+        check_predictor(&self.predictor)?;
+        check_sumo(&self.sumo)
+    }
+}
+
+/// sumo-gui's pause per step: from none to ten seconds.
+fn check_sumo(s: &SumoSettings) -> Result<(), ConfigError> {
+    match s.gui_delay_ms {
+        Some(d) if !(0.0..=10_000.0).contains(&d) => Err(ConfigError::Invalid {
+            field: "sumo.gui_delay_ms",
+            value: d.to_string(),
+            reason: "must lie in [0, 10000] ms",
+        }),
+        _ => Ok(()),
     }
 }
 

@@ -43,6 +43,7 @@ pub fn episode_error(e: &EpisodeError) -> PyErr {
     };
     match e {
         EpisodeError::Config(_)
+        | EpisodeError::NoGui(_)
         | EpisodeError::Controller(_)
         | EpisodeError::Input(InputError::MissingNet(_))
         | EpisodeError::Road(NetworkError::Shape(_)) => BkpbsError::new_err(message),

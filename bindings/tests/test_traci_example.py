@@ -39,6 +39,22 @@ def test_traci_loop_timing_against_the_rust_runner():
     assert "per step (ms), traci loop" in out and "per step (ms), Rust runner" in out
 
 
+def test_traci_loop_in_sumo_gui_under_a_virtual_display():
+    # Same run as without the GUI (traci drives sumo-gui instead of sumo): same counts.
+    args = ("--planner", "bk-pbs", "--steps", "60", "--seed", "2")
+    plain = run_example(*args)
+    p = subprocess.run(
+        ["xvfb-run", "-a", sys.executable, str(EXAMPLE), *args, "--gui-delay", "0"],
+        capture_output=True, text=True, timeout=300,
+    )
+    assert p.returncode == 0, p.stdout + p.stderr
+    counts = lambda out: out.strip().splitlines()[-1].split("via traci")[1]
+    assert counts(p.stdout) == counts(plain)
+    env = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY")}
+    p = subprocess.run([sys.executable, str(EXAMPLE), "--gui"], capture_output=True, text=True, env=env)
+    assert p.returncode == 1 and p.stderr.startswith("error: no display"), p.stderr
+
+
 def _libsumo_python():
     """An interpreter with SUMO's Python libsumo: this one, else Debian's own python3."""
     probe = "import sys; sys.path.append('/usr/share/sumo/tools'); import libsumo"

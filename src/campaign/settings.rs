@@ -320,8 +320,12 @@ impl Settings {
     pub fn scenario_difference(&self, other: &Settings) -> Option<String> {
         let mut a = self.config.clone();
         let mut b = other.config.clone();
-        a.sumo.verbose = false;
-        b.sumo.verbose = false;
+        for c in [&mut a, &mut b] {
+            // How SUMO is watched does not change what it computes.
+            c.sumo.verbose = false;
+            c.sumo.gui = false;
+            c.sumo.gui_delay_ms = None;
+        }
         first_difference(
             &toml::Value::Table(scenario_table(&a)),
             &toml::Value::Table(scenario_table(&b)),

@@ -8,6 +8,7 @@ use clap::Args;
 use bkpbs::config::{Config, PredictorKind, Scenario};
 use bkpbs::episode::trace::Tracer;
 use bkpbs::episode::Driver;
+use bkpbs::sumo::files as sumo_files;
 use bkpbs::{controller, episode};
 
 use super::scenario::{ScenarioArgs, TrajectoryArgs};
@@ -32,6 +33,13 @@ pub struct EpisodeArgs {
     trace: bool,
     #[command(flatten)]
     trajectories: TrajectoryArgs,
+    /// Show the episode live in SUMO's own sumo-gui (same results; needs a display): CAVs
+    /// green on their plan, orange changing lanes, red when the shield took over.
+    #[arg(long)]
+    gui: bool,
+    /// sumo-gui's pause per step in ms [default: real time]; implies --gui.
+    #[arg(long, value_name = "MS", allow_negative_numbers = true)]
+    gui_delay: Option<f64>,
 }
 
 /// A checked episode: the planner exists for this configuration and the output place is known.
@@ -47,6 +55,7 @@ impl EpisodeArgs {
     pub fn resolve(self) -> Result<Episode> {
         let predictor = self.predictor;
         let trajectories = self.trajectories.format();
+        let (gui, gui_delay) = (self.gui, self.gui_delay);
         let config = self.scenario.resolve_with(|c| {
             if let Some(kind) = predictor {
                 c.predictor.kind = kind;
@@ -54,7 +63,12 @@ impl EpisodeArgs {
             if let Some(format) = trajectories {
                 c.output.trajectories = format;
             }
+            c.sumo.gui |= gui || gui_delay.is_some();
+            c.sumo.gui_delay_ms = gui_delay.or(c.sumo.gui_delay_ms);
         })?;
+        if let Some(why) = config.sumo.gui.then(sumo_files::gui_unavailable).flatten() {
+            anyhow::bail!("cannot show the episode: {why}");
+        }
         controller::check(&self.planner, &config)?;
         let out = self
             .out

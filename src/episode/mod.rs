@@ -6,6 +6,7 @@
 pub mod bench;
 pub mod demand;
 pub mod entry;
+pub mod gui;
 pub mod merge_rule;
 pub mod metrics;
 pub mod output;

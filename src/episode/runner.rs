@@ -12,6 +12,7 @@ use crate::config::{Config, ConfigError, TStarSpeed};
 use crate::controller::{self, BuildError, CavHandling, Command, Controller, PlanStats};
 use crate::episode::demand::{self, PlannedVehicle};
 use crate::episode::entry::EntryControl;
+use crate::episode::gui::GuiColours;
 use crate::episode::merge_rule::RampMergeRule;
 use crate::episode::metrics::{
     percentile, CollisionEvent, Outcome, Summary, SummaryInput, Timing, VehicleRecord,
@@ -59,6 +60,9 @@ pub enum EpisodeError {
         time: f64,
         cause: SumoError,
     },
+    /// `sumo.gui` asked for sumo-gui where it cannot run.
+    #[error("cannot show the episode: {0}")]
+    NoGui(String),
     /// A stop signal (Ctrl-C, `kill`) arrived: the episode ended early, SUMO was closed and
     /// its input removed; nothing was written.
     #[error("interrupted by {} at step {step}; nothing written", crate::io::interrupt::name(*.signal))]
@@ -184,6 +188,14 @@ pub fn run_observed(
     observer: &mut dyn Observer,
 ) -> Result<EpisodeResult, EpisodeError> {
     let wall = Instant::now();
+    if let Some(why) = config
+        .sumo
+        .gui
+        .then(crate::sumo::files::gui_unavailable)
+        .flatten()
+    {
+        return Err(EpisodeError::NoGui(why));
+    }
     let input = EpisodeInput::write(config)?;
     let capture = if config.sumo.verbose {
         None
@@ -289,6 +301,8 @@ struct Episode<'a> {
     trajectories: Option<TrajectoryLog>,
     /// The trajectory row of each scene vehicle in the current step.
     scene_rows: Vec<usize>,
+    /// CAV colours in sumo-gui, when shown there.
+    gui: Option<GuiColours>,
 }
 
 impl<'a> Episode<'a> {
@@ -324,6 +338,7 @@ impl<'a> Episode<'a> {
             speed_samples: 0,
             trajectories: TrajectoryLog::new(config.output.trajectories),
             scene_rows: Vec::new(),
+            gui: config.sumo.gui.then(GuiColours::default),
         }
     }
 
@@ -414,6 +429,9 @@ impl<'a> Episode<'a> {
         if self.controller.handling() == CavHandling::Commanded {
             self.apply(sim)?;
             self.record_sent();
+            if let Some(gui) = &mut self.gui {
+                gui.update(sim, &self.sumo_scene.scene, &self.commands)?;
+            }
         }
         Ok(())
     }

@@ -2,6 +2,7 @@
 #![allow(dead_code)]
 
 use std::os::raw::c_char;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 /// Mirrors `BkVehicleState` in the shim.
 #[repr(C)]
@@ -33,51 +34,64 @@ pub const LIST_ARRIVED: i32 = 2;
 pub const LIST_LANES: i32 = 3;
 pub const LIST_EDGES: i32 = 4;
 
-extern "C" {
-    pub fn bk_last_error() -> *const c_char;
-    pub fn bk_start(args: *const c_char, argc: usize) -> i32;
-    pub fn bk_close() -> i32;
-    pub fn bk_step() -> i32;
-    pub fn bk_time(out: *mut f64) -> i32;
-    pub fn bk_min_expected_number(out: *mut i32) -> i32;
-    pub fn bk_id_list(which: i32, buf: *mut *const c_char, len: *mut usize) -> i32;
-    pub fn bk_set_edge_names(names: *const c_char, count: usize) -> i32;
-    pub fn bk_vehicle_type(id: *const c_char, out: *mut *const c_char, len: *mut usize) -> i32;
-    pub fn bk_read_vehicles(
-        states: *mut *const RawVehicleState,
-        count: *mut usize,
-        strings: *mut *const c_char,
-        strings_len: *mut usize,
-    ) -> i32;
-    pub fn bk_collisions(
-        items: *mut *const RawCollision,
-        count: *mut usize,
-        strings: *mut *const c_char,
-        strings_len: *mut usize,
-    ) -> i32;
-    pub fn bk_set_speed(id: *const c_char, speed: f64) -> i32;
-    pub fn bk_vehicle_add(
-        id: *const c_char,
-        route: *const c_char,
-        type_id: *const c_char,
-        lane: i32,
-        speed: f64,
-    ) -> i32;
-    pub fn bk_vehicle_remove(id: *const c_char) -> i32;
-    pub fn bk_set_speeds(ids: *const c_char, count: usize, speeds: *const f64) -> i32;
-    pub fn bk_set_max_speed(id: *const c_char, speed: f64) -> i32;
-    pub fn bk_set_speed_mode(id: *const c_char, mode: i32) -> i32;
-    pub fn bk_set_lane_change_mode(id: *const c_char, mode: i32) -> i32;
-    pub fn bk_change_lane(id: *const c_char, lane_index: i32, duration: f64) -> i32;
-    pub fn bk_vehicle_driving_distance(
-        id: *const c_char,
-        edge: *const c_char,
-        pos: f64,
-        out: *mut f64,
-    ) -> i32;
-    pub fn bk_lane_length(lane: *const c_char, out: *mut f64) -> i32;
-    pub fn bk_lane_width(lane: *const c_char, out: *mut f64) -> i32;
-    pub fn bk_lane_max_speed(lane: *const c_char, out: *mut f64) -> i32;
-    pub fn bk_edge_lane_count(edge: *const c_char, out: *mut i32) -> i32;
-    pub fn bk_lane_shape(lane: *const c_char, xy: *mut *const f64, count: *mut usize) -> i32;
+/// Which shim the calls go to: libsumo (SUMO in this process) or libtraci (a sumo-gui process
+/// driven over TraCI). One simulation per process, so one switch for the process.
+static USE_TRACI: AtomicBool = AtomicBool::new(false);
+
+/// Sends the following calls to libtraci (`true`, sumo-gui) or libsumo (`false`).
+pub fn use_traci(traci: bool) {
+    USE_TRACI.store(traci, Ordering::SeqCst);
+}
+
+/// Declares each shim function twice (`bk_*` over libsumo, `bkt_*` over libtraci) and a
+/// wrapper named like the first that calls whichever [`use_traci`] chose.
+macro_rules! shim_functions {
+    ($( fn $name:ident / $traci:ident ( $($arg:ident : $ty:ty),* $(,)? ) -> $ret:ty; )*) => {
+        mod raw {
+            use super::*;
+            extern "C" {
+                $( pub fn $name($($arg: $ty),*) -> $ret; pub fn $traci($($arg: $ty),*) -> $ret; )*
+            }
+        }
+        $(
+            /// # Safety
+            /// The shim's contract for this function (see `shim.cpp`).
+            pub unsafe fn $name($($arg: $ty),*) -> $ret {
+                if USE_TRACI.load(Ordering::Relaxed) {
+                    raw::$traci($($arg),*)
+                } else {
+                    raw::$name($($arg),*)
+                }
+            }
+        )*
+    };
+}
+
+shim_functions! {
+    fn bk_last_error / bkt_last_error() -> *const c_char;
+    fn bk_start / bkt_start(args: *const c_char, argc: usize) -> i32;
+    fn bk_close / bkt_close() -> i32;
+    fn bk_step / bkt_step() -> i32;
+    fn bk_time / bkt_time(out: *mut f64) -> i32;
+    fn bk_min_expected_number / bkt_min_expected_number(out: *mut i32) -> i32;
+    fn bk_id_list / bkt_id_list(which: i32, buf: *mut *const c_char, len: *mut usize) -> i32;
+    fn bk_set_edge_names / bkt_set_edge_names(names: *const c_char, count: usize) -> i32;
+    fn bk_vehicle_type / bkt_vehicle_type(id: *const c_char, out: *mut *const c_char, len: *mut usize) -> i32;
+    fn bk_read_vehicles / bkt_read_vehicles(states: *mut *const RawVehicleState, count: *mut usize, strings: *mut *const c_char, strings_len: *mut usize) -> i32;
+    fn bk_collisions / bkt_collisions(items: *mut *const RawCollision, count: *mut usize, strings: *mut *const c_char, strings_len: *mut usize) -> i32;
+    fn bk_set_speed / bkt_set_speed(id: *const c_char, speed: f64) -> i32;
+    fn bk_vehicle_add / bkt_vehicle_add(id: *const c_char, route: *const c_char, type_id: *const c_char, lane: i32, speed: f64) -> i32;
+    fn bk_vehicle_remove / bkt_vehicle_remove(id: *const c_char) -> i32;
+    fn bk_set_speeds / bkt_set_speeds(ids: *const c_char, count: usize, speeds: *const f64) -> i32;
+    fn bk_set_max_speed / bkt_set_max_speed(id: *const c_char, speed: f64) -> i32;
+    fn bk_set_speed_mode / bkt_set_speed_mode(id: *const c_char, mode: i32) -> i32;
+    fn bk_set_lane_change_mode / bkt_set_lane_change_mode(id: *const c_char, mode: i32) -> i32;
+    fn bk_change_lane / bkt_change_lane(id: *const c_char, lane_index: i32, duration: f64) -> i32;
+    fn bk_vehicle_driving_distance / bkt_vehicle_driving_distance(id: *const c_char, edge: *const c_char, pos: f64, out: *mut f64) -> i32;
+    fn bk_lane_length / bkt_lane_length(lane: *const c_char, out: *mut f64) -> i32;
+    fn bk_lane_width / bkt_lane_width(lane: *const c_char, out: *mut f64) -> i32;
+    fn bk_lane_max_speed / bkt_lane_max_speed(lane: *const c_char, out: *mut f64) -> i32;
+    fn bk_edge_lane_count / bkt_edge_lane_count(edge: *const c_char, out: *mut i32) -> i32;
+    fn bk_lane_shape / bkt_lane_shape(lane: *const c_char, xy: *mut *const f64, count: *mut usize) -> i32;
+    fn bk_set_color / bkt_set_color(id: *const c_char, r: i32, g: i32, b: i32) -> i32;
 }

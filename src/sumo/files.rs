@@ -100,8 +100,9 @@ impl EpisodeInput {
 /// constant lateral speed.
 pub fn command_line(config: &Config, net: &Path, vtypes: &Path, routes: &Path) -> Vec<String> {
     let s = &config.scenario;
+    let program = if config.sumo.gui { GUI_PROGRAM } else { "sumo" };
     let mut args: Vec<String> = vec![
-        "sumo".into(),
+        program.into(),
         "--net-file".into(),
         net.display().to_string(),
         "--additional-files".into(),
@@ -140,8 +141,42 @@ pub fn command_line(config: &Config, net: &Path, vtypes: &Path, routes: &Path) -
             args.push("true".into());
         }
     }
+    if config.sumo.gui {
+        // Start at once, close at the end, and pause each step (real time by default).
+        let delay = config.sumo.gui_delay_ms.unwrap_or(s.dt * 1000.0);
+        for (opt, value) in [
+            ("--start", "true".to_string()),
+            ("--quit-on-end", "true".to_string()),
+            ("--delay", format!("{delay}")),
+        ] {
+            args.push(opt.into());
+            args.push(value);
+        }
+    }
     args.extend(config.sumo.extra_args.iter().cloned());
     args
+}
+
+/// The program that shows an episode (`sumo.gui`); `Simulation::start` drives it through
+/// libtraci when a command line starts with it.
+pub const GUI_PROGRAM: &str = "sumo-gui";
+
+/// Why sumo-gui cannot be shown here, if it cannot: no display, or no sumo-gui.
+pub fn gui_unavailable() -> Option<String> {
+    let display = ["DISPLAY", "WAYLAND_DISPLAY"]
+        .iter()
+        .any(|v| std::env::var_os(v).is_some_and(|d| !d.is_empty()));
+    if !display {
+        return Some(
+            "no display for sumo-gui (DISPLAY is not set); on a machine without one run under a \
+             virtual X server: xvfb-run -a bkpbs episode --gui …"
+                .into(),
+        );
+    }
+    let on_path = std::env::var_os("PATH").is_some_and(|path| {
+        std::env::split_paths(&path).any(|dir| dir.join(GUI_PROGRAM).is_file())
+    });
+    (!on_path).then(|| format!("{GUI_PROGRAM} is not installed (Debian: apt-get install sumo)"))
 }
 
 /// SUMO route file with the two routes (vehicles are added at run time by entry control).

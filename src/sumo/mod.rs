@@ -136,11 +136,14 @@ pub struct Simulation {
 }
 
 impl Simulation {
-    /// Starts SUMO with a full command line (`args[0]` is a program name that libsumo ignores).
+    /// Starts SUMO with a full command line: in this process through libsumo (`args[0]` is a
+    /// program name it ignores), or, when `args[0]` is `sumo-gui`, that program driven through
+    /// libtraci (same calls, same results, shown live).
     ///
     /// Waits while another thread of this process has a simulation open.
     pub fn start(args: &[String]) -> Result<Self, SumoError> {
         let slot = SlotGuard::acquire()?;
+        ffi::use_traci(args.first().map(String::as_str) == Some(files::GUI_PROGRAM));
         let mut buf = Vec::new();
         for a in args {
             buf.extend_from_slice(c_string(a)?.as_bytes_with_nul());
@@ -392,6 +395,15 @@ impl Simulation {
         })
     }
 
+    /// The vehicle's colour in the GUI (red, green, blue).
+    pub fn set_color(&mut self, id: &str, [r, g, b]: [u8; 3]) -> Result<(), SumoError> {
+        let cid = c_string(id)?;
+        // SAFETY: valid C string.
+        decode("vehicle.setColor", unsafe {
+            ffi::bk_set_color(cid.as_ptr(), r.into(), g.into(), b.into())
+        })
+    }
+
     /// SUMO's speed-mode bit set (0 = no checks at all: the command is the speed).
     pub fn set_speed_mode(&mut self, id: &str, mode: i32) -> Result<(), SumoError> {
         let cid = c_string(id)?;
@@ -456,7 +468,7 @@ impl Simulation {
         &self,
         lane: &str,
         call: &'static str,
-        f: unsafe extern "C" fn(*const c_char, *mut f64) -> i32,
+        f: unsafe fn(*const c_char, *mut f64) -> i32,
     ) -> Result<f64, SumoError> {
         let clane = c_string(lane)?;
         let mut v = 0.0;

@@ -2,7 +2,16 @@
 // it into a status code plus a message kept in `g_error`, so no exception ever unwinds into Rust.
 // Strings and arrays handed back stay owned by this file and are valid until the next call of the
 // same function; the Rust side copies them at once.
+// Compiled twice: as is over libsumo (SUMO in this process), and with BK_TRACI defined
+// (shim_traci.cpp) over libtraci, SUMO's C++ TraCI client with the same API, which drives a
+// separate sumo-gui. The exported names then start with `bkt_` instead of `bk_`.
+#ifdef BK_TRACI
+#include <libsumo/libtraci.h>
+#define BK(name) bkt_##name
+#else
 #include <libsumo/libsumo.h>
+#define BK(name) bk_##name
+#endif
 
 #include <cstdint>
 #include <cstdio>
@@ -10,6 +19,9 @@
 #include <exception>
 #include <string>
 #include <vector>
+
+// The API classes live in libsumo:: or libtraci::; the data types in libsumo:: for both.
+namespace api = LIBSUMO_NAMESPACE;
 
 namespace {
 
@@ -74,10 +86,10 @@ struct BkCollision {
     double position;
 };
 
-const char* bk_last_error() { return g_error.c_str(); }
+const char* BK(last_error)() { return g_error.c_str(); }
 
 // `args` holds `argc` NUL-terminated strings back to back (argv[0] included; libsumo ignores it).
-int bk_start(const char* args, size_t argc) {
+int BK(start)(const char* args, size_t argc) {
     return guarded([&] {
         std::vector<std::string> cmd;
         const char* p = args;
@@ -85,37 +97,37 @@ int bk_start(const char* args, size_t argc) {
             cmd.emplace_back(p);
             p += std::strlen(p) + 1;
         }
-        libsumo::Simulation::start(cmd);
+        api::Simulation::start(cmd);
     });
 }
 
-int bk_close() {
-    return guarded([] { libsumo::Simulation::close(); });
+int BK(close)() {
+    return guarded([] { api::Simulation::close(); });
 }
 
-int bk_step() {
-    return guarded([] { libsumo::Simulation::step(); });
+int BK(step)() {
+    return guarded([] { api::Simulation::step(); });
 }
 
-int bk_time(double* out) {
-    return guarded([&] { *out = libsumo::Simulation::getTime(); });
+int BK(time)(double* out) {
+    return guarded([&] { *out = api::Simulation::getTime(); });
 }
 
-int bk_min_expected_number(int32_t* out) {
-    return guarded([&] { *out = libsumo::Simulation::getMinExpectedNumber(); });
+int BK(min_expected_number)(int32_t* out) {
+    return guarded([&] { *out = api::Simulation::getMinExpectedNumber(); });
 }
 
 // Id lists: 0 = vehicles now in the net, 1 = departed in the last step, 2 = arrived in the last step,
 // 3 = lanes of the net, 4 = edges of the net.
-int bk_id_list(int32_t which, const char** buf, size_t* len) {
+int BK(id_list)(int32_t which, const char** buf, size_t* len) {
     return guarded([&] {
         std::vector<std::string> ids;
         switch (which) {
-            case 0: ids = libsumo::Vehicle::getIDList(); break;
-            case 1: ids = libsumo::Simulation::getDepartedIDList(); break;
-            case 2: ids = libsumo::Simulation::getArrivedIDList(); break;
-            case 3: ids = libsumo::Lane::getIDList(); break;
-            case 4: ids = libsumo::Edge::getIDList(); break;
+            case 0: ids = api::Vehicle::getIDList(); break;
+            case 1: ids = api::Simulation::getDepartedIDList(); break;
+            case 2: ids = api::Simulation::getArrivedIDList(); break;
+            case 3: ids = api::Lane::getIDList(); break;
+            case 4: ids = api::Edge::getIDList(); break;
             default: throw std::runtime_error("unknown id list selector");
         }
         join(ids, g_list);
@@ -125,7 +137,7 @@ int bk_id_list(int32_t which, const char** buf, size_t* len) {
 }
 
 // Registers the edges whose vehicles `bk_read_vehicles` reports by index (NUL-separated names).
-int bk_set_edge_names(const char* names, size_t count) {
+int BK(set_edge_names)(const char* names, size_t count) {
     return guarded([&] {
         g_edge_names.clear();
         const char* p = names;
@@ -136,9 +148,9 @@ int bk_set_edge_names(const char* names, size_t count) {
     });
 }
 
-int bk_vehicle_type(const char* id, const char** out, size_t* len) {
+int BK(vehicle_type)(const char* id, const char** out, size_t* len) {
     return guarded([&] {
-        g_scalar_string = libsumo::Vehicle::getTypeID(id);
+        g_scalar_string = api::Vehicle::getTypeID(id);
         *out = g_scalar_string.data();
         *len = g_scalar_string.size();
     });
@@ -146,26 +158,26 @@ int bk_vehicle_type(const char* id, const char** out, size_t* len) {
 
 // Reads every vehicle in the net: states into an internal array and the ids, NUL-separated, in
 // the same order. Vehicle types never change, so they are asked for once (`bk_vehicle_type`).
-int bk_read_vehicles(const BkVehicleState** states, size_t* count, const char** strings,
+int BK(read_vehicles)(const BkVehicleState** states, size_t* count, const char** strings,
                      size_t* strings_len) {
     static std::vector<BkVehicleState> buffer;
     return guarded([&] {
-        const std::vector<std::string> ids = libsumo::Vehicle::getIDList();
+        const std::vector<std::string> ids = api::Vehicle::getIDList();
         buffer.clear();
         buffer.reserve(ids.size());
         g_vehicle_strings.clear();
         for (const auto& id : ids) {
-            const libsumo::TraCIPosition pos = libsumo::Vehicle::getPosition(id);
+            const libsumo::TraCIPosition pos = api::Vehicle::getPosition(id);
             BkVehicleState s{};
             s.x = pos.x;
             s.y = pos.y;
-            s.speed = libsumo::Vehicle::getSpeed(id);
-            s.acceleration = libsumo::Vehicle::getAcceleration(id);
-            s.angle = libsumo::Vehicle::getAngle(id);
-            s.lane_position = libsumo::Vehicle::getLanePosition(id);
-            s.lateral_offset = libsumo::Vehicle::getLateralLanePosition(id);
-            s.lane_index = libsumo::Vehicle::getLaneIndex(id);
-            const std::string edge = libsumo::Vehicle::getRoadID(id);
+            s.speed = api::Vehicle::getSpeed(id);
+            s.acceleration = api::Vehicle::getAcceleration(id);
+            s.angle = api::Vehicle::getAngle(id);
+            s.lane_position = api::Vehicle::getLanePosition(id);
+            s.lateral_offset = api::Vehicle::getLateralLanePosition(id);
+            s.lane_index = api::Vehicle::getLaneIndex(id);
+            const std::string edge = api::Vehicle::getRoadID(id);
             s.edge_code = -1;
             for (size_t e = 0; e < g_edge_names.size(); ++e) {
                 if (g_edge_names[e] == edge) {
@@ -186,11 +198,11 @@ int bk_read_vehicles(const BkVehicleState** states, size_t* count, const char** 
 
 // Collisions of the last step: numbers into an internal array, and
 // "collider\0victim\0colliderType\0victimType\0kind\0lane\0" per collision.
-int bk_collisions(const BkCollision** items, size_t* count, const char** strings,
+int BK(collisions)(const BkCollision** items, size_t* count, const char** strings,
                   size_t* strings_len) {
     static std::vector<BkCollision> buffer;
     return guarded([&] {
-        const std::vector<libsumo::TraCICollision> cs = libsumo::Simulation::getCollisions();
+        const std::vector<libsumo::TraCICollision> cs = api::Simulation::getCollisions();
         buffer.clear();
         g_collision_strings.clear();
         for (const auto& c : cs) {
@@ -208,76 +220,76 @@ int bk_collisions(const BkCollision** items, size_t* count, const char** strings
     });
 }
 
-int bk_set_speed(const char* id, double speed) {
-    return guarded([&] { libsumo::Vehicle::setSpeed(id, speed); });
+int BK(set_speed)(const char* id, double speed) {
+    return guarded([&] { api::Vehicle::setSpeed(id, speed); });
 }
 
 // Inserts a vehicle now (SUMO retries each step while its entry is blocked).
-int bk_vehicle_add(const char* id, const char* route, const char* type, int32_t lane, double speed) {
+int BK(vehicle_add)(const char* id, const char* route, const char* type, int32_t lane, double speed) {
     return guarded([&] {
         char speed_text[64];
         std::snprintf(speed_text, sizeof speed_text, "%.6f", speed);
-        libsumo::Vehicle::add(id, route, type, "now", std::to_string(lane), "base", speed_text);
+        api::Vehicle::add(id, route, type, "now", std::to_string(lane), "base", speed_text);
     });
 }
 
 // Takes a vehicle out of the simulation (as "vaporized").
-int bk_vehicle_remove(const char* id) {
-    return guarded([&] { libsumo::Vehicle::remove(id, libsumo::REMOVE_VAPORIZED); });
+int BK(vehicle_remove)(const char* id) {
+    return guarded([&] { api::Vehicle::remove(id, libsumo::REMOVE_VAPORIZED); });
 }
 
 // setSpeed for `count` vehicles at once: `ids` NUL-separated, `speeds` in the same order.
-int bk_set_speeds(const char* ids, size_t count, const double* speeds) {
+int BK(set_speeds)(const char* ids, size_t count, const double* speeds) {
     return guarded([&] {
         const char* p = ids;
         for (size_t i = 0; i < count; ++i) {
-            libsumo::Vehicle::setSpeed(p, speeds[i]);
+            api::Vehicle::setSpeed(p, speeds[i]);
             p += std::strlen(p) + 1;
         }
     });
 }
 
-int bk_set_max_speed(const char* id, double speed) {
-    return guarded([&] { libsumo::Vehicle::setMaxSpeed(id, speed); });
+int BK(set_max_speed)(const char* id, double speed) {
+    return guarded([&] { api::Vehicle::setMaxSpeed(id, speed); });
 }
 
-int bk_set_speed_mode(const char* id, int32_t mode) {
-    return guarded([&] { libsumo::Vehicle::setSpeedMode(id, mode); });
+int BK(set_speed_mode)(const char* id, int32_t mode) {
+    return guarded([&] { api::Vehicle::setSpeedMode(id, mode); });
 }
 
-int bk_set_lane_change_mode(const char* id, int32_t mode) {
-    return guarded([&] { libsumo::Vehicle::setLaneChangeMode(id, mode); });
+int BK(set_lane_change_mode)(const char* id, int32_t mode) {
+    return guarded([&] { api::Vehicle::setLaneChangeMode(id, mode); });
 }
 
-int bk_change_lane(const char* id, int32_t lane_index, double duration) {
-    return guarded([&] { libsumo::Vehicle::changeLane(id, lane_index, duration); });
+int BK(change_lane)(const char* id, int32_t lane_index, double duration) {
+    return guarded([&] { api::Vehicle::changeLane(id, lane_index, duration); });
 }
 
-int bk_vehicle_driving_distance(const char* id, const char* edge, double pos, double* out) {
-    return guarded([&] { *out = libsumo::Vehicle::getDrivingDistance(id, edge, pos); });
+int BK(vehicle_driving_distance)(const char* id, const char* edge, double pos, double* out) {
+    return guarded([&] { *out = api::Vehicle::getDrivingDistance(id, edge, pos); });
 }
 
-int bk_lane_length(const char* lane, double* out) {
-    return guarded([&] { *out = libsumo::Lane::getLength(lane); });
+int BK(lane_length)(const char* lane, double* out) {
+    return guarded([&] { *out = api::Lane::getLength(lane); });
 }
 
-int bk_lane_width(const char* lane, double* out) {
-    return guarded([&] { *out = libsumo::Lane::getWidth(lane); });
+int BK(lane_width)(const char* lane, double* out) {
+    return guarded([&] { *out = api::Lane::getWidth(lane); });
 }
 
-int bk_lane_max_speed(const char* lane, double* out) {
-    return guarded([&] { *out = libsumo::Lane::getMaxSpeed(lane); });
+int BK(lane_max_speed)(const char* lane, double* out) {
+    return guarded([&] { *out = api::Lane::getMaxSpeed(lane); });
 }
 
-int bk_edge_lane_count(const char* edge, int32_t* out) {
-    return guarded([&] { *out = libsumo::Edge::getLaneNumber(edge); });
+int BK(edge_lane_count)(const char* edge, int32_t* out) {
+    return guarded([&] { *out = api::Edge::getLaneNumber(edge); });
 }
 
 // Lane shape as "x0 y0 x1 y1 ..." (flat doubles).
-int bk_lane_shape(const char* lane, const double** xy, size_t* count) {
+int BK(lane_shape)(const char* lane, const double** xy, size_t* count) {
     static std::vector<double> buffer;
     return guarded([&] {
-        const libsumo::TraCIPositionVector shape = libsumo::Lane::getShape(lane);
+        const libsumo::TraCIPositionVector shape = api::Lane::getShape(lane);
         buffer.clear();
         for (const auto& p : shape.value) {
             buffer.push_back(p.x);
@@ -286,6 +298,11 @@ int bk_lane_shape(const char* lane, const double** xy, size_t* count) {
         *xy = buffer.data();
         *count = buffer.size();
     });
+}
+
+// A vehicle's colour in the GUI (alpha opaque).
+int BK(set_color)(const char* id, int32_t r, int32_t g, int32_t b) {
+    return guarded([&] { api::Vehicle::setColor(id, libsumo::TraCIColor(r, g, b, 255)); });
 }
 
 }  // extern "C"

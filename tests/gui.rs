@@ -1,0 +1,82 @@
+//! `bkpbs episode --gui`: the same episode through sumo-gui (libtraci), under a virtual X
+//! server (Debian's xvfb, installed by `make deps`).
+
+use std::process::Command;
+
+mod common;
+
+const BIN: &str = env!("CARGO_BIN_EXE_bkpbs");
+
+#[test]
+fn an_episode_shown_in_sumo_gui_gives_the_same_results() {
+    let d = tempfile::tempdir().unwrap();
+    let (plain, shown) = (d.path().join("plain"), d.path().join("gui"));
+    let args = |out: &std::path::Path| {
+        let mut a: Vec<String> = [
+            "episode",
+            "--planner",
+            "bk-pbs",
+            "--steps",
+            "200",
+            "--seed",
+            "3",
+        ]
+        .map(String::from)
+        .to_vec();
+        a.extend([
+            "--trajectories".into(),
+            "--out".into(),
+            out.display().to_string(),
+        ]);
+        a
+    };
+    let o = Command::new(BIN).args(args(&plain)).output().unwrap();
+    assert!(o.status.success(), "{}", common::stderr(&o));
+    let o = Command::new("xvfb-run")
+        .args(["-a", BIN])
+        .args(args(&shown))
+        .args(["--gui-delay", "0"])
+        .output()
+        .expect("xvfb-run (Debian's xvfb; `make deps` installs it)");
+    assert!(o.status.success(), "{}", common::stderr(&o));
+    for f in [
+        "episode.csv",
+        "vehicles.csv",
+        "collisions.csv",
+        "trajectories.csv",
+    ] {
+        assert_eq!(
+            std::fs::read(plain.join(f)).unwrap(),
+            std::fs::read(shown.join(f)).unwrap(),
+            "{f} differs with the GUI"
+        );
+    }
+}
+
+#[test]
+fn without_a_display_the_gui_is_refused_in_one_line() {
+    let d = tempfile::tempdir().unwrap();
+    let o = Command::new(BIN)
+        .args(["episode", "--gui", "--steps", "20", "--out"])
+        .arg(d.path().join("x"))
+        .env_remove("DISPLAY")
+        .env_remove("WAYLAND_DISPLAY")
+        .output()
+        .unwrap();
+    let err = common::stderr(&o);
+    assert_eq!(o.status.code(), Some(1));
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(
+        err.starts_with("error: cannot show the episode: no display"),
+        "{err}"
+    );
+    let o = Command::new(BIN)
+        .args(["episode", "--gui-delay", "-5", "--steps", "20"])
+        .output()
+        .unwrap();
+    assert!(
+        common::stderr(&o).contains("sumo.gui_delay_ms"),
+        "{}",
+        common::stderr(&o)
+    );
+}
