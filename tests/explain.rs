@@ -38,6 +38,7 @@ fn traced_crash(dir: &Path) -> std::path::PathBuf {
         "--steps",
         "120",
         "--trace",
+        "--trajectories",
         "--out",
         out.to_str().unwrap(),
     ]);
@@ -164,4 +165,18 @@ fn a_traced_episode_that_fails_writes_no_trace() {
     ]);
     assert_one_error_line(&o, &["SUMO failed at step"]);
     assert!(!out.join(TRACE_FILE).exists() && !out.join("collisions.csv").exists());
+}
+
+#[test]
+fn plot_marks_the_collision_and_draws_its_close_up() {
+    let d = tempfile::tempdir().unwrap();
+    let out = traced_crash(d.path());
+    let o = bkpbs(&["plot", out.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(text.contains("explain_1.png"), "{text}");
+    let tracks = bkpbs::report::lane_tracks::read(&out).unwrap();
+    assert_eq!(tracks.collisions.len(), 1, "{:?}", tracks.collisions);
+    let svg = std::fs::read_to_string(out.join("time_space.svg")).unwrap();
+    assert!(svg.contains("collision"), "legend");
 }
