@@ -567,25 +567,12 @@ fn a_campaign_stopped_by_ctrl_c_keeps_what_finished_and_resumes() {
     let (d, tmpdir) = (tempfile::tempdir().unwrap(), tempfile::tempdir().unwrap());
     let out = d.path();
     let marker = format!("{}-ctrl-c", std::process::id());
-    let args = [
-        "--planners",
-        "idm-mobil",
-        "--alphas",
-        "0.5",
-        "--lambdas",
-        "3000",
-        "--seeds",
-        "3",
-        "--steps",
-        "40",
-        "--workers",
-        "1",
-    ];
+    let args = idm_mobil_cells("3", "1");
     let child = Command::new(BIN)
         .arg("campaign")
         .arg("--out")
         .arg(out)
-        .args(args)
+        .args(&args)
         .env(bkpbs::campaign::worker::FAULT_ENV, "hang:2")
         .env("BKPBS_TEST_MARK", &marker)
         .env("TMPDIR", tmpdir.path())
@@ -742,26 +729,13 @@ fn killed_campaign_resumes_without_losing_or_duplicating_episodes() {
 fn failed_episodes_are_recorded_others_go_on_and_a_rerun_repairs_them() {
     let d = tempfile::tempdir().unwrap();
     let out = d.path();
-    let args = [
-        "--planners",
-        "idm-mobil",
-        "--alphas",
-        "0.5",
-        "--lambdas",
-        "3000",
-        "--seeds",
-        "4",
-        "--steps",
-        "40",
-        "--workers",
-        "1",
-    ];
+    let args = idm_mobil_cells("4", "1");
     let with_fault = |fault: &str| {
         Command::new(BIN)
             .arg("campaign")
             .arg("--out")
             .arg(out)
-            .args(args)
+            .args(&args)
             .env(bkpbs::campaign::worker::FAULT_ENV, fault)
             .output()
             .unwrap()
@@ -814,28 +788,13 @@ fn an_episode_over_the_timeout_is_stopped_and_recorded_as_failed() {
     // Without a limit, one hanging episode held its worker, and so the campaign, forever.
     let d = tempfile::tempdir().unwrap();
     let out = d.path();
-    let args = [
-        "--planners",
-        "idm-mobil",
-        "--alphas",
-        "0.5",
-        "--lambdas",
-        "3000",
-        "--seeds",
-        "3",
-        "--steps",
-        "40",
-        "--workers",
-        "2",
-        "--episode-timeout",
-        "4",
-    ];
+    let args = [&idm_mobil_cells("3", "2")[..], &["--episode-timeout", "4"]].concat();
     let started = std::time::Instant::now();
     let o = Command::new(BIN)
         .arg("campaign")
         .arg("--out")
         .arg(out)
-        .args(args)
+        .args(&args)
         .env(bkpbs::campaign::worker::FAULT_ENV, "hang:1")
         .output()
         .unwrap();
@@ -856,6 +815,24 @@ fn an_episode_over_the_timeout_is_stopped_and_recorded_as_failed() {
     let o = campaign(out, &args);
     assert_ok(&o);
     assert_eq!(already_done(&o), 2);
+}
+
+/// One idm-mobil cell (α 0.5, λ 3000) × `seeds` seeds of 40 steps, on `workers` workers.
+fn idm_mobil_cells(seeds: &'static str, workers: &'static str) -> Vec<&'static str> {
+    vec![
+        "--planners",
+        "idm-mobil",
+        "--alphas",
+        "0.5",
+        "--lambdas",
+        "3000",
+        "--seeds",
+        seeds,
+        "--steps",
+        "40",
+        "--workers",
+        workers,
+    ]
 }
 
 /// Runs the binary and checks for one `error:` line naming `culprit` and a non-zero exit.
@@ -947,20 +924,7 @@ fn a_campaign_file_sets_the_grid_and_scenario_and_a_changed_scenario_is_refused(
 #[test]
 fn campaign_trajectories_are_written_per_cell_and_are_no_setting() {
     let d = tempfile::tempdir().unwrap();
-    let args = [
-        "--planners",
-        "idm-mobil",
-        "--alphas",
-        "0.5",
-        "--lambdas",
-        "3000",
-        "--seeds",
-        "2",
-        "--steps",
-        "40",
-        "--workers",
-        "2",
-    ];
+    let args = idm_mobil_cells("2", "2");
     assert_ok(&campaign(
         d.path(),
         &[&args[..], &["--trajectories"]].concat(),

@@ -351,24 +351,55 @@ impl Painter for Heatmap {
     where
         DB::ErrorType: 'static,
     {
-        let vmax = self.scale_max();
+        let bar = ColourBar {
+            label: &self.scale_label,
+            margins: (40, 58, 10),
+            label_area: 84,
+            font: 15,
+        };
+        bar.paint(area, self.scale_max(), &|v| self.number(v))
+    }
+}
+
+/// A vertical viridis colour bar from 0 to a maximum, its numbers on the right.
+pub(super) struct ColourBar<'a> {
+    pub label: &'a str,
+    /// Top, bottom and left margins (px).
+    pub margins: (u32, u32, u32),
+    /// Width of the numbers and label on the right (px).
+    pub label_area: u32,
+    /// Size of the numbers; the label is one larger.
+    pub font: u32,
+}
+
+impl ColourBar<'_> {
+    pub(super) fn paint<DB: DrawingBackend>(
+        &self,
+        area: &DrawingArea<DB, Shift>,
+        vmax: f64,
+        number: &dyn Fn(f64) -> String,
+    ) -> Result<(), String>
+    where
+        DB::ErrorType: 'static,
+    {
+        let (top, bottom, left) = self.margins;
         let mut scale = ChartBuilder::on(area)
-            .margin_top(40)
-            .margin_bottom(58)
-            .margin_left(10)
+            .margin_top(top)
+            .margin_bottom(bottom)
+            .margin_left(left)
             .margin_right(10)
-            .right_y_label_area_size(84)
+            .right_y_label_area_size(self.label_area)
             .build_cartesian_2d(0.0..1.0, 0.0..vmax)
             .map_err(drawing_failed)?;
         scale
             .configure_mesh()
             .disable_mesh()
             .disable_x_axis()
-            .y_desc(&self.scale_label)
+            .y_desc(self.label)
             .y_labels(6)
-            .y_label_formatter(&|v| self.number(*v))
-            .label_style((FONT, 15))
-            .axis_desc_style((FONT, 16))
+            .y_label_formatter(&|v| number(*v))
+            .label_style((FONT, self.font))
+            .axis_desc_style((FONT, self.font + 1))
             .draw()
             .map_err(drawing_failed)?;
         const STEPS: usize = 100;

@@ -9,7 +9,7 @@ use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 use super::lane_tracks::LaneTracks;
-use super::plot::{drawing_failed, render, viridis, Figure, Painter, PlotError, FONT};
+use super::plot::{drawing_failed, render, viridis, ColourBar, Figure, Painter, PlotError, FONT};
 
 const PANEL_W: u32 = 1000;
 const PANEL_H: u32 = 280;
@@ -234,7 +234,13 @@ impl Painter for LaneFigure<'_> {
         DB::ErrorType: 'static,
     {
         let (bar, legend) = area.split_vertically(area.dim_in_pixel().1.min(420) as i32 - 150);
-        paint_speed_bar(&bar, self.speed_max())?;
+        let speed_bar = ColourBar {
+            label: "speed (m/s)",
+            margins: (60, 20, 60),
+            label_area: 70,
+            font: 14,
+        };
+        speed_bar.paint(&bar, self.speed_max(), &|v| format!("{v:.0}"))?;
         let text = TextStyle::from((FONT, 15).into_font()).pos(Pos::new(HPos::Left, VPos::Center));
         let grey = RGBColor(90, 90, 90);
         let mut y = 20;
@@ -264,45 +270,4 @@ impl Painter for LaneFigure<'_> {
         }
         Ok(())
     }
-}
-
-/// A vertical viridis bar from 0 to `vmax` m/s.
-fn paint_speed_bar<DB: DrawingBackend>(
-    area: &DrawingArea<DB, Shift>,
-    vmax: f64,
-) -> Result<(), String>
-where
-    DB::ErrorType: 'static,
-{
-    let mut scale = ChartBuilder::on(area)
-        .margin_top(60)
-        .margin_bottom(20)
-        .margin_left(60)
-        .margin_right(10)
-        .right_y_label_area_size(70)
-        .build_cartesian_2d(0.0..1.0, 0.0..vmax)
-        .map_err(drawing_failed)?;
-    scale
-        .configure_mesh()
-        .disable_mesh()
-        .disable_x_axis()
-        .y_desc("speed (m/s)")
-        .y_labels(6)
-        .y_label_formatter(&|v| format!("{v:.0}"))
-        .label_style((FONT, 14))
-        .axis_desc_style((FONT, 15))
-        .draw()
-        .map_err(drawing_failed)?;
-    const STEPS: usize = 100;
-    scale
-        .draw_series((0..STEPS).map(|i| {
-            let lo = vmax * i as f64 / STEPS as f64;
-            let hi = vmax * (i + 1) as f64 / STEPS as f64;
-            Rectangle::new(
-                [(0.0, lo), (1.0, hi)],
-                viridis((i as f64 + 0.5) / STEPS as f64).filled(),
-            )
-        }))
-        .map_err(drawing_failed)?;
-    Ok(())
 }
