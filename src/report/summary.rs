@@ -55,37 +55,50 @@ fn column(t: &Table, path: &Path, name: &'static str) -> Result<usize, SummaryEr
     })
 }
 
+/// The `episodes.csv` columns averaged per group, in the order of [`Group`]'s estimates.
+const SAMPLED: [&str; 4] = [
+    "mean_delay_s",
+    "controllable_collision_rate",
+    "throughput_veh_h",
+    "mean_speed_mps",
+];
+
+/// A row's values in the [`SAMPLED`] columns (at `columns`); empty fields are `None`.
+fn sampled_values(
+    row: &crate::campaign::results::Row,
+    columns: &[usize; 4],
+    path: &Path,
+) -> Result<[Option<f64>; 4], SummaryError> {
+    let mut out = [None; 4];
+    for ((slot, &i), name) in out.iter_mut().zip(columns).zip(SAMPLED) {
+        let text = row.fields.get(i).unwrap_or("");
+        if text.is_empty() {
+            continue;
+        }
+        *slot = Some(text.parse().map_err(|_| SummaryError::Value {
+            path: path.to_path_buf(),
+            cell: row.cell.to_string(),
+            column: name,
+            value: text.to_string(),
+        })?);
+    }
+    Ok(out)
+}
+
 impl Summary {
     /// Groups the (sorted) episode rows; `path` names the file in errors.
     pub fn from_results(res: &Results, path: &Path) -> Result<Summary, SummaryError> {
         let t = &res.episodes;
-        let delay_col = column(t, path, "mean_delay_s")?;
-        let rate_col = column(t, path, "controllable_collision_rate")?;
-        let tp_col = column(t, path, "throughput_veh_h")?;
-        let speed_col = column(t, path, "mean_speed_mps")?;
+        let mut columns = [0; 4];
+        for (slot, name) in columns.iter_mut().zip(SAMPLED) {
+            *slot = column(t, path, name)?;
+        }
         let mut groups: Vec<(Group, [Vec<f64>; 4])> = Vec::new();
         let mut alphas: Vec<f64> = Vec::new();
         let mut lambdas: Vec<f64> = Vec::new();
         for row in &t.rows {
             let c = &row.cell;
-            let value = |i: usize, name: &'static str| -> Result<Option<f64>, SummaryError> {
-                let text = row.fields.get(i).unwrap_or("");
-                if text.is_empty() {
-                    return Ok(None);
-                }
-                text.parse().map(Some).map_err(|_| SummaryError::Value {
-                    path: path.to_path_buf(),
-                    cell: c.to_string(),
-                    column: name,
-                    value: text.to_string(),
-                })
-            };
-            let vals = [
-                value(delay_col, "mean_delay_s")?,
-                value(rate_col, "controllable_collision_rate")?,
-                value(tp_col, "throughput_veh_h")?,
-                value(speed_col, "mean_speed_mps")?,
-            ];
+            let vals = sampled_values(row, &columns, path)?;
             let same =
                 |g: &Group| g.planner == c.planner && g.alpha == c.alpha && g.lambda == c.lambda;
             if !groups.last().is_some_and(|(g, _)| same(g)) {
