@@ -399,3 +399,20 @@ fn an_episode_that_cannot_replace_every_file_leaves_the_earlier_set_whole() {
         );
     }
 }
+
+#[test]
+fn a_driver_profile_sumo_rejects_or_nobody_knows_is_one_error_line() {
+    let d = tmp();
+    let out = d.path().join("out");
+    let o = episode_into(&out, &["--hdv-profile", "reckless", "--steps", "10"]);
+    assert_clear_failure(&o, "unknown HDV profile 'reckless'", &out);
+    assert!(stderr(&o).contains("sumo-safe, paper, heterogeneous, krauss, eidm"));
+    // SUMO itself refuses a negative reaction time; its reason is in the line.
+    let (cfg, out) = config_file(
+        d.path(),
+        "bad.toml",
+        "[hdv]\nprofile = \"mine\"\n[hdv.profiles.mine]\nattributes = { tau = \"-1\" }\n",
+    );
+    let o = episode_into(&out, &["--config", &cfg, "--steps", "10"]);
+    assert_clear_failure(&o, "SUMO said", &out);
+}

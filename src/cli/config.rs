@@ -21,6 +21,10 @@ pub struct ConfigArgs {
     /// Start from this file instead of the defaults.
     #[arg(long)]
     config: Option<PathBuf>,
+    /// Use this HDV driver profile; `--print` then also shows its resolved settings (under
+    /// [hdv.profiles.NAME], ready to copy and edit).
+    #[arg(long, value_name = "NAME")]
+    hdv_profile: Option<String>,
 }
 
 /// What `config` prints: the TOML (`--print`, also without a flag) or the vehicle types.
@@ -32,7 +36,19 @@ pub enum ShowConfig {
 impl ConfigArgs {
     /// Loads (and so checks) the configuration to show.
     pub fn resolve(self) -> Result<ShowConfig> {
-        let config = load_config(self.config.as_deref(), |_| {})?;
+        let profile = self.hdv_profile;
+        let mut config = load_config(self.config.as_deref(), |c| {
+            if let Some(p) = &profile {
+                c.hdv.profile = p.clone();
+            }
+        })?;
+        if profile.is_some() {
+            let resolved = config.hdv.resolved()?;
+            config
+                .hdv
+                .profiles
+                .insert(config.hdv.profile.clone(), resolved);
+        }
         Ok(if self.vtypes {
             ShowConfig::VehicleTypes(config)
         } else {

@@ -43,6 +43,10 @@ pub struct ScenarioArgs {
     /// Network file to use instead of the embedded merge network.
     #[arg(long)]
     net: Option<PathBuf>,
+    /// HDV driver profile: sumo-safe (default), paper, heterogeneous, krauss, eidm, or one
+    /// the config file defines under [hdv.profiles.NAME].
+    #[arg(long, value_name = "NAME")]
+    hdv_profile: Option<String>,
     /// Let SUMO print its warnings.
     #[arg(long)]
     verbose: bool,
@@ -80,6 +84,9 @@ impl ScenarioArgs {
         }
         if let Some(n) = &self.net {
             s.net_file = Some(n.clone());
+        }
+        if let Some(p) = &self.hdv_profile {
+            c.hdv.profile = p.clone();
         }
         c.sumo.verbose |= self.verbose;
     }

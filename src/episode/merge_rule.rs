@@ -7,18 +7,23 @@
 //! request only into a gap it deems safe (the vehicle adapts its speed to find one). Decisions use
 //! their own random stream, so they are reproducible for a seed and independent of the demand.
 //!
+//! Under a gap-acceptance driver profile (`[hdv]`, e.g. `paper`) a decided HDV instead draws a
+//! critical time gap and moves over, without SUMO's safety check, whenever the gaps to its new
+//! follower and leader are at least that long (see [`accepts`]).
+//!
 //! A decided HDV standing at the very end of the acceleration lane forces its way in (SUMO then
 //! only avoids immediate collisions), as a stuck human driver does. Without it SUMO deadlocks:
 //! its main-lane follower stops to let the merger in (LC2013's cooperation) while the merger,
 //! standing, waits for a safe gap that never opens (seen with bk-mastar, α = 0.4, λ = 2500,
 //! seed 4: the right lane stood still for the last 50 s).
 
-use std::collections::HashSet;
+use std::collections::{HashMap, HashSet};
 use std::sync::Arc;
 
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
+use crate::config::hdv::RampMergeStyle;
 use crate::config::Config;
 use crate::model::road::MERGE_LANE;
 use crate::model::scene::{Kind, Origin, Scene};
@@ -31,7 +36,8 @@ pub const MERGE_STREAM: u64 = 2;
 pub struct MergeRequest {
     /// Scene index of the HDV.
     pub vehicle: usize,
-    /// Stuck at the lane end: merge ignoring safe gaps (avoiding only immediate collisions).
+    /// Merge ignoring SUMO's safe gaps (avoiding only immediate collisions): stuck at the lane
+    /// end, or a gap the driver accepted (gap-acceptance profiles).
     pub forced: bool,
 }
 
@@ -39,18 +45,27 @@ pub struct MergeRequest {
 #[derive(Debug, Clone)]
 pub struct RampMergeRule {
     exponent: f64,
+    style: RampMergeStyle,
     rng: ChaCha8Rng,
     decided: HashSet<Arc<str>>,
+    /// Each decided driver's critical time gap (s), gap-acceptance profiles only.
+    critical_gap: HashMap<Arc<str>, f64>,
 }
 
 impl RampMergeRule {
     pub fn new(config: &Config) -> Self {
         let mut rng = ChaCha8Rng::seed_from_u64(config.scenario.seed);
         rng.set_stream(MERGE_STREAM);
+        let style = config
+            .hdv
+            .resolved()
+            .map_or(RampMergeStyle::Safe, |p| p.ramp_merge);
         RampMergeRule {
             exponent: config.ramp_merge.exponent,
+            style,
             rng,
             decided: HashSet::new(),
+            critical_gap: HashMap::new(),
         }
     }
 
@@ -78,16 +93,70 @@ impl RampMergeRule {
                 let xi = (v.front() - road.merge_start) / zone;
                 let p = self.probability(xi);
                 if self.rng.gen::<f64>() < p {
-                    self.decided.insert(v.id.clone());
+                    self.decide(&v.id);
                 }
             }
-            if self.decided.contains(&v.id) {
-                let forced = road.forces_merge(v.front(), v.speed);
-                out.push(MergeRequest { vehicle: i, forced });
+            if !self.decided.contains(&v.id) {
+                continue;
+            }
+            if road.forces_merge(v.front(), v.speed) {
+                out.push(MergeRequest {
+                    vehicle: i,
+                    forced: true,
+                });
+            } else if let Some(&gap) = self.critical_gap.get(&v.id) {
+                if accepts(scene, i, gap) {
+                    out.push(MergeRequest {
+                        vehicle: i,
+                        forced: true,
+                    });
+                }
+            } else {
+                out.push(MergeRequest {
+                    vehicle: i,
+                    forced: false,
+                });
             }
         }
         out
     }
+
+    /// Records the decision and, with gap acceptance, draws the driver's critical gap.
+    fn decide(&mut self, id: &Arc<str>) {
+        self.decided.insert(id.clone());
+        if let RampMergeStyle::GapAcceptance { median_s, log_sd } = self.style {
+            let z = standard_normal(&mut self.rng);
+            self.critical_gap
+                .insert(id.clone(), median_s * (log_sd * z).exp());
+        }
+    }
+}
+
+/// A standard normal draw (Box–Muller).
+fn standard_normal(rng: &mut ChaCha8Rng) -> f64 {
+    let u1: f64 = 1.0 - rng.gen::<f64>();
+    let u2: f64 = rng.gen();
+    (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
+}
+
+/// Gap acceptance of the ramp HDV at scene index `i` into the lane to its left: the new
+/// follower at least `critical_gap` seconds behind (at the follower's speed), the new leader at
+/// least half that ahead (at the merger's own speed). Nothing alongside.
+pub fn accepts(scene: &Scene, i: usize, critical_gap: f64) -> bool {
+    let v = &scene.vehicles[i];
+    scene
+        .vehicles
+        .iter()
+        .filter(|u| u.lane == MERGE_LANE + 1)
+        .all(|u| {
+            if u.front() <= v.rear() {
+                v.rear() - u.front() >= critical_gap * u.speed.max(0.1)
+            } else if u.rear() >= v.front() {
+                u.rear() - v.front() >= 0.5 * critical_gap * v.speed.max(0.1)
+            } else {
+                false
+            }
+        })
 }
 
 #[cfg(test)]
@@ -177,5 +246,36 @@ mod tests {
         }
         let rate = decided as f64 / n as f64;
         assert!((rate - 0.25).abs() < 0.025, "{rate}");
+    }
+
+    #[test]
+    fn gap_acceptance_wants_the_critical_gap_behind_and_half_of_it_ahead() {
+        let road = Road::paper_default();
+        let with = |follower_s: f64, leader_s: f64| Scene {
+            time: 0.0,
+            road: road.clone(),
+            vehicles: vec![
+                ramp_hdv(150.0),
+                VehicleState::on_lane("f", Kind::Cav, Origin::Main, follower_s, 1, 25.0),
+                VehicleState::on_lane("l", Kind::Hdv, Origin::Main, leader_s, 1, 25.0),
+            ],
+        };
+        // Critical gap 1 s: 25 m behind (at the follower's 25 m/s), 10 m ahead (at 20 m/s).
+        assert!(accepts(
+            &with(150.0 - 5.0 - 25.5, 150.0 + 5.0 + 10.5),
+            0,
+            1.0
+        ));
+        assert!(!accepts(
+            &with(150.0 - 5.0 - 24.5, 150.0 + 5.0 + 10.5),
+            0,
+            1.0
+        ));
+        assert!(!accepts(
+            &with(150.0 - 5.0 - 25.5, 150.0 + 5.0 + 9.5),
+            0,
+            1.0
+        ));
+        assert!(!accepts(&with(152.0, 300.0), 0, 1.0), "a car alongside");
     }
 }

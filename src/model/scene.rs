@@ -22,9 +22,10 @@ impl Kind {
         }
     }
 
-    /// Parses a SUMO type id; SUMO names a per-vehicle copy of a type `type@vehicle`.
+    /// Parses a SUMO type id; SUMO names a per-vehicle copy of a type `type@vehicle`, and the
+    /// driver types of a heterogeneous profile are `hdv.0`, `hdv.1`, ….
     pub fn from_type_id(s: &str) -> Option<Kind> {
-        match s.split('@').next().unwrap_or(s) {
+        match s.split(['@', '.']).next().unwrap_or(s) {
             "cav" => Some(Kind::Cav),
             "hdv" => Some(Kind::Hdv),
             _ => None,

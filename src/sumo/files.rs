@@ -2,6 +2,10 @@
 
 use std::path::{Path, PathBuf};
 
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+use crate::config::hdv::{CarFollowing, HdvProfile};
 use crate::config::Config;
 use crate::model::road::EMBEDDED_NET;
 
@@ -17,24 +21,121 @@ pub enum InputError {
     },
 }
 
-/// SUMO vehicle types `hdv` and `cav` from the configured IDM parameters.
+/// SUMO vehicle types `hdv` and `cav` from the configured IDM parameters and the HDV driver
+/// profile (`[hdv]`).
 ///
 /// Both are 5 m × 2 m with a 35 m/s maximum; speedFactor 1 and speedDev 0 so that the desired
-/// speed is exactly the one the demand draws (SUMO's default would randomise it).
+/// speed is exactly the one the demand draws (SUMO's default would randomise it). A profile
+/// with per-driver draws makes `hdv` a `vTypeDistribution` of driver types `hdv.0`, `hdv.1`, …
+/// (drawn from the episode's seed), from which SUMO gives each HDV one.
 pub fn vehicle_types(config: &Config) -> String {
+    let profile = config
+        .hdv
+        .resolved()
+        .expect("a validated configuration names a known profile");
+    let hdv = match profile.draws.is_empty() {
+        true => vtype_line(&hdv_attributes(config, &profile, "hdv")),
+        false => driver_types(config, &profile),
+    };
+    let cav = vtype_line(&base_attributes(config, "cav", "0,200,0"));
+    format!(
+        "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<!-- Vehicle types of the merge scenario (written by bkpbs from its configuration). -->\n<additional>\n{hdv}{cav}</additional>\n"
+    )
+}
+
+/// Random stream of the drivers' drawn parameters.
+pub const DRIVER_STREAM: u64 = 5;
+
+/// Attributes in SUMO's order of the vType line.
+type Attributes = Vec<(String, String)>;
+
+/// The IDM type of the configuration (`[idm]`, `[scenario]`), as both kinds start.
+fn base_attributes(config: &Config, id: &str, color: &str) -> Attributes {
     let s = &config.scenario;
     let i = &config.idm;
-    let vtype = |id: &str, color: &str| {
-        format!(
-            "    <vType id=\"{id}\" vClass=\"passenger\" length=\"{}\" width=\"{}\" minGap=\"{}\" maxSpeed=\"{}\" accel=\"{}\" decel=\"{}\" emergencyDecel=\"{}\" tau=\"{}\" delta=\"{}\" carFollowModel=\"IDM\" laneChangeModel=\"LC2013\" speedFactor=\"1\" speedDev=\"0\" sigma=\"0\" color=\"{color}\"/>\n",
-            s.vehicle_length, s.vehicle_width, i.min_gap, s.v_max, i.accel, i.decel, i.max_decel, i.time_headway, i.delta
-        )
-    };
-    format!(
-        "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<!-- Vehicle types of the merge scenario (written by bkpbs from its configuration). -->\n<additional>\n{}{}</additional>\n",
-        vtype("hdv", "0,90,255"),
-        vtype("cav", "0,200,0")
-    )
+    [
+        ("id", id.to_string()),
+        ("vClass", "passenger".into()),
+        ("length", s.vehicle_length.to_string()),
+        ("width", s.vehicle_width.to_string()),
+        ("minGap", i.min_gap.to_string()),
+        ("maxSpeed", s.v_max.to_string()),
+        ("accel", i.accel.to_string()),
+        ("decel", i.decel.to_string()),
+        ("emergencyDecel", i.max_decel.to_string()),
+        ("tau", i.time_headway.to_string()),
+        ("delta", i.delta.to_string()),
+        ("carFollowModel", "IDM".into()),
+        ("laneChangeModel", "LC2013".into()),
+        ("speedFactor", "1".into()),
+        ("speedDev", "0".into()),
+        ("sigma", "0".into()),
+        ("color", color.into()),
+    ]
+    .into_iter()
+    .map(|(k, v)| (k.to_string(), v))
+    .collect()
+}
+
+/// The HDV type of a profile: its model, then its own attributes over the derived ones.
+fn hdv_attributes(config: &Config, profile: &HdvProfile, id: &str) -> Attributes {
+    let mut a = base_attributes(config, id, "0,90,255");
+    if profile.car_following == CarFollowing::Krauss {
+        a.retain(|(k, _)| k != "delta");
+    }
+    set(&mut a, "carFollowModel", profile.car_following.sumo_name());
+    for (k, v) in &profile.attributes {
+        set(&mut a, k, v);
+    }
+    a
+}
+
+/// Replaces attribute `key`, or appends it before the colour.
+fn set(a: &mut Attributes, key: &str, value: &str) {
+    match a.iter_mut().find(|(k, _)| k == key) {
+        Some(slot) => slot.1 = value.to_string(),
+        None => {
+            let at = a.len() - 1;
+            a.insert(at, (key.to_string(), value.to_string()));
+        }
+    }
+}
+
+fn vtype_line(a: &Attributes) -> String {
+    let attrs: Vec<String> = a.iter().map(|(k, v)| format!("{k}=\"{v}\"")).collect();
+    format!("    <vType {}/>\n", attrs.join(" "))
+}
+
+/// `hdv` as a distribution of `driver_types` types, each drawing the profile's `draws`
+/// uniformly (3 decimals), equally likely.
+fn driver_types(config: &Config, profile: &HdvProfile) -> String {
+    let mut rng = ChaCha8Rng::seed_from_u64(config.scenario.seed);
+    rng.set_stream(DRIVER_STREAM);
+    let mut out = String::from("    <vTypeDistribution id=\"hdv\">\n");
+    for k in 0..profile.driver_types {
+        let mut a = hdv_attributes(config, profile, &format!("hdv.{k}"));
+        for (key, [low, high]) in &profile.draws {
+            let v = if high > low {
+                rng.gen_range(*low..=*high)
+            } else {
+                *low
+            };
+            set(&mut a, key, &format!("{v:.3}"));
+        }
+        // The hardest braking must stay at least the comfortable one.
+        let decel: f64 = a
+            .iter()
+            .find(|(k, _)| k == "decel")
+            .map_or(0.0, |(_, v)| v.parse().unwrap_or(0.0));
+        if decel > config.idm.max_decel {
+            set(&mut a, "emergencyDecel", &format!("{decel:.3}"));
+        }
+        set(&mut a, "probability", "1");
+        out.push_str("    ");
+        out.push_str(&vtype_line(&a));
+    }
+    out.push_str("    </vTypeDistribution>\n");
+    out
 }
 
 /// Prefix of an episode's input directory in the temporary directory: `bkpbs-episode-<pid>-…`.
@@ -194,6 +295,44 @@ mod tests {
             vehicle_types(&Config::default()),
             "sumo_net/vtypes.add.xml drifted from the defaults: regenerate it with `bkpbs config --vtypes`"
         );
+    }
+
+    fn vtypes_of(profile: &str) -> String {
+        let mut c = Config::default();
+        c.hdv.profile = profile.into();
+        vehicle_types(&c)
+    }
+
+    #[test]
+    fn profiles_change_only_the_hdv_type() {
+        let cav_line = |t: &str| {
+            t.lines()
+                .find(|l| l.contains("id=\"cav\""))
+                .unwrap()
+                .to_string()
+        };
+        let default = vtypes_of("sumo-safe");
+        let krauss = vtypes_of("krauss");
+        let hdv = krauss.lines().find(|l| l.contains("id=\"hdv\"")).unwrap();
+        assert!(hdv.contains("carFollowModel=\"Krauss\"") && hdv.contains("sigma=\"0.5\""));
+        assert!(!hdv.contains("delta="), "Krauss has no δ: {hdv}");
+        assert!(vtypes_of("eidm").contains("carFollowModel=\"EIDM\" laneChangeModel=\"LC2013\""));
+        assert!(vtypes_of("paper").contains("lcAssertive=\"3\""));
+        for p in ["krauss", "eidm", "paper", "heterogeneous"] {
+            assert_eq!(cav_line(&vtypes_of(p)), cav_line(&default), "{p}");
+        }
+    }
+
+    #[test]
+    fn heterogeneous_drivers_are_a_distribution_drawn_from_the_seed() {
+        let t = vtypes_of("heterogeneous");
+        assert!(t.contains("<vTypeDistribution id=\"hdv\">"));
+        assert_eq!(t.matches("<vType id=\"hdv.").count(), 20);
+        assert_eq!(t, vtypes_of("heterogeneous"), "same seed, same drivers");
+        let mut c = Config::default();
+        c.hdv.profile = "heterogeneous".into();
+        c.scenario.seed = 9;
+        assert_ne!(t, vehicle_types(&c), "another seed, other drivers");
     }
 
     #[test]

@@ -3,9 +3,13 @@
 //! A TOML file may set any subset of fields; the rest keep their defaults. Unknown fields are an
 //! error, so a misspelt key never silently leaves a default in place.
 
+pub mod hdv;
+
 use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
+
+pub use hdv::{HdvProfile, HdvSettings};
 
 /// Why a configuration could not be used.
 #[derive(Debug, thiserror::Error)]
@@ -23,6 +27,10 @@ pub enum ConfigError {
         value: String,
         reason: &'static str,
     },
+    #[error("unknown HDV profile '{name}' (hdv.profile); known: {known}")]
+    UnknownProfile { name: String, known: String },
+    #[error("invalid setting hdv draw {key} = [{low}, {high}]: must be positive and low ≤ high")]
+    InvalidDraw { key: String, low: f64, high: f64 },
 }
 
 /// Everything an episode needs besides the controller.
@@ -37,6 +45,8 @@ pub struct Config {
     pub mobil: Mobil,
     /// Stochastic merge decision of HDVs on the ramp.
     pub ramp_merge: RampMerge,
+    /// Who the human drivers are (README: "HDV driver profiles").
+    pub hdv: HdvSettings,
     /// Motion primitives and M-A* (BK-M-A*, BK-PBS).
     pub planner: PlannerSettings,
     /// The high-level search of BK-PBS.
@@ -481,7 +491,8 @@ impl Config {
         check_planner(&self.planner)?;
         check_ramp_merge(&self.ramp_merge)?;
         check_predictor(&self.predictor)?;
-        check_sumo(&self.sumo)
+        check_sumo(&self.sumo)?;
+        self.hdv.validate()
     }
 }
 
