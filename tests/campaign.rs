@@ -86,6 +86,7 @@ fn grid_order_is_planner_alpha_lambda_seed_with_sorted_unique_values() {
         alpha,
         lambda,
         seed,
+        hdv_profile: "sumo-safe".into(),
     };
     assert_eq!(cells[0], c("idm-mobil", 0.4, 2500.0, 10));
     assert_eq!(cells[1], c("idm-mobil", 0.4, 2500.0, 11));
@@ -96,6 +97,23 @@ fn grid_order_is_planner_alpha_lambda_seed_with_sorted_unique_values() {
     assert_eq!(
         cells[0].dir_name(),
         PathBuf::from("idm-mobil").join("a0.4_l2500_s10")
+    );
+    // HDV profiles are an axis after the planner; other drivers get a folder of their own.
+    let g = g.with_profiles(&names(&["sumo-safe", "paper", "sumo-safe"]));
+    let cells = g.cells();
+    assert_eq!(g.len(), 2 * 2 * 2 * 2 * 2);
+    assert_eq!(cells[7].hdv_profile, "sumo-safe");
+    assert_eq!(cells[8].hdv_profile, "paper");
+    assert_eq!(cells[8].planner, "idm-mobil");
+    assert_eq!(
+        cells[8].dir_name(),
+        PathBuf::from("idm-mobil")
+            .join("hdv-paper")
+            .join("a0.4_l2500_s10")
+    );
+    assert_eq!(
+        cells[8].to_string(),
+        "idm-mobil α=0.4 λ=2500 seed=10 hdv=paper"
     );
 }
 
@@ -207,13 +225,19 @@ fn one_and_two_workers_give_byte_identical_results() {
     let episodes = read(&two.join("episodes.csv"));
     let lines: Vec<&str> = episodes.lines().collect();
     assert_eq!(lines.len(), 1 + 8);
-    assert!(lines[1].starts_with("sumo,0.4,3000,0,60,"), "{}", lines[1]);
     assert!(
-        lines[8].starts_with("idm-mobil,0.8,3000,1,60,"),
+        lines[1].starts_with("sumo,0.4,3000,0,sumo-safe,60,"),
+        "{}",
+        lines[1]
+    );
+    assert!(
+        lines[8].starts_with("idm-mobil,0.8,3000,1,sumo-safe,60,"),
         "{}",
         lines[8]
     );
-    assert!(read(&two.join("vehicles.csv")).starts_with("planner,alpha,lambda,seed,id,"));
+    assert!(
+        read(&two.join("vehicles.csv")).starts_with("planner,alpha,lambda,seed,hdv_profile,id,")
+    );
     assert_eq!(read(&two.join("timings.csv")).lines().count(), 1 + 8);
     assert_eq!(read(&two.join("failures.csv")).lines().count(), 1);
     // The report ran at the end and printed its tables.
@@ -429,7 +453,7 @@ fn report_refuses_damaged_episode_rows_naming_file_and_line() {
     let whole = reference();
     let original = read(&whole.join("episodes.csv"));
     let lines: Vec<&str> = original.lines().collect();
-    // Column 13 (0-based) is controllable_collision_rate, 16 mean_delay_s.
+    // Column 14 (0-based) is controllable_collision_rate, 17 mean_delay_s.
     let with_field = |line: usize, col: usize, value: &str| {
         let mut out: Vec<String> = lines.iter().map(|l| l.to_string()).collect();
         let mut f: Vec<&str> = lines[line].split(',').collect();
@@ -440,10 +464,10 @@ fn report_refuses_damaged_episode_rows_naming_file_and_line() {
     let duplicated = format!("{original}{}\n", lines[3]);
     for (damaged, expected) in [
         (duplicated, "line 10: cell"),
-        (with_field(2, 16, "NaN"), "line 3: mean_delay_s = 'NaN'"),
-        (with_field(2, 16, "-999"), "line 3: mean_delay_s = '-999'"),
+        (with_field(2, 17, "NaN"), "line 3: mean_delay_s = 'NaN'"),
+        (with_field(2, 17, "-999"), "line 3: mean_delay_s = '-999'"),
         (
-            with_field(4, 13, "7.5"),
+            with_field(4, 14, "7.5"),
             "line 5: controllable_collision_rate = '7.5'",
         ),
     ] {
@@ -712,7 +736,7 @@ fn killed_campaign_resumes_without_losing_or_duplicating_episodes() {
     assert_eq!(keys[total - 1], "idm-mobil,0.8,3000,5");
     let inserted: usize = rows
         .iter()
-        .map(|r| r.split(',').nth(6).unwrap().parse::<usize>().unwrap())
+        .map(|r| r.split(',').nth(7).unwrap().parse::<usize>().unwrap())
         .sum();
     assert_eq!(
         read(&out.join("vehicles.csv")).lines().count() - 1,
@@ -903,7 +927,7 @@ fn a_campaign_file_sets_the_grid_and_scenario_and_a_changed_scenario_is_refused(
         .lines()
         .nth(1)
         .unwrap()
-        .starts_with("idm-mobil,0.5,2500,7,30,"));
+        .starts_with("idm-mobil,0.5,2500,7,sumo-safe,30,"));
     // The saved settings reproduce the campaign.
     let saved = read(&out.join("campaign.toml"));
     assert!(
@@ -965,4 +989,64 @@ fn campaign_trajectories_are_written_per_cell_and_are_no_setting() {
     );
     assert!(!o.status.success());
     assert!(text(&o.stderr).contains("--plots"), "{}", text(&o.stderr));
+}
+
+#[test]
+fn hdv_profiles_are_a_grid_axis_recorded_in_every_row() {
+    let d = tempfile::tempdir().unwrap();
+    let args = [
+        &idm_mobil_cells("2", "2")[..],
+        &["--hdv-profiles", "sumo-safe,paper"],
+    ]
+    .concat();
+    let o = campaign(d.path(), &args);
+    assert_ok(&o);
+    assert!(
+        text(&o.stdout).contains("1 planners × 2 HDV profiles × 1 α × 1 λ × 2 seeds = 4 episodes"),
+        "{}",
+        text(&o.stdout)
+    );
+    let episodes = read(&d.path().join("episodes.csv"));
+    let profiles: Vec<&str> = episodes
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').nth(4).unwrap())
+        .collect();
+    assert_eq!(profiles, ["sumo-safe", "sumo-safe", "paper", "paper"]);
+    let vehicles = read(&d.path().join("vehicles.csv"));
+    assert!(vehicles.lines().skip(1).any(|l| l.contains(",paper,")));
+    assert!(d
+        .path()
+        .join("episodes/idm-mobil/hdv-paper/a0.5_l3000_s1/episode.csv")
+        .is_file());
+    let tables = read(&d.path().join("report/tables.md"));
+    assert!(tables.contains("| idm-mobil (paper) |"), "{tables}");
+    assert!(d
+        .path()
+        .join("report/collision_rate_idm-mobil_paper.csv")
+        .is_file());
+    // The grid grows by a profile (dropping one would be refused); an unknown one is refused
+    // naming the flag.
+    let grown = ["--hdv-profiles", "sumo-safe,paper,krauss"];
+    let o = campaign(d.path(), &[&idm_mobil_cells("2", "2")[..], &grown].concat());
+    assert_ok(&o);
+    assert_eq!(already_done(&o), 4);
+    let dropped = ["--hdv-profiles", "paper,krauss"];
+    let o = campaign(
+        d.path(),
+        &[&idm_mobil_cells("2", "2")[..], &dropped].concat(),
+    );
+    assert!(
+        text(&o.stderr).contains("outside this grid"),
+        "{}",
+        text(&o.stderr)
+    );
+    assert_clear_failure(
+        &[
+            &["campaign", "--out", d.path().to_str().unwrap()][..],
+            &["--hdv-profiles", "paper,reckless"],
+        ]
+        .concat(),
+        "reckless",
+    );
 }

@@ -89,6 +89,7 @@ impl PyCampaign {
             episode_timeout: None,
             // From the config file's `[output]` table, if any.
             trajectories: None,
+            hdv_profiles: None,
             shard,
         };
         let settings = Settings::resolve(config.as_deref(), &overrides).map_err(settings_error)?;

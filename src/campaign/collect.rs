@@ -60,6 +60,7 @@ fn strings(cols: &[&str]) -> Vec<String> {
 pub fn collect(out: &Path, grid: &Grid, shard: Shard) -> Result<Results, ResultsError> {
     let mut res = Results {
         planners: grid.planners.clone(),
+        profiles: grid.profiles.clone(),
         ..Results::default()
     };
     for (position, cell) in grid.cells().into_iter().enumerate() {
@@ -94,6 +95,7 @@ pub fn collect(out: &Path, grid: &Grid, shard: Shard) -> Result<Results, Results
             fields.push_field(&cell.alpha.to_string());
             fields.push_field(&cell.lambda.to_string());
             fields.push_field(&cell.seed.to_string());
+            fields.push_field(&cell.hdv_profile);
             fields.push_field(&error);
             res.failures.rows.push(Row { cell, fields });
         }

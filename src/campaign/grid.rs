@@ -1,11 +1,15 @@
-//! The experiment grid: planners × α × λ × seeds, its fixed order, and how it splits into shards.
+//! The experiment grid: planners × HDV profiles × α × λ × seeds, its fixed order, and how it
+//! splits into shards.
 //!
-//! Grid order is planner (in the order given), then α, λ and seed, each ascending. Every output
-//! of a campaign follows it, so results never depend on which worker ran which episode.
+//! Grid order is planner and HDV profile (in the order given), then α, λ and seed, each
+//! ascending. Every output of a campaign follows it, so results never depend on which worker
+//! ran which episode.
 
 use std::fmt;
 use std::path::PathBuf;
 use std::str::FromStr;
+
+use crate::config::hdv::DEFAULT_PROFILE;
 
 /// One episode of the grid.
 #[derive(Debug, Clone, PartialEq)]
@@ -14,16 +18,22 @@ pub struct Cell {
     pub alpha: f64,
     pub lambda: f64,
     pub seed: u64,
+    /// The HDV driver profile SUMO runs.
+    pub hdv_profile: String,
 }
 
 impl Cell {
-    /// The cell's directory below `<out>/episodes/`: `<planner>/a<α>_l<λ>_s<seed>`.
+    /// The cell's directory below `<out>/episodes/`: `<planner>/a<α>_l<λ>_s<seed>` for the
+    /// default drivers, `<planner>/hdv-<profile>/a<α>_l<λ>_s<seed>` for others.
     ///
     /// α and λ use Rust's shortest round-trip formatting, the same as `episode.csv`, so the name
     /// is stable and reads like the values (`a0.4_l2500_s3`).
     pub fn dir_name(&self) -> PathBuf {
-        PathBuf::from(&self.planner)
-            .join(format!("a{}_l{}_s{}", self.alpha, self.lambda, self.seed))
+        let mut dir = PathBuf::from(&self.planner);
+        if self.hdv_profile != DEFAULT_PROFILE {
+            dir.push(format!("hdv-{}", self.hdv_profile));
+        }
+        dir.join(format!("a{}_l{}_s{}", self.alpha, self.lambda, self.seed))
     }
 }
 
@@ -33,7 +43,11 @@ impl fmt::Display for Cell {
             f,
             "{} α={} λ={} seed={}",
             self.planner, self.alpha, self.lambda, self.seed
-        )
+        )?;
+        if self.hdv_profile != DEFAULT_PROFILE {
+            write!(f, " hdv={}", self.hdv_profile)?;
+        }
+        Ok(())
     }
 }
 
@@ -42,9 +56,22 @@ impl fmt::Display for Cell {
 #[derive(Debug, Clone, PartialEq)]
 pub struct Grid {
     pub planners: Vec<String>,
+    /// HDV driver profiles, in the order given.
+    pub profiles: Vec<String>,
     pub alphas: Vec<f64>,
     pub lambdas: Vec<f64>,
     pub seeds: Vec<u64>,
+}
+
+/// The names in their first-seen order, each once.
+fn unique(names: &[String]) -> Vec<String> {
+    let mut out: Vec<String> = Vec::new();
+    for n in names {
+        if !out.contains(n) {
+            out.push(n.clone());
+        }
+    }
+    out
 }
 
 fn sorted_unique(mut xs: Vec<f64>) -> Vec<f64> {
@@ -54,7 +81,8 @@ fn sorted_unique(mut xs: Vec<f64>) -> Vec<f64> {
 }
 
 impl Grid {
-    /// Builds the normalised grid (validation of the values is the caller's job).
+    /// Builds the normalised grid for the default drivers (validation of the values is the
+    /// caller's job).
     pub fn new(
         planners: &[String],
         alphas: &[f64],
@@ -62,23 +90,28 @@ impl Grid {
         seed_base: u64,
         seeds: u64,
     ) -> Grid {
-        let mut ps: Vec<String> = Vec::new();
-        for p in planners {
-            if !ps.contains(p) {
-                ps.push(p.clone());
-            }
-        }
         Grid {
-            planners: ps,
+            planners: unique(planners),
+            profiles: vec![DEFAULT_PROFILE.to_string()],
             alphas: sorted_unique(alphas.to_vec()),
             lambdas: sorted_unique(lambdas.to_vec()),
             seeds: (0..seeds).map(|i| seed_base.saturating_add(i)).collect(),
         }
     }
 
+    /// The same grid over these HDV profiles (duplicates dropped, order kept).
+    pub fn with_profiles(mut self, profiles: &[String]) -> Grid {
+        self.profiles = unique(profiles);
+        self
+    }
+
     /// Number of episodes.
     pub fn len(&self) -> usize {
-        self.planners.len() * self.alphas.len() * self.lambdas.len() * self.seeds.len()
+        self.planners.len()
+            * self.profiles.len()
+            * self.alphas.len()
+            * self.lambdas.len()
+            * self.seeds.len()
     }
 
     /// True for a grid without episodes.
@@ -86,19 +119,20 @@ impl Grid {
         self.len() == 0
     }
 
-    /// All cells in grid order: planner, α, λ, seed.
+    /// All cells in grid order: planner, profile, α, λ, seed.
     pub fn cells(&self) -> Vec<Cell> {
         let mut out = Vec::with_capacity(self.len());
         for p in &self.planners {
-            for &alpha in &self.alphas {
-                for &lambda in &self.lambdas {
-                    for &seed in &self.seeds {
-                        out.push(Cell {
+            for h in &self.profiles {
+                for &alpha in &self.alphas {
+                    for &lambda in &self.lambdas {
+                        out.extend(self.seeds.iter().map(|&seed| Cell {
                             planner: p.clone(),
                             alpha,
                             lambda,
                             seed,
-                        });
+                            hdv_profile: h.clone(),
+                        }));
                     }
                 }
             }

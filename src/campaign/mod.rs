@@ -1,5 +1,6 @@
-//! Experiment campaigns: every episode of a planners × α × λ × seeds grid, run in parallel
-//! worker processes, resumable after any interruption, collected into one set of CSV files.
+//! Experiment campaigns: every episode of a planners × HDV profiles × α × λ × seeds grid, run
+//! in parallel worker processes, resumable after any interruption, collected into one set of CSV
+//! files.
 //!
 //! Layout of a campaign directory `<out>`:
 //!
@@ -97,8 +98,12 @@ pub fn run(settings: &Settings, out: &Path, exe: &Path) -> Result<RunSummary, Ca
     } = tasks::prepare(settings, out)?;
     let cells = settings.grid.cells();
     let g = &settings.grid;
+    let profiles = match g.profiles.len() {
+        1 => String::new(),
+        n => format!(" × {n} HDV profiles"),
+    };
     println!(
-        "campaign: {} planners × {} α × {} λ × {} seeds = {} episodes; shard {}: {}; already done: {}; to run: {}; workers: {}",
+        "campaign: {} planners{profiles} × {} α × {} λ × {} seeds = {} episodes; shard {}: {}; already done: {}; to run: {}; workers: {}",
         g.planners.len(),
         g.alphas.len(),
         g.lambdas.len(),

@@ -9,7 +9,7 @@ use super::grid::Cell;
 use crate::episode::output::{self, WriteError, EPISODE_COLUMNS, TIMING_COLUMNS, VEHICLE_COLUMNS};
 
 /// The columns that name a cell; every collected file starts with them.
-pub const CELL_COLUMNS: [&str; 4] = ["planner", "alpha", "lambda", "seed"];
+pub const CELL_COLUMNS: [&str; 5] = ["planner", "alpha", "lambda", "seed", "hdv_profile"];
 
 /// The collected files of a campaign directory.
 pub const FILES: [&str; 4] = [
@@ -111,8 +111,10 @@ pub fn failures_header() -> Vec<String> {
 /// The four collected files of one directory (or of several, merged).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Results {
-    /// Planner order of the grid (rows are sorted by it, then α, λ, seed).
+    /// Planner order of the grid (rows are sorted by it, then HDV profile, α, λ, seed).
     pub planners: Vec<String>,
+    /// HDV profile order of the grid.
+    pub profiles: Vec<String>,
     pub episodes: Table,
     pub vehicles: Table,
     pub timings: Table,
@@ -123,6 +125,7 @@ impl Default for Results {
     fn default() -> Self {
         Results {
             planners: Vec::new(),
+            profiles: Vec::new(),
             episodes: Table::new(episodes_header()),
             vehicles: Table::new(vehicles_header()),
             timings: Table::new(timings_header()),
@@ -140,6 +143,7 @@ pub fn cell_of(fields: &csv::StringRecord) -> Result<Cell, String> {
         alpha: num(1)?,
         lambda: num(2)?,
         seed: get(3).parse().map_err(|_| get(3).to_string())?,
+        hdv_profile: get(4).to_string(),
     })
 }
 
@@ -182,8 +186,8 @@ pub fn read_table(path: &Path, header: &[String]) -> Result<Table, ResultsError>
     Ok(table)
 }
 
-/// Identity of a cell for lookups: planner, α and λ (by value), seed.
-pub type CellKey = (String, u64, u64, u64);
+/// Identity of a cell for lookups: planner, α and λ (by value), seed, HDV profile.
+pub type CellKey = (String, u64, u64, u64, String);
 
 /// Identity of a cell for lookups (α and λ by value).
 pub fn key(c: &Cell) -> CellKey {
@@ -192,6 +196,7 @@ pub fn key(c: &Cell) -> CellKey {
         c.alpha.to_bits(),
         c.lambda.to_bits(),
         c.seed,
+        c.hdv_profile.clone(),
     )
 }
 
@@ -206,14 +211,19 @@ fn rows_by_cell(table: &Table) -> HashMap<CellKey, Vec<&csv::StringRecord>> {
 
 impl Results {
     /// Reads a campaign directory's collected files; `failures.csv` and `timings.csv` may be
-    /// missing. `planners` gives the grid's planner order (planners seen only in the rows follow
-    /// in order of appearance).
-    pub fn read(dir: &Path, planners: &[String]) -> Result<Results, ResultsError> {
+    /// missing. `planners` and `profiles` give the grid's order (those seen only in the rows
+    /// follow in order of appearance).
+    pub fn read(
+        dir: &Path,
+        planners: &[String],
+        profiles: &[String],
+    ) -> Result<Results, ResultsError> {
         let episodes_path = dir.join("episodes.csv");
         let episodes = read_table(&episodes_path, &episodes_header())?;
         super::validate::check_episodes(&episodes_path, &episodes)?;
         let mut res = Results {
             planners: planners.to_vec(),
+            profiles: profiles.to_vec(),
             episodes,
             vehicles: read_table(&dir.join("vehicles.csv"), &vehicles_header())?,
             ..Results::default()
@@ -227,17 +237,12 @@ impl Results {
                 *table = read_table(&p, &header)?;
             }
         }
-        for r in &res.episodes.rows {
-            if !res.planners.contains(&r.cell.planner) {
-                res.planners.push(r.cell.planner.clone());
-            }
-        }
+        res.note_order();
         Ok(res)
     }
 
-    /// Sorts every table into grid order; rows of one cell keep their order.
-    pub fn sort(&mut self) {
-        let planners = &mut self.planners;
+    /// Appends the planners and profiles seen in the rows but not yet in the order.
+    fn note_order(&mut self) {
         for t in [
             &self.episodes,
             &self.vehicles,
@@ -245,20 +250,31 @@ impl Results {
             &self.failures,
         ] {
             for r in &t.rows {
-                if !planners.contains(&r.cell.planner) {
-                    planners.push(r.cell.planner.clone());
+                if !self.planners.contains(&r.cell.planner) {
+                    self.planners.push(r.cell.planner.clone());
+                }
+                if !self.profiles.contains(&r.cell.hdv_profile) {
+                    self.profiles.push(r.cell.hdv_profile.clone());
                 }
             }
         }
-        let rank: HashMap<&str, usize> = self
-            .planners
-            .iter()
-            .enumerate()
-            .map(|(i, p)| (p.as_str(), i))
-            .collect();
+    }
+
+    /// Sorts every table into grid order; rows of one cell keep their order.
+    pub fn sort(&mut self) {
+        self.note_order();
+        let rank = |names: &[String]| -> HashMap<String, usize> {
+            names
+                .iter()
+                .enumerate()
+                .map(|(i, p)| (p.clone(), i))
+                .collect()
+        };
+        let (planner_rank, profile_rank) = (rank(&self.planners), rank(&self.profiles));
         let order = |a: &Row, b: &Row| {
-            rank[a.cell.planner.as_str()]
-                .cmp(&rank[b.cell.planner.as_str()])
+            planner_rank[&a.cell.planner]
+                .cmp(&planner_rank[&b.cell.planner])
+                .then(profile_rank[&a.cell.hdv_profile].cmp(&profile_rank[&b.cell.hdv_profile]))
                 .then(a.cell.alpha.total_cmp(&b.cell.alpha))
                 .then(a.cell.lambda.total_cmp(&b.cell.lambda))
                 .then(a.cell.seed.cmp(&b.cell.seed))
@@ -289,6 +305,11 @@ impl Results {
             for p in &part.planners {
                 if !merged.planners.contains(p) {
                     merged.planners.push(p.clone());
+                }
+            }
+            for h in &part.profiles {
+                if !merged.profiles.contains(h) {
+                    merged.profiles.push(h.clone());
                 }
             }
             for row in &part.episodes.rows {

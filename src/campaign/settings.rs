@@ -94,6 +94,9 @@ pub struct CampaignTable {
     /// recorded as failed. Default: none. Does not change the results of episodes that finish.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub episode_timeout: Option<f64>,
+    /// HDV driver profiles, a grid axis; default: the one of `[hdv] profile`.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub hdv_profiles: Vec<String>,
 }
 
 impl Default for CampaignTable {
@@ -107,6 +110,7 @@ impl Default for CampaignTable {
             steps: 400,
             workers: None,
             episode_timeout: None,
+            hdv_profiles: Vec::new(),
         }
     }
 }
@@ -127,6 +131,8 @@ pub struct Overrides {
     pub episode_timeout: Option<f64>,
     /// `--trajectories[-format]`: replaces the file's `output.trajectories`.
     pub trajectories: Option<TrajectoryFormat>,
+    /// `--hdv-profiles`, comma-separated.
+    pub hdv_profiles: Option<String>,
 }
 
 /// Validated settings of one campaign run.
@@ -225,6 +231,9 @@ fn apply_overrides(table: &mut CampaignTable, o: &Overrides) -> Result<(), Setti
     if let Some(text) = &o.lambdas {
         table.lambdas = parse_list("--lambdas", text)?;
     }
+    if let Some(text) = &o.hdv_profiles {
+        table.hdv_profiles = parse_list("--hdv-profiles", text)?;
+    }
     table.seeds = o.seeds.unwrap_or(table.seeds);
     table.seed_base = o.seed_base.unwrap_or(table.seed_base);
     table.steps = o.steps.unwrap_or(table.steps);
@@ -265,13 +274,18 @@ impl Settings {
         if let Some(format) = o.trajectories {
             config.output.trajectories = format;
         }
+        let profiles = match table.hdv_profiles.is_empty() {
+            true => vec![config.hdv.profile.clone()],
+            false => table.hdv_profiles.clone(),
+        };
         let grid = Grid::new(
             &table.planners,
             &table.alphas,
             &table.lambdas,
             table.seed_base,
             table.seeds,
-        );
+        )
+        .with_profiles(&profiles);
         check_cells(&config, &grid)?;
         Ok(Settings {
             table,
@@ -289,6 +303,7 @@ impl Settings {
         c.scenario.alpha = cell.alpha;
         c.scenario.lambda = cell.lambda;
         c.scenario.seed = cell.seed;
+        c.hdv.profile = cell.hdv_profile.clone();
         c
     }
 
@@ -442,12 +457,15 @@ fn episode_timeout(
 /// Every (α, λ) of the grid must make a valid episode configuration, so that no cell fails on
 /// its settings halfway through the campaign.
 fn check_cells(config: &Config, grid: &Grid) -> Result<(), ConfigError> {
-    for &alpha in &grid.alphas {
-        for &lambda in &grid.lambdas {
-            let mut c = config.clone();
-            c.scenario.alpha = alpha;
-            c.scenario.lambda = lambda;
-            c.validate()?;
+    for profile in &grid.profiles {
+        for &alpha in &grid.alphas {
+            for &lambda in &grid.lambdas {
+                let mut c = config.clone();
+                c.scenario.alpha = alpha;
+                c.scenario.lambda = lambda;
+                c.hdv.profile = profile.clone();
+                c.validate()?;
+            }
         }
     }
     Ok(())

@@ -5,7 +5,7 @@
 use std::collections::HashSet;
 use std::path::{Path, PathBuf};
 
-use super::results::{key, Table};
+use super::results::{key, Table, CELL_COLUMNS};
 use crate::episode::output::EPISODE_COLUMNS;
 
 /// The first thing wrong with a collected `episodes.csv`.
@@ -67,7 +67,11 @@ pub fn check_episodes(path: &Path, table: &Table) -> Result<(), RowError> {
             });
         }
         // The cell columns are checked when the row is read.
-        for (column, value) in EPISODE_COLUMNS.iter().zip(row.fields.iter()).skip(4) {
+        for (column, value) in EPISODE_COLUMNS
+            .iter()
+            .zip(row.fields.iter())
+            .skip(CELL_COLUMNS.len())
+        {
             if let Some(reason) = problem(column, value) {
                 return Err(RowError::Value {
                     path: path.to_path_buf(),

@@ -29,6 +29,10 @@ pub struct CampaignArgs {
     /// Arrival rates λ (veh/h), comma-separated [default: 2500,3000].
     #[arg(long, allow_hyphen_values = true)]
     lambdas: Option<String>,
+    /// HDV driver profiles, comma-separated: a grid axis [default: the config's hdv.profile,
+    /// sumo-safe].
+    #[arg(long, value_name = "NAMES")]
+    hdv_profiles: Option<String>,
     /// Seeds per cell [default: 5].
     #[arg(long)]
     seeds: Option<u64>,
@@ -71,6 +75,7 @@ impl CampaignArgs {
             planners: self.planners,
             alphas: self.alphas,
             lambdas: self.lambdas,
+            hdv_profiles: self.hdv_profiles,
             seeds: self.seeds,
             seed_base: self.seed_base,
             steps: self.steps,

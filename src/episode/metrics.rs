@@ -105,6 +105,8 @@ pub struct Summary {
     pub alpha: f64,
     pub lambda: f64,
     pub seed: u64,
+    /// The HDV driver profile SUMO ran (`[hdv] profile`).
+    pub hdv_profile: String,
     pub steps: u32,
     /// Vehicles the demand scheduled within the horizon.
     pub scheduled: usize,
@@ -148,6 +150,7 @@ pub struct SummaryInput<'a> {
     pub alpha: f64,
     pub lambda: f64,
     pub seed: u64,
+    pub hdv_profile: &'a str,
     pub steps: u32,
     pub dt: f64,
     pub scheduled: usize,
@@ -181,6 +184,7 @@ impl Summary {
             alpha: inp.alpha,
             lambda: inp.lambda,
             seed: inp.seed,
+            hdv_profile: inp.hdv_profile.to_string(),
             steps: inp.steps,
             scheduled: inp.scheduled,
             inserted,
@@ -284,6 +288,7 @@ mod tests {
         ];
         let s = Summary::compute(&SummaryInput {
             planner: "p",
+            hdv_profile: "sumo-safe",
             alpha: 0.5,
             lambda: 3000.0,
             seed: 1,

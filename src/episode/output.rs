@@ -23,11 +23,12 @@ fn csv_bytes(header: &[&str], rows: impl Iterator<Item = Vec<String>>) -> Vec<u8
 }
 
 /// Columns of `episode.csv`.
-pub const EPISODE_COLUMNS: [&str; 32] = [
+pub const EPISODE_COLUMNS: [&str; 33] = [
     "planner",
     "alpha",
     "lambda",
     "seed",
+    "hdv_profile",
     "steps",
     "scheduled",
     "inserted",
@@ -65,6 +66,7 @@ pub fn episode_row(s: &Summary) -> Vec<String> {
         format!("{}", s.alpha),
         format!("{}", s.lambda),
         s.seed.to_string(),
+        s.hdv_profile.clone(),
         s.steps.to_string(),
         s.scheduled.to_string(),
         s.inserted.to_string(),
@@ -284,6 +286,7 @@ mod tests {
     fn episode_row_has_one_cell_per_column() {
         let s = crate::episode::metrics::Summary::compute(&crate::episode::metrics::SummaryInput {
             planner: "p",
+            hdv_profile: "sumo-safe",
             alpha: 0.5,
             lambda: 3000.0,
             seed: 0,

@@ -658,6 +658,7 @@ impl<'a> Episode<'a> {
         let vehicles: Vec<VehicleRecord> = self.tracked.iter().map(|t| t.record.clone()).collect();
         let summary = Summary::compute(&SummaryInput {
             planner: self.controller.name(),
+            hdv_profile: &self.config.hdv.profile,
             alpha: sc.alpha,
             lambda: sc.lambda,
             seed: sc.seed,

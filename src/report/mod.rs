@@ -102,27 +102,33 @@ fn same_settings(dirs: &[PathBuf]) -> Result<(), ReportError> {
     Ok(())
 }
 
-fn planner_order(dir: &Path) -> Result<Vec<String>, ReportError> {
+/// The planner and HDV-profile order a campaign directory was run with (from its
+/// `campaign.toml`), or none.
+fn grid_order(dir: &Path) -> Result<(Vec<String>, Vec<String>), ReportError> {
     let path = dir.join(SETTINGS_FILE);
     let Ok(text) = std::fs::read_to_string(&path) else {
-        return Ok(Vec::new());
+        return Ok(Default::default());
     };
     let bad = |message: String| ReportError::Settings {
         path: path.clone(),
         message,
     };
     let doc: toml::Table = toml::from_str(&text).map_err(|e| bad(e.message().to_string()))?;
-    let planners = doc
-        .get("campaign")
-        .and_then(|c| c.get("planners"))
-        .and_then(|p| p.as_array())
-        .map(|a| {
-            a.iter()
+    let names = |table: &str, key: &str| -> Vec<String> {
+        match doc.get(table).and_then(|c| c.get(key)) {
+            Some(toml::Value::Array(a)) => a
+                .iter()
                 .filter_map(|v| v.as_str().map(String::from))
-                .collect()
-        })
-        .unwrap_or_default();
-    Ok(planners)
+                .collect(),
+            Some(toml::Value::String(s)) => vec![s.clone()],
+            _ => Vec::new(),
+        }
+    };
+    let mut profiles = names("campaign", "hdv_profiles");
+    if profiles.is_empty() {
+        profiles = names("hdv", "profile");
+    }
+    Ok((names("campaign", "planners"), profiles))
 }
 
 /// Reads (and merges) the campaign directories, writes tables and figures into
@@ -138,8 +144,8 @@ pub fn run(dirs: &[PathBuf], out: Option<&Path>, allow_mixed: bool) -> Result<Re
         if !dir.join("episodes.csv").is_file() {
             return Err(ReportError::NotACampaign { dir: dir.clone() });
         }
-        let planners = planner_order(dir)?;
-        parts.push((dir.clone(), Results::read(dir, &planners)?));
+        let (planners, profiles) = grid_order(dir)?;
+        parts.push((dir.clone(), Results::read(dir, &planners, &profiles)?));
     }
     let mut files = Vec::new();
     let results = if parts.len() == 1 {

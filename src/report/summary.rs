@@ -22,6 +22,8 @@ pub enum SummaryError {
 /// Statistics of the seeds of one (planner, α, λ).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Group {
+    /// The planner, with its HDV profile in brackets when the results hold several profiles
+    /// (`bk-pbs (paper)`).
     pub planner: String,
     pub alpha: f64,
     pub lambda: f64,
@@ -96,15 +98,23 @@ impl Summary {
         let mut groups: Vec<(Group, [Vec<f64>; 4])> = Vec::new();
         let mut alphas: Vec<f64> = Vec::new();
         let mut lambdas: Vec<f64> = Vec::new();
+        let several_profiles = t
+            .rows
+            .iter()
+            .any(|r| r.cell.hdv_profile != t.rows[0].cell.hdv_profile);
+        let label = |planner: &str, profile: &str| match several_profiles {
+            true => format!("{planner} ({profile})"),
+            false => planner.to_string(),
+        };
         for row in &t.rows {
             let c = &row.cell;
             let vals = sampled_values(row, &columns, path)?;
-            let same =
-                |g: &Group| g.planner == c.planner && g.alpha == c.alpha && g.lambda == c.lambda;
+            let name = label(&c.planner, &c.hdv_profile);
+            let same = |g: &Group| g.planner == name && g.alpha == c.alpha && g.lambda == c.lambda;
             if !groups.last().is_some_and(|(g, _)| same(g)) {
                 groups.push((
                     Group {
-                        planner: c.planner.clone(),
+                        planner: name.clone(),
                         alpha: c.alpha,
                         lambda: c.lambda,
                         episodes: 0,
@@ -143,9 +153,14 @@ impl Summary {
         let planners = res
             .planners
             .iter()
-            .filter(|p| groups.iter().any(|g| &g.planner == *p))
-            .cloned()
-            .collect();
+            .flat_map(|p| res.profiles.iter().map(move |h| label(p, h)))
+            .filter(|name| groups.iter().any(|g| &g.planner == name))
+            .fold(Vec::new(), |mut seen: Vec<String>, name| {
+                if !seen.contains(&name) {
+                    seen.push(name);
+                }
+                seen
+            });
         Ok(Summary {
             planners,
             alphas,

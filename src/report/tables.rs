@@ -108,7 +108,7 @@ fn collision_rate_table(s: &Summary, p: &str) -> CsvFile {
         .map(|&l| wide_row(lambda_label(l), &s.alphas, |a| rate_of(s.get(p, a, l)), 6))
         .collect();
     CsvFile {
-        name: format!("collision_rate_{p}.csv"),
+        name: format!("collision_rate_{}.csv", file_stem(p)),
         bytes: csv_bytes(&header, &rows),
     }
 }
@@ -246,4 +246,9 @@ pub fn markdown(s: &Summary) -> String {
         md += "\n";
     }
     md
+}
+
+/// A planner label as a file-name part: `bk-pbs (paper)` becomes `bk-pbs_paper`.
+pub fn file_stem(label: &str) -> String {
+    label.replace(" (", "_").replace(')', "")
 }
