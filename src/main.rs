@@ -91,6 +91,7 @@ fn run(command: Command) -> Result<()> {
         Command::Train(a) => cli::train::train(a.resolve()),
         Command::EvalPredictor(a) => cli::train::eval_predictor(a.resolve()),
         Command::BenchPredictor(a) => cli::train::bench_predictor(a.resolve()?),
+        Command::Calibrate(a) => cli::calibrate::run(a.resolve()?),
         Command::Worker => {
             interrupt::install(false);
             cli::campaign::worker()

@@ -3,6 +3,7 @@
 //! function runs it through the library. `main.rs` only parses and dispatches.
 
 pub mod bench;
+pub mod calibrate;
 pub mod campaign;
 pub mod config;
 pub mod demand;
@@ -55,6 +56,9 @@ pub enum Command {
     EvalPredictor(train::EvalPredictorArgs),
     /// Time b_θ: one prediction, and all HDVs of a dense scene per step.
     BenchPredictor(train::BenchPredictorArgs),
+    /// Fit an IDM to the HDVs SUMO drives under a driver profile and compare it with constant
+    /// speed on held-out episodes.
+    Calibrate(calibrate::CalibrateArgs),
     /// Internal: run episodes sent by a campaign on stdin (one JSON line each).
     #[command(hide = true)]
     Worker,

@@ -28,6 +28,8 @@ impl Outcome {
 pub struct VehicleRecord {
     pub id: String,
     pub kind: Kind,
+    /// SUMO's vehicle type (a heterogeneous profile's driver type, `hdv.7`); not in the CSV.
+    pub sumo_type: String,
     pub origin: Origin,
     /// Departure time the demand scheduled (s).
     pub scheduled_depart: f64,
@@ -259,6 +261,7 @@ mod tests {
         VehicleRecord {
             id: "x".into(),
             kind,
+            sumo_type: kind.as_str().into(),
             origin: Origin::Main,
             scheduled_depart: 1.0,
             scheduled_speed: 30.0,

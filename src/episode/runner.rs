@@ -441,7 +441,8 @@ impl<'a> Episode<'a> {
         let end_edge = EDGES[3];
         let end_pos = self.road.edges[3].length;
         for id in sim.departed()? {
-            let kind = Kind::from_type_id(&sim.vehicle_type(&id)?).unwrap_or(Kind::Hdv);
+            let sumo_type = sim.vehicle_type(&id)?;
+            let kind = Kind::from_type_id(&sumo_type).unwrap_or(Kind::Hdv);
             let planned = self.planned.get(id.as_str()).copied();
             let origin = planned.map_or(Origin::Main, |p| p.origin);
             let desired = planned.map_or(self.config.scenario.v_max, |p| p.desired_speed);
@@ -465,6 +466,7 @@ impl<'a> Episode<'a> {
             let record = VehicleRecord {
                 id: id.clone(),
                 kind,
+                sumo_type,
                 origin,
                 scheduled_depart,
                 scheduled_speed: speed,

@@ -1,5 +1,6 @@
 //! What SUMO is given for one episode: the network, the vehicle types, the demand, and options.
 
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use rand::{Rng, SeedableRng};
@@ -106,27 +107,17 @@ fn vtype_line(a: &Attributes) -> String {
     format!("    <vType {}/>\n", attrs.join(" "))
 }
 
-/// `hdv` as a distribution of `driver_types` types, each drawing the profile's `draws`
-/// uniformly (3 decimals), equally likely.
+/// `hdv` as a distribution of `driver_types` types, each with its drawn attributes (see
+/// [`driver_type_draws`]), equally likely.
 fn driver_types(config: &Config, profile: &HdvProfile) -> String {
-    let mut rng = ChaCha8Rng::seed_from_u64(config.scenario.seed);
-    rng.set_stream(DRIVER_STREAM);
     let mut out = String::from("    <vTypeDistribution id=\"hdv\">\n");
-    for k in 0..profile.driver_types {
+    for (k, draws) in driver_type_draws(config).iter().enumerate() {
         let mut a = hdv_attributes(config, profile, &format!("hdv.{k}"));
-        for (key, [low, high]) in &profile.draws {
-            let v = if high > low {
-                rng.gen_range(*low..=*high)
-            } else {
-                *low
-            };
+        for (key, v) in draws {
             set(&mut a, key, &format!("{v:.3}"));
         }
         // The hardest braking must stay at least the comfortable one.
-        let decel: f64 = a
-            .iter()
-            .find(|(k, _)| k == "decel")
-            .map_or(0.0, |(_, v)| v.parse().unwrap_or(0.0));
+        let decel = draws.get("decel").copied().unwrap_or(0.0);
         if decel > config.idm.max_decel {
             set(&mut a, "emergencyDecel", &format!("{decel:.3}"));
         }
@@ -136,6 +127,36 @@ fn driver_types(config: &Config, profile: &HdvProfile) -> String {
     }
     out.push_str("    </vTypeDistribution>\n");
     out
+}
+
+/// The attributes each driver type of the configuration's profile draws (type `hdv.k` is entry
+/// k), uniformly in the profile's ranges from the episode's seed, rounded to 3 decimals as
+/// written; empty for a profile without draws.
+pub fn driver_type_draws(config: &Config) -> Vec<BTreeMap<String, f64>> {
+    let Ok(profile) = config.hdv.resolved() else {
+        return Vec::new();
+    };
+    if profile.draws.is_empty() {
+        return Vec::new();
+    }
+    let mut rng = ChaCha8Rng::seed_from_u64(config.scenario.seed);
+    rng.set_stream(DRIVER_STREAM);
+    (0..profile.driver_types)
+        .map(|_| {
+            profile
+                .draws
+                .iter()
+                .map(|(key, [low, high])| {
+                    let v = if high > low {
+                        rng.gen_range(*low..=*high)
+                    } else {
+                        *low
+                    };
+                    (key.clone(), (v * 1000.0).round() / 1000.0)
+                })
+                .collect()
+        })
+        .collect()
 }
 
 /// Prefix of an episode's input directory in the temporary directory: `bkpbs-episode-<pid>-…`.

@@ -1,7 +1,8 @@
-//! Offline work on the learned predictor b_θ: collecting lane-change data from SUMO episodes,
-//! the data set, training (Adam, the network's backward pass), evaluation and the predictor's
-//! benchmark. It runs whole episodes, so it sits above the episode runner; the runtime predictor
-//! it produces is [`crate::predict`].
+//! Offline work on the HDV models: the learned predictor b_θ (collecting lane-change data from
+//! SUMO episodes, the data set, training with Adam and the network's backward pass, evaluation,
+//! the predictor's benchmark) and the longitudinal calibration against SUMO's drivers
+//! ([`longitudinal`]). It runs whole episodes, so it sits above the episode runner; the runtime
+//! predictor it produces is [`crate::predict`].
 
 pub mod adam;
 pub mod bench;
@@ -12,4 +13,5 @@ pub mod eval;
 pub mod fit;
 pub mod gcn;
 pub mod logistic;
+pub mod longitudinal;
 pub mod training_loop;

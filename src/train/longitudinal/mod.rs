@@ -1,0 +1,248 @@
+//! Longitudinal calibration (`bkpbs calibrate`): how well the planner's HDV model predicts the
+//! HDVs SUMO drives under a driver profile. Follow samples come from SUMO episodes
+//! ([`samples`]), an IDM is fitted to them by nonlinear least squares ([`fit`]), and on held-out
+//! episodes its open-loop predictions ([`model`]) are compared with constant speed, the
+//! planner's present assumption; per-vehicle fits say how well heterogeneous drivers' drawn
+//! parameters are recovered.
+
+pub mod fit;
+pub mod model;
+pub mod samples;
+
+use std::collections::{BTreeMap, HashMap};
+
+use serde::{Deserialize, Serialize};
+
+use crate::config::Config;
+use crate::episode::{self, Driver, EpisodeError};
+use crate::sumo::files::driver_type_draws;
+use fit::fit_idm;
+use model::{predict_constant_speed, predict_idm, rmse, FollowSample, IdmParams};
+use samples::FollowRecorder;
+
+/// Format tag and version of `calibration.json`.
+pub const FORMAT: &str = "bkpbs-calibration";
+pub const VERSION: u32 = 1;
+/// Most samples the global fit uses (evenly thinned beyond): enough for five parameters.
+pub const MAX_FIT_SAMPLES: usize = 4000;
+/// Fewest samples of one vehicle for a per-vehicle fit.
+pub const MIN_VEHICLE_SAMPLES: usize = 10;
+
+/// What to calibrate on: the profile's episodes `seed_base ..` for fitting, the next
+/// `held_out` seeds for evaluation.
+#[derive(Debug, Clone)]
+pub struct CalibrateSpec {
+    pub episodes: u64,
+    pub held_out: u64,
+    pub seed_base: u64,
+}
+
+/// Prediction errors on held-out samples: speed after 1 s and 3 s (m/s), gap after 3 s (m).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Errors {
+    pub rmse_speed_1s: f64,
+    pub rmse_speed_3s: f64,
+    pub rmse_gap_3s: f64,
+}
+
+impl From<[f64; 3]> for Errors {
+    fn from(e: [f64; 3]) -> Self {
+        Errors {
+            rmse_speed_1s: e[0],
+            rmse_speed_3s: e[1],
+            rmse_gap_3s: e[2],
+        }
+    }
+}
+
+/// How well per-vehicle fits recover one drawn parameter.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Recovery {
+    /// SUMO's attribute name (`tau`, `minGap`, `accel`, `decel`).
+    pub parameter: String,
+    /// Vehicles compared.
+    pub vehicles: usize,
+    /// Median |fitted − drawn| / drawn.
+    pub median_relative_error: f64,
+}
+
+/// The result of a calibration, as written to `calibration.json`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Calibration {
+    pub format: String,
+    pub version: u32,
+    pub profile: String,
+    pub episodes: u64,
+    pub held_out: u64,
+    pub seed_base: u64,
+    pub fit_samples: usize,
+    pub held_out_samples: usize,
+    /// The fitted IDM (desired speed: the vehicle's own times `v0_factor`).
+    pub idm: IdmParams,
+    pub constant_speed: Errors,
+    pub idm_fitted: Errors,
+    /// Heterogeneous profiles: recovery of the drawn parameters by per-vehicle fits.
+    pub recovery: Vec<Recovery>,
+}
+
+impl Calibration {
+    /// The report: one line per model in a fixed form, then the fit and any recovery.
+    pub fn to_text(&self) -> String {
+        let line = |model: &str, e: &Errors| {
+            format!(
+                "longitudinal {model} rmse_speed_1s={:.3} rmse_speed_3s={:.3} rmse_gap_3s={:.3}\n",
+                e.rmse_speed_1s, e.rmse_speed_3s, e.rmse_gap_3s
+            )
+        };
+        let p = &self.idm;
+        let mut out =
+            line("constant-speed", &self.constant_speed) + &line("idm-fitted", &self.idm_fitted);
+        out += &format!(
+            "idm fitted on {} samples of {} episodes (profile {}): v0 = {:.3} × desired, T = {:.3} s, s0 = {:.3} m, a = {:.3} m/s², b = {:.3} m/s²; evaluated on {} samples of {} held-out episodes\n",
+            self.fit_samples, self.episodes, self.profile, p.v0_factor, p.time_headway, p.min_gap, p.accel, p.decel, self.held_out_samples, self.held_out
+        );
+        for r in &self.recovery {
+            out += &format!(
+                "per-vehicle recovery {}: median relative error {:.1} % over {} vehicles\n",
+                r.parameter,
+                100.0 * r.median_relative_error,
+                r.vehicles
+            );
+        }
+        out
+    }
+}
+
+/// One episode's samples and each vehicle's SUMO type.
+fn episode_samples(
+    config: &Config,
+    seed: u64,
+) -> Result<(Vec<FollowSample>, HashMap<String, String>), EpisodeError> {
+    let mut c = config.clone();
+    c.scenario.seed = seed;
+    let planned = episode::demand::generate(&c);
+    let mut recorder = FollowRecorder::default();
+    let result = episode::run_observed(&c, Driver::Named("sumo"), &planned, &mut recorder)?;
+    let types = result
+        .vehicles
+        .iter()
+        .map(|v| (v.id.clone(), v.sumo_type.clone()))
+        .collect();
+    Ok((recorder.samples(), types))
+}
+
+/// Runs the episodes, fits and evaluates; `progress` hears about each episode.
+pub fn calibrate(
+    config: &Config,
+    spec: &CalibrateSpec,
+    mut progress: impl FnMut(&str),
+) -> Result<Calibration, EpisodeError> {
+    let (mut fit_set, mut test_set) = (Vec::new(), Vec::new());
+    let mut recovery_data: Vec<(FollowSample, Option<BTreeMap<String, f64>>)> = Vec::new();
+    for k in 0..spec.episodes + spec.held_out {
+        let seed = spec.seed_base + k;
+        let (samples, types) = episode_samples(config, seed)?;
+        progress(&format!("episode seed {seed}: {} samples", samples.len()));
+        if k < spec.episodes {
+            let mut c = config.clone();
+            c.scenario.seed = seed;
+            let draws = driver_type_draws(&c);
+            for s in &samples {
+                let drawn = types
+                    .get(&s.vehicle)
+                    .and_then(|t| {
+                        t.split('@')
+                            .next()?
+                            .strip_prefix("hdv.")?
+                            .parse::<usize>()
+                            .ok()
+                    })
+                    .and_then(|i| draws.get(i).cloned());
+                recovery_data.push((
+                    FollowSample {
+                        vehicle: format!("{seed}/{}", s.vehicle),
+                        ..s.clone()
+                    },
+                    drawn,
+                ));
+            }
+            fit_set.extend(samples);
+        } else {
+            test_set.extend(samples);
+        }
+    }
+    let dt = config.scenario.dt;
+    let start = IdmParams {
+        v0_factor: 1.0,
+        time_headway: config.idm.time_headway,
+        min_gap: config.idm.min_gap,
+        accel: config.idm.accel,
+        decel: config.idm.decel,
+    };
+    let stride = fit_set.len().div_ceil(MAX_FIT_SAMPLES).max(1);
+    let thinned: Vec<&FollowSample> = fit_set.iter().step_by(stride).collect();
+    let global = fit_idm(&thinned, start, dt).params;
+    Ok(Calibration {
+        format: FORMAT.into(),
+        version: VERSION,
+        profile: config.hdv.profile.clone(),
+        episodes: spec.episodes,
+        held_out: spec.held_out,
+        seed_base: spec.seed_base,
+        fit_samples: thinned.len(),
+        held_out_samples: test_set.len(),
+        idm: global,
+        constant_speed: rmse(&test_set, |s| predict_constant_speed(s, dt)).into(),
+        idm_fitted: rmse(&test_set, |s| predict_idm(&global, s, dt)).into(),
+        recovery: recover(&recovery_data, global, dt),
+    })
+}
+
+/// SUMO attribute → index into [`IdmParams::to_array`].
+const RECOVERED: [(&str, usize); 4] = [("tau", 1), ("minGap", 2), ("accel", 3), ("decel", 4)];
+
+/// Per-vehicle fits of the vehicles with drawn parameters and enough samples, compared with
+/// their draws.
+fn recover(
+    data: &[(FollowSample, Option<BTreeMap<String, f64>>)],
+    start: IdmParams,
+    dt: f64,
+) -> Vec<Recovery> {
+    let mut by_vehicle: BTreeMap<&str, (Vec<&FollowSample>, &BTreeMap<String, f64>)> =
+        BTreeMap::new();
+    for (s, drawn) in data {
+        if let Some(d) = drawn {
+            by_vehicle
+                .entry(&s.vehicle)
+                .or_insert((Vec::new(), d))
+                .0
+                .push(s);
+        }
+    }
+    let mut errors: BTreeMap<&str, Vec<f64>> = BTreeMap::new();
+    for (samples, drawn) in by_vehicle.values() {
+        if samples.len() < MIN_VEHICLE_SAMPLES || samples.iter().all(|s| s.leader.is_none()) {
+            continue;
+        }
+        let fitted = fit_idm(samples, start, dt).params.to_array();
+        for (name, i) in RECOVERED {
+            if let Some(&want) = drawn.get(name) {
+                errors
+                    .entry(name)
+                    .or_default()
+                    .push((fitted[i] - want).abs() / want);
+            }
+        }
+    }
+    errors
+        .into_iter()
+        .map(|(name, mut e)| {
+            e.sort_by(f64::total_cmp);
+            Recovery {
+                parameter: name.to_string(),
+                vehicles: e.len(),
+                median_relative_error: e[e.len() / 2],
+            }
+        })
+        .collect()
+}

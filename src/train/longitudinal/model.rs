@@ -1,0 +1,135 @@
+//! Open-loop longitudinal predictions of one HDV over 3 s, given its leader's real course: the
+//! IDM with given parameters, and constant speed, the planner's present assumption.
+
+use serde::{Deserialize, Serialize};
+
+/// Steps of a sample's horizon and where its checkpoints lie (1 s and 3 s at 0.2 s steps).
+pub const HORIZON_STEPS: usize = 15;
+pub const STEPS_1S: usize = 5;
+
+/// IDM acceleration exponent δ (fixed, as SUMO's and the paper's).
+pub const DELTA: f64 = 4.0;
+
+/// One follower at one instant and what followed: its start and its actual speed and gap
+/// after 1 s and 3 s; its leader's real rear position and speed over the horizon.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FollowSample {
+    /// The vehicle (for per-vehicle fits).
+    pub vehicle: String,
+    /// Its desired speed (known to the planner: the scene carries it).
+    pub desired_speed: f64,
+    pub front: f64,
+    pub speed: f64,
+    /// The leader's rear and speed at steps 0..=HORIZON_STEPS; `None` on a free road.
+    pub leader: Option<Vec<(f64, f64)>>,
+    /// What happened: speed after 1 s and 3 s, gap after 3 s (bumper to bumper; free road:
+    /// not used).
+    pub speed_1s: f64,
+    pub speed_3s: f64,
+    pub gap_3s: f64,
+}
+
+/// IDM parameters; the desired speed is the vehicle's own times `v0_factor`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct IdmParams {
+    pub v0_factor: f64,
+    /// Time headway T (s).
+    pub time_headway: f64,
+    /// Jam distance s0 (m).
+    pub min_gap: f64,
+    /// Maximum acceleration a (m/s²).
+    pub accel: f64,
+    /// Comfortable deceleration b (m/s²).
+    pub decel: f64,
+}
+
+impl IdmParams {
+    pub fn to_array(self) -> [f64; 5] {
+        [
+            self.v0_factor,
+            self.time_headway,
+            self.min_gap,
+            self.accel,
+            self.decel,
+        ]
+    }
+
+    pub fn from_array(x: [f64; 5]) -> IdmParams {
+        IdmParams {
+            v0_factor: x[0],
+            time_headway: x[1],
+            min_gap: x[2],
+            accel: x[3],
+            decel: x[4],
+        }
+    }
+
+    /// The IDM acceleration at speed `v`, desired speed `v0`, and (gap, closing speed) to the
+    /// leader if there is one.
+    pub fn acceleration(&self, v: f64, v0: f64, leader: Option<(f64, f64)>) -> f64 {
+        let free = 1.0 - (v / v0.max(0.1)).powf(DELTA);
+        let interaction = leader.map_or(0.0, |(gap, closing)| {
+            let s_star = self.min_gap
+                + (v * self.time_headway + v * closing / (2.0 * (self.accel * self.decel).sqrt()))
+                    .max(0.0);
+            (s_star / gap.max(0.1)).powi(2)
+        });
+        self.accel * (free - interaction)
+    }
+}
+
+/// Speed after 1 s, speed after 3 s, gap after 3 s (the gap is NaN on a free road).
+pub type Prediction = [f64; 3];
+
+/// The IDM's open-loop course from the sample's start (Euler steps of `dt`, as SUMO's default
+/// integration: the position advances with the new speed).
+pub fn predict_idm(p: &IdmParams, s: &FollowSample, dt: f64) -> Prediction {
+    let v0 = p.v0_factor * s.desired_speed;
+    let (mut x, mut v) = (s.front, s.speed);
+    let mut v_1s = v;
+    for k in 0..HORIZON_STEPS {
+        let leader = s.leader.as_ref().map(|l| (l[k].0 - x, v - l[k].1));
+        v = (v + p.acceleration(v, v0, leader) * dt).max(0.0);
+        x += v * dt;
+        if k + 1 == STEPS_1S {
+            v_1s = v;
+        }
+    }
+    let gap = s
+        .leader
+        .as_ref()
+        .map_or(f64::NAN, |l| l[HORIZON_STEPS].0 - x);
+    [v_1s, v, gap]
+}
+
+/// Constant speed: the planner's present HDV model.
+pub fn predict_constant_speed(s: &FollowSample, dt: f64) -> Prediction {
+    let x = s.front + s.speed * dt * HORIZON_STEPS as f64;
+    let gap = s
+        .leader
+        .as_ref()
+        .map_or(f64::NAN, |l| l[HORIZON_STEPS].0 - x);
+    [s.speed, s.speed, gap]
+}
+
+/// Root mean square errors of predictions against what happened: speed at 1 s, speed at 3 s,
+/// gap at 3 s (over the samples with a leader).
+pub fn rmse(samples: &[FollowSample], predict: impl Fn(&FollowSample) -> Prediction) -> [f64; 3] {
+    let mut sums = [0.0; 3];
+    let mut with_leader = 0usize;
+    for s in samples {
+        let p = predict(s);
+        sums[0] += (p[0] - s.speed_1s).powi(2);
+        sums[1] += (p[1] - s.speed_3s).powi(2);
+        if s.leader.is_some() {
+            sums[2] += (p[2] - s.gap_3s).powi(2);
+            with_leader += 1;
+        }
+    }
+    let n = samples.len().max(1) as f64;
+    [
+        (sums[0] / n).sqrt(),
+        (sums[1] / n).sqrt(),
+        (sums[2] / with_leader.max(1) as f64).sqrt(),
+    ]
+}

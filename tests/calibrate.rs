@@ -1,0 +1,93 @@
+//! `bkpbs calibrate` on real SUMO: the fitted IDM beats constant speed on held-out episodes,
+//! per-vehicle fits recover heterogeneous drivers' drawn parameters, the output is reproducible,
+//! and bad input is one error line.
+
+mod common;
+
+use common::{bkpbs, stderr};
+
+/// `(rmse_speed_1s, rmse_speed_3s, rmse_gap_3s)` of the report line of `model`.
+fn errors(report: &str, model: &str) -> [f64; 3] {
+    let line = report
+        .lines()
+        .find(|l| l.starts_with(&format!("longitudinal {model} ")))
+        .unwrap_or_else(|| panic!("no line for {model} in:\n{report}"));
+    let value = |key: &str| -> f64 {
+        let at = line.find(&format!("{key}=")).unwrap() + key.len() + 1;
+        line[at..].split(' ').next().unwrap().parse().unwrap()
+    };
+    ["rmse_speed_1s", "rmse_speed_3s", "rmse_gap_3s"].map(value)
+}
+
+#[test]
+fn the_fitted_idm_beats_constant_speed_and_recovers_heterogeneous_drivers() {
+    let d = tempfile::tempdir().unwrap();
+    let out = d.path().join("cal");
+    let args = [
+        "calibrate",
+        "--profile",
+        "heterogeneous",
+        "--episodes",
+        "4",
+        "--held-out",
+        "2",
+        "--seed-base",
+        "700",
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    let o = bkpbs(&args);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let report = String::from_utf8_lossy(&o.stdout).to_string();
+    let (constant, idm) = (
+        errors(&report, "constant-speed"),
+        errors(&report, "idm-fitted"),
+    );
+    assert!(idm[1] < constant[1] && idm[2] < constant[2], "{report}");
+    for parameter in ["tau", "accel", "decel"] {
+        let line = report
+            .lines()
+            .find(|l| l.starts_with(&format!("per-vehicle recovery {parameter}:")))
+            .unwrap_or_else(|| panic!("{report}"));
+        let pct: f64 = line
+            .split("error ")
+            .nth(1)
+            .unwrap()
+            .split(' ')
+            .next()
+            .unwrap()
+            .parse()
+            .unwrap();
+        assert!(pct < 10.0, "{line}");
+    }
+    let json = std::fs::read_to_string(out.join("calibration.json")).unwrap();
+    let v: serde_json::Value = serde_json::from_str(&json).unwrap();
+    assert_eq!(v["format"], "bkpbs-calibration");
+    assert_eq!(v["profile"], "heterogeneous");
+    // The same command gives the same file.
+    let o = bkpbs(&args);
+    assert!(o.status.success());
+    assert_eq!(
+        std::fs::read_to_string(out.join("calibration.json")).unwrap(),
+        json
+    );
+}
+
+#[test]
+fn bad_calibration_input_is_one_error_line() {
+    let d = tempfile::tempdir().unwrap();
+    let out = d.path().join("cal");
+    for (extra, culprit) in [
+        (vec!["--profile", "reckless"], "reckless"),
+        (vec!["--episodes", "0"], "--episodes"),
+        (vec!["--held-out", "-1"], "--held-out"),
+    ] {
+        let mut args = vec!["calibrate", "--out", out.to_str().unwrap()];
+        args.extend(extra);
+        let o = bkpbs(&args);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(1), "{args:?}: {err}");
+        assert_eq!(err.lines().count(), 1, "{err}");
+        assert!(err.starts_with("error: ") && err.contains(culprit), "{err}");
+    }
+}
