@@ -91,3 +91,47 @@ fn bad_calibration_input_is_one_error_line() {
         assert!(err.starts_with("error: ") && err.contains(culprit), "{err}");
     }
 }
+
+#[test]
+fn a_shipped_calibration_drives_the_planner_only_for_its_own_profile() {
+    let d = tempfile::tempdir().unwrap();
+    let shipped = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("models/profiles/paper/calibration.json");
+    let config = |profile: &str, file: &std::path::Path| {
+        let path = d.path().join(format!("{profile}.toml"));
+        let text = format!(
+            "[hdv]\nprofile = \"{profile}\"\n[predictor]\ncalibration = \"{}\"\n",
+            file.display()
+        );
+        std::fs::write(&path, text).unwrap();
+        path
+    };
+    let run = |cfg: &std::path::Path| {
+        bkpbs(&[
+            "episode",
+            "--planner",
+            "bk-pbs",
+            "--steps",
+            "60",
+            "--config",
+            cfg.to_str().unwrap(),
+            "--out",
+            d.path().join("out").to_str().unwrap(),
+        ])
+    };
+    let o = run(&config("paper", &shipped));
+    assert!(o.status.success(), "{}", stderr(&o));
+    for (cfg, culprit) in [
+        (config("sumo-safe", &shipped), "SUMO runs 'sumo-safe'"),
+        (
+            config("paper", &d.path().join("nope.json")),
+            "predictor.calibration",
+        ),
+    ] {
+        let o = run(&cfg);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(1), "{err}");
+        assert_eq!(err.lines().count(), 1, "{err}");
+        assert!(err.contains(culprit), "{err}");
+    }
+}

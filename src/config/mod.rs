@@ -346,6 +346,10 @@ pub struct PredictorSettings {
     /// `models/gcn-unconditioned.json`.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub unconditioned_model: Option<PathBuf>,
+    /// `calibration.json` of `bkpbs calibrate` for the profile SUMO runs: predicted HDVs then
+    /// follow their present leader by the fitted IDM instead of keeping their speed.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub calibration: Option<PathBuf>,
     /// A lane change is predicted to start at the first step at which the probability that it
     /// has started (from the per-step probabilities along the rollout) reaches this value.
     pub decision_probability: f64,
@@ -365,6 +369,7 @@ impl Default for PredictorSettings {
             kind: PredictorKind::Learned,
             conditioned_model: None,
             unconditioned_model: None,
+            calibration: None,
             decision_probability: 0.5,
         }
     }

@@ -3,6 +3,7 @@
 //! than not to have decided, executing the lane change as SUMO does (constant lateral speed over
 //! the lane-change duration).
 
+use super::longitudinal::Longitudinal;
 use super::Predictor;
 use crate::config::Config;
 use crate::model::road::MERGE_LANE;
@@ -17,6 +18,8 @@ pub struct ConstantSpeed {
     merge_exponent: f64,
     /// Hardest braking of an HDV (SUMO's emergencyDecel), carried by its predictions.
     hdv_brake: f64,
+    /// How predicted HDVs move along their lane (the name's constant speed by default).
+    longitudinal: Longitudinal,
 }
 
 impl ConstantSpeed {
@@ -27,7 +30,14 @@ impl ConstantSpeed {
             lane_change_steps: s.lane_change_steps(),
             merge_exponent: config.ramp_merge.exponent,
             hdv_brake: config.idm.max_decel,
+            longitudinal: Longitudinal::ConstantSpeed,
         }
+    }
+
+    /// The same predictor with HDVs moving along their lane by `longitudinal`.
+    pub fn with_longitudinal(mut self, longitudinal: Longitudinal) -> ConstantSpeed {
+        self.longitudinal = longitudinal;
+        self
     }
 
     /// Step at which a ramp HDV whose front is at `front`, driving `speed`, has decided to merge
@@ -75,17 +85,24 @@ impl Predictor for ConstantSpeed {
                 .then(|| self.median_merge_step(scene, v.front(), forward, horizon))
                 .flatten();
         let lc = self.lane_change_steps as f64;
-        let poses = (0..=horizon)
-            .map(|k| {
+        let model = match v.kind {
+            Kind::Hdv => self.longitudinal,
+            Kind::Cav => Longitudinal::ConstantSpeed,
+        };
+        let poses = model
+            .course(scene, i, horizon, self.dt)
+            .into_iter()
+            .enumerate()
+            .map(|(k, (s, speed))| {
                 let y = match merge_at {
                     Some(m) if k > m => y0 + w * ((k - m) as f64 / lc).min(1.0),
                     _ => y0,
                 };
                 Pose {
-                    s: v.s + forward * self.dt * k as f64,
+                    s,
                     y,
                     heading: 0.0,
-                    speed: forward,
+                    speed,
                 }
             })
             .collect();

@@ -24,6 +24,7 @@ use super::features::{
     LATERAL_AT_REST, PREVIEW,
 };
 use super::infer::Workspace;
+use super::longitudinal::Longitudinal;
 use super::model_file::{LaneChangeModel, ModelError};
 use super::Predictor;
 use crate::config::{Config, PredictorKind};
@@ -41,6 +42,8 @@ pub struct Learned {
     /// Hardest braking of an HDV (SUMO's emergencyDecel), carried by its predictions.
     hdv_brake: f64,
     decision_probability: f64,
+    /// How predicted HDVs move along their lane.
+    longitudinal: Longitudinal,
 }
 
 /// Per-thread buffers, so predicting allocates nothing but the trajectory it returns.
@@ -88,7 +91,14 @@ impl Learned {
             lane_change_steps: (s.lane_change_duration / s.dt).round().max(1.0) as usize,
             decision_probability: config.predictor.decision_probability,
             hdv_brake: config.idm.max_decel,
+            longitudinal: Longitudinal::ConstantSpeed,
         }
+    }
+
+    /// The same predictor with HDVs moving along their lane by `longitudinal`.
+    pub fn with_longitudinal(mut self, longitudinal: Longitudinal) -> Learned {
+        self.longitudinal = longitudinal;
+        self
     }
 
     /// The model used with (`true`) or without plans to condition on.
@@ -256,12 +266,19 @@ impl Learned {
         horizon: usize,
     ) -> Trajectory {
         let v = &scene.vehicles[i];
-        let poses = (0..=horizon)
-            .map(|k| Pose {
-                s: v.s + v.speed * self.dt * k as f64,
+        let model = match v.kind {
+            Kind::Hdv => self.longitudinal,
+            Kind::Cav => Longitudinal::ConstantSpeed,
+        };
+        let poses = model
+            .course(scene, i, horizon, self.dt)
+            .into_iter()
+            .enumerate()
+            .map(|(k, (s, speed))| Pose {
+                s,
                 y: lateral(k),
                 heading: 0.0,
-                speed: v.speed,
+                speed,
             })
             .collect();
         Trajectory {
@@ -356,8 +373,14 @@ pub struct PredictorError {
 /// # Errors
 /// A model file that cannot be used, naming the setting and the file.
 pub fn configured(config: &Config) -> Result<Box<dyn Predictor>, PredictorError> {
+    let longitudinal = Longitudinal::from_config(config).map_err(|cause| PredictorError {
+        field: "predictor.calibration",
+        cause,
+    })?;
     match config.predictor.kind {
-        PredictorKind::Constant => Ok(Box::new(super::ConstantSpeed::new(config))),
+        PredictorKind::Constant => Ok(Box::new(
+            super::ConstantSpeed::new(config).with_longitudinal(longitudinal),
+        )),
         PredictorKind::Learned => {
             let p = &config.predictor;
             let load = |path: &Option<std::path::PathBuf>, field, conditioned| match path {
@@ -385,7 +408,9 @@ pub fn configured(config: &Config) -> Result<Box<dyn Predictor>, PredictorError>
                     },
                 });
             }
-            Ok(Box::new(Learned::with_models(config, c, u)))
+            Ok(Box::new(
+                Learned::with_models(config, c, u).with_longitudinal(longitudinal),
+            ))
         }
     }
 }

@@ -17,6 +17,7 @@ pub mod gcn;
 pub mod infer;
 pub mod learned;
 pub mod logistic;
+pub mod longitudinal;
 pub mod model_file;
 pub mod training_record;
 

@@ -1,14 +1,11 @@
 //! Open-loop longitudinal predictions of one HDV over 3 s, given its leader's real course: the
 //! IDM with given parameters, and constant speed, the planner's present assumption.
 
-use serde::{Deserialize, Serialize};
+pub use crate::predict::longitudinal::IdmParams;
 
 /// Steps of a sample's horizon and where its checkpoints lie (1 s and 3 s at 0.2 s steps).
 pub const HORIZON_STEPS: usize = 15;
 pub const STEPS_1S: usize = 5;
-
-/// IDM acceleration exponent δ (fixed, as SUMO's and the paper's).
-pub const DELTA: f64 = 4.0;
 
 /// One follower at one instant and what followed: its start and its actual speed and gap
 /// after 1 s and 3 s; its leader's real rear position and speed over the horizon.
@@ -27,55 +24,6 @@ pub struct FollowSample {
     pub speed_1s: f64,
     pub speed_3s: f64,
     pub gap_3s: f64,
-}
-
-/// IDM parameters; the desired speed is the vehicle's own times `v0_factor`.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct IdmParams {
-    pub v0_factor: f64,
-    /// Time headway T (s).
-    pub time_headway: f64,
-    /// Jam distance s0 (m).
-    pub min_gap: f64,
-    /// Maximum acceleration a (m/s²).
-    pub accel: f64,
-    /// Comfortable deceleration b (m/s²).
-    pub decel: f64,
-}
-
-impl IdmParams {
-    pub fn to_array(self) -> [f64; 5] {
-        [
-            self.v0_factor,
-            self.time_headway,
-            self.min_gap,
-            self.accel,
-            self.decel,
-        ]
-    }
-
-    pub fn from_array(x: [f64; 5]) -> IdmParams {
-        IdmParams {
-            v0_factor: x[0],
-            time_headway: x[1],
-            min_gap: x[2],
-            accel: x[3],
-            decel: x[4],
-        }
-    }
-
-    /// The IDM acceleration at speed `v`, desired speed `v0`, and (gap, closing speed) to the
-    /// leader if there is one.
-    pub fn acceleration(&self, v: f64, v0: f64, leader: Option<(f64, f64)>) -> f64 {
-        let free = 1.0 - (v / v0.max(0.1)).powf(DELTA);
-        let interaction = leader.map_or(0.0, |(gap, closing)| {
-            let s_star = self.min_gap
-                + (v * self.time_headway + v * closing / (2.0 * (self.accel * self.decel).sqrt()))
-                    .max(0.0);
-            (s_star / gap.max(0.1)).powi(2)
-        });
-        self.accel * (free - interaction)
-    }
 }
 
 /// Speed after 1 s, speed after 3 s, gap after 3 s (the gap is NaN on a free road).

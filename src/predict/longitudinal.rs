@@ -1,0 +1,228 @@
+//! How a predicted HDV moves along its lane: at constant speed (the default), or by an IDM
+//! fitted to SUMO's drivers with `bkpbs calibrate` (`[predictor] calibration`), behind its
+//! present leader, which keeps its speed.
+
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+
+use super::model_file::ModelError;
+use crate::config::Config;
+use crate::model::scene::Scene;
+
+/// IDM acceleration exponent δ (fixed, as SUMO's and the paper's).
+pub const DELTA: f64 = 4.0;
+
+/// IDM parameters; the desired speed is the vehicle's own times `v0_factor`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct IdmParams {
+    pub v0_factor: f64,
+    /// Time headway T (s).
+    pub time_headway: f64,
+    /// Jam distance s0 (m).
+    pub min_gap: f64,
+    /// Maximum acceleration a (m/s²).
+    pub accel: f64,
+    /// Comfortable deceleration b (m/s²).
+    pub decel: f64,
+}
+
+impl IdmParams {
+    pub fn to_array(self) -> [f64; 5] {
+        [
+            self.v0_factor,
+            self.time_headway,
+            self.min_gap,
+            self.accel,
+            self.decel,
+        ]
+    }
+
+    pub fn from_array(x: [f64; 5]) -> IdmParams {
+        IdmParams {
+            v0_factor: x[0],
+            time_headway: x[1],
+            min_gap: x[2],
+            accel: x[3],
+            decel: x[4],
+        }
+    }
+
+    /// The IDM acceleration at speed `v`, desired speed `v0`, and (gap, closing speed) to the
+    /// leader if there is one.
+    pub fn acceleration(&self, v: f64, v0: f64, leader: Option<(f64, f64)>) -> f64 {
+        let free = 1.0 - (v / v0.max(0.1)).powf(DELTA);
+        let interaction = leader.map_or(0.0, |(gap, closing)| {
+            let s_star = self.min_gap
+                + (v * self.time_headway + v * closing / (2.0 * (self.accel * self.decel).sqrt()))
+                    .max(0.0);
+            (s_star / gap.max(0.1)).powi(2)
+        });
+        self.accel * (free - interaction)
+    }
+}
+
+/// The longitudinal model of predicted HDVs.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Longitudinal {
+    ConstantSpeed,
+    Idm(IdmParams),
+}
+
+/// What a predictor needs of `calibration.json` (written by `bkpbs calibrate`).
+#[derive(Deserialize)]
+struct CalibrationView {
+    format: String,
+    version: u32,
+    profile: String,
+    idm: IdmParams,
+}
+
+/// Format tag and version of `calibration.json`.
+pub const CALIBRATION_FORMAT: &str = "bkpbs-calibration";
+pub const CALIBRATION_VERSION: u32 = 1;
+
+impl Longitudinal {
+    /// The configured model: the IDM of `predictor.calibration` if set, which must be a
+    /// calibration for the profile SUMO runs.
+    pub fn from_config(config: &Config) -> Result<Longitudinal, ModelError> {
+        match &config.predictor.calibration {
+            None => Ok(Longitudinal::ConstantSpeed),
+            Some(path) => load(path, &config.hdv.profile).map(Longitudinal::Idm),
+        }
+    }
+
+    /// (s, speed) of vehicle `i` at steps 0..=`horizon` along its lane.
+    pub fn course(&self, scene: &Scene, i: usize, horizon: usize, dt: f64) -> Vec<(f64, f64)> {
+        let v = &scene.vehicles[i];
+        let Longitudinal::Idm(p) = self else {
+            return (0..=horizon)
+                .map(|k| (v.s + v.speed * dt * k as f64, v.speed))
+                .collect();
+        };
+        let leader = scene
+            .vehicles
+            .iter()
+            .filter(|u| u.lane == v.lane && u.s > v.s)
+            .min_by(|a, b| a.s.total_cmp(&b.s));
+        let v0 = p.v0_factor * v.desired_speed;
+        let (mut s, mut speed) = (v.s, v.speed);
+        let mut out = Vec::with_capacity(horizon + 1);
+        out.push((s, speed));
+        for k in 0..horizon {
+            let ahead = leader.map(|l| {
+                let rear = l.rear() + l.speed * dt * k as f64;
+                (rear - (s + 0.5 * v.length), speed - l.speed)
+            });
+            speed = (speed + p.acceleration(speed, v0, ahead) * dt).max(0.0);
+            s += speed * dt;
+            out.push((s, speed));
+        }
+        out
+    }
+}
+
+/// The fitted IDM of a calibration file, checked: the format, its version, and that it was
+/// made for `profile`.
+pub fn load(path: &Path, profile: &str) -> Result<IdmParams, ModelError> {
+    let p = || PathBuf::from(path);
+    let text =
+        std::fs::read_to_string(path).map_err(|cause| ModelError::Read { path: p(), cause })?;
+    let c: CalibrationView = serde_json::from_str(&text).map_err(|e| ModelError::Json {
+        path: p(),
+        message: e.to_string(),
+    })?;
+    if c.format != CALIBRATION_FORMAT {
+        return Err(ModelError::Format {
+            path: p(),
+            found: c.format,
+        });
+    }
+    if c.version != CALIBRATION_VERSION {
+        return Err(ModelError::Version {
+            path: p(),
+            found: c.version,
+            expected: CALIBRATION_VERSION,
+        });
+    }
+    if c.profile != profile {
+        return Err(ModelError::Shape {
+            path: p(),
+            what: format!(
+                "it calibrates HDV profile '{}', but SUMO runs '{profile}' (hdv.profile)",
+                c.profile
+            ),
+        });
+    }
+    let ok = c
+        .idm
+        .to_array()
+        .iter()
+        .all(|v| v.is_finite() && *v > 0.0 && *v < 1e3);
+    if !ok {
+        return Err(ModelError::Shape {
+            path: p(),
+            what: format!("IDM parameters out of range: {:?}", c.idm),
+        });
+    }
+    Ok(c.idm)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::road::Road;
+    use crate::model::scene::{Kind, Origin, VehicleState};
+
+    fn scene() -> Scene {
+        Scene {
+            time: 0.0,
+            road: Road::paper_default(),
+            vehicles: vec![
+                VehicleState::on_lane("h", Kind::Hdv, Origin::Main, 100.0, 1, 30.0),
+                VehicleState::on_lane("slow", Kind::Hdv, Origin::Main, 130.0, 1, 10.0),
+            ],
+        }
+    }
+
+    const IDM: IdmParams = IdmParams {
+        v0_factor: 1.0,
+        time_headway: 1.5,
+        min_gap: 5.0,
+        accel: 3.0,
+        decel: 5.0,
+    };
+
+    #[test]
+    fn the_idm_course_brakes_behind_a_slow_leader_and_constant_speed_does_not() {
+        let s = scene();
+        let constant = Longitudinal::ConstantSpeed.course(&s, 0, 15, 0.2);
+        assert_eq!(constant[15], (100.0 + 30.0 * 0.2 * 15.0, 30.0));
+        let idm = Longitudinal::Idm(IDM).course(&s, 0, 15, 0.2);
+        assert!(idm[15].1 < 15.0, "{:?}", idm[15]);
+        // It stays behind the leader, which keeps its 10 m/s.
+        for (k, (pos, _)) in idm.iter().enumerate() {
+            let leader_rear = 130.0 - 2.5 + 10.0 * 0.2 * k as f64;
+            assert!(pos + 2.5 < leader_rear, "step {k}: {pos}");
+        }
+    }
+
+    #[test]
+    fn a_calibration_file_must_be_one_and_for_the_profile_sumo_runs() {
+        let d = tempfile::tempdir().unwrap();
+        let path = d.path().join("calibration.json");
+        let write = |format: &str, profile: &str| {
+            let text = serde_json::json!({
+                "format": format, "version": 1, "profile": profile, "idm": IDM
+            });
+            std::fs::write(&path, text.to_string()).unwrap();
+        };
+        write(CALIBRATION_FORMAT, "paper");
+        assert_eq!(load(&path, "paper").unwrap(), IDM);
+        let e = load(&path, "sumo-safe").unwrap_err().to_string();
+        assert!(e.contains("'paper'") && e.contains("'sumo-safe'"), "{e}");
+        write("something-else", "paper");
+        assert!(load(&path, "paper").is_err());
+        assert!(load(&d.path().join("missing.json"), "paper").is_err());
+    }
+}
