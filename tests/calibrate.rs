@@ -135,3 +135,55 @@ fn a_shipped_calibration_drives_the_planner_only_for_its_own_profile() {
         assert!(err.contains(culprit), "{err}");
     }
 }
+
+#[test]
+fn the_generalisation_matrix_holds_every_pair_and_constant_speed_is_worst() {
+    let d = tempfile::tempdir().unwrap();
+    let out = d.path().join("m");
+    let args = [
+        "calibrate",
+        "--matrix",
+        "--profiles",
+        "sumo-safe,krauss",
+        "--episodes",
+        "3",
+        "--held-out",
+        "2",
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    let o = bkpbs(&args);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let table = std::fs::read_to_string(out.join("longitudinal_matrix.csv")).unwrap();
+    let rows: Vec<Vec<&str>> = table
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').collect())
+        .collect();
+    assert_eq!(rows.len(), 3 * 2, "{table}");
+    for evaluated in ["sumo-safe", "krauss"] {
+        let speed_3s = |model: &str| -> f64 {
+            rows.iter()
+                .find(|r| r[0] == model && r[1] == evaluated)
+                .unwrap()[3]
+                .parse()
+                .unwrap()
+        };
+        let constant = speed_3s("constant speed");
+        for fitted in ["IDM fitted on sumo-safe", "IDM fitted on krauss"] {
+            assert!(
+                speed_3s(fitted) < constant,
+                "{fitted} on {evaluated}: {table}"
+            );
+        }
+    }
+    assert!(std::fs::read(out.join("longitudinal_matrix.png"))
+        .unwrap()
+        .starts_with(b"\x89PNG"));
+    let o = bkpbs(&args);
+    assert!(o.status.success());
+    assert_eq!(
+        std::fs::read_to_string(out.join("longitudinal_matrix.csv")).unwrap(),
+        table
+    );
+}

@@ -5,7 +5,9 @@ use std::path::PathBuf;
 use anyhow::{Context, Result};
 use clap::Args;
 
+use bkpbs::config::hdv::BUILT_IN;
 use bkpbs::config::Config;
+use bkpbs::report::calibration;
 use bkpbs::train::longitudinal::{self, CalibrateSpec};
 
 use super::scenario::load_config;
@@ -27,9 +29,16 @@ pub struct CalibrateArgs {
     /// TOML file with settings (α, λ, steps, profiles of one's own, …).
     #[arg(long)]
     config: Option<PathBuf>,
-    /// Directory for calibration.json.
+    /// Directory for calibration.json (with --matrix: for the matrix's tables and figure).
     #[arg(long)]
     out: PathBuf,
+    /// The generalisation matrix instead: an IDM fitted on each of --profiles, evaluated on
+    /// each of them.
+    #[arg(long, conflicts_with = "profile")]
+    matrix: bool,
+    /// Profiles of the matrix, comma-separated [default: every built-in profile].
+    #[arg(long, requires = "matrix", value_name = "NAMES")]
+    profiles: Option<String>,
 }
 
 /// A checked calibration run.
@@ -37,12 +46,24 @@ pub struct Calibrate {
     config: Config,
     spec: CalibrateSpec,
     out: PathBuf,
+    /// The matrix's profiles, when asked for the matrix.
+    matrix: Option<Vec<String>>,
 }
 
 impl CalibrateArgs {
     pub fn resolve(self) -> Result<Calibrate> {
         let profile = self.profile;
         let config = load_config(self.config.as_deref(), |c| c.hdv.profile = profile)?;
+        let matrix: Option<Vec<String>> = match (self.matrix, &self.profiles) {
+            (false, _) => None,
+            (true, None) => Some(BUILT_IN.iter().map(|p| p.to_string()).collect()),
+            (true, Some(text)) => Some(text.split(',').map(|p| p.trim().to_string()).collect()),
+        };
+        for p in matrix.iter().flatten() {
+            let mut c = config.clone();
+            c.hdv.profile = p.clone();
+            c.validate().context("--profiles")?;
+        }
         for (flag, n) in [("--episodes", self.episodes), ("--held-out", self.held_out)] {
             if !(1..=10_000).contains(&n) {
                 anyhow::bail!("{flag} {n} must be 1 to 10000 episodes");
@@ -57,12 +78,16 @@ impl CalibrateArgs {
                 seed_base: self.seed_base,
             },
             out: self.out,
+            matrix,
         })
     }
 }
 
-/// Runs the episodes, prints the report and writes `calibration.json`.
+/// Runs the episodes, prints the report and writes `calibration.json` (or the matrix).
 pub fn run(c: Calibrate) -> Result<()> {
+    if let Some(profiles) = &c.matrix {
+        return run_matrix(&c, profiles);
+    }
     let total = c.spec.episodes + c.spec.held_out;
     let mut done = 0;
     let calibration = longitudinal::calibrate(&c.config, &c.spec, |line| {
@@ -75,5 +100,30 @@ pub fn run(c: Calibrate) -> Result<()> {
     bkpbs::io::write_atomic(&path, text.as_bytes())
         .with_context(|| format!("cannot save the calibration in {}", c.out.display()))?;
     println!("calibration: {}", path.display());
+    Ok(())
+}
+
+/// The generalisation matrix: tables (CSV, Markdown) and the heat map into `--out`.
+fn run_matrix(c: &Calibrate, profiles: &[String]) -> Result<()> {
+    let total = (c.spec.episodes + c.spec.held_out) * profiles.len() as u64;
+    let mut done = 0;
+    let m = longitudinal::matrix(&c.config, profiles, &c.spec, |line| {
+        done += 1;
+        eprintln!("calibrate: {done}/{total} {line}");
+    })?;
+    let (table, markdown) = (calibration::csv(&m), calibration::markdown(&m));
+    let figure = calibration::figure(&m)?;
+    let files: [(&str, &[u8]); 4] = [
+        ("longitudinal_matrix.csv", table.as_bytes()),
+        ("longitudinal_matrix.md", markdown.as_bytes()),
+        ("longitudinal_matrix.png", &figure.png),
+        ("longitudinal_matrix.svg", figure.svg.as_bytes()),
+    ];
+    print!("{markdown}");
+    for (name, bytes) in files {
+        let path = c.out.join(name);
+        bkpbs::io::write_atomic(&path, bytes)?;
+        println!("written: {}", path.display());
+    }
     Ok(())
 }

@@ -9,6 +9,7 @@
 //! Figures of one episode: [`episode_plots`] (`bkpbs plot`), from its trajectories
 //! ([`lane_tracks`]) drawn by [`timespace`], and the collision close-ups of [`explain`].
 
+pub mod calibration;
 pub mod episode_plots;
 pub mod explain;
 pub mod lane_tracks;

@@ -131,47 +131,74 @@ fn episode_samples(
     Ok((recorder.samples(), types))
 }
 
-/// Runs the episodes, fits and evaluates; `progress` hears about each episode.
-pub fn calibrate(
+/// A sample of a vehicle with drawn parameters, and those draws.
+type DrawnSample = (FollowSample, Option<BTreeMap<String, f64>>);
+
+/// The samples of one profile: to fit on, held out, and with each vehicle's draws.
+struct ProfileData {
+    fit: Vec<FollowSample>,
+    held_out: Vec<FollowSample>,
+    drawn: Vec<DrawnSample>,
+}
+
+/// The index of a heterogeneous driver type (`hdv.7`, `hdv.7@id`).
+fn driver_index(sumo_type: &str) -> Option<usize> {
+    sumo_type
+        .split('@')
+        .next()?
+        .strip_prefix("hdv.")?
+        .parse()
+        .ok()
+}
+
+/// Runs the profile's episodes and gathers their samples.
+fn gather(
     config: &Config,
     spec: &CalibrateSpec,
-    mut progress: impl FnMut(&str),
-) -> Result<Calibration, EpisodeError> {
-    let (mut fit_set, mut test_set) = (Vec::new(), Vec::new());
-    let mut recovery_data: Vec<(FollowSample, Option<BTreeMap<String, f64>>)> = Vec::new();
+    progress: &mut impl FnMut(&str),
+) -> Result<ProfileData, EpisodeError> {
+    let mut data = ProfileData {
+        fit: Vec::new(),
+        held_out: Vec::new(),
+        drawn: Vec::new(),
+    };
     for k in 0..spec.episodes + spec.held_out {
         let seed = spec.seed_base + k;
         let (samples, types) = episode_samples(config, seed)?;
-        progress(&format!("episode seed {seed}: {} samples", samples.len()));
-        if k < spec.episodes {
-            let mut c = config.clone();
-            c.scenario.seed = seed;
-            let draws = driver_type_draws(&c);
-            for s in &samples {
-                let drawn = types
-                    .get(&s.vehicle)
-                    .and_then(|t| {
-                        t.split('@')
-                            .next()?
-                            .strip_prefix("hdv.")?
-                            .parse::<usize>()
-                            .ok()
-                    })
-                    .and_then(|i| draws.get(i).cloned());
-                recovery_data.push((
-                    FollowSample {
-                        vehicle: format!("{seed}/{}", s.vehicle),
-                        ..s.clone()
-                    },
-                    drawn,
-                ));
-            }
-            fit_set.extend(samples);
-        } else {
-            test_set.extend(samples);
+        progress(&format!(
+            "{} seed {seed}: {} samples",
+            config.hdv.profile,
+            samples.len()
+        ));
+        if k >= spec.episodes {
+            data.held_out.extend(samples);
+            continue;
         }
+        let mut c = config.clone();
+        c.scenario.seed = seed;
+        let draws = driver_type_draws(&c);
+        for s in &samples {
+            let drawn = types
+                .get(&s.vehicle)
+                .and_then(|t| driver_index(t))
+                .and_then(|i| draws.get(i).cloned());
+            let vehicle = format!("{seed}/{}", s.vehicle);
+            data.drawn.push((
+                FollowSample {
+                    vehicle,
+                    ..s.clone()
+                },
+                drawn,
+            ));
+        }
+        data.fit.extend(samples);
     }
-    let dt = config.scenario.dt;
+    Ok(data)
+}
+
+/// The global IDM fit of a profile's samples (at most [`MAX_FIT_SAMPLES`], evenly thinned),
+/// starting from `[idm]`; returns it and the number of samples used.
+fn fit_global(config: &Config, samples: &[FollowSample]) -> (IdmParams, usize) {
     let start = IdmParams {
         v0_factor: 1.0,
         time_headway: config.idm.time_headway,
@@ -179,9 +206,23 @@ pub fn calibrate(
         accel: config.idm.accel,
         decel: config.idm.decel,
     };
-    let stride = fit_set.len().div_ceil(MAX_FIT_SAMPLES).max(1);
-    let thinned: Vec<&FollowSample> = fit_set.iter().step_by(stride).collect();
-    let global = fit_idm(&thinned, start, dt).params;
+    let stride = samples.len().div_ceil(MAX_FIT_SAMPLES).max(1);
+    let thinned: Vec<&FollowSample> = samples.iter().step_by(stride).collect();
+    (
+        fit_idm(&thinned, start, config.scenario.dt).params,
+        thinned.len(),
+    )
+}
+
+/// Runs the episodes, fits and evaluates; `progress` hears about each episode.
+pub fn calibrate(
+    config: &Config,
+    spec: &CalibrateSpec,
+    mut progress: impl FnMut(&str),
+) -> Result<Calibration, EpisodeError> {
+    let data = gather(config, spec, &mut progress)?;
+    let dt = config.scenario.dt;
+    let (global, fit_samples) = fit_global(config, &data.fit);
     Ok(Calibration {
         format: FORMAT.into(),
         version: VERSION,
@@ -189,12 +230,55 @@ pub fn calibrate(
         episodes: spec.episodes,
         held_out: spec.held_out,
         seed_base: spec.seed_base,
-        fit_samples: thinned.len(),
-        held_out_samples: test_set.len(),
+        fit_samples,
+        held_out_samples: data.held_out.len(),
         idm: global,
-        constant_speed: rmse(&test_set, |s| predict_constant_speed(s, dt)).into(),
-        idm_fitted: rmse(&test_set, |s| predict_idm(&global, s, dt)).into(),
-        recovery: recover(&recovery_data, global, dt),
+        constant_speed: rmse(&data.held_out, |s| predict_constant_speed(s, dt)).into(),
+        idm_fitted: rmse(&data.held_out, |s| predict_idm(&global, s, dt)).into(),
+        recovery: recover(&data.drawn, global, dt),
+    })
+}
+
+/// The generalisation matrix: an IDM fitted on each profile, evaluated on every profile's
+/// held-out samples, next to constant speed.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Matrix {
+    pub profiles: Vec<String>,
+    /// `fitted[a][b]`: errors of the IDM fitted on profile a, on profile b's held-out samples.
+    pub fitted: Vec<Vec<Errors>>,
+    /// `constant[b]`: constant speed on profile b's held-out samples.
+    pub constant: Vec<Errors>,
+}
+
+/// Fits on every profile and evaluates on every profile (the same seeds for each).
+pub fn matrix(
+    config: &Config,
+    profiles: &[String],
+    spec: &CalibrateSpec,
+    mut progress: impl FnMut(&str),
+) -> Result<Matrix, EpisodeError> {
+    let dt = config.scenario.dt;
+    let mut data = Vec::new();
+    for p in profiles {
+        let mut c = config.clone();
+        c.hdv.profile = p.clone();
+        data.push(gather(&c, spec, &mut progress)?);
+    }
+    let fits: Vec<IdmParams> = data.iter().map(|d| fit_global(config, &d.fit).0).collect();
+    Ok(Matrix {
+        profiles: profiles.to_vec(),
+        fitted: fits
+            .iter()
+            .map(|f| {
+                data.iter()
+                    .map(|d| rmse(&d.held_out, |s| predict_idm(f, s, dt)).into())
+                    .collect()
+            })
+            .collect(),
+        constant: data
+            .iter()
+            .map(|d| rmse(&d.held_out, |s| predict_constant_speed(s, dt)).into())
+            .collect(),
     })
 }
 
@@ -203,11 +287,7 @@ const RECOVERED: [(&str, usize); 4] = [("tau", 1), ("minGap", 2), ("accel", 3), 
 
 /// Per-vehicle fits of the vehicles with drawn parameters and enough samples, compared with
 /// their draws.
-fn recover(
-    data: &[(FollowSample, Option<BTreeMap<String, f64>>)],
-    start: IdmParams,
-    dt: f64,
-) -> Vec<Recovery> {
+fn recover(data: &[DrawnSample], start: IdmParams, dt: f64) -> Vec<Recovery> {
     let mut by_vehicle: BTreeMap<&str, (Vec<&FollowSample>, &BTreeMap<String, f64>)> =
         BTreeMap::new();
     for (s, drawn) in data {
