@@ -5,8 +5,11 @@
 use super::plot::{Figure, HeatPanel, Heatmap, PlotError};
 use crate::train::longitudinal::{Errors, Matrix};
 
-/// The two errors shown: name, unit, how to read it.
-const SHOWN: [(&str, &str, fn(&Errors) -> f64); 2] = [
+/// An error shown: its name, unit, and how to read it.
+type Shown = (&'static str, &'static str, fn(&Errors) -> f64);
+
+/// The two errors shown.
+const SHOWN: [Shown; 2] = [
     ("rmse_speed_3s", "m/s", |e| e.rmse_speed_3s),
     ("rmse_gap_3s", "m", |e| e.rmse_gap_3s),
 ];
