@@ -8,7 +8,7 @@ use super::Predictor;
 use crate::config::Config;
 use crate::model::road::MERGE_LANE;
 use crate::model::scene::{Kind, Origin, Scene};
-use crate::model::trajectory::{Pose, Trajectory};
+use crate::model::trajectory::Trajectory;
 
 /// Keeps speed and lane; ramp HDVs merge at their median decision time.
 #[derive(Debug, Clone)]
@@ -85,27 +85,10 @@ impl Predictor for ConstantSpeed {
                 .then(|| self.median_merge_step(scene, v.front(), forward, horizon))
                 .flatten();
         let lc = self.lane_change_steps as f64;
-        let model = match v.kind {
-            Kind::Hdv => self.longitudinal,
-            Kind::Cav => Longitudinal::ConstantSpeed,
-        };
-        let poses = model
-            .course(scene, i, horizon, self.dt)
-            .into_iter()
-            .enumerate()
-            .map(|(k, (s, speed))| {
-                let y = match merge_at {
-                    Some(m) if k > m => y0 + w * ((k - m) as f64 / lc).min(1.0),
-                    _ => y0,
-                };
-                Pose {
-                    s,
-                    y,
-                    heading: 0.0,
-                    speed,
-                }
-            })
-            .collect();
+        let poses = self.longitudinal.poses(scene, i, horizon, self.dt, |k| match merge_at {
+            Some(m) if k > m => y0 + w * ((k - m) as f64 / lc).min(1.0),
+            _ => y0,
+        });
         Trajectory {
             poses,
             length: v.length,

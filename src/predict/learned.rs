@@ -30,7 +30,7 @@ use super::Predictor;
 use crate::config::{Config, PredictorKind};
 use crate::model::road::{lane_at, MERGE_LANE};
 use crate::model::scene::{Kind, Scene};
-use crate::model::trajectory::{Pose, Trajectory};
+use crate::model::trajectory::Trajectory;
 
 /// b_θ as a [`Predictor`].
 #[derive(Debug, Clone)]
@@ -266,21 +266,7 @@ impl Learned {
         horizon: usize,
     ) -> Trajectory {
         let v = &scene.vehicles[i];
-        let model = match v.kind {
-            Kind::Hdv => self.longitudinal,
-            Kind::Cav => Longitudinal::ConstantSpeed,
-        };
-        let poses = model
-            .course(scene, i, horizon, self.dt)
-            .into_iter()
-            .enumerate()
-            .map(|(k, (s, speed))| Pose {
-                s,
-                y: lateral(k),
-                heading: 0.0,
-                speed,
-            })
-            .collect();
+        let poses = self.longitudinal.poses(scene, i, horizon, self.dt, lateral);
         Trajectory {
             poses,
             length: v.length,

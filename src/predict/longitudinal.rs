@@ -8,7 +8,8 @@ use serde::{Deserialize, Serialize};
 
 use super::model_file::ModelError;
 use crate::config::Config;
-use crate::model::scene::Scene;
+use crate::model::scene::{Kind, Scene};
+use crate::model::trajectory::Pose;
 
 /// IDM acceleration exponent δ (fixed, as SUMO's and the paper's).
 pub const DELTA: f64 = 4.0;
@@ -92,6 +93,33 @@ impl Longitudinal {
         }
     }
 
+    /// The poses of vehicle `i` at steps 0..=`horizon`: along its lane by this model if it is
+    /// an HDV (CAVs keep their speed), sideways at `lateral(k)`.
+    pub fn poses(
+        &self,
+        scene: &Scene,
+        i: usize,
+        horizon: usize,
+        dt: f64,
+        lateral: impl Fn(usize) -> f64,
+    ) -> Vec<Pose> {
+        let model = match scene.vehicles[i].kind {
+            Kind::Hdv => *self,
+            Kind::Cav => Longitudinal::ConstantSpeed,
+        };
+        model
+            .course(scene, i, horizon, dt)
+            .into_iter()
+            .enumerate()
+            .map(|(k, (s, speed))| Pose {
+                s,
+                y: lateral(k),
+                heading: 0.0,
+                speed,
+            })
+            .collect()
+    }
+
     /// (s, speed) of vehicle `i` at steps 0..=`horizon` along its lane.
     pub fn course(&self, scene: &Scene, i: usize, horizon: usize, dt: f64) -> Vec<(f64, f64)> {
         let v = &scene.vehicles[i];
@@ -172,7 +200,7 @@ pub fn load(path: &Path, profile: &str) -> Result<IdmParams, ModelError> {
 mod tests {
     use super::*;
     use crate::model::road::Road;
-    use crate::model::scene::{Kind, Origin, VehicleState};
+    use crate::model::scene::{Origin, VehicleState};
 
     fn scene() -> Scene {
         Scene {
