@@ -187,3 +187,39 @@ fn the_generalisation_matrix_holds_every_pair_and_constant_speed_is_worst() {
         table
     );
 }
+
+#[test]
+fn a_directory_of_calibrations_serves_the_profile_sumo_runs() {
+    let d = tempfile::tempdir().unwrap();
+    let shipped = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("models/profiles");
+    let run = |profile: &str, dir: &std::path::Path| {
+        let cfg = d.path().join("c.toml");
+        let text = format!(
+            "[hdv]\nprofile = \"{profile}\"\n[predictor]\ncalibrations = \"{}\"\n",
+            dir.display()
+        );
+        std::fs::write(&cfg, text).unwrap();
+        bkpbs(&[
+            "episode",
+            "--planner",
+            "bk-mastar",
+            "--steps",
+            "40",
+            "--config",
+            cfg.to_str().unwrap(),
+            "--out",
+            d.path().join("out").to_str().unwrap(),
+        ])
+    };
+    for profile in ["krauss", "paper"] {
+        let o = run(profile, &shipped);
+        assert!(o.status.success(), "{profile}: {}", stderr(&o));
+    }
+    let o = run("krauss", d.path());
+    assert_eq!(o.status.code(), Some(1));
+    assert!(
+        stderr(&o).contains("krauss/calibration.json"),
+        "{}",
+        stderr(&o)
+    );
+}

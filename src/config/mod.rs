@@ -350,6 +350,14 @@ pub struct PredictorSettings {
     /// follow their present leader by the fitted IDM instead of keeping their speed.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub calibration: Option<PathBuf>,
+    /// A directory of calibrations per profile (`DIR/<profile>/calibration.json`, as in
+    /// `models/profiles`): the one of the profile SUMO runs is used when `calibration` is unset
+    /// (a campaign over several profiles).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub calibrations: Option<PathBuf>,
+    /// Accept a calibration made for another profile than SUMO runs: a mismatch experiment.
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub calibration_for_any_profile: bool,
     /// A lane change is predicted to start at the first step at which the probability that it
     /// has started (from the per-step probabilities along the rollout) reaches this value.
     pub decision_probability: f64,
@@ -370,6 +378,8 @@ impl Default for PredictorSettings {
             conditioned_model: None,
             unconditioned_model: None,
             calibration: None,
+            calibrations: None,
+            calibration_for_any_profile: false,
             decision_probability: 0.5,
         }
     }

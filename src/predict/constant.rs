@@ -85,10 +85,12 @@ impl Predictor for ConstantSpeed {
                 .then(|| self.median_merge_step(scene, v.front(), forward, horizon))
                 .flatten();
         let lc = self.lane_change_steps as f64;
-        let poses = self.longitudinal.poses(scene, i, horizon, self.dt, |k| match merge_at {
-            Some(m) if k > m => y0 + w * ((k - m) as f64 / lc).min(1.0),
-            _ => y0,
-        });
+        let poses = self
+            .longitudinal
+            .poses(scene, i, horizon, self.dt, |k| match merge_at {
+                Some(m) if k > m => y0 + w * ((k - m) as f64 / lc).min(1.0),
+                _ => y0,
+            });
         Trajectory {
             poses,
             length: v.length,

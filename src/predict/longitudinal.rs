@@ -87,10 +87,18 @@ impl Longitudinal {
     /// The configured model: the IDM of `predictor.calibration` if set, which must be a
     /// calibration for the profile SUMO runs.
     pub fn from_config(config: &Config) -> Result<Longitudinal, ModelError> {
-        match &config.predictor.calibration {
-            None => Ok(Longitudinal::ConstantSpeed),
-            Some(path) => load(path, &config.hdv.profile).map(Longitudinal::Idm),
-        }
+        let p = &config.predictor;
+        let profile = &config.hdv.profile;
+        let path = p.calibration.clone().or_else(|| {
+            p.calibrations
+                .as_ref()
+                .map(|dir| dir.join(profile).join("calibration.json"))
+        });
+        let Some(path) = path else {
+            return Ok(Longitudinal::ConstantSpeed);
+        };
+        let expected = (!p.calibration_for_any_profile).then_some(profile.as_str());
+        load(&path, expected).map(Longitudinal::Idm)
     }
 
     /// The poses of vehicle `i` at steps 0..=`horizon`: along its lane by this model if it is
@@ -151,8 +159,8 @@ impl Longitudinal {
 }
 
 /// The fitted IDM of a calibration file, checked: the format, its version, and that it was
-/// made for `profile`.
-pub fn load(path: &Path, profile: &str) -> Result<IdmParams, ModelError> {
+/// made for `profile` (unless `None`: any profile).
+pub fn load(path: &Path, profile: Option<&str>) -> Result<IdmParams, ModelError> {
     let p = || PathBuf::from(path);
     let text =
         std::fs::read_to_string(path).map_err(|cause| ModelError::Read { path: p(), cause })?;
@@ -173,11 +181,12 @@ pub fn load(path: &Path, profile: &str) -> Result<IdmParams, ModelError> {
             expected: CALIBRATION_VERSION,
         });
     }
-    if c.profile != profile {
+    if let Some(profile) = profile.filter(|p| *p != c.profile) {
         return Err(ModelError::Shape {
             path: p(),
             what: format!(
-                "it calibrates HDV profile '{}', but SUMO runs '{profile}' (hdv.profile)",
+                "it calibrates HDV profile '{}', but SUMO runs '{profile}' (hdv.profile; \
+                 predictor.calibration_for_any_profile allows it)",
                 c.profile
             ),
         });
@@ -246,11 +255,12 @@ mod tests {
             std::fs::write(&path, text.to_string()).unwrap();
         };
         write(CALIBRATION_FORMAT, "paper");
-        assert_eq!(load(&path, "paper").unwrap(), IDM);
-        let e = load(&path, "sumo-safe").unwrap_err().to_string();
+        assert_eq!(load(&path, Some("paper")).unwrap(), IDM);
+        let e = load(&path, Some("sumo-safe")).unwrap_err().to_string();
         assert!(e.contains("'paper'") && e.contains("'sumo-safe'"), "{e}");
+        assert_eq!(load(&path, None).unwrap(), IDM, "any profile");
         write("something-else", "paper");
-        assert!(load(&path, "paper").is_err());
-        assert!(load(&d.path().join("missing.json"), "paper").is_err());
+        assert!(load(&path, Some("paper")).is_err());
+        assert!(load(&d.path().join("missing.json"), Some("paper")).is_err());
     }
 }
