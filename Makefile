@@ -17,7 +17,7 @@ demo: build
 	rm -rf $(DEMO_OUT)
 	./target/release/bkpbs campaign --alphas 0.4,0.8 --lambdas 2500,3000 --seeds 2 --steps 400 --out $(DEMO_OUT)
 	@echo "demo: CSV files in $(DEMO_OUT)/ (episodes.csv, vehicles.csv, timings.csv, failures.csv; one directory per episode under episodes/)"
-	@echo "demo: tables and figures in $(DEMO_OUT)/report/ (tables.md, *.csv, collision_heatmap.png/.svg, delay_vs_collision.png/.svg)"
+	@echo "demo: tables and figures in $(DEMO_OUT)/report/ (tables.md, *.csv, collision_heatmap, delay_vs_collision, metrics_vs_alpha .png/.svg)"
 
 # The whole suite: formatting, lints, unit and integration tests (integration tests run real SUMO).
 test: deps
