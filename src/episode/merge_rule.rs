@@ -50,6 +50,8 @@ pub struct RampMergeRule {
     decided: HashSet<Arc<str>>,
     /// Each decided driver's critical time gap (s), gap-acceptance profiles only.
     critical_gap: HashMap<Arc<str>, f64>,
+    /// Comfortable deceleration of the HDVs (`idm.decel`), for the gap to the new leader.
+    decel: f64,
 }
 
 impl RampMergeRule {
@@ -66,6 +68,7 @@ impl RampMergeRule {
             rng,
             decided: HashSet::new(),
             critical_gap: HashMap::new(),
+            decel: config.idm.decel,
         }
     }
 
@@ -105,7 +108,7 @@ impl RampMergeRule {
                     forced: true,
                 });
             } else if let Some(&gap) = self.critical_gap.get(&v.id) {
-                if accepts(scene, i, gap) {
+                if accepts(scene, i, gap, self.decel) {
                     out.push(MergeRequest {
                         vehicle: i,
                         forced: true,
@@ -140,9 +143,11 @@ fn standard_normal(rng: &mut ChaCha8Rng) -> f64 {
 }
 
 /// Gap acceptance of the ramp HDV at scene index `i` into the lane to its left: the new
-/// follower at least `critical_gap` seconds behind (at the follower's speed), the new leader at
-/// least half that ahead (at the merger's own speed). Nothing alongside.
-pub fn accepts(scene: &Scene, i: usize, critical_gap: f64) -> bool {
+/// follower at least `critical_gap` seconds behind (at the follower's speed); ahead, room to
+/// brake behind the new leader at the comfortable `decel` plus half the critical gap at its own
+/// speed. Nothing alongside. The driver risks the follower's safety, not its own: a merger
+/// accepting a short gap behind a standing car drove into it.
+pub fn accepts(scene: &Scene, i: usize, critical_gap: f64, decel: f64) -> bool {
     let v = &scene.vehicles[i];
     scene
         .vehicles
@@ -152,7 +157,8 @@ pub fn accepts(scene: &Scene, i: usize, critical_gap: f64) -> bool {
             if u.front() <= v.rear() {
                 v.rear() - u.front() >= critical_gap * u.speed.max(0.1)
             } else if u.rear() >= v.front() {
-                u.rear() - v.front() >= 0.5 * critical_gap * v.speed.max(0.1)
+                let braking = (v.speed.powi(2) - u.speed.powi(2)).max(0.0) / (2.0 * decel);
+                u.rear() - v.front() >= 0.5 * critical_gap * v.speed.max(0.1) + braking
             } else {
                 false
             }
@@ -249,7 +255,7 @@ mod tests {
     }
 
     #[test]
-    fn gap_acceptance_wants_the_critical_gap_behind_and_half_of_it_ahead() {
+    fn gap_acceptance_wants_the_critical_gap_behind_and_room_to_brake_ahead() {
         let road = Road::paper_default();
         let with = |follower_s: f64, leader_s: f64| Scene {
             time: 0.0,
@@ -260,22 +266,18 @@ mod tests {
                 VehicleState::on_lane("l", Kind::Hdv, Origin::Main, leader_s, 1, 25.0),
             ],
         };
-        // Critical gap 1 s: 25 m behind (at the follower's 25 m/s), 10 m ahead (at 20 m/s).
-        assert!(accepts(
-            &with(150.0 - 5.0 - 25.5, 150.0 + 5.0 + 10.5),
-            0,
-            1.0
-        ));
-        assert!(!accepts(
-            &with(150.0 - 5.0 - 24.5, 150.0 + 5.0 + 10.5),
-            0,
-            1.0
-        ));
-        assert!(!accepts(
-            &with(150.0 - 5.0 - 25.5, 150.0 + 5.0 + 9.5),
-            0,
-            1.0
-        ));
-        assert!(!accepts(&with(152.0, 300.0), 0, 1.0), "a car alongside");
+        // Critical gap 1 s: 25 m behind (at the follower's 25 m/s), 10 m ahead (at 20 m/s; the
+        // leader is faster, so no braking room).
+        let ok = |follower: f64, leader: f64| accepts(&with(follower, leader), 0, 1.0, 5.0);
+        assert!(ok(150.0 - 5.0 - 25.5, 150.0 + 5.0 + 10.5));
+        assert!(!ok(150.0 - 5.0 - 24.5, 150.0 + 5.0 + 10.5));
+        assert!(!ok(150.0 - 5.0 - 25.5, 150.0 + 5.0 + 9.5));
+        assert!(!ok(152.0, 300.0), "a car alongside");
+        // Behind a standing car it also wants room to brake: 20²/(2·5) = 40 m more.
+        let mut standing = with(100.0, 150.0 + 2.5 + 45.0);
+        standing.vehicles[2].speed = 0.0;
+        assert!(!accepts(&standing, 0, 1.0, 5.0));
+        standing.vehicles[2].s += 10.0;
+        assert!(accepts(&standing, 0, 1.0, 5.0));
     }
 }
