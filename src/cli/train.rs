@@ -42,6 +42,9 @@ pub struct CollectArgs {
     /// TOML file with scenario settings (α, λ, seed and steps are set per episode).
     #[arg(long)]
     config: Option<PathBuf>,
+    /// HDV driver profile of the episodes (overrides the config's hdv.profile).
+    #[arg(long, value_name = "NAME")]
+    hdv_profile: Option<String>,
 }
 
 /// A checked collection: the base configuration, the episodes' plan and the data file.
@@ -54,7 +57,12 @@ pub struct Collect {
 impl CollectArgs {
     /// Loads the base configuration and fills the plan's unset flags with the library defaults.
     pub fn resolve(self) -> Result<Collect> {
-        let base = load_config(self.config.as_deref(), |_| {})?;
+        let profile = self.hdv_profile;
+        let base = load_config(self.config.as_deref(), |c| {
+            if let Some(p) = profile {
+                c.hdv.profile = p;
+            }
+        })?;
         let d = CollectPlan::default();
         let plan = CollectPlan {
             episodes: self.episodes,
