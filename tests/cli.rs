@@ -416,3 +416,32 @@ fn a_driver_profile_sumo_rejects_or_nobody_knows_is_one_error_line() {
     let o = episode_into(&out, &["--config", &cfg, "--steps", "10"]);
     assert_clear_failure(&o, "SUMO said", &out);
 }
+
+#[test]
+fn collect_takes_a_driver_profile_and_refuses_an_unknown_one() {
+    let d = tmp();
+    let out = d.path().join("x.bin");
+    let o = bkpbs(&[
+        "collect",
+        "--hdv-profile",
+        "reckless",
+        "--episodes",
+        "1",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_clear_failure(&o, "reckless", d.path());
+    let o = bkpbs(&[
+        "collect",
+        "--hdv-profile",
+        "krauss",
+        "--episodes",
+        "1",
+        "--steps",
+        "60",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(out.is_file());
+}
