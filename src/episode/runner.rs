@@ -252,11 +252,21 @@ fn trajectory_row(
         x: raw.x,
         y: raw.y,
         angle: raw.angle,
-        frame: position.map(|(front, lane)| FrameState {
-            s: front - 0.5 * sc.vehicle_length,
-            lane,
-            lateral: raw.lateral_offset,
-            heading: (90.0 - raw.angle).to_radians(),
+        // The scene's own translation into the road frame, so the two never disagree.
+        frame: position.map(|(front, lane)| {
+            let who = frame::Identity {
+                id: id.clone(),
+                kind: record.kind,
+                origin: record.origin,
+                desired_speed: record.desired_speed,
+            };
+            let v = frame::state_at(sc, who, raw, front, lane);
+            FrameState {
+                s: v.s,
+                lane: v.lane,
+                lateral: v.lateral,
+                heading: v.heading,
+            }
         }),
         speed: raw.speed,
         accel: raw.acceleration,

@@ -26,6 +26,8 @@ pub enum TracksError {
         line: u64,
         message: String,
     },
+    #[error(transparent)]
+    Collisions(#[from] super::explain::ExplainError),
 }
 
 /// One vehicle's stay on one lane: consecutive (t, s, speed) samples.
@@ -210,20 +212,11 @@ fn read_collisions(
     if !path.is_file() {
         return Ok(Vec::new());
     }
-    let text = read_text(&path)?;
-    let mut reader = csv::Reader::from_reader(text.as_bytes());
-    let mut marks = Vec::new();
-    for (k, rec) in reader.records().enumerate() {
-        let rec = rec.map_err(|e| TracksError::Malformed {
-            path: path.clone(),
-            line: k as u64 + 2,
-            message: e.to_string(),
-        })?;
-        if let Some(&(t, lane, s)) = rec.get(1).and_then(|collider| last.get(collider)) {
-            marks.push(Mark { lane, t, s });
-        }
-    }
-    Ok(marks)
+    Ok(super::explain::read_collisions(&path)?
+        .iter()
+        .filter_map(|c| last.get(&c.collider))
+        .map(|&(t, lane, s)| Mark { lane, t, s })
+        .collect())
 }
 
 #[cfg(test)]
