@@ -353,6 +353,20 @@ pub struct PredictorError {
     pub cause: ModelError,
 }
 
+/// b_θ trained on the profile SUMO runs, when `predictor.calibrations` names a directory of
+/// per-profile calibrations that holds one (`DIR/<profile>/gcn-conditioned.json`,
+/// `gcn-unconditioned.json`); else the configured or embedded model is used.
+fn profile_model(config: &Config, conditioned: bool) -> Option<std::path::PathBuf> {
+    let file = if conditioned {
+        "gcn-conditioned.json"
+    } else {
+        "gcn-unconditioned.json"
+    };
+    let dir = config.predictor.calibrations.as_ref()?;
+    let path = dir.join(&config.hdv.profile).join(file);
+    path.is_file().then_some(path)
+}
+
 /// The HDV predictor `config.predictor` selects: b_θ (with the configured or the embedded
 /// models) or constant speed.
 ///
@@ -369,8 +383,11 @@ pub fn configured(config: &Config) -> Result<Box<dyn Predictor>, PredictorError>
         )),
         PredictorKind::Learned => {
             let p = &config.predictor;
-            let load = |path: &Option<std::path::PathBuf>, field, conditioned| match path {
-                Some(path) => LaneChangeModel::load(path)
+            let load = |path: &Option<std::path::PathBuf>, field, conditioned| match path
+                .clone()
+                .or_else(|| profile_model(config, conditioned))
+            {
+                Some(path) => LaneChangeModel::load(&path)
                     .map(Arc::new)
                     .map_err(|cause| PredictorError { field, cause }),
                 None => Ok(LaneChangeModel::embedded(conditioned)),
