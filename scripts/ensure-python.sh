@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Makes the Python environment of the bindings' tests, only what is missing (idempotent): a
-# virtualenv at $VENV (default .venv, from `python3`) with maturin, pytest and ray from PyPI.
+# virtualenv at $VENV (default .venv, from `python3`) with maturin, pytest, ray, gymnasium and pettingzoo from PyPI.
 # Fails with one clear line when something cannot be had.
 set -euo pipefail
 
@@ -38,6 +38,8 @@ need=()
 "$VENV/bin/python" -c 'import maturin' 2>/dev/null || need+=("maturin>=1.9.4,<2")
 "$VENV/bin/python" -c 'import pytest' 2>/dev/null || need+=("pytest>=7")
 "$VENV/bin/python" -c 'import ray' 2>/dev/null || need+=("ray>=2.9")
+"$VENV/bin/python" -c 'import gymnasium' 2>/dev/null || need+=("gymnasium>=1.0")
+"$VENV/bin/python" -c 'import pettingzoo' 2>/dev/null || need+=("pettingzoo>=1.24")
 if [ ${#need[@]} -gt 0 ]; then
     say "installing ${need[*]} into $VENV (pip)"
     "$VENV/bin/python" -m pip install --quiet --disable-pip-version-check "${need[@]}" \

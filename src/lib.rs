@@ -5,7 +5,7 @@
 //! The folders are layers, lowest first; each imports only from the ones above it in this list:
 //! [`io`] and [`config`] (plain files and settings), [`model`] (the road frame), [`sumo`] (libsumo
 //! and the frame <-> SUMO translation), [`predict`] (HDV prediction), [`planner`] (M-A*, PBS),
-//! [`controller`] (one maneuver per CAV), [`episode`] (SUMO and a controller in lock-step),
+//! [`policy`] (the RL-PPO policy), [`controller`] (one maneuver per CAV), [`episode`] (SUMO and a controller in lock-step),
 //! [`train`] (offline training of the predictor), [`campaign`] (grids of episodes), [`report`]
 //! (tables and figures). Start at [`episode::run`].
 
@@ -20,6 +20,8 @@ pub mod sumo;
 pub mod predict;
 
 pub mod planner;
+
+pub mod policy;
 
 pub mod controller;
 

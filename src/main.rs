@@ -92,6 +92,15 @@ fn run(command: Command) -> Result<()> {
         Command::EvalPredictor(a) => cli::train::eval_predictor(a.resolve()),
         Command::BenchPredictor(a) => cli::train::bench_predictor(a.resolve()?),
         Command::Calibrate(a) => cli::calibrate::run(a.resolve()?),
+        Command::TrainRl(a) => {
+            let training = a.resolve()?;
+            interrupt::install(true);
+            cli::train_rl::run(training)
+        }
+        Command::RlWorker => {
+            interrupt::install(false);
+            Ok(bkpbs::train::ppo::workers::serve_stdio()?)
+        }
         Command::Worker => {
             interrupt::install(false);
             cli::campaign::worker()

@@ -8,13 +8,14 @@ use std::path::{Path, PathBuf};
 /// The layers of `src/`, lowest first. A module may name `crate::X` only for an `X` listed at or
 /// before its own folder. `cli` is the binary's (it names the library as `bkpbs::`, which is
 /// above everything).
-const LAYERS: [&str; 12] = [
+const LAYERS: [&str; 13] = [
     "io",
     "config",
     "model",
     "sumo",
     "predict",
     "planner",
+    "policy",
     "controller",
     "episode",
     "train",

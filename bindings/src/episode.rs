@@ -59,7 +59,7 @@ fn panic_message(payload: &(dyn std::any::Any + Send)) -> String {
 }
 
 /// The α, λ and seed of an episode as a `scenario` table.
-fn cell_table(alpha: f64, lam: f64, seed: i64) -> PyResult<toml::Table> {
+pub(crate) fn cell_table(alpha: f64, lam: f64, seed: i64) -> PyResult<toml::Table> {
     if seed < 0 {
         return Err(bad_input(format!(
             "invalid setting scenario.seed = {seed}: must not be negative"
@@ -85,7 +85,10 @@ const FLOAT_COLUMNS: [&str; 8] = [
 ];
 
 /// The `episode.csv` row as a dict: the same numbers, typed (empty cells are `None`).
-fn summary_dict<'py>(py: Python<'py>, r: &EpisodeResult) -> PyResult<Bound<'py, PyDict>> {
+pub(crate) fn summary_dict<'py>(
+    py: Python<'py>,
+    r: &EpisodeResult,
+) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
     for (col, cell) in EPISODE_COLUMNS.iter().zip(episode_row(&r.summary)) {
         if cell.is_empty() {

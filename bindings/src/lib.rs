@@ -6,6 +6,7 @@ mod config;
 mod controller;
 mod episode;
 mod errors;
+mod gym;
 mod predict;
 mod scene;
 
@@ -21,6 +22,7 @@ fn _bkpbs(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<campaign::PyCampaign>()?;
     m.add_class::<campaign::PyCampaignTask>()?;
     m.add_class::<predict::PyPredictor>()?;
+    m.add_class::<gym::PyMergeEnv>()?;
     m.add_function(wrap_pyfunction!(episode::run_episode, m)?)?;
     m.add_function(wrap_pyfunction!(episode::write_demand, m)?)?;
     m.add_function(wrap_pyfunction!(episode::write_scenario, m)?)?;

@@ -69,32 +69,6 @@ pub const STOP_GRACE: Duration = Duration::from_secs(10);
 /// How often a wait for a reply looks at the clock and for stop signals.
 const POLL: Duration = Duration::from_millis(100);
 
-/// On Linux, the kernel kills the worker when the campaign dies, set up in the child before it
-/// runs the binary, so there is no moment in which a killed campaign can leave it orphaned (a
-/// worker that asked for this itself, once started, could miss a parent killed in its first
-/// milliseconds and then run its episode to the end). Elsewhere a worker ends when its stdin
-/// closes.
-fn die_with_campaign(command: &mut Command) {
-    #[cfg(target_os = "linux")]
-    {
-        use std::os::unix::process::CommandExt;
-        let campaign = std::process::id() as libc::pid_t;
-        // SAFETY: the closure runs in the forked child before exec and calls only prctl,
-        // getppid and _exit, which are async-signal-safe.
-        unsafe {
-            command.pre_exec(move || {
-                libc::prctl(libc::PR_SET_PDEATHSIG, libc::SIGKILL);
-                if libc::getppid() != campaign {
-                    libc::_exit(1);
-                }
-                Ok(())
-            });
-        }
-    }
-    #[cfg(not(target_os = "linux"))]
-    let _ = command;
-}
-
 impl Worker {
     fn spawn(exe: &Path) -> std::io::Result<Worker> {
         let mut command = Command::new(exe);
@@ -103,7 +77,7 @@ impl Worker {
             .stdin(Stdio::piped())
             .stdout(Stdio::piped())
             .stderr(Stdio::inherit());
-        die_with_campaign(&mut command);
+        crate::io::child::die_with_parent(&mut command);
         let mut child = command.spawn()?;
         let stdin = child.stdin.take().expect("piped stdin");
         let stdout = BufReader::new(child.stdout.take().expect("piped stdout"));

@@ -79,7 +79,7 @@ static IN_EPISODE: AtomicBool = AtomicBool::new(false);
 
 /// Runs the worker on the process's stdin/stdout until stdin closes.
 pub fn serve_stdio() -> Result<(), WorkerError> {
-    let channel = protocol_channel().map_err(WorkerError::Channel)?;
+    let channel = crate::io::child::protocol_channel().map_err(WorkerError::Channel)?;
     panic::set_hook(Box::new(|info| {
         if IN_EPISODE.load(Ordering::SeqCst) {
             *LAST_PANIC.lock().unwrap_or_else(|e| e.into_inner()) = Some(info.to_string());
@@ -196,24 +196,4 @@ pub(crate) fn run_cell(req: &Request) -> Result<(), String> {
 /// rename fail ("cannot write …/campaign.toml: No such file or directory").
 pub(crate) fn remove_stale_temporaries(dir: &Path) {
     crate::io::sweep_stale(dir, crate::io::TEMPORARY_PREFIX);
-}
-
-/// The reply channel: a duplicate of the original stdout, with fd 1 itself pointed at stderr,
-/// so that stray prints (SUMO's, a planner's `println!`) never mix into replies.
-fn protocol_channel() -> std::io::Result<std::fs::File> {
-    use std::os::fd::FromRawFd;
-    std::io::stdout().flush()?;
-    // SAFETY: plain fd calls; the duplicate is owned by the returned File alone.
-    unsafe {
-        let fd = libc::dup(1);
-        if fd < 0 {
-            return Err(std::io::Error::last_os_error());
-        }
-        if libc::dup2(2, 1) < 0 {
-            let e = std::io::Error::last_os_error();
-            libc::close(fd);
-            return Err(e);
-        }
-        Ok(std::fs::File::from_raw_fd(fd))
-    }
 }

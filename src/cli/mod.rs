@@ -13,6 +13,7 @@ pub mod plot;
 pub mod report;
 pub mod scenario;
 pub mod train;
+pub mod train_rl;
 
 use clap::{Parser, Subcommand};
 
@@ -59,6 +60,12 @@ pub enum Command {
     /// Fit an IDM to the HDVs SUMO drives under a driver profile and compare it with constant
     /// speed on held-out episodes.
     Calibrate(calibrate::CalibrateArgs),
+    /// Train the RL-PPO policy with PPO on SUMO episodes (resumable), then compare it with a
+    /// random and an idle policy on held-out episodes.
+    TrainRl(train_rl::TrainRlArgs),
+    /// Internal: run RL rollouts sent by `train-rl` on stdin (one JSON line each).
+    #[command(hide = true)]
+    RlWorker,
     /// Internal: run episodes sent by a campaign on stdin (one JSON line each).
     #[command(hide = true)]
     Worker,

@@ -58,6 +58,9 @@ pub struct Config {
     pub metrics: MetricsSettings,
     /// The safety shield in front of the search-based planners.
     pub safety: SafetySettings,
+    /// The RL-PPO baseline (`rl-ppo`): which policy, shielded or not.
+    #[serde(skip_serializing_if = "RlSettings::is_default")]
+    pub rl: RlSettings,
     /// Optional per-episode outputs; they do not change any result.
     pub output: OutputSettings,
 }
@@ -96,6 +99,25 @@ pub struct SafetySettings {
 impl Default for SafetySettings {
     fn default() -> Self {
         SafetySettings { shield: true }
+    }
+}
+
+/// The RL-PPO baseline (README: "RL-PPO").
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct RlSettings {
+    /// Policy file of `bkpbs train-rl`; unset: the one embedded in the binary
+    /// (`models/rl-ppo.json`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub policy: Option<PathBuf>,
+    /// Put the safety shield in front of the policy. Off by default: the paper's RL-PPO has none.
+    pub shield: bool,
+}
+
+impl RlSettings {
+    /// Whether nothing is set (then a config file does not show the table).
+    pub fn is_default(&self) -> bool {
+        *self == RlSettings::default()
     }
 }
 
@@ -352,7 +374,9 @@ pub struct PredictorSettings {
     pub calibration: Option<PathBuf>,
     /// A directory of calibrations per profile (`DIR/<profile>/calibration.json`, as in
     /// `models/profiles`): the one of the profile SUMO runs is used when `calibration` is unset
-    /// (a campaign over several profiles).
+    /// (a campaign over several profiles), and so is b_θ trained on that profile
+    /// (`DIR/<profile>/gcn-conditioned.json`, `gcn-unconditioned.json`) where the directory
+    /// has it and no model file is named.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub calibrations: Option<PathBuf>,
     /// Accept a calibration made for another profile than SUMO runs: a mismatch experiment.

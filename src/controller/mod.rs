@@ -10,6 +10,7 @@ pub mod execute;
 pub mod idm;
 pub mod idm_mobil;
 pub mod mobil;
+pub mod rl_ppo;
 pub mod shield;
 pub mod sumo_native;
 
@@ -75,6 +76,8 @@ pub enum Source {
     Continuation,
     /// A rule-based controller (idm-mobil, test controllers).
     Rule,
+    /// The RL-PPO policy's choice.
+    Policy,
 }
 
 impl Source {
@@ -89,6 +92,7 @@ impl Source {
             Source::Shield => "shield",
             Source::Continuation => "continuation",
             Source::Rule => "rule",
+            Source::Policy => "policy",
         }
     }
 }
@@ -192,7 +196,7 @@ pub trait Controller {
 }
 
 /// Names accepted by [`by_name`].
-pub const PLANNERS: [&str; 4] = ["sumo", "idm-mobil", "bk-mastar", "bk-pbs"];
+pub const PLANNERS: [&str; 5] = ["sumo", "idm-mobil", "bk-mastar", "bk-pbs", "rl-ppo"];
 
 /// An unknown planner name.
 #[derive(Debug, thiserror::Error)]
@@ -207,11 +211,14 @@ pub enum BuildError {
     Unknown(#[from] UnknownPlanner),
     #[error(transparent)]
     Predictor(#[from] PredictorError),
+    #[error("rl.policy: {0}")]
+    Policy(#[from] crate::policy::model_file::PolicyError),
 }
 
 /// Builds the controller called `name` for the road SUMO runs; planners predict HDVs with the
 /// predictor `config.predictor` selects ([`crate::predict::configured`]). The search-based
-/// planners (bk-mastar, bk-pbs) sit behind the safety shield when `config.safety.shield` is on.
+/// planners (bk-mastar, bk-pbs) sit behind the safety shield when `config.safety.shield` is on,
+/// the `rl-ppo` policy when `config.rl.shield` is.
 ///
 /// # Errors
 /// An unknown name, or a predictor model file that cannot be used.
@@ -233,6 +240,14 @@ pub fn by_name(
             crate::predict::configured(config)?,
             road,
         )),
+        "rl-ppo" => {
+            let policy: Box<dyn Controller> = Box::new(rl_ppo::RlPpo::from_config(config)?);
+            return Ok(if config.rl.shield {
+                Box::new(shield::Shielded::new(policy, config))
+            } else {
+                policy
+            });
+        }
         other => return Err(UnknownPlanner(other.to_string()).into()),
     };
     Ok(if config.safety.shield {
@@ -251,6 +266,9 @@ pub fn check(name: &str, config: &Config) -> Result<(), BuildError> {
     match name {
         "sumo" | "idm-mobil" => Ok(()),
         "bk-mastar" | "bk-pbs" => crate::predict::configured(config)
+            .map(drop)
+            .map_err(Into::into),
+        "rl-ppo" => crate::policy::model_file::load(config.rl.policy.as_deref())
             .map(drop)
             .map_err(Into::into),
         other => Err(UnknownPlanner(other.to_string()).into()),

@@ -157,6 +157,10 @@ pub trait Observer {
     /// believed (when tracing; see [`Controller::set_tracing`]).
     fn planned(&mut self, _scene: &Scene, _commands: &[Command], _controller: &dyn Controller) {}
 
+    /// Hears of each vehicle removed in a collision, in the step it happened (before the
+    /// scene of that step is observed).
+    fn removed_in_collision(&mut self, _id: &str) {}
+
     /// Whether [`Observer::planned`] needs the controller's beliefs (turns its tracing on).
     fn wants_beliefs(&self) -> bool {
         false
@@ -513,6 +517,7 @@ impl<'a> Episode<'a> {
             for id in [c.collider.as_str(), c.victim.as_str()] {
                 if !removed.contains(&id) {
                     sim.remove_vehicle(id)?;
+                    self.observer.removed_in_collision(id);
                     removed.push(id);
                 }
             }

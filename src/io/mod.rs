@@ -4,6 +4,7 @@
 //! data sets all go through it. [`interrupt`]: stop signals as requests, so that a run
 //! interrupted by them tidies up.
 
+pub mod child;
 pub mod interrupt;
 
 use std::io::Write;

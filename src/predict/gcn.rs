@@ -36,7 +36,7 @@ pub struct Dense {
 }
 
 impl Dense {
-    fn new(rows: usize, cols: usize, offset: &mut usize) -> Dense {
+    pub fn new(rows: usize, cols: usize, offset: &mut usize) -> Dense {
         let d = Dense {
             rows,
             cols,

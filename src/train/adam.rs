@@ -1,7 +1,7 @@
 //! The Adam optimiser (Kingma & Ba), over one flat parameter vector.
 
 /// Adam's moment estimates and settings.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Adam {
     pub lr: f32,
     pub beta1: f32,

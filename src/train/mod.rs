@@ -14,4 +14,5 @@ pub mod fit;
 pub mod gcn;
 pub mod logistic;
 pub mod longitudinal;
+pub mod ppo;
 pub mod training_loop;

@@ -1,0 +1,192 @@
+"""Gymnasium and PettingZoo environments of the merge scenario, stepped through the Rust core.
+
+- :class:`MergeEnv` (registered as ``bkpbs/Merge-v0``): one CAV among HDVs, as the paper trains
+  its RL-PPO baseline; observation = the ego and its 14 nearest vehicles in the road frame
+  (``MergeEnv.feature_names``), action = one of the six motion primitives
+  (``MergeEnv.action_names``), reward as ``bkpbs train-rl``'s (README, "RL-PPO").
+- :class:`MergeParallelEnv`: a PettingZoo ``ParallelEnv`` with every CAV an agent (the shared
+  policy of the paper's test set-up); agents appear when inserted and leave when they arrive
+  (truncated) or crash (terminated).
+
+Each step's ``info`` holds the agent's ``action_mask`` (1 = allowed by the lane-change rules); a
+masked-out action is executed as idle. SUMO runs in-process (libsumo): one environment per
+process at a time; use vectorised environments with subprocesses for more.
+"""
+
+from __future__ import annotations
+
+import functools
+from typing import Any, Dict, List, Optional, Tuple
+
+import gymnasium
+import numpy as np
+from gymnasium import spaces
+
+from ._bkpbs import MergeEnvCore
+
+try:  # PettingZoo is needed only for the multi-agent environment.
+    from pettingzoo import ParallelEnv as _ParallelBase
+except ImportError:  # pragma: no cover - exercised only without pettingzoo
+    _ParallelBase = object
+
+OBS_DIM: int = MergeEnvCore.OBS_DIM
+N_ACTIONS: int = len(MergeEnvCore.action_names())
+# Every feature is scaled by a fixed constant and clipped well inside this range.
+OBS_BOUND = 4.0
+
+
+def _observation_space() -> spaces.Box:
+    return spaces.Box(-OBS_BOUND, OBS_BOUND, shape=(OBS_DIM,), dtype=np.float32)
+
+
+class _Core:
+    """The core environment's current step as numpy arrays."""
+
+    def __init__(self, agents: str, alpha: float, lam: float, config: Any, overrides: Dict[str, Any]):
+        self.env = MergeEnvCore(agents, alpha, lam, config, **overrides)
+
+    def arrays(self) -> Tuple[List[str], np.ndarray, np.ndarray]:
+        ids = self.env.agents()
+        obs = np.frombuffer(self.env.observations(), dtype="<f4").reshape(len(ids), OBS_DIM)
+        masks = np.frombuffer(self.env.masks(), dtype=np.uint8).reshape(len(ids), N_ACTIONS)
+        return ids, obs.astype(np.float32), masks.astype(np.int8)
+
+    def frame(self, width: int, height: int) -> np.ndarray:
+        return np.frombuffer(self.env.render_rgb(width, height), dtype=np.uint8).reshape(height, width, 3)
+
+
+class MergeEnv(gymnasium.Env):
+    """One CAV (the first inserted after a 10 s warm-up) among HDVs on the merge section."""
+
+    metadata = {"render_modes": ["rgb_array"], "render_fps": 5}
+    feature_names = MergeEnvCore.feature_names()
+    action_names = MergeEnvCore.action_names()
+
+    def __init__(
+        self,
+        alpha: float = 0.5,
+        lam: float = 3000.0,
+        config: Any = None,
+        render_mode: Optional[str] = None,
+        render_size: Tuple[int, int] = (600, 150),
+        **overrides: Any,
+    ):
+        if render_mode not in (None, "rgb_array"):
+            raise ValueError(f"render_mode {render_mode!r}: only 'rgb_array' is supported")
+        self.render_mode = render_mode
+        self.render_size = render_size
+        self.observation_space = _observation_space()
+        self.action_space = spaces.Discrete(N_ACTIONS)
+        self._core = _Core("single", alpha, lam, config, overrides)
+        self._obs = np.zeros(OBS_DIM, dtype=np.float32)
+        self._mask = np.ones(N_ACTIONS, dtype=np.int8)
+
+    def _read(self) -> Dict[str, Any]:
+        ids, obs, masks = self._core.arrays()
+        if ids:
+            self._obs, self._mask = obs[0], masks[0]
+            self._ego = ids[0]
+        return {"action_mask": self._mask, "agent": getattr(self, "_ego", None)}
+
+    def reset(self, *, seed: Optional[int] = None, options: Optional[Dict[str, Any]] = None):
+        super().reset(seed=seed)
+        demand_seed = int(self.np_random.integers(0, 2**31 - 1)) if seed is None else int(seed)
+        self._core.env.reset(demand_seed)
+        info = self._read()
+        return self._obs.copy(), info
+
+    def step(self, action):
+        rewards, terminated, truncated, done = self._core.env.step([int(action)])
+        reward = float(sum(r for _, r in rewards))
+        ended = bool(terminated) or bool(truncated) or done
+        info = self._read() if not ended else {"action_mask": self._mask, "agent": getattr(self, "_ego", None)}
+        if ended:
+            info["episode_summary"] = self._core.env.summary()
+        return self._obs.copy(), reward, bool(terminated), ended and not terminated, info
+
+    def render(self):
+        if self.render_mode == "rgb_array":
+            return self._core.frame(*self.render_size)
+        return None
+
+    def close(self):
+        self._core.env.close()
+
+
+class MergeParallelEnv(_ParallelBase):
+    """Every CAV an agent, all acting at once (PettingZoo ``ParallelEnv``)."""
+
+    metadata = {"name": "bkpbs_merge_v0", "render_modes": ["rgb_array"], "render_fps": 5}
+
+    def __init__(
+        self,
+        alpha: float = 0.5,
+        lam: float = 3000.0,
+        config: Any = None,
+        render_mode: Optional[str] = None,
+        render_size: Tuple[int, int] = (600, 150),
+        **overrides: Any,
+    ):
+        if render_mode not in (None, "rgb_array"):
+            raise ValueError(f"render_mode {render_mode!r}: only 'rgb_array' is supported")
+        self.render_mode = render_mode
+        self.render_size = render_size
+        self._core = _Core("all", alpha, lam, config, overrides)
+        self._rng = np.random.default_rng()
+        self.agents: List[str] = []
+        self.possible_agents: List[str] = []
+        self._last_obs: Dict[str, np.ndarray] = {}
+
+    @functools.lru_cache(maxsize=None)
+    def observation_space(self, agent: str) -> spaces.Box:
+        return _observation_space()
+
+    @functools.lru_cache(maxsize=None)
+    def action_space(self, agent: str) -> spaces.Discrete:
+        return spaces.Discrete(N_ACTIONS)
+
+    def _observe(self) -> Tuple[Dict[str, np.ndarray], Dict[str, Dict[str, Any]]]:
+        ids, obs, masks = self._core.arrays()
+        self.agents = list(ids)
+        observations = {a: obs[k] for k, a in enumerate(ids)}
+        self._last_obs.update(observations)
+        infos = {a: {"action_mask": masks[k]} for k, a in enumerate(ids)}
+        return observations, infos
+
+    def reset(self, seed: Optional[int] = None, options: Optional[Dict[str, Any]] = None):
+        if seed is not None:
+            self._rng = np.random.default_rng(seed)
+        demand_seed = int(self._rng.integers(0, 2**31 - 1)) if seed is None else int(seed)
+        self._core.env.reset(demand_seed)
+        self.possible_agents = self._core.env.possible_agents()
+        self._last_obs = {}
+        return self._observe()
+
+    def step(self, actions: Dict[str, Any]):
+        acting = list(self.agents)
+        idle = self._core.env.action_names().index("idle")
+        chosen = [int(actions.get(a, idle)) for a in acting]
+        rewards, terminated, truncated, _done = self._core.env.step(chosen)
+        observations, infos = self._observe()
+        reward = {a: 0.0 for a in acting}
+        reward.update({a: float(r) for a, r in rewards})
+        ended_t, ended_u = set(terminated), set(truncated)
+        keys = set(acting) | set(self.agents)
+        terms = {a: a in ended_t for a in keys}
+        truncs = {a: a in ended_u for a in keys}
+        for a in keys:
+            reward.setdefault(a, 0.0)
+            infos.setdefault(a, {})
+            observations.setdefault(a, self._last_obs[a])
+        return observations, reward, terms, truncs, infos
+
+    def render(self):
+        if self.render_mode == "rgb_array":
+            return self._core.frame(*self.render_size)
+        return None
+
+    def close(self):
+        self._core.env.close()
+
+
+gymnasium.register(id="bkpbs/Merge-v0", entry_point="bkpbs.gym:MergeEnv")

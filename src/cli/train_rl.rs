@@ -1,0 +1,201 @@
+//! `bkpbs train-rl`: train the RL-PPO policy on SUMO episodes (resumable), then compare it with
+//! a random and an idle policy on held-out episodes.
+
+use std::io::Write;
+use std::path::PathBuf;
+
+use anyhow::{Context, Result};
+use clap::Args;
+
+use bkpbs::config::Config;
+use bkpbs::train::ppo::evaluate;
+use bkpbs::train::ppo::rollout::RolloutStats;
+use bkpbs::train::ppo::trainer::{self, Checkpoint, RunFiles, TrainSettings};
+use bkpbs::train::ppo::workers::{Pool, PoolError};
+
+use super::scenario::load_config;
+
+#[derive(Args)]
+pub struct TrainRlArgs {
+    /// Run directory: checkpoint.json, learning_curve.csv/.png, policy.json, evaluation.csv.
+    /// Re-running the same command resumes from the checkpoint.
+    #[arg(long)]
+    out: PathBuf,
+    /// Environment steps (CAV decisions) to train for; a larger value extends a finished run.
+    #[arg(long, default_value_t = 10_000_000)]
+    steps: u64,
+    /// Seed of the initial weights, the episodes and the sampling.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// SUMO episodes per PPO update.
+    #[arg(long, default_value_t = 4)]
+    episodes_per_update: usize,
+    /// Worker processes running the episodes [default: number of cores].
+    #[arg(long)]
+    workers: Option<usize>,
+    /// Threads of the PPO update (the result does not depend on it) [default: number of cores].
+    #[arg(long)]
+    threads: Option<usize>,
+    /// Held-out episodes (seeds 0, 1, …, α and λ cycled over the paper's grid) on which the
+    /// trained, a random and an idle policy are compared at the end (0: none).
+    #[arg(long, default_value_t = 20)]
+    eval_episodes: u64,
+    /// TOML file with scenario settings (α, λ and seed are set per episode).
+    #[arg(long)]
+    config: Option<PathBuf>,
+}
+
+/// A checked training run.
+pub struct TrainRl {
+    files: RunFiles,
+    settings: TrainSettings,
+    config: Config,
+    workers: usize,
+    eval_episodes: u64,
+}
+
+impl TrainRlArgs {
+    pub fn resolve(self) -> Result<TrainRl> {
+        let config = load_config(self.config.as_deref(), |_| {})?;
+        if self.steps == 0 || self.episodes_per_update == 0 {
+            anyhow::bail!("--steps and --episodes-per-update must be positive");
+        }
+        let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+        let threads = self.threads.unwrap_or(cores);
+        if threads == 0 || self.workers == Some(0) {
+            anyhow::bail!("--threads and --workers must be positive");
+        }
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build_global()
+            .context("cannot start the update threads")?;
+        bkpbs::io::ensure_writable_dir(&self.out)?;
+        Ok(TrainRl {
+            files: RunFiles { dir: self.out },
+            settings: TrainSettings {
+                steps: self.steps,
+                seed: self.seed,
+                episodes_per_update: self.episodes_per_update,
+                ..TrainSettings::default()
+            },
+            config,
+            workers: self.workers.unwrap_or(cores),
+            eval_episodes: self.eval_episodes,
+        })
+    }
+}
+
+/// Trains to the budget (or resumes), writes the policy and the curve, evaluates.
+pub fn run(t: TrainRl) -> Result<()> {
+    let mut ck = trainer::start_or_resume(&t.files, t.settings.clone(), t.config.clone())?;
+    let mut pool = Pool::start(t.workers)?;
+    if ck.updates > 0 {
+        eprintln!(
+            "train-rl: resuming after update {} ({} steps)",
+            ck.updates, ck.env_steps
+        );
+    }
+    while ck.env_steps < ck.settings.steps {
+        match trainer::one_update(&mut ck, &mut pool, &t.files) {
+            Ok(report) => {
+                trainer::save(&ck, &t.files)?;
+                log_update(&t.files, &ck, &report)?;
+            }
+            Err(trainer::TrainError::Pool(PoolError::Interrupted(_))) => {
+                eprintln!(
+                    "train-rl: stopped; {} updates kept in {} (the same command resumes)",
+                    ck.updates,
+                    t.files.checkpoint().display()
+                );
+                anyhow::bail!("interrupted");
+            }
+            Err(e) => return Err(e.into()),
+        }
+    }
+    finish(&t, &ck, &mut pool)
+}
+
+/// A progress line and a `timings.csv` row (wall times differ run to run, so they stay out of
+/// the learning curve).
+fn log_update(files: &RunFiles, ck: &Checkpoint, r: &trainer::UpdateReport) -> Result<()> {
+    let rate = ck.env_steps as f64 / ck.wall_s.max(1e-9);
+    let left = ck.settings.steps.saturating_sub(ck.env_steps) as f64 / rate.max(1e-9);
+    eprintln!(
+        "train-rl: update {} | {} steps ({:.1} %) | return {:.2} | collisions {:.2} % | speed {:.1} m/s | {:.0} steps/s (rollout {:.1} s, update {:.1} s) | {:.0} min left",
+        ck.updates,
+        ck.env_steps,
+        100.0 * ck.env_steps as f64 / ck.settings.steps as f64,
+        r.row.mean_return,
+        100.0 * r.row.collision_rate,
+        r.row.mean_speed,
+        rate,
+        r.rollout_s,
+        r.update_s,
+        left / 60.0
+    );
+    let path = files.timings();
+    let new = !path.exists();
+    let mut f = std::fs::OpenOptions::new()
+        .create(true)
+        .append(true)
+        .open(&path)
+        .with_context(|| format!("cannot write {}", path.display()))?;
+    if new {
+        writeln!(f, "update,env_steps,rollout_s,update_s")?;
+    }
+    writeln!(
+        f,
+        "{},{},{:.3},{:.3}",
+        ck.updates, ck.env_steps, r.rollout_s, r.update_s
+    )?;
+    Ok(())
+}
+
+/// Writes the policy and the learning curve figure, then the evaluation.
+fn finish(t: &TrainRl, ck: &Checkpoint, pool: &mut Pool) -> Result<()> {
+    trainer::policy_file(ck).write(&t.files.policy())?;
+    let fig = bkpbs::report::learning_curve::figure(&ck.curve).render()?;
+    bkpbs::io::write_atomic(&t.files.dir.join("learning_curve.png"), &fig.png)?;
+    bkpbs::io::write_atomic(&t.files.dir.join("learning_curve.svg"), fig.svg.as_bytes())?;
+    println!(
+        "policy: {} ({} steps, {} updates, {:.0} s of training)",
+        t.files.policy().display(),
+        ck.env_steps,
+        ck.updates,
+        ck.wall_s
+    );
+    if t.eval_episodes == 0 {
+        return Ok(());
+    }
+    let s = &ck.settings;
+    let configs: Vec<Config> = (0..t.eval_episodes)
+        .map(|k| {
+            let mut c = ck.config.clone();
+            c.scenario.alpha = s.alphas[(k % s.alphas.len() as u64) as usize];
+            c.scenario.lambda =
+                s.lambdas[((k / s.alphas.len() as u64) % s.lambdas.len() as u64) as usize];
+            c.scenario.seed = k;
+            c
+        })
+        .collect();
+    let rows = evaluate::compare(pool, &t.files.policy(), &configs, &s.reward)?;
+    let text = evaluation_csv(&rows);
+    bkpbs::io::write_atomic(&t.files.dir.join("evaluation.csv"), text.as_bytes())?;
+    print!("{text}");
+    Ok(())
+}
+
+fn evaluation_csv(rows: &[(&str, RolloutStats)]) -> String {
+    let mut out = String::from("policy,episodes,cavs,mean_return,collision_rate,mean_speed_mps\n");
+    for (name, s) in rows {
+        out.push_str(&format!(
+            "{name},{},{},{:.4},{:.5},{:.3}\n",
+            s.episodes,
+            s.agents,
+            s.mean_return(),
+            s.collision_rate(),
+            s.mean_speed()
+        ));
+    }
+    out
+}

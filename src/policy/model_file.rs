@@ -1,0 +1,175 @@
+//! The RL-PPO policy file (`models/rl-ppo.json`): both networks' weights, versioned, checked on
+//! load like the predictor's model files (format, version, shapes, finite weights), with what
+//! training produced it.
+
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+
+use super::actions::ACTIONS;
+use super::mlp::Mlp;
+use super::network::{ActorCritic, HIDDEN};
+use super::observation::OBS_DIM;
+use crate::planner::primitives::Primitive;
+
+/// Format tag and version of the policy file.
+pub const POLICY_FORMAT: &str = "bkpbs-rl-policy";
+pub const POLICY_VERSION: u32 = 1;
+
+/// The committed policy, embedded in the binary.
+pub const EMBEDDED_POLICY: &str = include_str!("../../models/rl-ppo.json");
+
+/// Why a policy file cannot be used.
+#[derive(Debug, thiserror::Error)]
+pub enum PolicyError {
+    #[error("cannot read policy file {path}: {cause}")]
+    Read {
+        path: PathBuf,
+        cause: std::io::Error,
+    },
+    #[error("policy file {path} is not valid JSON (truncated or corrupt?): {message}")]
+    Json { path: PathBuf, message: String },
+    #[error("{path} is not a bkpbs RL policy (format '{found}')")]
+    Format { path: PathBuf, found: String },
+    #[error("policy file {path} has format version {found}; this build reads version {expected}")]
+    Version {
+        path: PathBuf,
+        found: u32,
+        expected: u32,
+    },
+    #[error("policy file {path} does not fit this build: {what}")]
+    Shape { path: PathBuf, what: String },
+    #[error(transparent)]
+    Write(#[from] crate::io::WriteError),
+}
+
+/// The file's contents.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PolicyFile {
+    pub format: String,
+    pub version: u32,
+    pub observation_dim: usize,
+    /// Primitive names, in the order of the policy's outputs.
+    pub actions: Vec<String>,
+    pub hidden: Vec<usize>,
+    pub activation: String,
+    pub actor: Vec<f32>,
+    pub critic: Vec<f32>,
+    /// How it was trained (steps, seed, wall time, hyper-parameters), for the record.
+    pub training: serde_json::Value,
+}
+
+impl PolicyFile {
+    /// The file of `net`, trained as `training` says.
+    pub fn of(net: &ActorCritic, training: serde_json::Value) -> PolicyFile {
+        PolicyFile {
+            format: POLICY_FORMAT.into(),
+            version: POLICY_VERSION,
+            observation_dim: net.actor.inputs(),
+            actions: Primitive::ALL
+                .iter()
+                .map(|p| p.name().to_string())
+                .collect(),
+            hidden: HIDDEN.to_vec(),
+            activation: "tanh".into(),
+            actor: net.actor_params.clone(),
+            critic: net.critic_params.clone(),
+            training,
+        }
+    }
+
+    /// Parses and checks policy JSON; `path` only names it in errors.
+    pub fn from_json(path: &Path, text: &str) -> Result<PolicyFile, PolicyError> {
+        let p = || path.to_path_buf();
+        #[derive(Deserialize)]
+        struct Head {
+            format: Option<String>,
+            version: Option<u32>,
+        }
+        let json = |e: serde_json::Error| PolicyError::Json {
+            path: p(),
+            message: e.to_string(),
+        };
+        let head: Head = serde_json::from_str(text).map_err(json)?;
+        let found = head.format.unwrap_or_default();
+        if found != POLICY_FORMAT {
+            return Err(PolicyError::Format { path: p(), found });
+        }
+        let version = head.version.unwrap_or(0);
+        if version != POLICY_VERSION {
+            return Err(PolicyError::Version {
+                path: p(),
+                found: version,
+                expected: POLICY_VERSION,
+            });
+        }
+        let file: PolicyFile = serde_json::from_str(text).map_err(json)?;
+        file.check(path)?;
+        Ok(file)
+    }
+
+    fn check(&self, path: &Path) -> Result<(), PolicyError> {
+        let shape = |what: String| PolicyError::Shape {
+            path: path.to_path_buf(),
+            what,
+        };
+        let names: Vec<&str> = Primitive::ALL.iter().map(|p| p.name()).collect();
+        if self.observation_dim != OBS_DIM || self.actions != names || self.hidden != HIDDEN {
+            return Err(shape(format!(
+                "observation {} / actions {:?} / hidden {:?}; expected {OBS_DIM} / {names:?} / {HIDDEN:?}",
+                self.observation_dim, self.actions, self.hidden
+            )));
+        }
+        if self.activation != "tanh" {
+            return Err(shape(format!("activation '{}'", self.activation)));
+        }
+        let actor = Mlp::new(OBS_DIM, &HIDDEN, ACTIONS);
+        let critic = Mlp::new(OBS_DIM, &HIDDEN, 1);
+        if self.actor.len() != actor.n_params || self.critic.len() != critic.n_params {
+            return Err(shape(format!(
+                "{} actor and {} critic weights; expected {} and {}",
+                self.actor.len(),
+                self.critic.len(),
+                actor.n_params,
+                critic.n_params
+            )));
+        }
+        if !self.actor.iter().chain(&self.critic).all(|w| w.is_finite()) {
+            return Err(shape("non-finite weights".into()));
+        }
+        Ok(())
+    }
+
+    /// Reads and checks a policy file.
+    pub fn read(path: &Path) -> Result<PolicyFile, PolicyError> {
+        let text = std::fs::read_to_string(path).map_err(|cause| PolicyError::Read {
+            path: path.to_path_buf(),
+            cause,
+        })?;
+        PolicyFile::from_json(path, &text)
+    }
+
+    /// Writes the file atomically.
+    pub fn write(&self, path: &Path) -> Result<(), PolicyError> {
+        let text = serde_json::to_string(self).expect("a policy serialises");
+        crate::io::write_atomic(path, text.as_bytes())?;
+        Ok(())
+    }
+
+    /// The networks.
+    pub fn networks(&self) -> ActorCritic {
+        let mut net = ActorCritic::new(0);
+        net.actor_params.clone_from(&self.actor);
+        net.critic_params.clone_from(&self.critic);
+        net
+    }
+}
+
+/// The policy at `path`, or the embedded one.
+pub fn load(path: Option<&Path>) -> Result<ActorCritic, PolicyError> {
+    match path {
+        Some(p) => PolicyFile::read(p).map(|f| f.networks()),
+        None => PolicyFile::from_json(Path::new("embedded:rl-ppo.json"), EMBEDDED_POLICY)
+            .map(|f| f.networks()),
+    }
+}

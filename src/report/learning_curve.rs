@@ -1,0 +1,81 @@
+//! The RL-PPO learning curve (`learning_curve.png` / `.svg` of `bkpbs train-rl`): mean return,
+//! CAV collision rate and mean speed of each update's sampled episodes against environment
+//! steps; each update thin, a moving average over `SMOOTHING` updates thick.
+
+use super::plot::{Curve, LinePanel, LinePanels};
+use crate::train::ppo::trainer::CurveRow;
+
+/// Updates in the moving average.
+const SMOOTHING: usize = 20;
+
+/// The figure of `rows`.
+pub fn figure(rows: &[CurveRow]) -> LinePanels {
+    let panel = |title: &str, y_label: &str, value: fn(&CurveRow) -> f64| {
+        let points: Vec<(f64, f64)> = rows
+            .iter()
+            .map(|r| (r.env_steps as f64 / 1e6, value(r)))
+            .collect();
+        LinePanel {
+            title: title.into(),
+            x_label: "environment steps (millions of CAV decisions)".into(),
+            y_label: y_label.into(),
+            curves: vec![
+                Curve {
+                    points: points.clone(),
+                    colour: 0,
+                    thick: false,
+                },
+                Curve {
+                    points: moving_average(&points, SMOOTHING),
+                    colour: 0,
+                    thick: true,
+                },
+            ],
+            bands: Vec::new(),
+            marks: Vec::new(),
+            x_range: None,
+        }
+    };
+    LinePanels {
+        panels: vec![
+            panel("mean return per CAV", "return", |r| r.mean_return),
+            panel("CAV collision rate", "crashed CAVs (%)", |r| {
+                100.0 * r.collision_rate
+            }),
+            panel("mean CAV speed", "m/s", |r| r.mean_speed),
+            panel("policy entropy", "nats", |r| r.entropy),
+        ],
+        legend: vec![
+            (0, "each update".into(), false),
+            (0, format!("mean of {SMOOTHING} updates"), true),
+        ],
+    }
+}
+
+/// Trailing moving average over up to `k` points.
+fn moving_average(points: &[(f64, f64)], k: usize) -> Vec<(f64, f64)> {
+    (0..points.len())
+        .map(|i| {
+            let from = (i + 1).saturating_sub(k);
+            let w = &points[from..=i];
+            (
+                points[i].0,
+                w.iter().map(|p| p.1).sum::<f64>() / w.len() as f64,
+            )
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn moving_average_trails() {
+        let p = [(0.0, 1.0), (1.0, 3.0), (2.0, 5.0)];
+        assert_eq!(
+            moving_average(&p, 2),
+            vec![(0.0, 1.0), (1.0, 2.0), (2.0, 4.0)]
+        );
+    }
+}

@@ -1,0 +1,408 @@
+//! The merge scenario as a stepped RL environment, for Gymnasium and PettingZoo (the Python
+//! package's `bkpbs.gym`): the caller picks every agent's primitive, one step at a time.
+//!
+//! The episode runs on its own thread, exactly as any episode (the runner, SUMO, metrics), with
+//! a controller that hands each step's observations to the caller and waits for the actions.
+//! Observations, action masks, lane-change execution and rewards are the Rust trainer's
+//! ([`crate::policy`], [`RewardSettings`]), so an agent trained here faces the same task.
+//!
+//! Two agent sets: every CAV (PettingZoo), or one CAV among HDVs (Gymnasium; the paper trains
+//! its RL-PPO "in a single CAV environment"): the first CAV of the demand inserted after the
+//! warm-up, every other vehicle an HDV.
+
+use std::collections::HashMap;
+use std::sync::mpsc::{self, Receiver, Sender, SyncSender};
+use std::sync::{Arc, Mutex};
+use std::thread::JoinHandle;
+
+use super::reward::RewardSettings;
+use crate::config::Config;
+use crate::controller::rl_ppo::{merge_progress, Executor};
+use crate::controller::{CavHandling, Command, Controller};
+use crate::episode::demand::PlannedVehicle;
+use crate::episode::{self, Driver, EpisodeError, EpisodeResult, Observer};
+use crate::model::scene::{Kind, Scene};
+use crate::planner::primitives::Primitive;
+use crate::policy::actions::{Mask, IDLE};
+use crate::policy::observation::{observe, OBS_DIM};
+
+/// Which vehicles are agents.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Agents {
+    /// One CAV among HDVs.
+    Single,
+    /// Every CAV.
+    AllCavs,
+}
+
+/// One agent awaiting its action.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Agent {
+    pub id: Arc<str>,
+    pub obs: Vec<f32>,
+    pub mask: Mask,
+    /// A lane change under way: its action is ignored (continued at constant speed).
+    pub forced: bool,
+    pub speed: f64,
+    pub merge_progress: Option<f64>,
+}
+
+/// What one step did to the agents that acted.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct StepResult {
+    /// (agent, reward) for every agent that acted.
+    pub rewards: Vec<(Arc<str>, f64)>,
+    /// Agents removed in a collision: their episode ended.
+    pub terminated: Vec<Arc<str>>,
+    /// Agents that left (arrived) or were still driving when the episode ended.
+    pub truncated: Vec<Arc<str>>,
+    /// The environment is over: no agent will act again.
+    pub done: bool,
+}
+
+/// Why the environment cannot go on.
+#[derive(Debug, thiserror::Error)]
+pub enum EnvError {
+    #[error(transparent)]
+    Episode(#[from] EpisodeError),
+    #[error("expected {expected} actions, one per agent, got {got}")]
+    Actions { expected: usize, got: usize },
+    #[error("action {0} is not one of the 6 primitives (0–5)")]
+    UnknownAction(usize),
+    #[error("the episode thread ended unexpectedly")]
+    Lost,
+    #[error("the environment is done: reset it")]
+    Done,
+}
+
+/// A step in which agents must decide: the scene, the agents, and the vehicles crashed since
+/// the last one.
+struct Decision {
+    scene: Scene,
+    agents: Vec<Agent>,
+    crashed: Vec<Arc<str>>,
+}
+
+/// A step of the episode thread: agents to decide, or the end.
+enum Event {
+    Decide(Box<Decision>),
+    Finished(Box<Result<EpisodeResult, EpisodeError>>),
+}
+
+/// A running episode stepped from outside.
+pub struct MergeEnv {
+    events: Receiver<Event>,
+    actions: SyncSender<Vec<usize>>,
+    thread: Option<JoinHandle<()>>,
+    agents: Vec<Agent>,
+    scene: Option<Scene>,
+    possible: Vec<Arc<str>>,
+    reward: RewardSettings,
+    single: bool,
+    done: bool,
+    result: Option<EpisodeResult>,
+}
+
+impl MergeEnv {
+    /// Starts the episode `config` describes and runs it to the first step with an agent.
+    pub fn start(
+        config: &Config,
+        agents: Agents,
+        reward: RewardSettings,
+    ) -> Result<Self, EnvError> {
+        config.validate().map_err(EpisodeError::from)?;
+        let demand = agent_demand(config, agents);
+        let possible = demand
+            .iter()
+            .filter(|v| v.kind == Kind::Cav)
+            .map(|v| Arc::from(v.id.as_str()))
+            .collect();
+        let (event_tx, events) = mpsc::channel();
+        let (actions, action_rx) = mpsc::sync_channel(1);
+        let config = config.clone();
+        let thread =
+            std::thread::spawn(move || episode_thread(config, demand, event_tx, action_rx));
+        let mut env = MergeEnv {
+            events,
+            actions,
+            thread: Some(thread),
+            agents: Vec::new(),
+            scene: None,
+            possible,
+            reward,
+            single: agents == Agents::Single,
+            done: false,
+            result: None,
+        };
+        env.advance(&[])?;
+        Ok(env)
+    }
+
+    /// Every vehicle that may become an agent (the demand's CAVs), in order of insertion.
+    pub fn possible_agents(&self) -> &[Arc<str>] {
+        &self.possible
+    }
+
+    /// The agents of the current step.
+    pub fn agents(&self) -> &[Agent] {
+        &self.agents
+    }
+
+    /// The current step's scene (for rendering).
+    pub fn scene(&self) -> Option<&Scene> {
+        self.scene.as_ref()
+    }
+
+    pub fn is_done(&self) -> bool {
+        self.done
+    }
+
+    /// The finished episode's results (metrics, vehicles), once done.
+    pub fn result(&self) -> Option<&EpisodeResult> {
+        self.result.as_ref()
+    }
+
+    /// Applies one primitive per agent (in [`MergeEnv::agents`]'s order; a masked-out one is
+    /// replaced by idle, a forced agent's is ignored) and runs to the next step with an agent.
+    pub fn step(&mut self, actions: &[usize]) -> Result<StepResult, EnvError> {
+        if self.done {
+            return Err(EnvError::Done);
+        }
+        if actions.len() != self.agents.len() {
+            return Err(EnvError::Actions {
+                expected: self.agents.len(),
+                got: actions.len(),
+            });
+        }
+        if let Some(&a) = actions.iter().find(|&&a| a >= Primitive::ALL.len()) {
+            return Err(EnvError::UnknownAction(a));
+        }
+        let chosen: Vec<usize> = actions
+            .iter()
+            .zip(&self.agents)
+            .map(|(&a, ag)| if ag.forced || !ag.mask[a] { IDLE } else { a })
+            .collect();
+        self.actions
+            .send(chosen.clone())
+            .map_err(|_| EnvError::Lost)?;
+        self.advance(&chosen)
+    }
+
+    /// Waits for the next step with agents (or the end) and scores the previous agents' moves.
+    fn advance(&mut self, chosen: &[usize]) -> Result<StepResult, EnvError> {
+        let mut before = std::mem::take(&mut self.agents);
+        let mut out = StepResult::default();
+        loop {
+            match self.events.recv().map_err(|_| EnvError::Lost)? {
+                Event::Decide(d) => {
+                    let Decision {
+                        scene,
+                        agents,
+                        crashed,
+                    } = *d;
+                    self.score(&before, chosen, Some((&agents, &crashed)), &mut out);
+                    before.clear();
+                    self.scene = Some(scene);
+                    if agents.is_empty() {
+                        // Only news of a collision: nobody to ask, the episode goes on.
+                        self.actions.send(Vec::new()).map_err(|_| EnvError::Lost)?;
+                        continue;
+                    }
+                    self.agents = agents;
+                }
+                Event::Finished(result) => {
+                    self.score(&before, chosen, None, &mut out);
+                    self.done = true;
+                    self.join();
+                    self.result = Some((*result)?);
+                }
+            }
+            break;
+        }
+        // One agent among HDVs: its leaving ends the environment.
+        if self.single && (!out.terminated.is_empty() || !out.truncated.is_empty()) {
+            self.done = true;
+            self.agents.clear();
+        }
+        out.done = self.done;
+        Ok(out)
+    }
+
+    /// Rewards of the agents `before` for their `chosen` actions, given the next step's agents
+    /// and the vehicles crashed since (`None`: the episode ended).
+    fn score(
+        &self,
+        before: &[Agent],
+        chosen: &[usize],
+        next: Option<(&[Agent], &[Arc<str>])>,
+        out: &mut StepResult,
+    ) {
+        let now: HashMap<&str, &Agent> = next
+            .map(|(agents, _)| agents.iter().map(|a| (&*a.id, a)).collect())
+            .unwrap_or_default();
+        for (prev, &a) in before.iter().zip(chosen) {
+            let changed = !prev.forced && Primitive::ALL[a].is_lane_change();
+            let id = prev.id.clone();
+            if next.is_some_and(|(_, crashed)| crashed.contains(&prev.id)) {
+                out.rewards
+                    .push((id.clone(), -self.reward.collision_penalty));
+                out.terminated.push(id);
+            } else if let Some(n) = now.get(&*prev.id) {
+                let r = self.reward.step(n.speed, n.merge_progress, changed);
+                out.rewards.push((id, r));
+            } else {
+                let r = self.reward.step(prev.speed, prev.merge_progress, changed);
+                out.rewards.push((id.clone(), r));
+                out.truncated.push(id);
+            }
+        }
+    }
+
+    /// Ends the episode early: every agent idles to its end (the simulation must close before
+    /// another can start in this process).
+    pub fn close(&mut self) {
+        while !self.done {
+            let idle = vec![IDLE; self.agents.len()];
+            if self.step(&idle).is_err() {
+                break;
+            }
+        }
+        self.join();
+    }
+
+    fn join(&mut self) {
+        if let Some(t) = self.thread.take() {
+            let _ = t.join();
+        }
+    }
+}
+
+impl Drop for MergeEnv {
+    fn drop(&mut self) {
+        self.close();
+    }
+}
+
+/// The demand of the episode: as drawn, or with one agent CAV among HDVs.
+fn agent_demand(config: &Config, agents: Agents) -> Vec<PlannedVehicle> {
+    let mut demand = episode::demand::generate(config);
+    if agents == Agents::Single {
+        const WARMUP_S: f64 = 10.0;
+        let ego = demand
+            .iter()
+            .position(|v| v.kind == Kind::Cav && v.depart >= WARMUP_S)
+            .or_else(|| demand.iter().position(|v| v.depart >= WARMUP_S))
+            .unwrap_or(0);
+        for (k, v) in demand.iter_mut().enumerate() {
+            v.kind = if k == ego { Kind::Cav } else { Kind::Hdv };
+        }
+    }
+    demand
+}
+
+fn episode_thread(
+    config: Config,
+    demand: Vec<PlannedVehicle>,
+    events: Sender<Event>,
+    actions: Receiver<Vec<usize>>,
+) {
+    let crashed = Arc::new(Mutex::new(Vec::new()));
+    let mut ctl = Remote {
+        executor: Executor::new(&config),
+        events: events.clone(),
+        actions,
+        crashed: crashed.clone(),
+        v_max: config.scenario.v_max,
+        detached: false,
+    };
+    let mut observer = CrashLog(crashed);
+    let result = episode::run_observed(&config, Driver::Given(&mut ctl), &demand, &mut observer);
+    let _ = events.send(Event::Finished(Box::new(result)));
+}
+
+/// Records the vehicles removed in collisions, for the controller to report.
+struct CrashLog(Arc<Mutex<Vec<Arc<str>>>>);
+
+impl Observer for CrashLog {
+    fn observe(&mut self, _scene: &Scene) {}
+
+    fn removed_in_collision(&mut self, id: &str) {
+        self.0
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .push(Arc::from(id));
+    }
+}
+
+/// The controller on the episode thread: sends the agents' observations, waits for actions.
+struct Remote {
+    executor: Executor,
+    events: Sender<Event>,
+    actions: Receiver<Vec<usize>>,
+    crashed: Arc<Mutex<Vec<Arc<str>>>>,
+    v_max: f64,
+    /// The environment is gone: idle to the end.
+    detached: bool,
+}
+
+impl Controller for Remote {
+    fn name(&self) -> &'static str {
+        "rl-env"
+    }
+
+    fn handling(&self) -> CavHandling {
+        CavHandling::Commanded
+    }
+
+    fn plan(&mut self, scene: &Scene, out: &mut Vec<Command>) {
+        self.executor.forget_finished(scene.time);
+        let cavs: Vec<usize> = (0..scene.vehicles.len())
+            .filter(|&i| scene.vehicles[i].kind == Kind::Cav)
+            .collect();
+        let crashed = std::mem::take(&mut *self.crashed.lock().unwrap_or_else(|e| e.into_inner()));
+        if cavs.is_empty() && crashed.is_empty() {
+            return;
+        }
+        let agents: Vec<Agent> = cavs.iter().map(|&i| self.agent(scene, i)).collect();
+        let forced: Vec<bool> = agents.iter().map(|a| a.forced).collect();
+        let chosen = if self.detached {
+            None
+        } else {
+            let event = Event::Decide(Box::new(Decision {
+                scene: scene.clone(),
+                agents,
+                crashed,
+            }));
+            self.events
+                .send(event)
+                .ok()
+                .and_then(|()| self.actions.recv().ok())
+        };
+        self.detached |= chosen.is_none();
+        let chosen = chosen.unwrap_or_else(|| vec![IDLE; cavs.len()]);
+        for ((&i, a), f) in cavs.iter().zip(chosen).zip(forced) {
+            out.push(self.executor.command(scene, i, a, f));
+        }
+    }
+
+    fn lane_change_cancelled(&mut self, id: &str) {
+        self.executor.lane_changes.cancel(id);
+    }
+}
+
+impl Remote {
+    fn agent(&self, scene: &Scene, i: usize) -> Agent {
+        let v = &scene.vehicles[i];
+        let forced = self.executor.changing(scene, i);
+        let mut obs = vec![0.0; OBS_DIM];
+        observe(scene, i, forced, self.v_max, &mut obs);
+        Agent {
+            id: v.id.clone(),
+            obs,
+            mask: self.executor.rules.mask(scene, i),
+            forced,
+            speed: v.speed,
+            merge_progress: merge_progress(scene, i),
+        }
+    }
+}

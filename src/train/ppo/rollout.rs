@@ -1,0 +1,157 @@
+//! Experience from one SUMO episode: every CAV driven by the policy (shared weights, as at test
+//! time), each CAV's decisions a [`Segment`] with the rewards of [`RewardSettings`].
+//!
+//! A CAV's segment ends with its collision (terminal, the penalty paid), or, when it arrives or
+//! the episode ends, at its last decision, whose value bootstraps what follows: the road goes on
+//! past the section, so arriving is not an end of the task (else the policy would learn that
+//! lingering collects more reward).
+
+use std::collections::HashMap;
+use std::sync::Arc;
+
+use serde::{Deserialize, Serialize};
+
+use super::reward::RewardSettings;
+use super::{Segment, Step};
+use crate::config::Config;
+use crate::controller::rl_ppo::{Choice, Decision, RlPpo};
+use crate::episode::metrics::Outcome;
+use crate::episode::{self, Driver, EpisodeError, NoObserver};
+use crate::planner::primitives::Primitive;
+use crate::policy::network::ActorCritic;
+
+/// Totals of one or more episodes, for the learning curve and evaluations.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+pub struct RolloutStats {
+    pub episodes: u64,
+    /// CAVs that made at least one decision.
+    pub agents: u64,
+    /// Agent steps (decisions): the environment steps PPO counts.
+    pub steps: u64,
+    /// Sum over CAVs of their undiscounted return.
+    pub return_sum: f64,
+    /// CAVs removed in a collision.
+    pub crashed: u64,
+    /// Sum of the CAVs' speeds over their decisions (m/s).
+    pub speed_sum: f64,
+    /// Wall time of the episodes (s).
+    pub wall_s: f64,
+}
+
+impl RolloutStats {
+    pub fn add(&mut self, o: &RolloutStats) {
+        self.episodes += o.episodes;
+        self.agents += o.agents;
+        self.steps += o.steps;
+        self.return_sum += o.return_sum;
+        self.crashed += o.crashed;
+        self.speed_sum += o.speed_sum;
+        self.wall_s += o.wall_s;
+    }
+
+    /// Mean return per CAV.
+    pub fn mean_return(&self) -> f64 {
+        self.return_sum / self.agents.max(1) as f64
+    }
+
+    /// Share of CAVs that crashed.
+    pub fn collision_rate(&self) -> f64 {
+        self.crashed as f64 / self.agents.max(1) as f64
+    }
+
+    /// Mean CAV speed over decisions (m/s).
+    pub fn mean_speed(&self) -> f64 {
+        self.speed_sum / self.steps.max(1) as f64
+    }
+}
+
+/// One episode's experience.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct Rollout {
+    pub segments: Vec<Segment>,
+    pub stats: RolloutStats,
+}
+
+/// Runs the episode `config` describes with every CAV choosing by `choice` from `net`, and
+/// returns its experience (segments only when sampling: PPO trains on-policy).
+///
+/// # Errors
+/// SUMO failing, or an invalid configuration.
+pub fn run(
+    config: &Config,
+    net: Arc<ActorCritic>,
+    choice: Choice,
+    reward: &RewardSettings,
+) -> Result<Rollout, EpisodeError> {
+    config.validate()?;
+    let keep_segments = matches!(choice, Choice::Sample(_));
+    let mut ctl = RlPpo::new(config, net, choice, true);
+    let demand = episode::demand::generate(config);
+    let result = episode::run_observed(config, Driver::Given(&mut ctl), &demand, &mut NoObserver)?;
+    let outcomes: HashMap<&str, Outcome> = result
+        .vehicles
+        .iter()
+        .map(|v| (v.id.as_str(), v.outcome))
+        .collect();
+    let mut out = Rollout::default();
+    out.stats.episodes = 1;
+    out.stats.wall_s = result.timing.wall_s;
+    for (id, decisions) in ctl.take_record().vehicles {
+        let crashed = outcomes.get(&*id) == Some(&Outcome::Crashed);
+        let seg = segment(&decisions, crashed, reward);
+        out.stats.agents += 1;
+        out.stats.steps += decisions.len() as u64;
+        out.stats.crashed += u64::from(crashed);
+        out.stats.speed_sum += decisions.iter().map(|d| d.speed).sum::<f64>();
+        out.stats.return_sum += seg.steps.iter().map(|s| f64::from(s.reward)).sum::<f64>();
+        if keep_segments && !seg.steps.is_empty() {
+            out.segments.push(seg);
+        }
+    }
+    Ok(out)
+}
+
+/// The segment of one CAV's `decisions`: each step's reward read off the next decision's state;
+/// the last decision ends it (collision) or only bootstraps it (otherwise).
+pub fn segment(decisions: &[Decision], crashed: bool, reward: &RewardSettings) -> Segment {
+    let step = |d: &Decision, r: f64| Step {
+        obs: d.obs.clone(),
+        mask: d.mask.to_vec(),
+        action: d.action,
+        log_prob: d.log_prob,
+        value: d.value,
+        reward: r as f32,
+        forced: d.forced,
+    };
+    let changed =
+        |d: &Decision| !d.forced && Primitive::ALL[usize::from(d.action)].is_lane_change();
+    let mut steps: Vec<Step> = decisions
+        .windows(2)
+        .map(|w| {
+            step(
+                &w[0],
+                reward.step(w[1].speed, w[1].merge_progress, changed(&w[0])),
+            )
+        })
+        .collect();
+    match decisions.last() {
+        Some(last) if crashed => {
+            steps.push(step(last, -reward.collision_penalty));
+            Segment {
+                steps,
+                terminal: true,
+                bootstrap: 0.0,
+            }
+        }
+        Some(last) => Segment {
+            steps,
+            terminal: false,
+            bootstrap: last.value,
+        },
+        None => Segment {
+            steps,
+            terminal: false,
+            bootstrap: 0.0,
+        },
+    }
+}

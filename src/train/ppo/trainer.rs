@@ -1,0 +1,298 @@
+//! `bkpbs train-rl`: PPO on SUMO episodes until a budget of environment steps (CAV decisions),
+//! with a learning curve, checkpoints after every update, and resumption from the last one.
+//!
+//! Everything random derives from the seed and the update's number (the episodes' seeds, α and
+//! λ, the action sampling, the minibatch shuffling), and rollouts come back in request order,
+//! so a run is the same for a seed whatever the number of workers or threads, and a resumed
+//! run continues exactly as an uninterrupted one.
+
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::time::Instant;
+
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use serde::{Deserialize, Serialize};
+
+use super::reward::RewardSettings;
+use super::rollout::RolloutStats;
+use super::update::{update, Optimiser, UpdateStats};
+use super::workers::{Acting, Pool, PoolError, RolloutRequest};
+use super::PpoSettings;
+use crate::config::Config;
+use crate::policy::model_file::{PolicyError, PolicyFile};
+use crate::policy::network::ActorCritic;
+
+/// What a training run is; stored in its checkpoint, so a resumed run keeps it.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct TrainSettings {
+    /// Environment steps (CAV decisions) to train for.
+    pub steps: u64,
+    pub seed: u64,
+    /// SUMO episodes per update.
+    pub episodes_per_update: usize,
+    /// α and λ of the training episodes, cycled (the paper's grid).
+    pub alphas: Vec<f64>,
+    pub lambdas: Vec<f64>,
+    /// First episode seed (far from the evaluation seeds 0…).
+    pub seed_base: u64,
+    pub ppo: PpoSettings,
+    pub reward: RewardSettings,
+}
+
+impl Default for TrainSettings {
+    fn default() -> Self {
+        TrainSettings {
+            steps: 10_000_000,
+            seed: 1,
+            episodes_per_update: 4,
+            alphas: vec![0.4, 0.5, 0.6, 0.7, 0.8],
+            lambdas: vec![2500.0, 3000.0],
+            seed_base: 1_000_000,
+            ppo: PpoSettings::default(),
+            reward: RewardSettings::default(),
+        }
+    }
+}
+
+/// One row of `learning_curve.csv`: the sampled episodes of one update and the update itself.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CurveRow {
+    pub update: u64,
+    /// Environment steps after this update's episodes.
+    pub env_steps: u64,
+    pub episodes: u64,
+    pub mean_return: f64,
+    pub collision_rate: f64,
+    pub mean_speed: f64,
+    pub policy_loss: f64,
+    pub value_loss: f64,
+    pub entropy: f64,
+    pub approx_kl: f64,
+    pub clip_fraction: f64,
+}
+
+/// Everything needed to continue a run.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct Checkpoint {
+    pub format: String,
+    pub settings: TrainSettings,
+    /// The base scenario configuration of the episodes.
+    pub config: Config,
+    pub updates: u64,
+    pub env_steps: u64,
+    pub wall_s: f64,
+    pub actor: Vec<f32>,
+    pub critic: Vec<f32>,
+    pub optimiser: Optimiser,
+    pub curve: Vec<CurveRow>,
+}
+
+const CHECKPOINT_FORMAT: &str = "bkpbs-rl-checkpoint-1";
+
+/// Why training stopped.
+#[derive(Debug, thiserror::Error)]
+pub enum TrainError {
+    #[error(transparent)]
+    Pool(#[from] PoolError),
+    #[error(transparent)]
+    Policy(#[from] PolicyError),
+    #[error(transparent)]
+    Write(#[from] crate::io::WriteError),
+    #[error("cannot read checkpoint {path}: {message}")]
+    Checkpoint { path: PathBuf, message: String },
+    #[error("{0}")]
+    Config(#[from] crate::config::ConfigError),
+}
+
+/// The files of a run directory.
+pub struct RunFiles {
+    pub dir: PathBuf,
+}
+
+impl RunFiles {
+    pub fn checkpoint(&self) -> PathBuf {
+        self.dir.join("checkpoint.json")
+    }
+    pub fn curve(&self) -> PathBuf {
+        self.dir.join("learning_curve.csv")
+    }
+    pub fn timings(&self) -> PathBuf {
+        self.dir.join("timings.csv")
+    }
+    pub fn policy(&self) -> PathBuf {
+        self.dir.join("policy.json")
+    }
+    /// The policy the workers act with during an update.
+    pub fn acting(&self) -> PathBuf {
+        self.dir.join("acting-policy.json")
+    }
+}
+
+/// A fresh run's checkpoint, or the one in `files` when resuming.
+pub fn start_or_resume(
+    files: &RunFiles,
+    settings: TrainSettings,
+    config: Config,
+) -> Result<Checkpoint, TrainError> {
+    let path = files.checkpoint();
+    if path.exists() {
+        let bad = |message: String| TrainError::Checkpoint {
+            path: path.clone(),
+            message,
+        };
+        let text = std::fs::read_to_string(&path).map_err(|e| bad(e.to_string()))?;
+        let mut ck: Checkpoint = serde_json::from_str(&text).map_err(|e| bad(e.to_string()))?;
+        if ck.format != CHECKPOINT_FORMAT {
+            return Err(bad(format!("format '{}'", ck.format)));
+        }
+        ck.settings.steps = settings.steps; // the budget may be extended
+        return Ok(ck);
+    }
+    config.validate()?;
+    let net = ActorCritic::new(settings.seed);
+    Ok(Checkpoint {
+        format: CHECKPOINT_FORMAT.into(),
+        optimiser: Optimiser::new(&net, settings.ppo.learning_rate),
+        actor: net.actor_params,
+        critic: net.critic_params,
+        settings,
+        config,
+        updates: 0,
+        env_steps: 0,
+        wall_s: 0.0,
+        curve: Vec::new(),
+    })
+}
+
+/// The requests of update `u`: its episodes' α, λ, seeds and sampling seeds.
+pub fn requests(ck: &Checkpoint, u: u64, policy: &Path) -> Vec<RolloutRequest> {
+    let s = &ck.settings;
+    (0..s.episodes_per_update)
+        .map(|j| {
+            let g = u * s.episodes_per_update as u64 + j as u64;
+            let mut config = ck.config.clone();
+            config.scenario.alpha = s.alphas[(g % s.alphas.len() as u64) as usize];
+            config.scenario.lambda =
+                s.lambdas[((g / s.alphas.len() as u64) % s.lambdas.len() as u64) as usize];
+            config.scenario.seed = s.seed_base + g;
+            RolloutRequest {
+                index: j,
+                config,
+                policy: policy.to_path_buf(),
+                acting: Acting::Sample(mix(s.seed, g)),
+                reward: s.reward.clone(),
+            }
+        })
+        .collect()
+}
+
+/// A seed from two numbers (SplitMix64 of their combination).
+pub fn mix(a: u64, b: u64) -> u64 {
+    let mut z = a
+        .wrapping_mul(0x9E37_79B9_7F4A_7C15)
+        .wrapping_add(b)
+        .wrapping_add(0x9E37_79B9_7F4A_7C15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^ (z >> 31)
+}
+
+/// How one update went, for progress lines and timings.
+pub struct UpdateReport {
+    pub row: CurveRow,
+    pub rollout_s: f64,
+    pub update_s: f64,
+}
+
+/// Runs one update: rollouts in the pool, then PPO on them; advances the checkpoint.
+pub fn one_update(
+    ck: &mut Checkpoint,
+    pool: &mut Pool,
+    files: &RunFiles,
+) -> Result<UpdateReport, TrainError> {
+    let u = ck.updates;
+    let mut net = ActorCritic::new(0);
+    net.actor_params.clone_from(&ck.actor);
+    net.critic_params.clone_from(&ck.critic);
+    PolicyFile::of(&net, serde_json::Value::Null).write(&files.acting())?;
+    let t0 = Instant::now();
+    let rollouts = pool.run(requests(ck, u, &files.acting()))?;
+    let rollout_s = t0.elapsed().as_secs_f64();
+    let mut stats = RolloutStats::default();
+    let mut segments = Vec::new();
+    for r in rollouts {
+        stats.add(&r.stats);
+        segments.extend(r.segments);
+    }
+    let t1 = Instant::now();
+    let mut rng = ChaCha8Rng::seed_from_u64(mix(ck.settings.seed ^ 0x5EED, u));
+    let st: UpdateStats = update(
+        &mut net,
+        &mut ck.optimiser,
+        &segments,
+        &ck.settings.ppo,
+        &mut rng,
+    );
+    let update_s = t1.elapsed().as_secs_f64();
+    ck.actor = net.actor_params;
+    ck.critic = net.critic_params;
+    ck.updates += 1;
+    ck.env_steps += stats.steps;
+    ck.wall_s += rollout_s + update_s;
+    let row = CurveRow {
+        update: ck.updates,
+        env_steps: ck.env_steps,
+        episodes: stats.episodes,
+        mean_return: stats.mean_return(),
+        collision_rate: stats.collision_rate(),
+        mean_speed: stats.mean_speed(),
+        policy_loss: st.policy_loss,
+        value_loss: st.value_loss,
+        entropy: st.entropy,
+        approx_kl: st.approx_kl,
+        clip_fraction: st.clip_fraction,
+    };
+    ck.curve.push(row.clone());
+    Ok(UpdateReport {
+        row,
+        rollout_s,
+        update_s,
+    })
+}
+
+/// Writes the checkpoint and the learning curve (atomically, each).
+pub fn save(ck: &Checkpoint, files: &RunFiles) -> Result<(), TrainError> {
+    let text = serde_json::to_string(ck).expect("a checkpoint serialises");
+    crate::io::write_atomic(&files.checkpoint(), text.as_bytes())?;
+    let mut w = csv::Writer::from_writer(Vec::new());
+    for row in &ck.curve {
+        w.serialize(row).expect("a curve row serialises");
+    }
+    let bytes = w.into_inner().expect("in-memory CSV");
+    crate::io::write_atomic(&files.curve(), &bytes)?;
+    Ok(())
+}
+
+/// The trained policy file of a checkpoint.
+pub fn policy_file(ck: &Checkpoint) -> PolicyFile {
+    let mut net = ActorCritic::new(0);
+    net.actor_params.clone_from(&ck.actor);
+    net.critic_params.clone_from(&ck.critic);
+    let training = serde_json::json!({
+        "algorithm": "PPO (clipped, GAE), every CAV of an episode acting with the shared policy",
+        "env_steps": ck.env_steps,
+        "updates": ck.updates,
+        "settings": ck.settings,
+    });
+    PolicyFile::of(&net, training)
+}
+
+/// Keeps `net` shared for evaluation.
+pub fn networks(ck: &Checkpoint) -> Arc<ActorCritic> {
+    let mut net = ActorCritic::new(0);
+    net.actor_params.clone_from(&ck.actor);
+    net.critic_params.clone_from(&ck.critic);
+    Arc::new(net)
+}
