@@ -101,27 +101,32 @@ fn rl_ppo_runs_as_a_planner_and_a_bad_policy_file_is_one_error_line() {
     assert!(err.contains("is not a bkpbs RL policy"), "{err}");
 }
 
+/// `train-rl` with these arguments, one episode per update, one worker and thread.
+fn train_args<'a>(out: &'a str, steps: &'a str) -> Vec<&'a str> {
+    vec![
+        "train-rl",
+        "--out",
+        out,
+        "--steps",
+        steps,
+        "--episodes-per-update",
+        "1",
+        "--eval-episodes",
+        "0",
+        "--workers",
+        "1",
+        "--threads",
+        "1",
+    ]
+}
+
 /// Two updates in one go equal one update, stopped, then resumed to two: the same curve and
 /// weights (checkpoints carry everything random).
 #[test]
 fn training_resumes_exactly() {
     let dir = tempfile::tempdir().unwrap();
     let run = |out: &std::path::Path, steps: &str| {
-        let o = bkpbs(&[
-            "train-rl",
-            "--out",
-            out.to_str().unwrap(),
-            "--steps",
-            steps,
-            "--episodes-per-update",
-            "1",
-            "--eval-episodes",
-            "0",
-            "--workers",
-            "1",
-            "--threads",
-            "1",
-        ]);
+        let o = bkpbs(&train_args(out.to_str().unwrap(), steps));
         assert!(o.status.success(), "{}", stderr(&o));
     };
     let (a, b) = (dir.path().join("a"), dir.path().join("b"));
@@ -134,4 +139,55 @@ fn training_resumes_exactly() {
     let policy = |d: &std::path::Path| std::fs::read(d.join("policy.json")).unwrap();
     assert_eq!(policy(&a), policy(&b));
     assert!(curve(&a).lines().count() >= 3, "{}", curve(&a));
+}
+
+/// Ctrl-C mid-training: exit 130, the last finished update kept; the same command resumes and
+/// ends where an uninterrupted run does.
+#[test]
+fn interrupted_training_resumes_where_it_stopped() {
+    let dir = tempfile::tempdir().unwrap();
+    let (a, b) = (dir.path().join("a"), dir.path().join("b"));
+    let (a_s, b_s) = (a.to_str().unwrap(), b.to_str().unwrap());
+    let child = std::process::Command::new(env!("CARGO_BIN_EXE_bkpbs"))
+        .args(train_args(a_s, "1000000"))
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    common::wait_for("the first checkpoint", 120, || {
+        a.join("checkpoint.json").exists()
+    });
+    common::send_signal(child.id() as i32, libc::SIGINT);
+    let out = child.wait_with_output().unwrap();
+    assert_eq!(out.status.code(), Some(130), "{}", stderr(&out));
+    assert!(
+        stderr(&out).contains("the same command resumes"),
+        "{}",
+        stderr(&out)
+    );
+    let kept = std::fs::read_to_string(a.join("learning_curve.csv")).unwrap();
+    let updates = kept.lines().count() - 1;
+    assert!(updates >= 1);
+    // Resume to one update more than were kept, and run the same budget uninterrupted.
+    let steps: u64 = kept
+        .lines()
+        .last()
+        .unwrap()
+        .split(',')
+        .nth(1)
+        .unwrap()
+        .parse()
+        .unwrap();
+    let target = (steps + 1).to_string();
+    for out in [a_s, b_s] {
+        let o = bkpbs(&train_args(out, &target));
+        assert!(o.status.success(), "{}", stderr(&o));
+    }
+    let curve =
+        |d: &std::path::Path| std::fs::read_to_string(d.join("learning_curve.csv")).unwrap();
+    assert_eq!(curve(&a), curve(&b));
+    assert_eq!(curve(&a).lines().count(), updates + 2);
+    assert_eq!(
+        std::fs::read(a.join("policy.json")).unwrap(),
+        std::fs::read(b.join("policy.json")).unwrap()
+    );
 }

@@ -15,7 +15,7 @@ pub struct BenchArgs {
     #[arg(
         long,
         value_delimiter = ',',
-        default_value = "sumo,idm-mobil,bk-mastar,bk-pbs"
+        default_value = "sumo,idm-mobil,bk-mastar,bk-pbs,rl-ppo"
     )]
     planners: Vec<String>,
     /// Repeats per row (medians are reported).

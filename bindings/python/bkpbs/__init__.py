@@ -9,6 +9,9 @@ The Rust core does the work; this package is a thin layer over it:
   for a Python loop; :class:`Campaign` and ``python -m bkpbs.campaign`` run experiment grids
   (locally or on Ray) into the directory layout ``bkpbs report`` reads.
 - :func:`load_predictor` gives the planners' HDV predictor.
+- ``bkpbs.gym`` (imported on its own; needs gymnasium, and pettingzoo for the multi-agent one):
+  the merge scenario as a Gymnasium environment (``bkpbs/Merge-v0``) and a PettingZoo
+  ``ParallelEnv``, stepped through the core.
 
 Bad arguments raise :class:`BkpbsError` (a ``ValueError``); SUMO failures raise
 :class:`SumoError` (a ``RuntimeError``).

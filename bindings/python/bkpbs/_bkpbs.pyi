@@ -93,6 +93,39 @@ class Predictor:
     ) -> List[_Pose]:
         """Predicted ``(s, y, heading, speed)`` at steps 0 … horizon."""
 
+class MergeEnvCore:
+    """The merge scenario stepped one decision at a time (under ``bkpbs.gym``)."""
+
+    OBS_DIM: int
+    def __init__(
+        self,
+        agents: str = "single",
+        alpha: float = 0.5,
+        lam: float = 3000.0,
+        config: Optional[Union[Mapping[str, Any], str, "os.PathLike[str]"]] = None,
+        **overrides: Any,
+    ) -> None:
+        """``agents``: "single" (one CAV among HDVs) or "all" (every CAV)."""
+    def reset(self, seed: int) -> None:
+        """Starts a new episode (ending the running one) and runs to the first agent's step."""
+    def agents(self) -> List[str]: ...
+    def possible_agents(self) -> List[str]: ...
+    def observations(self) -> bytes:
+        """float32, agents × OBS_DIM, row-major."""
+    def masks(self) -> bytes:
+        """uint8, agents × 6 (1 = allowed)."""
+    def step(self, actions: List[int]) -> Tuple[List[Tuple[str, float]], List[str], List[str], bool]:
+        """(rewards, terminated agents, truncated agents, done)."""
+    def render_rgb(self, width: int = 600, height: int = 150) -> bytes:
+        """height × width × 3 RGB bytes of the current step."""
+    def summary(self) -> Optional[Dict[str, Any]]:
+        """The finished episode's ``episode.csv`` numbers, once done."""
+    def close(self) -> None: ...
+    @staticmethod
+    def feature_names() -> List[str]: ...
+    @staticmethod
+    def action_names() -> List[str]: ...
+
 class CampaignTask:
     """One unfinished episode of a campaign; picklable."""
 
