@@ -151,12 +151,9 @@ fn log_update(files: &RunFiles, ck: &Checkpoint, r: &trainer::UpdateReport) -> R
     Ok(())
 }
 
-/// Writes the policy and the learning curve figure, then the evaluation.
+/// Writes the policy, evaluates it, and draws the learning curve with the reference levels.
 fn finish(t: &TrainRl, ck: &Checkpoint, pool: &mut Pool) -> Result<()> {
     trainer::policy_file(ck).write(&t.files.policy())?;
-    let fig = bkpbs::report::learning_curve::figure(&ck.curve).render()?;
-    bkpbs::io::write_atomic(&t.files.dir.join("learning_curve.png"), &fig.png)?;
-    bkpbs::io::write_atomic(&t.files.dir.join("learning_curve.svg"), fig.svg.as_bytes())?;
     println!(
         "policy: {} ({} steps, {} updates, {:.0} s of training)",
         t.files.policy().display(),
@@ -164,9 +161,23 @@ fn finish(t: &TrainRl, ck: &Checkpoint, pool: &mut Pool) -> Result<()> {
         ck.updates,
         ck.wall_s
     );
-    if t.eval_episodes == 0 {
-        return Ok(());
-    }
+    let rows = if t.eval_episodes == 0 {
+        Vec::new()
+    } else {
+        evaluate_policy(t, ck, pool)?
+    };
+    let fig = bkpbs::report::learning_curve::figure(&ck.curve, &rows).render()?;
+    bkpbs::io::write_atomic(&t.files.dir.join("learning_curve.png"), &fig.png)?;
+    bkpbs::io::write_atomic(&t.files.dir.join("learning_curve.svg"), fig.svg.as_bytes())?;
+    Ok(())
+}
+
+/// The trained, a random and an idle policy on the held-out episodes: `evaluation.csv`.
+fn evaluate_policy(
+    t: &TrainRl,
+    ck: &Checkpoint,
+    pool: &mut Pool,
+) -> Result<Vec<(&'static str, RolloutStats)>> {
     let s = &ck.settings;
     let configs: Vec<Config> = (0..t.eval_episodes)
         .map(|k| {
@@ -182,7 +193,7 @@ fn finish(t: &TrainRl, ck: &Checkpoint, pool: &mut Pool) -> Result<()> {
     let text = evaluation_csv(&rows);
     bkpbs::io::write_atomic(&t.files.dir.join("evaluation.csv"), text.as_bytes())?;
     print!("{text}");
-    Ok(())
+    Ok(rows)
 }
 
 fn evaluation_csv(rows: &[(&str, RolloutStats)]) -> String {

@@ -3,18 +3,31 @@
 //! steps; each update thin, a moving average over `SMOOTHING` updates thick.
 
 use super::plot::{Curve, LinePanel, LinePanels};
+use crate::train::ppo::rollout::RolloutStats;
 use crate::train::ppo::trainer::CurveRow;
 
 /// Updates in the moving average.
 const SMOOTHING: usize = 20;
 
-/// The figure of `rows`.
-pub fn figure(rows: &[CurveRow]) -> LinePanels {
-    let panel = |title: &str, y_label: &str, value: fn(&CurveRow) -> f64| {
+/// The figure of `rows`, with the levels of reference policies (name, totals on held-out
+/// episodes) as flat lines.
+pub fn figure(rows: &[CurveRow], references: &[(&str, RolloutStats)]) -> LinePanels {
+    let x_end = rows.last().map_or(1.0, |r| r.env_steps as f64 / 1e6);
+    let panel = |title: &str,
+                 y_label: &str,
+                 value: fn(&CurveRow) -> f64,
+                 level: Option<fn(&RolloutStats) -> f64>| {
         let points: Vec<(f64, f64)> = rows
             .iter()
             .map(|r| (r.env_steps as f64 / 1e6, value(r)))
             .collect();
+        let flat = references.iter().enumerate().filter_map(|(k, (_, st))| {
+            level.map(|f| Curve {
+                points: vec![(0.0, f(st)), (x_end, f(st))],
+                colour: k + 1,
+                thick: true,
+            })
+        });
         LinePanel {
             title: title.into(),
             x_label: "environment steps (millions of CAV decisions)".into(),
@@ -30,25 +43,45 @@ pub fn figure(rows: &[CurveRow]) -> LinePanels {
                     colour: 0,
                     thick: true,
                 },
-            ],
+            ]
+            .into_iter()
+            .chain(flat)
+            .collect(),
             bands: Vec::new(),
             marks: Vec::new(),
             x_range: None,
         }
     };
+    let mut legend = vec![
+        (0, "each update (sampled)".into(), false),
+        (0, format!("mean of {SMOOTHING} updates"), true),
+    ];
+    for (k, (name, _)) in references.iter().enumerate() {
+        legend.push((k + 1, format!("{name}, held-out"), true));
+    }
     LinePanels {
         panels: vec![
-            panel("mean return per CAV", "return", |r| r.mean_return),
-            panel("CAV collision rate", "crashed CAVs (%)", |r| {
-                100.0 * r.collision_rate
-            }),
-            panel("mean CAV speed", "m/s", |r| r.mean_speed),
-            panel("policy entropy", "nats", |r| r.entropy),
+            panel(
+                "mean return per CAV",
+                "return",
+                |r| r.mean_return,
+                Some(RolloutStats::mean_return),
+            ),
+            panel(
+                "CAV collision rate",
+                "crashed CAVs (%)",
+                |r| 100.0 * r.collision_rate,
+                Some(|s| 100.0 * s.collision_rate()),
+            ),
+            panel(
+                "mean CAV speed",
+                "m/s",
+                |r| r.mean_speed,
+                Some(RolloutStats::mean_speed),
+            ),
+            panel("policy entropy", "nats", |r| r.entropy, None),
         ],
-        legend: vec![
-            (0, "each update".into(), false),
-            (0, format!("mean of {SMOOTHING} updates"), true),
-        ],
+        legend,
     }
 }
 
