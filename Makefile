@@ -39,6 +39,7 @@ pytest: deps
 	$(VENV)/bin/python -m pip install --quiet --disable-pip-version-check --force-reinstall --no-deps $(TARGET_DIR)/wheels/bkpbs-*.whl
 	BKPBS_BIN=$(TARGET_DIR)/debug/bkpbs $(VENV)/bin/python -m pytest -q -p no:cacheprovider bindings/tests
 
-# Regenerates sumo_net/merge.net.xml from its plain XML sources.
+# Regenerates the networks sumo_net/*.net.xml (merge, three-lane, corridor) from their plain XML
+# sources; an unchanged network keeps its file (see sumo_net/README.md).
 net: deps
 	bash sumo_net/build_net.sh
