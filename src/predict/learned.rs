@@ -417,3 +417,32 @@ pub fn configured(config: &Config) -> Result<Box<dyn Predictor>, PredictorError>
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `predictor.calibrations` picks b_θ trained on the profile SUMO runs where the directory
+    /// has one, and leaves the default model otherwise.
+    #[test]
+    fn calibrations_directory_selects_the_profile_s_models() {
+        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("models/profiles");
+        let mut c = Config::default();
+        c.predictor.calibrations = Some(dir.clone());
+        c.hdv.profile = "paper".into();
+        assert_eq!(
+            profile_model(&c, true),
+            Some(dir.join("paper/gcn-conditioned.json"))
+        );
+        assert_eq!(
+            profile_model(&c, false),
+            Some(dir.join("paper/gcn-unconditioned.json"))
+        );
+        c.hdv.profile = "sumo-safe".into(); // trained on it: the embedded models
+        assert_eq!(profile_model(&c, true), None);
+        c.predictor.calibrations = None;
+        c.hdv.profile = "paper".into();
+        assert_eq!(profile_model(&c, true), None);
+        configured(&c).unwrap();
+    }
+}
