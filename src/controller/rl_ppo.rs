@@ -17,7 +17,7 @@ use rand_chacha::ChaCha8Rng;
 use super::{CavHandling, Command, Controller, LaneChange, Maneuver, Source};
 use crate::config::Config;
 use crate::model::road::MERGE_LANE;
-use crate::model::scene::{Kind, Scene};
+use crate::model::scene::Scene;
 use crate::planner::lane_changes::LaneChanges;
 use crate::planner::primitives::Primitive;
 use crate::policy::actions::{Mask, Rules, IDLE};
@@ -224,9 +224,7 @@ impl Controller for RlPpo {
 
     fn plan(&mut self, scene: &Scene, out: &mut Vec<Command>) {
         self.executor.forget_finished(scene.time);
-        let cavs: Vec<usize> = (0..scene.vehicles.len())
-            .filter(|&i| scene.vehicles[i].kind == Kind::Cav)
-            .collect();
+        let cavs = scene.cav_indices();
         if cavs.is_empty() {
             return;
         }

@@ -127,6 +127,13 @@ impl Scene {
         }
     }
 
+    /// Indices of the CAVs, in scene order.
+    pub fn cav_indices(&self) -> Vec<usize> {
+        (0..self.vehicles.len())
+            .filter(|&i| self.vehicles[i].kind == Kind::Cav)
+            .collect()
+    }
+
     /// Index of the nearest vehicle ahead of `s` on `lane` (excluding `skip`), by centre position.
     pub fn leader(&self, lane: i32, s: f64, skip: usize) -> Option<usize> {
         self.nearest(lane, skip, |o| o > s, |a, b| a < b)

@@ -39,6 +39,11 @@ def _observation_space() -> spaces.Box:
     return spaces.Box(-OBS_BOUND, OBS_BOUND, shape=(OBS_DIM,), dtype=np.float32)
 
 
+def _check_render_mode(mode: Optional[str]) -> None:
+    if mode not in (None, "rgb_array"):
+        raise ValueError(f"render_mode {mode!r}: only 'rgb_array' is supported")
+
+
 class _Core:
     """The core environment's current step as numpy arrays."""
 
@@ -71,10 +76,8 @@ class MergeEnv(gymnasium.Env):
         render_size: Tuple[int, int] = (600, 150),
         **overrides: Any,
     ):
-        if render_mode not in (None, "rgb_array"):
-            raise ValueError(f"render_mode {render_mode!r}: only 'rgb_array' is supported")
-        self.render_mode = render_mode
-        self.render_size = render_size
+        _check_render_mode(render_mode)
+        self.render_mode, self.render_size = render_mode, render_size
         self.observation_space = _observation_space()
         self.action_space = spaces.Discrete(N_ACTIONS)
         self._core = _Core("single", alpha, lam, config, overrides)
@@ -127,10 +130,8 @@ class MergeParallelEnv(_ParallelBase):
         render_size: Tuple[int, int] = (600, 150),
         **overrides: Any,
     ):
-        if render_mode not in (None, "rgb_array"):
-            raise ValueError(f"render_mode {render_mode!r}: only 'rgb_array' is supported")
-        self.render_mode = render_mode
-        self.render_size = render_size
+        _check_render_mode(render_mode)
+        self.render_mode, self.render_size = render_mode, render_size
         self._core = _Core("all", alpha, lam, config, overrides)
         self._rng = np.random.default_rng()
         self.agents: List[str] = []

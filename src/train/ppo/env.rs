@@ -356,9 +356,7 @@ impl Controller for Remote {
 
     fn plan(&mut self, scene: &Scene, out: &mut Vec<Command>) {
         self.executor.forget_finished(scene.time);
-        let cavs: Vec<usize> = (0..scene.vehicles.len())
-            .filter(|&i| scene.vehicles[i].kind == Kind::Cav)
-            .collect();
+        let cavs = scene.cav_indices();
         let crashed = std::mem::take(&mut *self.crashed.lock().unwrap_or_else(|e| e.into_inner()));
         if cavs.is_empty() && crashed.is_empty() {
             return;
