@@ -104,6 +104,11 @@ pub enum TrainError {
     Checkpoint { path: PathBuf, message: String },
     #[error("{0}")]
     Config(#[from] crate::config::ConfigError),
+    #[error(
+        "checkpoint {0} was made with other settings (seed, episodes per update or scenario \
+         configuration): resume with the same ones, or train into another directory"
+    )]
+    OtherSettings(PathBuf),
 }
 
 /// The files of a run directory.
@@ -148,6 +153,9 @@ pub fn start_or_resume(
             return Err(bad(format!("format '{}'", ck.format)));
         }
         ck.settings.steps = settings.steps; // the budget may be extended
+        if ck.settings != settings || ck.config != config {
+            return Err(TrainError::OtherSettings(path));
+        }
         return Ok(ck);
     }
     config.validate()?;
