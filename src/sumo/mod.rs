@@ -8,6 +8,7 @@
 
 pub mod files;
 pub mod frame;
+pub mod network;
 
 mod ffi;
 mod quiet;
