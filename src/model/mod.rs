@@ -4,6 +4,7 @@
 pub mod geometry;
 pub mod kinematics;
 pub mod math;
+pub mod reference_line;
 pub mod road;
 pub mod scene;
 pub mod trajectory;

@@ -12,6 +12,7 @@ use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
 use crate::model::math::Point;
+use crate::model::reference_line::ReferenceLine;
 
 /// One lane of the network.
 #[derive(Debug, Clone, PartialEq)]
@@ -232,6 +233,8 @@ pub struct Layout {
     pub main: Vec<MainEdge>,
     pub on_ramps: Vec<OnRamp>,
     pub off_ramps: Vec<OffRamp>,
+    /// The curvilinear frame's reference line: s along it, d from it (positive left).
+    pub line: ReferenceLine,
 }
 
 impl Layout {
@@ -242,7 +245,8 @@ impl Layout {
             what,
         };
         let main_ids = main_chain(net).map_err(refuse)?;
-        let main = positions(net, &main_ids);
+        let line = reference_line(net, &main_ids).map_err(refuse)?;
+        let main = positions(net, &main_ids, &line);
         let on_main: BTreeSet<&str> = main_ids.iter().map(String::as_str).collect();
         let mut used: BTreeSet<String> = main_ids.iter().cloned().collect();
         let mut on_ramps = Vec::new();
@@ -254,7 +258,7 @@ impl Layout {
             if net.has_predecessor(&e.id) {
                 continue;
             }
-            let ramp = on_ramp(net, &e.id, &on_main, &main).map_err(refuse)?;
+            let ramp = on_ramp(net, &e.id, &on_main, &line).map_err(refuse)?;
             used.extend(ramp.edges.iter().cloned());
             on_ramps.push(ramp);
         }
@@ -283,12 +287,13 @@ impl Layout {
             main,
             on_ramps,
             off_ramps,
+            line,
         })
     }
 
-    /// Length of the main carriageway (m).
+    /// Length of the main carriageway along the reference line (m).
     pub fn length(&self) -> f64 {
-        self.main.last().map_or(0.0, |m| m.s_start + m.length)
+        self.line.length()
     }
 }
 
@@ -328,31 +333,49 @@ fn main_chain(net: &Net) -> Result<Vec<String>, String> {
     }
 }
 
-/// Where each main edge starts, counting the internal lanes between consecutive edges.
-fn positions(net: &Net, ids: &[String]) -> Vec<MainEdge> {
-    let mut s = 0.0;
-    let mut out = Vec::new();
+/// The reference line of the main carriageway: the centre line of each main edge's leftmost
+/// lane (a through lane: ramps join on the right) and of the internal lane joining it to the
+/// next edge's, in order.
+fn reference_line(net: &Net, ids: &[String]) -> Result<ReferenceLine, String> {
+    let mut points: Vec<Point> = Vec::new();
     for (k, id) in ids.iter().enumerate() {
         let e = net.edge(id);
-        let length = e.lanes.first().map_or(0.0, |l| l.length);
-        out.push(MainEdge {
-            id: id.clone(),
-            s_start: s,
-            length,
-            lanes: e.lanes.len() as u32,
-        });
-        s += length;
-        if let Some(next) = ids.get(k + 1) {
-            s += net
-                .connections
-                .iter()
-                .find(|c| &c.from == id && &c.to == next)
-                .and_then(|c| c.via.as_ref())
-                .and_then(|v| net.internal.get(v))
-                .map_or(0.0, |l| l.length);
+        let left = e
+            .lanes
+            .last()
+            .ok_or_else(|| format!("edge '{id}' has no lanes"))?;
+        points.extend(&left.shape);
+        let Some(next) = ids.get(k + 1) else { break };
+        let via = net
+            .connections
+            .iter()
+            .filter(|c| &c.from == id && &c.to == next)
+            .max_by_key(|c| c.from_lane)
+            .and_then(|c| c.via.as_ref())
+            .and_then(|v| net.internal.get(v));
+        if let Some(lane) = via {
+            points.extend(&lane.shape);
         }
     }
-    out
+    ReferenceLine::new(points).ok_or_else(|| "the main carriageway has no lane shapes".into())
+}
+
+/// Where each main edge starts along the reference line.
+fn positions(net: &Net, ids: &[String], line: &ReferenceLine) -> Vec<MainEdge> {
+    ids.iter()
+        .map(|id| {
+            let e = net.edge(id);
+            let left = e.lanes.last().expect("lanes checked");
+            let s_start = left.shape.first().map_or(0.0, |p| line.to_frame(*p).0);
+            let s_end = left.shape.last().map_or(0.0, |p| line.to_frame(*p).0);
+            MainEdge {
+                id: id.clone(),
+                s_start,
+                length: s_end - s_start,
+                lanes: e.lanes.len() as u32,
+            }
+        })
+        .collect()
 }
 
 /// The edges from `from` on, each with a single successor, until the main carriageway (not
@@ -374,12 +397,13 @@ fn unique_chain(net: &Net, from: &str, main: &BTreeSet<&str>) -> Result<Vec<Stri
     }
 }
 
-/// The on-ramp starting at source edge `source`.
+/// The on-ramp starting at source edge `source`: where the lane it feeds starts and, if that
+/// lane ends on the edge it joins, where it ends, along the reference line.
 fn on_ramp(
     net: &Net,
     source: &str,
     on_main: &BTreeSet<&str>,
-    main: &[MainEdge],
+    line: &ReferenceLine,
 ) -> Result<OnRamp, String> {
     let edges = unique_chain(net, source, on_main)?;
     let last = edges.last().expect("non-empty");
@@ -390,18 +414,18 @@ fn on_ramp(
         .ok_or_else(|| {
             format!("edge '{source}' leads to a sink without joining the main carriageway")
         })?;
-    let joined = main.iter().find(|m| m.id == c.to).expect("a main edge");
     let continues = net
         .connections
         .iter()
         .any(|k| k.from == c.to && k.from_lane == c.to_lane);
     let lane = &net.edge(&c.to).lanes[c.to_lane as usize];
+    let at = |p: Option<&Point>| p.map_or(0.0, |p| line.to_frame(*p).0);
     Ok(OnRamp {
         edges,
         joins: c.to.clone(),
         lane: c.to_lane,
-        merge_start: joined.s_start,
-        merge_end: (!continues).then_some(joined.s_start + lane.length),
+        merge_start: at(lane.shape.first()),
+        merge_end: (!continues).then(|| at(lane.shape.last())),
     })
 }
 
@@ -433,6 +457,13 @@ mod tests {
         assert!((r.merge_end.unwrap() - 330.0).abs() < 1e-6, "{r:?}");
         assert!((l.length() - 460.0).abs() < 1e-6);
         assert!(l.off_ramps.is_empty());
+        // Straight: s is SUMO's x, as in the fixed frame; the right main lane 4.5 m right of
+        // the reference (the left lane's centre line).
+        let (s, d) = l.line.to_frame(Point::new(123.4, -6.75));
+        assert!(
+            (s - 123.4).abs() < 0.01 && (d + 4.5).abs() < 0.01,
+            "{s} {d}"
+        );
     }
 
     #[test]
@@ -448,6 +479,12 @@ mod tests {
         assert!((r.merge_start - 203.0).abs() < 0.01, "{r:?}");
         assert!((r.merge_end.unwrap() - 423.0).abs() < 0.01, "{r:?}");
         assert!((l.length() - 631.0).abs() < 0.01, "{}", l.length());
+        // The acceleration lane's centre: three lanes of 3.6 m right of the reference.
+        let (s, d) = l.line.to_frame(Point::new(300.0, 37.4));
+        assert!(
+            (s - 300.0).abs() < 0.01 && (d + 10.8).abs() < 0.01,
+            "{s} {d}"
+        );
     }
 
     #[test]
@@ -460,6 +497,18 @@ mod tests {
         assert!((l.length() - 3000.48).abs() < 0.5, "{}", l.length());
         let ends: Vec<f64> = l.on_ramps.iter().map(|r| r.merge_end.unwrap()).collect();
         assert!(ends.windows(2).all(|w| w[0] < w[1]), "{ends:?}");
+        for r in &l.on_ramps {
+            let len = r.merge_end.unwrap() - r.merge_start;
+            assert!((150.0..260.0).contains(&len), "{r:?}");
+        }
+        // Curved: the reference turns, and frame and back agree.
+        let k: Vec<f64> = (0..30)
+            .map(|i| l.line.curvature_at(i as f64 * 100.0).abs())
+            .collect();
+        assert!(k.iter().any(|&c| c > 1e-4), "{k:?}");
+        let p = l.line.to_xy(1234.5, -7.2);
+        let (s, d) = l.line.to_frame(p);
+        assert!((s - 1234.5).abs() < 0.01 && (d + 7.2).abs() < 0.01);
     }
 
     /// A two-way road: two carriageways of equal width, neither of which the other joins.
