@@ -78,6 +78,7 @@ fn run(command: Command) -> Result<()> {
         }
         Command::Explain(a) => cli::explain::run(a),
         Command::Plot(a) => cli::plot::run(a),
+        Command::Network(a) => cli::network::run(a),
         Command::Config(a) => cli::config::run(a.resolve()?),
         Command::Bench(a) => cli::bench::run(a.resolve()?),
         Command::Demand(a) => cli::demand::run(a.resolve()?),

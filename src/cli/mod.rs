@@ -9,6 +9,7 @@ pub mod config;
 pub mod demand;
 pub mod episode;
 pub mod explain;
+pub mod network;
 pub mod plot;
 pub mod report;
 pub mod scenario;
@@ -39,6 +40,9 @@ pub enum Command {
     Explain(explain::ExplainArgs),
     /// Draw an episode's time–space diagram and speed field (from `episode --trajectories`).
     Plot(plot::PlotArgs),
+    /// The merge layout found in a SUMO network: main carriageway, on-ramps with their
+    /// acceleration lanes, off-ramps (episodes still run on the paper's layout only).
+    Network(network::NetworkArgs),
     /// Show the configuration (defaults = the paper's) or the SUMO vehicle types it implies.
     Config(config::ConfigArgs),
     /// Time SUMO alone against the same episode with controllers, side by side.

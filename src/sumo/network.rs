@@ -291,6 +291,44 @@ impl Layout {
         })
     }
 
+    /// What was found, one line per element, for `bkpbs network`.
+    pub fn describe(&self) -> String {
+        let mut out = format!("main carriageway: {:.2} m\n", self.length());
+        for m in &self.main {
+            out += &format!(
+                "  {:<16} s {:>8.2} – {:>8.2} m  {} lanes\n",
+                m.id,
+                m.s_start,
+                m.s_start + m.length,
+                m.lanes
+            );
+        }
+        for (k, r) in self.on_ramps.iter().enumerate() {
+            let end = r
+                .merge_end
+                .map_or("continues (a lane gain)".to_string(), |e| {
+                    format!("ends at s {e:.2} m")
+                });
+            out += &format!(
+                "on-ramp {}: {} → {} lane {}: from s {:.2} m, {end}\n",
+                k + 1,
+                r.edges.join(" → "),
+                r.joins,
+                r.lane,
+                r.merge_start
+            );
+        }
+        for (k, r) in self.off_ramps.iter().enumerate() {
+            out += &format!(
+                "off-ramp {}: {} → {}\n",
+                k + 1,
+                r.leaves,
+                r.edges.join(" → ")
+            );
+        }
+        out
+    }
+
     /// Length of the main carriageway along the reference line (m).
     pub fn length(&self) -> f64 {
         self.line.length()
