@@ -7,7 +7,6 @@
 //! run continues exactly as an uninterrupted one.
 
 use std::path::{Path, PathBuf};
-use std::sync::Arc;
 use std::time::Instant;
 
 use rand::SeedableRng;
@@ -87,6 +86,16 @@ pub struct Checkpoint {
     pub critic: Vec<f32>,
     pub optimiser: Optimiser,
     pub curve: Vec<CurveRow>,
+}
+
+impl Checkpoint {
+    /// The networks with the checkpoint's weights.
+    pub fn networks(&self) -> ActorCritic {
+        let mut net = ActorCritic::new(0);
+        net.actor_params.clone_from(&self.actor);
+        net.critic_params.clone_from(&self.critic);
+        net
+    }
 }
 
 const CHECKPOINT_FORMAT: &str = "bkpbs-rl-checkpoint-1";
@@ -221,9 +230,7 @@ pub fn one_update(
     files: &RunFiles,
 ) -> Result<UpdateReport, TrainError> {
     let u = ck.updates;
-    let mut net = ActorCritic::new(0);
-    net.actor_params.clone_from(&ck.actor);
-    net.critic_params.clone_from(&ck.critic);
+    let mut net = ck.networks();
     PolicyFile::of(&net, serde_json::Value::Null).write(&files.acting())?;
     let t0 = Instant::now();
     let rollouts = pool.run(requests(ck, u, &files.acting()))?;
@@ -285,9 +292,7 @@ pub fn save(ck: &Checkpoint, files: &RunFiles) -> Result<(), TrainError> {
 
 /// The trained policy file of a checkpoint.
 pub fn policy_file(ck: &Checkpoint) -> PolicyFile {
-    let mut net = ActorCritic::new(0);
-    net.actor_params.clone_from(&ck.actor);
-    net.critic_params.clone_from(&ck.critic);
+    let net = ck.networks();
     let training = serde_json::json!({
         "algorithm": "PPO (clipped, GAE), every CAV of an episode acting with the shared policy",
         "env_steps": ck.env_steps,
@@ -295,12 +300,4 @@ pub fn policy_file(ck: &Checkpoint) -> PolicyFile {
         "settings": ck.settings,
     });
     PolicyFile::of(&net, training)
-}
-
-/// Keeps `net` shared for evaluation.
-pub fn networks(ck: &Checkpoint) -> Arc<ActorCritic> {
-    let mut net = ActorCritic::new(0);
-    net.actor_params.clone_from(&ck.actor);
-    net.critic_params.clone_from(&ck.critic);
-    Arc::new(net)
 }
