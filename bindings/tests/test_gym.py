@@ -81,3 +81,25 @@ def test_render_and_bad_input():
         bg.MergeEnvCore("some", 0.5, 3000.0, None)
     with pytest.raises(BkpbsError):
         bg.MergeEnv(steps=-1)
+
+
+def test_misuse_is_one_clear_error():
+    from bkpbs import SimulationBusyError
+
+    env = bg.MergeParallelEnv(steps=60)
+    env.reset(seed=2)
+    n = len(env.agents)
+    with pytest.raises(BkpbsError, match="not one of the 6 primitives"):
+        env._core.env.step([9] * n)
+    with pytest.raises(BkpbsError, match=f"expected {n} actions"):
+        env._core.env.step([])
+    other = bg.MergeEnv(steps=60)
+    with pytest.raises(SimulationBusyError):
+        other.reset(seed=1)  # libsumo: one simulation per process
+    while env.agents:
+        env.step({a: 1 for a in env.agents})
+    with pytest.raises(BkpbsError, match="done"):
+        env._core.env.step([])
+    env.close()
+    other.reset(seed=1)  # free again
+    other.close()
