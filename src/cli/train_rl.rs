@@ -101,13 +101,13 @@ pub fn run(t: TrainRl) -> Result<()> {
                 trainer::save(&ck, &t.files)?;
                 log_update(&t.files, &ck, &report)?;
             }
-            Err(trainer::TrainError::Pool(PoolError::Interrupted(_))) => {
+            Err(trainer::TrainError::Pool(PoolError::Interrupted(signal))) => {
                 eprintln!(
                     "train-rl: stopped; {} updates kept in {} (the same command resumes)",
                     ck.updates,
                     t.files.checkpoint().display()
                 );
-                anyhow::bail!("interrupted");
+                anyhow::bail!("interrupted by {}", bkpbs::io::interrupt::name(signal));
             }
             Err(e) => return Err(e.into()),
         }

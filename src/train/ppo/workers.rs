@@ -180,7 +180,13 @@ impl Pool {
                 Err(mpsc::RecvTimeoutError::Timeout) => continue,
                 Err(mpsc::RecvTimeoutError::Disconnected) => return Err(PoolError::Died(0)),
             };
-            let line = line.ok_or(PoolError::Died(k))?;
+            let Some(line) = line else {
+                // A worker stopped by the same signal as the trainer ends without a reply.
+                return Err(match crate::io::interrupt::requested() {
+                    Some(sig) => PoolError::Interrupted(sig),
+                    None => PoolError::Died(k),
+                });
+            };
             let reply: RolloutReply =
                 serde_json::from_str(&line).map_err(|e| PoolError::Reply(e.to_string()))?;
             let index = reply.index;
