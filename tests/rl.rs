@@ -9,6 +9,7 @@ use std::sync::Arc;
 use bkpbs::config::Config;
 use bkpbs::controller::rl_ppo::Choice;
 use bkpbs::policy::model_file;
+use bkpbs::train::ppo::env::Agents;
 use bkpbs::train::ppo::reward::RewardSettings;
 use bkpbs::train::ppo::rollout::{self, RolloutStats};
 use common::{bkpbs, stderr};
@@ -24,7 +25,14 @@ fn totals(choice: impl Fn(u64) -> Choice) -> RolloutStats {
         c.scenario.alpha = alpha;
         c.scenario.lambda = lambda;
         c.scenario.seed = seed;
-        let r = rollout::run(&c, net.clone(), choice(seed), &RewardSettings::default()).unwrap();
+        let r = rollout::run(
+            &c,
+            net.clone(),
+            choice(seed),
+            &RewardSettings::default(),
+            Agents::AllCavs,
+        )
+        .unwrap();
         total.add(&r.stats);
     }
     total
@@ -190,4 +198,20 @@ fn interrupted_training_resumes_where_it_stopped() {
         std::fs::read(a.join("policy.json")).unwrap(),
         std::fs::read(b.join("policy.json")).unwrap()
     );
+}
+
+/// `--single-cav`: one CAV among HDVs per episode, as the paper trains: one decision per SUMO
+/// step at most, so an episode yields at most 400 environment steps.
+#[test]
+fn single_cav_training() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("single");
+    let mut args = train_args(out.to_str().unwrap(), "1");
+    args.push("--single-cav");
+    let o = bkpbs(&args);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let curve = std::fs::read_to_string(out.join("learning_curve.csv")).unwrap();
+    let row: Vec<&str> = curve.lines().nth(1).unwrap().split(',').collect();
+    let steps: u64 = row[1].parse().unwrap();
+    assert!((10..=400).contains(&steps), "{curve}");
 }

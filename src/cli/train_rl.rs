@@ -27,6 +27,10 @@ pub struct TrainRlArgs {
     /// Seed of the initial weights, the episodes and the sampling.
     #[arg(long, default_value_t = 1)]
     seed: u64,
+    /// Train with one CAV among HDVs per episode (the paper's "single CAV environment")
+    /// instead of every CAV acting with the shared policy; about one decision per SUMO step.
+    #[arg(long)]
+    single_cav: bool,
     /// SUMO episodes per PPO update.
     #[arg(long, default_value_t = 4)]
     episodes_per_update: usize,
@@ -76,6 +80,7 @@ impl TrainRlArgs {
                 steps: self.steps,
                 seed: self.seed,
                 episodes_per_update: self.episodes_per_update,
+                single_cav: self.single_cav,
                 ..TrainSettings::default()
             },
             config,

@@ -283,8 +283,9 @@ impl Drop for MergeEnv {
     }
 }
 
-/// The demand of the episode: as drawn, or with one agent CAV among HDVs.
-fn agent_demand(config: &Config, agents: Agents) -> Vec<PlannedVehicle> {
+/// The demand of the episode: as drawn, or with one agent CAV among HDVs (the first CAV
+/// inserted after a 10 s warm-up; every other vehicle an HDV).
+pub fn agent_demand(config: &Config, agents: Agents) -> Vec<PlannedVehicle> {
     let mut demand = episode::demand::generate(config);
     if agents == Agents::Single {
         const WARMUP_S: f64 = 10.0;

@@ -35,6 +35,7 @@ pub fn compare(
                     _ => Acting::Idle,
                 },
                 reward: reward.clone(),
+                single_cav: false,
             })
             .collect();
         let mut total = RolloutStats::default();

@@ -11,6 +11,7 @@ use std::sync::Arc;
 
 use serde::{Deserialize, Serialize};
 
+use super::env::{agent_demand, Agents};
 use super::reward::RewardSettings;
 use super::{Segment, Step};
 use crate::config::Config;
@@ -72,8 +73,9 @@ pub struct Rollout {
     pub stats: RolloutStats,
 }
 
-/// Runs the episode `config` describes with every CAV choosing by `choice` from `net`, and
-/// returns its experience (segments only when sampling: PPO trains on-policy).
+/// Runs the episode `config` describes with its CAVs (every one, or the one of
+/// [`Agents::Single`] among HDVs) choosing by `choice` from `net`, and returns its experience
+/// (segments only when sampling: PPO trains on-policy).
 ///
 /// # Errors
 /// SUMO failing, or an invalid configuration.
@@ -82,11 +84,12 @@ pub fn run(
     net: Arc<ActorCritic>,
     choice: Choice,
     reward: &RewardSettings,
+    agents: Agents,
 ) -> Result<Rollout, EpisodeError> {
     config.validate()?;
     let keep_segments = matches!(choice, Choice::Sample(_));
     let mut ctl = RlPpo::new(config, net, choice, true);
-    let demand = episode::demand::generate(config);
+    let demand = agent_demand(config, agents);
     let result = episode::run_observed(config, Driver::Given(&mut ctl), &demand, &mut NoObserver)?;
     let outcomes: HashMap<&str, Outcome> = result
         .vehicles

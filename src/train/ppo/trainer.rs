@@ -38,6 +38,9 @@ pub struct TrainSettings {
     pub seed_base: u64,
     pub ppo: PpoSettings,
     pub reward: RewardSettings,
+    /// Train with one CAV among HDVs per episode (the paper's set-up) instead of every CAV.
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub single_cav: bool,
 }
 
 impl Default for TrainSettings {
@@ -51,6 +54,7 @@ impl Default for TrainSettings {
             seed_base: 1_000_000,
             ppo: PpoSettings::default(),
             reward: RewardSettings::default(),
+            single_cav: false,
         }
     }
 }
@@ -200,6 +204,7 @@ pub fn requests(ck: &Checkpoint, u: u64, policy: &Path) -> Vec<RolloutRequest> {
                 policy: policy.to_path_buf(),
                 acting: Acting::Sample(mix(s.seed, g)),
                 reward: s.reward.clone(),
+                single_cav: s.single_cav,
             }
         })
         .collect()

@@ -16,6 +16,7 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
+use super::env::Agents;
 use super::reward::RewardSettings;
 use super::rollout::{self, Rollout};
 use crate::config::Config;
@@ -31,6 +32,9 @@ pub struct RolloutRequest {
     pub policy: PathBuf,
     pub acting: Acting,
     pub reward: RewardSettings,
+    /// One CAV among HDVs (the paper's training set-up) instead of every CAV.
+    #[serde(default)]
+    pub single_cav: bool,
 }
 
 /// How the CAVs of a rollout choose.
@@ -113,8 +117,19 @@ fn serve_one(req: &RolloutRequest) -> Result<Rollout, String> {
     let net = PolicyFile::read(&req.policy)
         .map_err(|e| e.to_string())?
         .networks();
-    rollout::run(&req.config, Arc::new(net), req.acting.choice(), &req.reward)
-        .map_err(|e| e.to_string())
+    let agents = if req.single_cav {
+        Agents::Single
+    } else {
+        Agents::AllCavs
+    };
+    rollout::run(
+        &req.config,
+        Arc::new(net),
+        req.acting.choice(),
+        &req.reward,
+        agents,
+    )
+    .map_err(|e| e.to_string())
 }
 
 struct Worker {
