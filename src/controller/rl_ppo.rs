@@ -147,7 +147,6 @@ impl Executor {
 /// The RL-PPO controller.
 pub struct RlPpo {
     net: Arc<ActorCritic>,
-    rules: Rules,
     choice: Choice,
     executor: Executor,
     record: Option<Record>,
@@ -160,7 +159,6 @@ impl RlPpo {
     pub fn new(config: &Config, net: Arc<ActorCritic>, choice: Choice, record: bool) -> Self {
         RlPpo {
             net,
-            rules: Rules::from_config(config),
             choice,
             executor: Executor::new(config),
             record: record.then(Record::default),
@@ -204,7 +202,7 @@ impl RlPpo {
                 scene,
                 i,
                 ongoing,
-                self.rules.v_max,
+                self.executor.rules.v_max,
                 obs.column_mut(col).as_mut_slice(),
             );
             changing.push(ongoing);
@@ -238,7 +236,7 @@ impl Controller for RlPpo {
         };
         for (col, &i) in cavs.iter().enumerate() {
             let v = &scene.vehicles[i];
-            let mask = self.rules.mask(scene, i);
+            let mask = self.executor.rules.mask(scene, i);
             let log_probs = masked_log_softmax(logits.column(col).as_slice(), &mask);
             let forced = changing[col];
             let action = if forced {

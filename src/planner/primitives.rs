@@ -49,6 +49,17 @@ impl Primitive {
         }
     }
 
+    /// The longitudinal acceleration the primitive holds, given the library's three magnitudes
+    /// (positive): lane changes keep the speed, as SUMO executes them.
+    pub fn acceleration(self, accel: f64, decel: f64, emergency_decel: f64) -> f64 {
+        match self {
+            Primitive::Accelerate => accel,
+            Primitive::Idle | Primitive::LaneChangeLeft | Primitive::LaneChangeRight => 0.0,
+            Primitive::Decelerate => -decel,
+            Primitive::EmergencyBrake => -emergency_decel,
+        }
+    }
+
     pub fn is_lane_change(self) -> bool {
         self.lane_offset() != 0
     }
@@ -213,12 +224,7 @@ impl Library {
 
     /// Longitudinal acceleration of the primitive.
     pub fn accel_of(&self, p: Primitive) -> f64 {
-        match p {
-            Primitive::Accelerate => self.accel,
-            Primitive::Idle | Primitive::LaneChangeLeft | Primitive::LaneChangeRight => 0.0,
-            Primitive::Decelerate => -self.decel,
-            Primitive::EmergencyBrake => -self.emergency_decel,
-        }
+        p.acceleration(self.accel, self.decel, self.emergency_decel)
     }
 
     /// Whether the primitive can start from `state`: a lane change needs the bicycle's minimum

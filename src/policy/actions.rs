@@ -69,12 +69,8 @@ impl Rules {
     /// [`Primitive::ALL`]) from `speed`: its acceleration held for one step, within
     /// [0, v_max]. Lane changes keep the speed, as the planners' lane-change primitive does.
     pub fn next_speed(&self, action: usize, speed: f64) -> f64 {
-        let accel = match Primitive::ALL[action] {
-            Primitive::Accelerate => self.accel,
-            Primitive::Decelerate => -self.decel,
-            Primitive::EmergencyBrake => -self.emergency_decel,
-            _ => 0.0,
-        };
+        let accel =
+            Primitive::ALL[action].acceleration(self.accel, self.decel, self.emergency_decel);
         (speed + accel * self.dt).clamp(0.0, self.v_max)
     }
 }

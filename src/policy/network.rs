@@ -6,7 +6,7 @@ use nalgebra::DMatrix;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
-use super::actions::{Mask, ACTIONS};
+use super::actions::ACTIONS;
 use super::mlp::{Activations, Mlp};
 use super::observation::OBS_DIM;
 
@@ -106,9 +106,6 @@ pub fn sample(log_probs: &[f32], u: f64) -> usize {
     last
 }
 
-/// A mask allowing every action.
-pub const ALL_ALLOWED: Mask = [true; ACTIONS];
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -130,7 +127,7 @@ mod tests {
         let obs = DMatrix::from_element(OBS_DIM, 2, 0.5f32);
         let mut a = Activations::default();
         let l = ac.logits(&obs, &mut a);
-        let lp = masked_log_softmax(l.column(0).as_slice(), &ALL_ALLOWED);
+        let lp = masked_log_softmax(l.column(0).as_slice(), &[true; ACTIONS]);
         for x in lp {
             assert!((x.exp() - 1.0 / 6.0).abs() < 0.02, "{x}");
         }
