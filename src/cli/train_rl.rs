@@ -184,16 +184,7 @@ fn evaluate_policy(
     pool: &mut Pool,
 ) -> Result<Vec<(&'static str, RolloutStats)>> {
     let s = &ck.settings;
-    let configs: Vec<Config> = (0..t.eval_episodes)
-        .map(|k| {
-            let mut c = ck.config.clone();
-            c.scenario.alpha = s.alphas[(k % s.alphas.len() as u64) as usize];
-            c.scenario.lambda =
-                s.lambdas[((k / s.alphas.len() as u64) % s.lambdas.len() as u64) as usize];
-            c.scenario.seed = k;
-            c
-        })
-        .collect();
+    let configs: Vec<Config> = (0..t.eval_episodes).map(|k| ck.episode(k, k)).collect();
     let rows = evaluate::compare(pool, &t.files.policy(), &configs, &s.reward)?;
     let text = evaluation_csv(&rows);
     bkpbs::io::write_atomic(&t.files.dir.join("evaluation.csv"), text.as_bytes())?;

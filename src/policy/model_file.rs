@@ -158,10 +158,7 @@ impl PolicyFile {
 
     /// The networks.
     pub fn networks(&self) -> ActorCritic {
-        let mut net = ActorCritic::new(0);
-        net.actor_params.clone_from(&self.actor);
-        net.critic_params.clone_from(&self.critic);
-        net
+        ActorCritic::with_params(self.actor.clone(), self.critic.clone())
     }
 }
 

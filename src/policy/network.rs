@@ -42,6 +42,17 @@ impl ActorCritic {
         Self::with_shape(OBS_DIM, &HIDDEN, ACTIONS, seed)
     }
 
+    /// The merge-scenario networks with given weights (checked for length by the caller: the
+    /// policy file's loader, a checkpoint of this build).
+    pub fn with_params(actor_params: Vec<f32>, critic_params: Vec<f32>) -> Self {
+        ActorCritic {
+            actor: Mlp::new(OBS_DIM, &HIDDEN, ACTIONS),
+            critic: Mlp::new(OBS_DIM, &HIDDEN, 1),
+            actor_params,
+            critic_params,
+        }
+    }
+
     /// Logits (actions × n) of the batch `obs` (obs_dim × n).
     pub fn logits(&self, obs: &DMatrix<f32>, act: &mut Activations) -> DMatrix<f32> {
         self.actor.forward(&self.actor_params, obs, act);

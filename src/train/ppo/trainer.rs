@@ -95,10 +95,19 @@ pub struct Checkpoint {
 impl Checkpoint {
     /// The networks with the checkpoint's weights.
     pub fn networks(&self) -> ActorCritic {
-        let mut net = ActorCritic::new(0);
-        net.actor_params.clone_from(&self.actor);
-        net.critic_params.clone_from(&self.critic);
-        net
+        ActorCritic::with_params(self.actor.clone(), self.critic.clone())
+    }
+
+    /// Episode number `k` of a sequence (training or evaluation) with demand seed `seed`: α and
+    /// λ cycled over the settings' grid, α fastest.
+    pub fn episode(&self, k: u64, seed: u64) -> Config {
+        let s = &self.settings;
+        let (na, nl) = (s.alphas.len() as u64, s.lambdas.len() as u64);
+        let mut c = self.config.clone();
+        c.scenario.alpha = s.alphas[(k % na) as usize];
+        c.scenario.lambda = s.lambdas[((k / na) % nl) as usize];
+        c.scenario.seed = seed;
+        c
     }
 }
 
@@ -165,6 +174,12 @@ pub fn start_or_resume(
         if ck.format != CHECKPOINT_FORMAT {
             return Err(bad(format!("format '{}'", ck.format)));
         }
+        let shape = ActorCritic::new(0);
+        if ck.actor.len() != shape.actor.n_params || ck.critic.len() != shape.critic.n_params {
+            return Err(bad(
+                "its networks have other shapes than this build's".into()
+            ));
+        }
         ck.settings.steps = settings.steps; // the budget may be extended
         if ck.settings != settings || ck.config != config {
             return Err(TrainError::OtherSettings(path));
@@ -193,14 +208,9 @@ pub fn requests(ck: &Checkpoint, u: u64, policy: &Path) -> Vec<RolloutRequest> {
     (0..s.episodes_per_update)
         .map(|j| {
             let g = u * s.episodes_per_update as u64 + j as u64;
-            let mut config = ck.config.clone();
-            config.scenario.alpha = s.alphas[(g % s.alphas.len() as u64) as usize];
-            config.scenario.lambda =
-                s.lambdas[((g / s.alphas.len() as u64) % s.lambdas.len() as u64) as usize];
-            config.scenario.seed = s.seed_base + g;
             RolloutRequest {
                 index: j,
-                config,
+                config: ck.episode(g, s.seed_base + g),
                 policy: policy.to_path_buf(),
                 acting: Acting::Sample(mix(s.seed, g)),
                 reward: s.reward.clone(),
