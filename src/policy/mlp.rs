@@ -53,10 +53,6 @@ impl Mlp {
         self.layers[0].cols
     }
 
-    pub fn outputs(&self) -> usize {
-        self.layers.last().map_or(0, |d| d.rows)
-    }
-
     /// Glorot-uniform weights, zero biases; the output layer's weights scaled by `out_gain`
     /// (a small gain starts a policy near uniform, as PPO implementations do).
     pub fn init(&self, rng: &mut impl Rng, out_gain: f32) -> Vec<f32> {
@@ -160,6 +156,6 @@ mod tests {
     fn shapes_and_parameter_count() {
         let mlp = Mlp::new(74, &[256, 256], 6);
         assert_eq!(mlp.n_params, 74 * 256 + 256 + 256 * 256 + 256 + 256 * 6 + 6);
-        assert_eq!((mlp.inputs(), mlp.outputs()), (74, 6));
+        assert_eq!((mlp.inputs(), mlp.layers[2].rows), (74, 6));
     }
 }

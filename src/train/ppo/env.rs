@@ -153,10 +153,6 @@ impl MergeEnv {
         self.scene.as_ref()
     }
 
-    pub fn is_done(&self) -> bool {
-        self.done
-    }
-
     /// The finished episode's results (metrics, vehicles), once done.
     pub fn result(&self) -> Option<&EpisodeResult> {
         self.result.as_ref()
