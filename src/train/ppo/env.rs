@@ -247,6 +247,9 @@ impl MergeEnv {
                 let r = self.reward.step(n.speed, n.merge_progress, changed);
                 out.rewards.push((id, r));
             } else {
+                // It left (arrived) or the episode ended: the state after the step is unknown,
+                // so the step is scored on the state before it. (The Rust trainer instead drops
+                // such a last step and bootstraps from its value; a Gymnasium step needs a reward.)
                 let r = self.reward.step(prev.speed, prev.merge_progress, changed);
                 out.rewards.push((id.clone(), r));
                 out.truncated.push(id);
