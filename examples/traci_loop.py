@@ -87,7 +87,7 @@ def sumo_command(args: argparse.Namespace, files: Dict[str, Any]) -> List[str]:
 
 def run(args: argparse.Namespace, sumo: Any, files: Dict[str, Any]) -> Dict[str, float]:
     """The TraCI loop; returns counts and seconds spent per phase."""
-    controller = bkpbs.Controller(args.planner)
+    controller = bkpbs.Controller(args.planner, net_file=args.net)
     dt = files["dt"]
     clock = time.perf_counter
     t = {"sumo": 0.0, "read": 0.0, "plan": 0.0, "apply": 0.0}
@@ -134,9 +134,15 @@ def run(args: argparse.Namespace, sumo: Any, files: Dict[str, Any]) -> Dict[str,
     }
 
 
+def net_override(args: argparse.Namespace) -> Dict[str, Any]:
+    """The configuration override of ``--net``, if given."""
+    return {"net_file": os.path.abspath(args.net)} if args.net else {}
+
+
 def rust_timing(args: argparse.Namespace, out: str) -> Dict[str, float]:
     """The same episode in bkpbs's Rust runner; its timing.csv."""
-    bkpbs.run_episode(args.planner, args.alpha, args.lam, args.seed, steps=args.steps, out=out)
+    bkpbs.run_episode(args.planner, args.alpha, args.lam, args.seed, steps=args.steps, out=out,
+                      **net_override(args))
     with open(os.path.join(out, "timing.csv"), newline="") as f:
         return {k: float(v) for k, v in next(csv.DictReader(f)).items()}
 
@@ -151,6 +157,8 @@ def main() -> int:
     p.add_argument("--libsumo", action="store_true", help="libsumo in-process instead of traci")
     p.add_argument("--timing", action="store_true", help="per-step costs vs the Rust runner")
     p.add_argument("--files", help="directory for the scenario files (default: temporary)")
+    p.add_argument("--net", metavar="FILE",
+                   help="a SUMO merge network of your own (default: the shipped one)")
     p.add_argument("--gui", action="store_true", help="show the run in sumo-gui (traci only)")
     p.add_argument("--gui-delay", type=float, metavar="MS",
                    help="sumo-gui's pause per step (default: real time); implies --gui")
@@ -165,7 +173,8 @@ def main() -> int:
     sumo = import_sumo(args.libsumo)
     with tempfile.TemporaryDirectory(prefix="bkpbs-traci-") as tmp:
         files = bkpbs.write_scenario(
-            args.files or tmp, args.alpha, args.lam, args.seed, steps=args.steps
+            args.files or tmp, args.alpha, args.lam, args.seed, steps=args.steps,
+            **net_override(args)
         )
         r = run(args, sumo, files)
         print(

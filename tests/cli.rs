@@ -232,7 +232,7 @@ fn sumo_s_own_reason_is_in_the_error_and_its_output_is_kept() {
     let out = d.path().join("garbage");
     let o = episode_into(&out, &["--net", net.to_str().unwrap(), "--steps", "5"]);
     assert_clear_failure(&o, "garbage.net.xml", &out);
-    assert!(stderr(&o).contains("SUMO said:"), "{}", stderr(&o));
+    assert!(stderr(&o).contains("not valid XML"), "{}", stderr(&o));
 }
 
 #[test]
@@ -275,13 +275,31 @@ fn missing_net_file_is_refused() {
 #[test]
 fn a_net_without_the_merge_layout_is_refused() {
     let d = tmp();
+    // Other edge ids are fine: the layout is found, not named.
     let net = d.path().join("other.net.xml");
-    let text = bkpbs::model::road::EMBEDDED_NET.replace("\"acc\"", "\"acceleration\"");
+    let text = bkpbs::model::road::EMBEDDED_NET
+        .replace("\"acc\"", "\"acceleration\"")
+        .replace("acc_", "acceleration_");
     std::fs::write(&net, text).unwrap();
     let out = d.path().join("out");
+    let o = episode_into(&out, &["--net", net.to_str().unwrap(), "--steps", "50"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    // A two-way road is no merge: one line, before SUMO starts.
+    let net = d.path().join("two-way.net.xml");
+    std::fs::write(
+        &net,
+        r#"<net><edge id="east"><lane id="east_0" index="0" length="100" shape="0,0 100,0"/></edge>
+           <edge id="west"><lane id="west_0" index="0" length="100" shape="100,5 0,5"/></edge></net>"#,
+    )
+    .unwrap();
+    let out = d.path().join("two-way");
     let o = episode_into(&out, &["--net", net.to_str().unwrap()]);
-    assert_clear_failure(&o, "other.net.xml", &out);
-    assert!(stderr(&o).contains("'acc'"), "{}", stderr(&o));
+    assert_clear_failure(&o, "two-way.net.xml", &out);
+    assert!(
+        stderr(&o).contains("not a one-way carriageway with merges"),
+        "{}",
+        stderr(&o)
+    );
 }
 
 #[test]

@@ -107,6 +107,7 @@ fn planned(id: &str, kind: Kind, depart: f64, speed: f64) -> PlannedVehicle {
         id: id.into(),
         kind,
         origin: Origin::Main,
+        entry: 0,
         depart,
         depart_lane: 0,
         depart_speed: speed,

@@ -1,13 +1,17 @@
 //! The merge network, read back through libsumo (real SUMO, in-process).
 
+mod common;
+
 use bkpbs::config::Config;
 use bkpbs::sumo::files::EpisodeInput;
+use bkpbs::sumo::frame::embedded_road;
 use bkpbs::sumo::Simulation;
+use common::netconvert_net;
 
 #[test]
 fn net_has_the_papers_geometry() {
     let config = Config::default();
-    let input = EpisodeInput::write(&config).unwrap();
+    let input = EpisodeInput::write(&config, &embedded_road()).unwrap();
     let sim = Simulation::start(&input.command_line(&config)).unwrap();
     // Lane counts per edge.
     for (edge, lanes) in [("main_in", 2), ("ramp", 1), ("acc", 3), ("main_out", 2)] {
@@ -28,9 +32,10 @@ fn net_has_the_papers_geometry() {
     assert!((len("main_in_0") + len("acc_1") + len("main_out_0") - 460.0).abs() < 1e-6);
     assert!((len("acc_0") - 180.0).abs() < 1e-6);
     // The main road is straight along x: lane shapes run at constant y, starting where s says.
-    let road = bkpbs::sumo::frame::road_from_simulation(&sim).unwrap();
+    let road = embedded_road();
+    let zone = road.zones[0];
     assert_eq!(
-        (road.merge_start, road.merge_end, road.section_end),
+        (zone.start, zone.end, road.section_end),
         (150.0, 330.0, 460.0)
     );
     for (edge, s0) in [("main_in", 0.0), ("acc", 150.0), ("main_out", 330.0)] {
@@ -48,12 +53,9 @@ fn net_has_the_papers_geometry() {
     // The acceleration lane leads nowhere: its shape ends at the merge end, and main_out, the
     // only edge after it, has no lane in the frame lane it would continue.
     let acc = sim.lane_shape("acc_0").unwrap();
-    assert!(
-        (acc.last().unwrap().0 - road.merge_end).abs() < 1e-6,
-        "{acc:?}"
-    );
+    assert!((acc.last().unwrap().0 - zone.end).abs() < 1e-6, "{acc:?}");
     assert!(!road
-        .lanes_at(road.merge_end)
+        .lanes_at(zone.end)
         .contains(&bkpbs::model::road::MERGE_LANE));
     let out_lanes = sim.edge_lane_count("main_out").unwrap();
     assert_eq!(out_lanes, 2, "main_out carries only the two main lanes");
@@ -78,7 +80,7 @@ fn start_close_start_in_one_process_reproduces_the_run() {
 #[test]
 fn a_second_simulation_in_the_same_thread_is_refused() {
     let config = Config::default();
-    let input = EpisodeInput::write(&config).unwrap();
+    let input = EpisodeInput::write(&config, &embedded_road()).unwrap();
     let sim = Simulation::start(&input.command_line(&config)).unwrap();
     let err = Simulation::start(&input.command_line(&config))
         .err()
@@ -90,7 +92,7 @@ fn a_second_simulation_in_the_same_thread_is_refused() {
 #[test]
 fn sumo_errors_carry_sumos_message() {
     let config = Config::default();
-    let input = EpisodeInput::write(&config).unwrap();
+    let input = EpisodeInput::write(&config, &embedded_road()).unwrap();
     let mut sim = Simulation::start(&input.command_line(&config)).unwrap();
     let err = sim
         .set_speed("no-such-vehicle", 3.0)
@@ -101,117 +103,6 @@ fn sumo_errors_carry_sumos_message() {
         "{err}"
     );
     sim.close().unwrap();
-}
-
-/// A merge network with `main_lanes` lanes, one on-ramp per entry of `ramps_at` (x of the
-/// merge), edge ids of its own, straight or bending (a gentle arc through the middle), built
-/// by netconvert with its defaults (internal lanes) in `dir`.
-fn netconvert_net(
-    dir: &std::path::Path,
-    main_lanes: u32,
-    ramps_at: &[f64],
-    curved: bool,
-) -> std::path::PathBuf {
-    let y = |x: f64| {
-        if curved {
-            0.0004 * (x - 300.0).powi(2)
-        } else {
-            0.0
-        }
-    };
-    let mut nodes = String::from("<nodes>\n<node id=\"start\" x=\"0\" y=\"0\"/>\n");
-    let mut edges = String::from("<edges>\n");
-    let mut cons = String::from("<connections>\n");
-    let mut from = "start".to_string();
-    let mut prev: Option<String> = None;
-    let shape = |x0: f64, x1: f64| {
-        (0..=10)
-            .map(|k| {
-                let x = x0 + (x1 - x0) * k as f64 / 10.0;
-                format!("{x:.2},{:.2}", y(x))
-            })
-            .collect::<Vec<_>>()
-            .join(" ")
-    };
-    let mut x = 0.0;
-    for (k, &xm) in ramps_at.iter().enumerate() {
-        let (a, m) = (format!("j{k}a"), format!("j{k}b"));
-        nodes += &format!(
-            "<node id=\"{a}\" x=\"{xm}\" y=\"{:.2}\"/>\n<node id=\"{m}\" x=\"{}\" y=\"{:.2}\"/>\n",
-            y(xm),
-            xm + 200.0,
-            y(xm + 200.0)
-        );
-        nodes += &format!(
-            "<node id=\"r{k}\" x=\"{}\" y=\"{:.2}\"/>\n",
-            xm - 150.0,
-            y(xm) - 60.0
-        );
-        let before = format!("road{k}");
-        edges += &format!("<edge id=\"{before}\" from=\"{from}\" to=\"{a}\" numLanes=\"{main_lanes}\" speed=\"35\" width=\"3.6\" shape=\"{}\"/>\n", shape(x, xm));
-        edges += &format!("<edge id=\"merge{k}\" from=\"{a}\" to=\"{m}\" numLanes=\"{}\" speed=\"35\" width=\"3.6\" shape=\"{}\"/>\n", main_lanes + 1, shape(xm, xm + 200.0));
-        edges += &format!("<edge id=\"entry{k}\" from=\"r{k}\" to=\"{a}\" numLanes=\"1\" speed=\"30\" width=\"3.6\"/>\n");
-        if let Some(p) = &prev {
-            for i in 0..main_lanes {
-                cons += &format!(
-                    "<connection from=\"{p}\" to=\"{before}\" fromLane=\"{}\" toLane=\"{i}\"/>\n",
-                    i + 1
-                );
-            }
-        }
-        for i in 0..main_lanes {
-            cons += &format!(
-                "<connection from=\"{before}\" to=\"merge{k}\" fromLane=\"{i}\" toLane=\"{}\"/>\n",
-                i + 1
-            );
-        }
-        cons += &format!(
-            "<connection from=\"entry{k}\" to=\"merge{k}\" fromLane=\"0\" toLane=\"0\"/>\n"
-        );
-        prev = Some(format!("merge{k}"));
-        from = m;
-        x = xm + 200.0;
-    }
-    nodes += &format!(
-        "<node id=\"end\" x=\"{}\" y=\"{:.2}\"/>\n</nodes>\n",
-        x + 200.0,
-        y(x + 200.0)
-    );
-    edges += &format!("<edge id=\"tail\" from=\"{from}\" to=\"end\" numLanes=\"{main_lanes}\" speed=\"35\" width=\"3.6\" shape=\"{}\"/>\n</edges>\n", shape(x, x + 200.0));
-    for i in 0..main_lanes {
-        cons += &format!(
-            "<connection from=\"{}\" to=\"tail\" fromLane=\"{}\" toLane=\"{i}\"/>\n",
-            prev.as_ref().unwrap(),
-            i + 1
-        );
-    }
-    cons += "</connections>\n";
-    for (name, text) in [
-        ("n.nod.xml", &nodes),
-        ("n.edg.xml", &edges),
-        ("n.con.xml", &cons),
-    ] {
-        std::fs::write(dir.join(name), text).unwrap();
-    }
-    let out = dir.join("n.net.xml");
-    let status = std::process::Command::new("netconvert")
-        .current_dir(dir)
-        .args([
-            "--node-files",
-            "n.nod.xml",
-            "--edge-files",
-            "n.edg.xml",
-            "--connection-files",
-            "n.con.xml",
-            "--output-file",
-            "n.net.xml",
-        ])
-        .stdout(std::process::Stdio::null())
-        .stderr(std::process::Stdio::null())
-        .status()
-        .unwrap();
-    assert!(status.success(), "netconvert failed on {}", dir.display());
-    out
 }
 
 /// Nets the test writes itself, with other edge ids, straight and curved, 2–4 main lanes, one

@@ -131,6 +131,7 @@ fn sumo_executes_every_primitive_as_the_planner_rolls_it_out() {
         id: "main.0".into(),
         kind: Kind::Cav,
         origin: Origin::Main,
+        entry: 0,
         depart: 0.0,
         depart_lane: 0,
         depart_speed: 25.0,

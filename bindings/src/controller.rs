@@ -46,7 +46,8 @@ impl PyManeuver {
 
 /// A core planner driven one step at a time by the caller.
 ///
-/// The road frame is that of the shipped merge network (`Road::paper_default`).
+/// The road frame is read from the network the configuration names (`net_file=`, or
+/// `scenario.net_file`), else it is that of the shipped merge network.
 #[pyclass(name = "Controller", module = "bkpbs", unsendable)]
 pub struct PyController {
     inner: Box<dyn Controller>,
@@ -59,21 +60,31 @@ pub struct PyController {
     commands: Vec<Command>,
 }
 
-/// Builds the core controller `planner` for `config`.
-fn build(planner: &str, config: &Config) -> PyResult<Box<dyn Controller>> {
-    controller::by_name(planner, config, &Road::paper_default()).map_err(bad_input)
+/// Builds the core controller `planner` for `config` on `road`.
+fn build(planner: &str, config: &Config, road: &Road) -> PyResult<Box<dyn Controller>> {
+    controller::by_name(planner, config, road).map_err(bad_input)
+}
+
+/// The road of `config`'s network, `net_file` (when given) replacing the configured one.
+pub fn road_of(config: &mut Config, net_file: Option<std::path::PathBuf>) -> PyResult<Road> {
+    if net_file.is_some() {
+        config.scenario.net_file = net_file;
+    }
+    frame::scenario_road(&config.scenario).map_err(bad_input)
 }
 
 #[pymethods]
 impl PyController {
     /// Builds planner `planner` (one of `bkpbs.PLANNERS`) with the configuration `config` (a
-    /// dict, TOML text or a TOML file) and keyword overrides; `model` is a predictor model file.
+    /// dict, TOML text or a TOML file) and keyword overrides; `model` is a predictor model file;
+    /// `net_file` the SUMO network the caller's loop runs (default: the shipped merge network).
     #[new]
-    #[pyo3(signature = (planner = "bk-pbs", config = None, model = None, **overrides))]
+    #[pyo3(signature = (planner = "bk-pbs", config = None, model = None, net_file = None, **overrides))]
     fn new(
         planner: &str,
         config: Option<&Bound<'_, PyAny>>,
         model: Option<std::path::PathBuf>,
+        net_file: Option<std::path::PathBuf>,
         overrides: Option<&Bound<'_, PyDict>>,
     ) -> PyResult<Self> {
         if !PLANNERS.contains(&planner) {
@@ -83,10 +94,11 @@ impl PyController {
         if let Some(path) = model {
             crate::predict::use_model(&mut config, &path)?;
         }
+        let road = road_of(&mut config, net_file)?;
         Ok(PyController {
-            inner: build(planner, &config)?,
+            inner: build(planner, &config, &road)?,
             config,
-            road: Road::paper_default(),
+            road,
             origins: HashMap::new(),
             calls: 0,
             commands: Vec::new(),

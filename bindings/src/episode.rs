@@ -172,8 +172,9 @@ pub fn write_demand(
     overrides: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<usize> {
     let config = crate::config::resolve(config, overrides, cell_table(alpha, lam, seed)?)?;
-    let planned = demand::generate(&config);
-    write(&out, &demand::route_file(&planned))?;
+    let road = bkpbs::sumo::frame::scenario_road(&config.scenario).map_err(bad_input)?;
+    let planned = demand::generate(&config, &road);
+    write(&out, &demand::route_file(&road, &planned))?;
     Ok(planned.len())
 }
 
@@ -206,8 +207,9 @@ pub fn write_scenario<'py>(
     let vtypes = dir.join("vtypes.add.xml");
     write(&vtypes, &files::vehicle_types(&config))?;
     let routes = dir.join("demand.rou.xml");
-    let planned = demand::generate(&config);
-    write(&routes, &demand::route_file(&planned))?;
+    let road = bkpbs::sumo::frame::scenario_road(&config.scenario).map_err(bad_input)?;
+    let planned = demand::generate(&config, &road);
+    write(&routes, &demand::route_file(&road, &planned))?;
     let d = PyDict::new(py);
     d.set_item(
         "sumo_args",

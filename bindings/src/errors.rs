@@ -7,7 +7,6 @@ use pyo3::prelude::*;
 
 use bkpbs::episode::EpisodeError;
 use bkpbs::sumo::files::InputError;
-use bkpbs::sumo::frame::NetworkError;
 
 pyo3::create_exception!(
     bkpbs,
@@ -46,14 +45,13 @@ pub fn episode_error(e: &EpisodeError) -> PyErr {
         | EpisodeError::NoGui(_)
         | EpisodeError::Controller(_)
         | EpisodeError::Input(InputError::MissingNet(_))
-        | EpisodeError::Road(NetworkError::Shape(_)) => BkpbsError::new_err(message),
+        | EpisodeError::Road(_) => BkpbsError::new_err(message),
         EpisodeError::Input(InputError::Write { .. }) => PyOSError::new_err(message),
         // Only the bkpbs binary takes stop signals as requests; kept exhaustive all the same.
         EpisodeError::Interrupted { .. } => PyKeyboardInterrupt::new_err(message),
-        EpisodeError::Start { .. }
-        | EpisodeError::Step { .. }
-        | EpisodeError::Road(_)
-        | EpisodeError::Sumo { .. } => SumoError::new_err(message),
+        EpisodeError::Start { .. } | EpisodeError::Step { .. } | EpisodeError::Sumo { .. } => {
+            SumoError::new_err(message)
+        }
     }
 }
 

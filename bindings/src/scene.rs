@@ -68,7 +68,12 @@ impl<'py> Keys<'py> {
 }
 
 /// Reads vehicle number `i` of the caller's list.
-fn read_vehicle(i: usize, obj: &Bound<'_, PyAny>, keys: &Keys<'_>) -> PyResult<Reading> {
+fn read_vehicle(
+    i: usize,
+    obj: &Bound<'_, PyAny>,
+    keys: &Keys<'_>,
+    road: &Road,
+) -> PyResult<Reading> {
     let mut v = VehicleReader::open(i, obj, keys)?;
     let id = v.id()?;
     let type_id = v.string("type")?;
@@ -85,7 +90,7 @@ fn read_vehicle(i: usize, obj: &Bound<'_, PyAny>, keys: &Keys<'_>) -> PyResult<R
         lane_position: v.required_number("lane_position")?,
         lateral_offset: v.optional_number("lateral_offset")?.unwrap_or(0.0),
         lane_index,
-        edge_code: frame::edge_code(&road_id).unwrap_or(-1),
+        edge_code: frame::edge_code(road, &road_id).unwrap_or(-1),
     };
     v.reject_unknown_keys()?;
     Ok(Reading {
@@ -272,12 +277,12 @@ pub fn scene_of(
         .map_err(|_| bad_input("vehicles must be a list of dicts (or objects)"))?;
     let keys = Keys::new(vehicles.py());
     for (i, item) in list.enumerate() {
-        let r = read_vehicle(i, &item?, &keys)?;
+        let r = read_vehicle(i, &item?, &keys, road)?;
         let origin = r
             .origin
             .or_else(|| frame::origin_from_id(&r.id))
             .or_else(|| origins.get(&r.id).copied())
-            .unwrap_or_else(|| frame::origin_from_edge(r.raw.edge_code));
+            .unwrap_or_else(|| frame::origin_from_edge(road, r.raw.edge_code));
         let who = Identity {
             id: Arc::from(r.id.as_str()),
             kind: r.kind,

@@ -83,6 +83,20 @@ def test_ramp_cav_merges_left_onto_the_main_road():
     assert m["x"].lane_change == "left" and m["x"].sumo_lane_index == 1
 
 
+def test_controller_on_a_users_network():
+    # On three-lane, the acceleration lane is lane 0 of hw_merge (4 lanes): a ramp CAV near its
+    # end merges into SUMO lane 1 there; on the shipped network's frame the edge is unknown.
+    net = REPO / "sumo_net" / "three-lane.net.xml"
+    c = bkpbs.Controller("idm-mobil", net_file=net)
+    m = c.plan([vehicle("x", "cav", "hw_merge", 0, 200.0, 25.0, origin="ramp")])
+    assert m["x"].lane_change == "left" and m["x"].sumo_lane_index == 1
+    assert bkpbs.Controller("idm-mobil").plan(
+        [vehicle("x", "cav", "hw_merge", 0, 200.0, 25.0, origin="ramp")]
+    ) == {}
+    with pytest.raises(bkpbs.BkpbsError, match="no-such.net.xml"):
+        bkpbs.Controller("bk-pbs", net_file="no-such.net.xml")
+
+
 def test_same_scene_same_plan(scene):
     a = bkpbs.Controller("bk-pbs").plan(scene, time=1.0)
     b = bkpbs.Controller("bk-pbs").plan(scene, time=1.0)

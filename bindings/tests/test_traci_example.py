@@ -34,6 +34,14 @@ def test_traci_loop_short_episode(planner):
     assert departed > 0
 
 
+def test_traci_loop_on_another_network():
+    net = REPO / "sumo_net" / "three-lane.net.xml"
+    out = run_example("--planner", "bk-pbs", "--steps", "150", "--seed", "1", "--net", str(net))
+    assert "bk-pbs via traci" in out and " 0 collisions" in out
+    arrived = int(out.split(" arrived")[0].rsplit(" ", 1)[1])
+    assert arrived > 0, out
+
+
 def test_traci_loop_timing_against_the_rust_runner():
     out = run_example("--planner", "idm-mobil", "--steps", "50", "--timing")
     assert "per step (ms), traci loop" in out and "per step (ms), Rust runner" in out

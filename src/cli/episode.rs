@@ -112,7 +112,7 @@ pub fn run(e: Episode) -> Result<()> {
         )
     };
     let result = if e.trace {
-        let demand = episode::demand::generate(&e.config);
+        let demand = episode::demand::generate_for(&e.config)?;
         let mut tracer = Tracer::new(&e.config);
         let planner = Driver::Named(&e.planner);
         let result = episode::run_observed(&e.config, planner, &demand, &mut tracer)

@@ -342,6 +342,12 @@ pub struct PbsSettings {
     /// Wall-time budget per round (ms); 0 = off, the default, since it would make results depend
     /// on the machine's speed.
     pub time_budget_ms: f64,
+    /// Decompose each round into independent groups of agents, searched apart and in parallel
+    /// (independence detection over the root's conflicts; see `planner::pbs`), each with its own
+    /// node budget. Off (the default): one search over every agent, as in the paper. Written
+    /// into a campaign's settings only when on, so campaigns of earlier versions still match.
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub independent_groups: bool,
 }
 
 impl Default for PbsSettings {
@@ -349,6 +355,7 @@ impl Default for PbsSettings {
         PbsSettings {
             node_budget: 200,
             time_budget_ms: 0.0,
+            independent_groups: false,
         }
     }
 }

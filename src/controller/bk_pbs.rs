@@ -75,11 +75,18 @@ impl Controller for BkPbs {
         let mut stats = search_stats(&solution.stats);
         let mut starts = Vec::new();
         let mut beliefs = Vec::new();
+        // After a fallback, the CAVs still in conflict are repaired.
+        let conflicted = solution
+            .stats
+            .fallback
+            .then(|| problem.conflicted_agents(&solution.trajectories));
         for (i, v) in scene.vehicles.iter().enumerate() {
             if v.kind != Kind::Cav {
                 continue;
             }
-            let (plan, planned_by) = executed_plan(&problem, &solution, &requests, i, &mut stats);
+            let in_conflict = conflicted.as_ref().is_some_and(|c| c[i]);
+            let (plan, planned_by) =
+                executed_plan(&problem, &solution, &requests, i, in_conflict, &mut stats);
             let lane = self.lane_changes.planning_lane(scene, i, dt);
             let changing = self.lane_changes.ongoing(&v.id, now, dt).is_some();
             let source = execute::source_of(planned_by, plan.is_some(), changing);
@@ -150,6 +157,7 @@ impl BkPbs {
                 nodes: pbs.node_budget,
                 time_ms: (pbs.time_budget_ms > 0.0).then_some(pbs.time_budget_ms),
             },
+            independent_groups: pbs.independent_groups,
         }
     }
 }
@@ -169,18 +177,16 @@ fn search_stats(s: &PbsStats) -> PlanStats {
 }
 
 /// The plan CAV `i` executes and where it came from: the chosen node's, or a repair when the
-/// node left it without one or, after a fallback, still in conflict: planned alone against every
+/// node left it without one or, after a fallback, `in_conflict`: planned alone against every
 /// other trajectory of the node. `None` when even the repair finds no plan.
 fn executed_plan(
     problem: &Problem<'_>,
     solution: &Solution,
     requests: &SceneRequests<'_>,
     i: usize,
+    in_conflict: bool,
     stats: &mut PlanStats,
 ) -> (Option<Arc<Plan>>, Source) {
-    let n = problem.scene.vehicles.len();
-    let in_conflict = solution.stats.fallback
-        && (0..n).any(|j| j != i && problem.conflict_between(i, j, &solution.trajectories));
     if !in_conflict && solution.plans[i].is_some() {
         let source = if solution.stats.fallback {
             Source::PbsBestNode

@@ -73,8 +73,9 @@ pub fn constraint_ahead(
     let from_vehicle = new_leader
         .or_else(|| leader_index(scene, lane, me.s, skip))
         .map(|j| gap_to(me, &scene.vehicles[j]));
-    let lane_end = (lane == MERGE_LANE && me.front() < scene.road.merge_end).then(|| Leader {
-        gap: scene.road.merge_end - me.front() + me.speed * time_headway,
+    let end = scene.road.zone_ahead(me.front()).end;
+    let lane_end = (lane == MERGE_LANE && me.front() < end).then(|| Leader {
+        gap: end - me.front() + me.speed * time_headway,
         speed: 0.0,
     });
     match (from_vehicle, lane_end) {

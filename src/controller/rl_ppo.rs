@@ -78,8 +78,9 @@ impl Record {
 /// has driven; elsewhere `None`. The reward's merge-deadline term reads it.
 pub fn merge_progress(scene: &Scene, i: usize) -> Option<f64> {
     let v = &scene.vehicles[i];
-    let zone = scene.road.merge_end - scene.road.merge_start;
-    (v.lane == MERGE_LANE && !v.on_ramp).then(|| (v.front() - scene.road.merge_start) / zone)
+    let merge = scene.road.zone_ahead(v.front());
+    let zone = merge.end - merge.start;
+    (v.lane == MERGE_LANE && !v.on_ramp).then(|| (v.front() - merge.start) / zone)
 }
 
 /// Turns a chosen primitive into the command SUMO executes, and keeps the lane changes under

@@ -18,7 +18,7 @@
 
 use super::{CavBelief, CavHandling, Command, Controller, LaneChange, Maneuver, PlanStats, Source};
 use crate::config::Config;
-use crate::model::road::{FORCED_MERGE_ZONE, MAIN_LANES, MERGE_LANE};
+use crate::model::road::{FIRST_MAIN_LANE, FORCED_MERGE_ZONE, MERGE_LANE};
 use crate::model::scene::{Kind, Origin, Scene, VehicleState};
 use crate::planner::mastar::StartGuard;
 
@@ -100,7 +100,7 @@ fn on_acceleration_lane(v: &VehicleState) -> bool {
 /// assumed to merge at any moment: that assumption cost a fifth of the throughput and no
 /// collision it prevented was seen.
 pub fn may_merge(scene: &Scene, v: &VehicleState, horizon: f64, b: &Bounds) -> bool {
-    let zone = scene.road.merge_end - FORCED_MERGE_ZONE;
+    let zone = scene.road.zone_ahead(v.front()).end - FORCED_MERGE_ZONE;
     let can_stand_in_zone = || {
         farthest_stand(v.speed, horizon, b.hdv_accel, b.hdv_decel)
             .is_some_and(|reach| v.front() + reach >= zone)
@@ -122,7 +122,7 @@ fn farthest_stand(speed: f64, horizon: f64, accel: f64, decel: f64) -> Option<f6
 /// Lanes another vehicle may occupy within `horizon` seconds under the worst cases.
 fn lanes_of_other(scene: &Scene, v: &VehicleState, horizon: f64, b: &Bounds) -> u64 {
     let merge = if may_merge(scene, v, horizon, b) {
-        bit(MAIN_LANES[0])
+        bit(FIRST_MAIN_LANE)
     } else {
         0
     };
@@ -189,7 +189,7 @@ fn cav_motion(v: &VehicleState, m: &Maneuver, b: &Bounds) -> Motion {
 /// on it, else without limit.
 fn reach(scene: &Scene, v: &VehicleState) -> f64 {
     if v.lane == MERGE_LANE {
-        (scene.road.merge_end - v.front()).max(0.0)
+        (scene.road.zone_ahead(v.front()).end - v.front()).max(0.0)
     } else {
         f64::INFINITY
     }
@@ -210,7 +210,7 @@ fn clear_of_lane_end(scene: &Scene, v: &VehicleState, m: &Maneuver, b: &Bounds) 
     stays_clear(
         cav_motion(v, m, b),
         wall,
-        scene.road.merge_end - v.front(),
+        scene.road.zone_ahead(v.front()).end - v.front(),
         b,
     )
 }
@@ -231,11 +231,11 @@ pub fn clear_of_leaders(
     let motion = cav_motion(me, m, b);
     let into_lane_1 = m
         .lane_change
-        .is_some_and(|lc| me.lane + lc.offset() == MAIN_LANES[0]);
+        .is_some_and(|lc| me.lane + lc.offset() == FIRST_MAIN_LANE);
     let lanes_of = |j: usize, o: &VehicleState| {
         let entered = entering.get(j).copied().unwrap_or(0);
         let merging = if into_lane_1 && on_acceleration_lane(o) {
-            bit(MAIN_LANES[0])
+            bit(FIRST_MAIN_LANE)
         } else {
             0
         };
@@ -631,7 +631,7 @@ mod tests {
         assert!(may_merge(&scene, &ramp, 1.0, &b));
         // Creeping a metre short of the zone, it can be standing in it within a second; ten
         // metres short, not.
-        let zone = scene.road.merge_end - FORCED_MERGE_ZONE;
+        let zone = scene.road.zone_ahead(0.0).end - FORCED_MERGE_ZONE;
         let creeping = VehicleState::on_lane("r", Kind::Hdv, Origin::Ramp, zone - 3.5, 0, 0.1);
         assert!(may_merge(&scene, &creeping, 1.0, &b));
         let further = VehicleState::on_lane("r", Kind::Hdv, Origin::Ramp, zone - 12.5, 0, 0.1);

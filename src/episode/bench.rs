@@ -30,13 +30,14 @@ pub struct BenchRow {
 /// SUMO stepping the episode's demand (as a plain route file, inserted by SUMO itself) with
 /// nobody reading or commanding: the floor.
 pub fn sumo_alone_ms_per_step(config: &Config) -> Result<f64, EpisodeError> {
-    let planned = demand::generate(config);
-    let input = EpisodeInput::write(config)?;
+    let road = crate::sumo::frame::scenario_road(&config.scenario)?;
+    let planned = demand::generate(config, &road);
+    let input = EpisodeInput::write(config, &road)?;
     let demand_file = tempfile::Builder::new()
         .suffix(".rou.xml")
         .tempfile()
         .and_then(|f| {
-            std::fs::write(f.path(), demand::route_file(&planned))?;
+            std::fs::write(f.path(), demand::route_file(&road, &planned))?;
             Ok(f)
         })
         .map_err(|cause| crate::sumo::files::InputError::Write {

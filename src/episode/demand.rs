@@ -1,7 +1,8 @@
 //! Per-episode traffic demand, generated deterministically from (λ, α, seed).
 //!
-//! Arrivals form two Poisson processes: the main road at rate (1 − r)·λ, each vehicle on either
-//! main lane with equal probability, and the ramp at rate r·λ, where r is `demand.ramp_share`.
+//! Arrivals form Poisson processes: the main road at rate (1 − r)·λ, each vehicle on any main
+//! lane with equal probability, and the on-ramps at rate r·λ together, shared equally, where r
+//! is `demand.ramp_share`.
 //! α is the share of CAVs among the episode's vehicles (`demand.cav_share = "exact"`, the
 //! paper's definition: round(α·n) CAVs placed at random) or, optionally, each vehicle's
 //! probability of being a CAV (`"probability"`). Insertion speeds and HDV desired speeds are uniform
@@ -14,8 +15,10 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
 use crate::config::{CavShare, Config};
+use crate::model::road::Road;
 use crate::model::scene::{Kind, Origin};
-use crate::sumo::files::ROUTES;
+use crate::sumo::files::routes_xml;
+use crate::sumo::frame::{scenario_road, NetworkError};
 
 /// Random stream of the demand (other streams of the same seed drive other random choices).
 pub const DEMAND_STREAM: u64 = 1;
@@ -26,6 +29,9 @@ pub struct PlannedVehicle {
     pub id: String,
     pub kind: Kind,
     pub origin: Origin,
+    /// Where it enters: an index into the road's entries (0 the main road, then the ramps), whose
+    /// name is also its SUMO route.
+    pub entry: usize,
     /// Scheduled insertion time (s).
     pub depart: f64,
     /// SUMO lane index on the first edge of the route.
@@ -34,25 +40,38 @@ pub struct PlannedVehicle {
     pub desired_speed: f64,
 }
 
+/// The vehicles arriving on the scenario's network (see [`generate`]).
+///
+/// # Errors
+/// A network file that cannot be read or is not a merge.
+pub fn generate_for(config: &Config) -> Result<Vec<PlannedVehicle>, NetworkError> {
+    Ok(generate(config, &scenario_road(&config.scenario)?))
+}
+
 /// Random stream that places the CAVs when `demand.cav_share` is exact.
 pub const CAV_PLACEMENT_STREAM: u64 = 3;
 
-/// Draws the vehicles arriving within the episode's horizon, sorted by depart time.
+/// Draws the vehicles arriving on `road` within the episode's horizon, sorted by depart time.
 ///
 /// Departures are rounded up to the step grid, and only those at or before the last simulated
 /// step are kept: a vehicle due later could never enter.
-pub fn generate(config: &Config) -> Vec<PlannedVehicle> {
+pub fn generate(config: &Config, road: &Road) -> Vec<PlannedVehicle> {
     let sc = &config.scenario;
     let mut rng = ChaCha8Rng::seed_from_u64(sc.seed);
     rng.set_stream(DEMAND_STREAM);
-    let events = arrivals(config, &mut rng);
+    let events = arrivals(config, road.entries.len() - 1, &mut rng);
     let cavs = exact_cavs(config, events.len());
     let [v_lo, v_hi] = config.demand.insertion_speed;
     let [d_lo, d_hi] = config.demand.hdv_desired_speed;
     events
         .into_iter()
         .enumerate()
-        .map(|(n, (t, origin))| {
+        .map(|(n, (t, entry))| {
+            let origin = if entry == 0 {
+                Origin::Main
+            } else {
+                Origin::Ramp
+            };
             // Drawn in either mode, so the exact mode changes who is a CAV and nothing else.
             let drawn_cav = rng.gen_bool(sc.alpha);
             let kind = match &cavs {
@@ -62,7 +81,7 @@ pub fn generate(config: &Config) -> Vec<PlannedVehicle> {
                 None => Kind::Hdv,
             };
             let depart_lane = match origin {
-                Origin::Main => rng.gen_range(0..2),
+                Origin::Main => rng.gen_range(0..road.main_lanes as u32),
                 Origin::Ramp => 0,
             };
             let depart_speed = rng.gen_range(v_lo..=v_hi);
@@ -72,9 +91,10 @@ pub fn generate(config: &Config) -> Vec<PlannedVehicle> {
                 Kind::Hdv => hdv_desired,
             };
             PlannedVehicle {
-                id: format!("{}.{n}", origin.as_str()),
+                id: format!("{}.{n}", road.entries[entry].name),
                 kind,
                 origin,
+                entry,
                 depart: t,
                 depart_lane,
                 depart_speed: (depart_speed * 100.0).round() / 100.0,
@@ -84,21 +104,22 @@ pub fn generate(config: &Config) -> Vec<PlannedVehicle> {
         .collect()
 }
 
-/// Arrival events (time on the step grid, origin) of both entries, sorted, up to the last
-/// simulated step.
-fn arrivals(config: &Config, rng: &mut ChaCha8Rng) -> Vec<(f64, Origin)> {
+/// Arrival events (time on the step grid, entry: 0 the main road, k the k-th of `ramps`
+/// on-ramps) of every entry, sorted, up to the last simulated step.
+fn arrivals(config: &Config, ramps: usize, rng: &mut ChaCha8Rng) -> Vec<(f64, usize)> {
     let sc = &config.scenario;
     let horizon = sc.steps as f64 * sc.dt;
     let last_step = sc.steps.saturating_sub(1) as f64 * sc.dt;
     let rate_main = sc.lambda * (1.0 - config.demand.ramp_share) / 3600.0;
-    let rate_ramp = sc.lambda * config.demand.ramp_share / 3600.0;
-    let main = arrival_times(rng, rate_main, horizon);
-    let ramp = arrival_times(rng, rate_ramp, horizon);
-    let mut events: Vec<(f64, Origin)> = main
+    let rate_ramp = sc.lambda * config.demand.ramp_share / 3600.0 / ramps.max(1) as f64;
+    let mut events: Vec<(f64, usize)> = arrival_times(rng, rate_main, horizon)
         .into_iter()
-        .map(|t| (t, Origin::Main))
-        .chain(ramp.into_iter().map(|t| (t, Origin::Ramp)))
+        .map(|t| (t, 0))
         .collect();
+    for k in 1..=ramps {
+        let times = arrival_times(rng, rate_ramp, horizon);
+        events.extend(times.into_iter().map(|t| (t, k)));
+    }
     events.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
     let on_grid = |t: f64| ((t / sc.dt).ceil() * sc.dt * 1e6).round() / 1e6;
     events.retain_mut(|(t, _)| {
@@ -141,16 +162,17 @@ fn arrival_times(rng: &mut ChaCha8Rng, rate: f64, horizon: f64) -> Vec<f64> {
     }
 }
 
-/// The demand as a SUMO route file, for inspection or for running it in SUMO alone.
-pub fn route_file(vehicles: &[PlannedVehicle]) -> String {
-    let mut xml = ROUTES.trim_end().trim_end_matches("</routes>").to_string();
+/// The demand on `road` as a SUMO route file, for inspection or for running it in SUMO alone.
+pub fn route_file(road: &Road, vehicles: &[PlannedVehicle]) -> String {
+    let routes = routes_xml(road);
+    let mut xml = routes.trim_end().trim_end_matches("</routes>").to_string();
     for v in vehicles {
         let _ = writeln!(
             xml,
             "    <vehicle id=\"{}\" type=\"{}\" route=\"{}\" depart=\"{:.2}\" departLane=\"{}\" departPos=\"base\" departSpeed=\"{:.2}\"/>",
             v.id,
             v.kind.as_str(),
-            v.origin.as_str(),
+            road.entries[v.entry].name,
             v.depart,
             v.depart_lane,
             v.depart_speed
@@ -164,10 +186,14 @@ pub fn route_file(vehicles: &[PlannedVehicle]) -> String {
 mod tests {
     use super::*;
 
+    fn gen(c: &Config) -> Vec<PlannedVehicle> {
+        generate(c, &Road::paper_default())
+    }
+
     #[test]
     fn shipped_demo_demand_matches_the_defaults() {
         let shipped = include_str!("../../sumo_net/demo.rou.xml");
-        let generated = route_file(&generate(&Config::default()));
+        let generated = route_file(&Road::paper_default(), &gen(&Config::default()));
         assert_eq!(
             shipped, generated,
             "regenerate with `bkpbs demand --out sumo_net/demo.rou.xml`"
@@ -184,14 +210,8 @@ mod tests {
 
     #[test]
     fn same_seed_same_demand_other_seed_other_demand() {
-        assert_eq!(
-            generate(&config(0.5, 3000.0, 7)),
-            generate(&config(0.5, 3000.0, 7))
-        );
-        assert_ne!(
-            generate(&config(0.5, 3000.0, 7)),
-            generate(&config(0.5, 3000.0, 8))
-        );
+        assert_eq!(gen(&config(0.5, 3000.0, 7)), gen(&config(0.5, 3000.0, 7)));
+        assert_ne!(gen(&config(0.5, 3000.0, 7)), gen(&config(0.5, 3000.0, 8)));
     }
 
     #[test]
@@ -202,7 +222,7 @@ mod tests {
             let (mut n, mut cav, mut ramp) = (0usize, 0usize, 0usize);
             let seeds = 400;
             for seed in 0..seeds {
-                for v in generate(&config(alpha, lambda, seed)) {
+                for v in gen(&config(alpha, lambda, seed)) {
                     n += 1;
                     cav += (v.kind == Kind::Cav) as usize;
                     ramp += (v.origin == Origin::Ramp) as usize;
@@ -223,7 +243,7 @@ mod tests {
     #[test]
     fn speeds_lie_in_their_ranges_and_departs_on_grid() {
         let c = config(0.5, 3000.0, 3);
-        for v in generate(&c) {
+        for v in gen(&c) {
             assert!((25.0..=35.0).contains(&v.depart_speed));
             if v.kind == Kind::Hdv {
                 assert!((25.0..=35.0).contains(&v.desired_speed));
@@ -242,7 +262,7 @@ mod tests {
         // never simulates, and counted as undeparted.
         let mut latest: f64 = 0.0;
         for seed in 0..200 {
-            for v in generate(&config(0.5, 3000.0, seed)) {
+            for v in gen(&config(0.5, 3000.0, seed)) {
                 latest = latest.max(v.depart);
             }
         }
@@ -252,7 +272,7 @@ mod tests {
     #[test]
     fn exact_share_makes_round_alpha_n_cavs() {
         for (alpha, seed) in [(0.5, 1), (0.4, 2), (0.8, 3), (0.6, 4)] {
-            let d = generate(&config(alpha, 3000.0, seed));
+            let d = gen(&config(alpha, 3000.0, seed));
             let cavs = d.iter().filter(|v| v.kind == Kind::Cav).count();
             assert_eq!(cavs, (alpha * d.len() as f64).round() as usize, "α {alpha}");
         }
@@ -263,7 +283,7 @@ mod tests {
         let exact = config(0.5, 3000.0, 11);
         let mut prob = exact.clone();
         prob.demand.cav_share = CavShare::Probability;
-        let (a, b) = (generate(&exact), generate(&prob));
+        let (a, b) = (gen(&exact), gen(&prob));
         assert_eq!(a.len(), b.len());
         for (x, y) in a.iter().zip(&b) {
             assert_eq!(
@@ -278,7 +298,7 @@ mod tests {
             .map(|seed| {
                 let mut c = config(0.5, 3000.0, seed);
                 c.demand.cav_share = CavShare::Probability;
-                let d = generate(&c);
+                let d = gen(&c);
                 cavs(&d) as f64 / d.len() as f64
             })
             .collect();
@@ -287,18 +307,18 @@ mod tests {
 
     #[test]
     fn alpha_extremes_give_one_kind() {
-        assert!(generate(&config(0.0, 3000.0, 1))
+        assert!(gen(&config(0.0, 3000.0, 1))
             .iter()
             .all(|v| v.kind == Kind::Hdv));
-        assert!(generate(&config(1.0, 3000.0, 1))
+        assert!(gen(&config(1.0, 3000.0, 1))
             .iter()
             .all(|v| v.kind == Kind::Cav));
     }
 
     #[test]
     fn route_file_lists_every_vehicle() {
-        let vs = generate(&config(0.5, 3000.0, 2));
-        let xml = route_file(&vs);
+        let vs = gen(&config(0.5, 3000.0, 2));
+        let xml = route_file(&Road::paper_default(), &vs);
         assert_eq!(xml.matches("<vehicle ").count(), vs.len());
         assert!(xml.contains("route=\"ramp\""));
     }

@@ -17,7 +17,7 @@ use std::collections::VecDeque;
 
 use crate::config::Config;
 use crate::episode::demand::PlannedVehicle;
-use crate::model::road::Road;
+use crate::model::road::{Road, MERGE_LANE};
 use crate::model::scene::{Origin, Scene};
 
 /// A vehicle cleared to enter now.
@@ -28,45 +28,51 @@ pub struct Admission {
     pub speed: f64,
 }
 
-/// The three entry queues (main lanes 0 and 1, ramp).
+/// The entry queues: one per main lane (by SUMO lane index on the first edge), then one per
+/// on-ramp.
 #[derive(Debug, Clone)]
 pub struct EntryControl {
-    queues: [VecDeque<PlannedVehicle>; 3],
+    queues: Vec<VecDeque<PlannedVehicle>>,
+    main_lanes: usize,
     idm: crate::config::Idm,
     dt: f64,
     length: f64,
 }
 
 impl EntryControl {
-    /// Queues `planned` (sorted by depart time) by entry.
-    pub fn new(config: &Config, planned: &[PlannedVehicle]) -> Self {
-        let mut queues: [VecDeque<PlannedVehicle>; 3] = Default::default();
+    /// Queues `planned` (sorted by depart time) by entry on `road`.
+    pub fn new(config: &Config, road: &Road, planned: &[PlannedVehicle]) -> Self {
+        let main_lanes = road.main_lanes as usize;
+        let mut queues = vec![VecDeque::new(); main_lanes + road.zones.len()];
         for p in planned {
-            queues[Self::entry_of(p)].push_back(p.clone());
+            queues[Self::queue_of(main_lanes, p)].push_back(p.clone());
         }
         EntryControl {
             queues,
+            main_lanes,
             idm: config.idm.clone(),
             dt: config.scenario.dt,
             length: config.scenario.vehicle_length,
         }
     }
 
-    fn entry_of(p: &PlannedVehicle) -> usize {
+    fn queue_of(main_lanes: usize, p: &PlannedVehicle) -> usize {
         match p.origin {
-            Origin::Main => (p.depart_lane as usize).min(1),
-            Origin::Ramp => 2,
+            Origin::Main => (p.depart_lane as usize).min(main_lanes - 1),
+            Origin::Ramp => main_lanes + p.entry - 1,
         }
     }
 
-    /// Road-frame lane and front position of a vehicle just inserted at `entry`.
-    fn entry_point(&self, road: &Road, entry: usize) -> (i32, f64) {
-        match entry {
-            2 => (
-                crate::model::road::MERGE_LANE,
-                road.ramp_start + self.length,
-            ),
-            k => (crate::model::road::MAIN_LANES[k], self.length),
+    /// Road-frame lane and front position of a vehicle just inserted by queue `queue`.
+    fn entry_point(&self, road: &Road, queue: usize) -> (i32, f64) {
+        match queue.checked_sub(self.main_lanes) {
+            Some(ramp) => (MERGE_LANE, road.zones[ramp].ramp_start + self.length),
+            None => {
+                let first = road.edges[0].lanes[queue]
+                    .as_ref()
+                    .expect("main lanes are in the frame");
+                (first.lane, first.s0 + self.length)
+            }
         }
     }
 
@@ -78,7 +84,7 @@ impl EntryControl {
     /// Pops the queue heads that may enter at time `now` given the current `scene`.
     pub fn admit(&mut self, now: f64, scene: &Scene) -> Vec<Admission> {
         let mut out = Vec::new();
-        for entry in 0..3 {
+        for entry in 0..self.queues.len() {
             let Some(head) = self.queues[entry].front() else {
                 continue;
             };
@@ -86,7 +92,11 @@ impl EntryControl {
                 continue;
             }
             let (lane, front) = self.entry_point(&scene.road, entry);
-            if let Some(speed) = self.entry_speed(scene, lane, front, head.depart_speed) {
+            // Not above the entry's speed limit, where SUMO would refuse the vehicle.
+            let wanted = head
+                .depart_speed
+                .min(scene.road.entries[head.entry].speed_limit);
+            if let Some(speed) = self.entry_speed(scene, lane, front, wanted) {
                 let vehicle = self.queues[entry].pop_front().expect("head exists");
                 out.push(Admission { vehicle, speed });
             }
@@ -137,6 +147,7 @@ mod tests {
             id: id.into(),
             kind: Kind::Hdv,
             origin,
+            entry: usize::from(origin == Origin::Ramp),
             depart,
             depart_lane: lane,
             depart_speed: speed,
@@ -156,6 +167,7 @@ mod tests {
         let c = Config::default();
         let mut e = EntryControl::new(
             &c,
+            &Road::paper_default(),
             &[
                 planned("a", Origin::Main, 0, 0.0, 30.0),
                 planned("b", Origin::Main, 0, 0.0, 28.0),
@@ -170,7 +182,11 @@ mod tests {
     #[test]
     fn not_before_the_scheduled_time() {
         let c = Config::default();
-        let mut e = EntryControl::new(&c, &[planned("a", Origin::Ramp, 0, 1.0, 30.0)]);
+        let mut e = EntryControl::new(
+            &c,
+            &Road::paper_default(),
+            &[planned("a", Origin::Ramp, 0, 1.0, 30.0)],
+        );
         assert!(e.admit(0.8, &Scene::on_paper_road(0.0, vec![])).is_empty());
         assert_eq!(e.admit(1.0, &Scene::on_paper_road(0.0, vec![])).len(), 1);
     }
@@ -179,7 +195,11 @@ mod tests {
     fn close_leader_blocks_and_slow_leader_lowers_speed() {
         let c = Config::default(); // s0 = 5, a = 3, b = 5, T = 1.5
                                    // Leader just ahead of the entry: 5 m gap -> no room.
-        let mut e = EntryControl::new(&c, &[planned("a", Origin::Main, 0, 0.0, 30.0)]);
+        let mut e = EntryControl::new(
+            &c,
+            &Road::paper_default(),
+            &[planned("a", Origin::Main, 0, 0.0, 30.0)],
+        );
         assert!(e
             .admit(0.0, &Scene::on_paper_road(0.0, vec![car(12.5, 1, 20.0)]))
             .is_empty());
@@ -193,7 +213,11 @@ mod tests {
         assert_eq!(got.len(), 1);
         assert!((got[0].speed - 22.2847).abs() < 1e-3, "{}", got[0].speed);
         // At 30 m/s wanted, a leader at 10 m/s that close means waiting.
-        let mut e = EntryControl::new(&c, &[planned("b", Origin::Main, 0, 0.0, 30.0)]);
+        let mut e = EntryControl::new(
+            &c,
+            &Road::paper_default(),
+            &[planned("b", Origin::Main, 0, 0.0, 30.0)],
+        );
         assert!(e
             .admit(
                 0.0,
@@ -205,7 +229,11 @@ mod tests {
     #[test]
     fn other_lanes_do_not_block() {
         let c = Config::default();
-        let mut e = EntryControl::new(&c, &[planned("a", Origin::Main, 1, 0.0, 30.0)]);
+        let mut e = EntryControl::new(
+            &c,
+            &Road::paper_default(),
+            &[planned("a", Origin::Main, 1, 0.0, 30.0)],
+        );
         assert_eq!(
             e.admit(0.0, &Scene::on_paper_road(0.0, vec![car(10.0, 1, 0.0)]))
                 .len(),

@@ -85,7 +85,6 @@ impl RampMergeRule {
     /// Draws this step's decisions; returns the HDVs that want to merge now.
     pub fn requests(&mut self, scene: &Scene) -> Vec<MergeRequest> {
         let road = &scene.road;
-        let zone = road.merge_end - road.merge_start;
         let mut out = Vec::new();
         for (i, v) in scene.vehicles.iter().enumerate() {
             if v.kind != Kind::Hdv || v.origin != Origin::Ramp || v.on_ramp || v.lane != MERGE_LANE
@@ -93,7 +92,8 @@ impl RampMergeRule {
                 continue;
             }
             if !self.decided.contains(&v.id) {
-                let xi = (v.front() - road.merge_start) / zone;
+                let merge = road.zone_ahead(v.front());
+                let xi = (v.front() - merge.start) / (merge.end - merge.start);
                 let p = self.probability(xi);
                 if self.rng.gen::<f64>() < p {
                     self.decide(&v.id);
@@ -194,7 +194,7 @@ mod tests {
         let scene = Scene {
             time: 0.0,
             road: road.clone(),
-            vehicles: vec![ramp_hdv(road.merge_end - 2.5)],
+            vehicles: vec![ramp_hdv(road.zones[0].end - 2.5)],
         };
         assert_eq!(
             r.requests(&scene)
@@ -215,7 +215,7 @@ mod tests {
     fn standing_at_the_lane_end_forces_the_merge() {
         let mut r = RampMergeRule::new(&Config::default());
         let road = Road::paper_default();
-        let mut v = ramp_hdv(road.merge_end - 2.5 - 1.0);
+        let mut v = ramp_hdv(road.zones[0].end - 2.5 - 1.0);
         v.speed = 0.1;
         let scene = Scene {
             time: 0.0,
@@ -242,7 +242,7 @@ mod tests {
             c.scenario.seed = seed;
             let mut r = RampMergeRule::new(&c);
             // front at 25 % of the zone
-            let s = road.merge_start + 0.25 * 180.0 - 2.5;
+            let s = road.zones[0].start + 0.25 * 180.0 - 2.5;
             let scene = Scene {
                 time: 0.0,
                 road: road.clone(),

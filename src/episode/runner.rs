@@ -21,7 +21,7 @@ use crate::episode::trajectories::{
     FrameState, Sent, TrajectoryFile, TrajectoryLog, TrajectoryRow,
 };
 use crate::model::kinematics::free_flow_time;
-use crate::model::road::{Road, EDGES};
+use crate::model::road::Road;
 use crate::model::scene::{Kind, Origin, Scene};
 use crate::sumo::files::{EpisodeInput, InputError};
 use crate::sumo::frame::{self, NetworkError, SumoScene};
@@ -144,7 +144,8 @@ pub enum Driver<'a> {
 /// An invalid config, an unknown planner or unusable predictor, or SUMO failing.
 pub fn run(config: &Config, planner: &str) -> Result<EpisodeResult, EpisodeError> {
     config.validate()?;
-    let planned = demand::generate(config);
+    let road = frame::scenario_road(&config.scenario)?;
+    let planned = demand::generate(config, &road);
     run_observed(config, Driver::Named(planner), &planned, &mut NoObserver)
 }
 
@@ -200,7 +201,8 @@ pub fn run_observed(
     {
         return Err(EpisodeError::NoGui(why));
     }
-    let input = EpisodeInput::write(config)?;
+    let road = frame::scenario_road(&config.scenario)?;
+    let input = EpisodeInput::write(config, &road)?;
     let capture = if config.sumo.verbose {
         None
     } else {
@@ -217,7 +219,6 @@ pub fn run_observed(
                 cause,
             }
         })?;
-        let road = frame::road_from_simulation(&sim)?;
         let mut built;
         let controller: &mut dyn Controller = match driver {
             Driver::Named(name) => {
@@ -238,6 +239,7 @@ pub fn run_observed(
 
 /// A reading as a trajectory row (without the maneuver, which comes after planning).
 fn trajectory_row(
+    road: &Road,
     sc: &crate::config::Scenario,
     id: &Arc<str>,
     record: &VehicleRecord,
@@ -250,7 +252,8 @@ fn trajectory_row(
         origin: record.origin,
         edge: usize::try_from(raw.edge_code)
             .ok()
-            .and_then(|c| EDGES.get(c).copied()),
+            .and_then(|c| road.edges.get(c))
+            .map(|e| e.name.clone()),
         sumo_lane: raw.lane_index,
         pos: raw.lane_position,
         x: raw.x,
@@ -264,7 +267,7 @@ fn trajectory_row(
                 origin: record.origin,
                 desired_speed: record.desired_speed,
             };
-            let v = frame::state_at(sc, who, raw, front, lane);
+            let v = frame::state_at(road, sc, who, raw, front, lane);
             FrameState {
                 s: v.s,
                 lane: v.lane,
@@ -327,6 +330,7 @@ impl<'a> Episode<'a> {
         road: Road,
         observer: &'a mut dyn Observer,
     ) -> Self {
+        let sumo_road = road.clone();
         Episode {
             config,
             controller,
@@ -339,7 +343,7 @@ impl<'a> Episode<'a> {
             index: HashMap::new(),
             collisions: Vec::new(),
             merge_rule: RampMergeRule::new(config),
-            entry: EntryControl::new(config, planned),
+            entry: EntryControl::new(config, &sumo_road, planned),
             readings: VehicleReadings::default(),
             slots: Vec::new(),
             slots_generation: u64::MAX,
@@ -359,7 +363,7 @@ impl<'a> Episode<'a> {
     fn run(&mut self, mut sim: Simulation) -> Result<EpisodeResult, EpisodeError> {
         let loop_start = Instant::now();
         let steps = self.config.scenario.steps;
-        sim.set_edge_codes(&EDGES)
+        sim.set_edge_codes(&frame::edge_names(&self.road))
             .map_err(|cause| EpisodeError::Step {
                 step: 0,
                 time: 0.0,
@@ -404,7 +408,7 @@ impl<'a> Episode<'a> {
             let v = &a.vehicle;
             sim.add_vehicle(
                 &v.id,
-                v.origin.as_str(),
+                &self.road.entries[v.entry].name,
                 v.kind.as_str(),
                 v.depart_lane as i32,
                 a.speed,
@@ -452,8 +456,7 @@ impl<'a> Episode<'a> {
 
     fn book_departures(&mut self, sim: &mut Simulation, now: f64) -> Result<(), SumoError> {
         let commanded = self.controller.handling() == CavHandling::Commanded;
-        let end_edge = EDGES[3];
-        let end_pos = self.road.edges[3].length;
+        let (end_edge, end_pos) = self.road.end_edge.clone();
         for id in sim.departed()? {
             let sumo_type = sim.vehicle_type(&id)?;
             let kind = Kind::from_type_id(&sumo_type).unwrap_or(Kind::Hdv);
@@ -475,7 +478,7 @@ impl<'a> Episode<'a> {
                 }
                 Kind::Cav => {}
             }
-            let distance = sim.driving_distance(&id, end_edge, end_pos)?;
+            let distance = sim.driving_distance(&id, &end_edge, end_pos)?;
             let sc = &self.config.scenario;
             let record = VehicleRecord {
                 id: id.clone(),
@@ -599,7 +602,8 @@ impl<'a> Episode<'a> {
             let position = frame::frame_position(&self.road, raw);
             let row = self.trajectories.as_mut().map(|log| {
                 let r = &self.tracked[k].record;
-                log.push(trajectory_row(sc, &self.tracked[k].id, r, raw, position))
+                let id = &self.tracked[k].id;
+                log.push(trajectory_row(&self.road, sc, id, r, raw, position))
             });
             let Some((front, lane)) = position else {
                 continue;
@@ -627,7 +631,7 @@ impl<'a> Episode<'a> {
                 origin: t.record.origin,
                 desired_speed: t.record.desired_speed,
             };
-            let vehicle = frame::state_at(sc, who, raw, front, lane);
+            let vehicle = frame::state_at(&self.road, sc, who, raw, front, lane);
             self.sumo_scene.push(vehicle, raw.edge_code);
             self.scene_rows.extend(row);
         }

@@ -13,6 +13,7 @@
 
 use std::fmt::Write as _;
 use std::io::Write as _;
+use std::sync::Arc;
 
 use flate2::write::GzEncoder;
 use flate2::Compression;
@@ -55,7 +56,7 @@ pub struct TrajectoryRow {
     pub kind: Kind,
     pub origin: Origin,
     /// SUMO's edge id; `None` off the known edges.
-    pub edge: Option<&'static str>,
+    pub edge: Option<Arc<str>>,
     pub sumo_lane: i32,
     /// Position of the front bumper along SUMO's lane (m).
     pub pos: f64,
@@ -221,7 +222,7 @@ fn csv_row(out: &mut String, time: f64, r: &TrajectoryRow) {
         r.id,
         r.kind.as_str(),
         r.origin.as_str(),
-        r.edge.unwrap_or(""),
+        r.edge.as_deref().unwrap_or(""),
         r.sumo_lane,
         r.pos,
         r.x,
@@ -273,7 +274,7 @@ fn fcd_step(out: &mut String, time: f64, rows: &[TrajectoryRow]) {
             r.kind.as_str(),
             r.speed,
             r.pos,
-            r.edge.unwrap_or(""),
+            r.edge.as_deref().unwrap_or(""),
             r.sumo_lane
         );
     }
@@ -289,7 +290,7 @@ mod tests {
             id: id.into(),
             kind: Kind::Cav,
             origin: Origin::Ramp,
-            edge: Some("acc"),
+            edge: Some(Arc::from("acc")),
             sumo_lane: 0,
             pos: 12.3456,
             x: 100.0,

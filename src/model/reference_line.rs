@@ -59,6 +59,14 @@ impl ReferenceLine {
         (self.points[k + 1] - self.points[k]).normalize()
     }
 
+    /// Whether the line runs due east (SUMO's x) throughout: then `s` is x shifted and every
+    /// heading 0.
+    pub fn is_straight_east(&self) -> bool {
+        self.points
+            .windows(2)
+            .all(|w| w[1].y == w[0].y && w[1].x > w[0].x)
+    }
+
     /// The point at arc length `s` and the line's heading there (rad); beyond the ends the
     /// first and last segments are extended.
     pub fn pose_at(&self, s: f64) -> (Point, f64) {

@@ -1,163 +1,241 @@
-//! The road frame of the merge section: where each of SUMO's edges lies in it (the mapping of
-//! readings and commands between the two is `crate::sumo::frame`).
+//! The road frame of a merge network: where each of SUMO's lanes lies in it (the mapping of
+//! readings and commands between the two is `crate::sumo::frame`, and the frame is built from
+//! the network's layout in `crate::sumo::network`).
 //!
-//! Frame: `s` is the distance along the main road (m), equal to SUMO's x on the straight part;
-//! lane 0 is the ramp / acceleration lane, lanes 1 and 2 the main road's right and left lanes.
-//! On the ramp edge, `s` is measured backwards from the merge-zone start along the ramp, so route
-//! distances stay exact even though the ramp is curved.
+//! Frame: `s` is the arc length along the main carriageway's reference line (SUMO's x on the
+//! straight paper network); lane 0 is the auxiliary lane on the right (a ramp, its acceleration
+//! lane, or a deceleration lane), lanes 1..=N the main carriageway's lanes from the right. On a
+//! ramp, `s` is measured backwards from where its acceleration lane begins, along the ramp, so
+//! route distances stay exact even though a ramp is curved. A curved carriageway is
+//! straightened: a vehicle that follows its lane keeps its lateral offset and heading 0.
 
-/// Edge names the merge network must provide, in the order of their codes.
-pub const EDGES: [&str; 4] = ["main_in", "ramp", "acc", "main_out"];
-/// Codes (indices in [`EDGES`]) of the four edges.
-pub const MAIN_IN: usize = 0;
-pub const RAMP: usize = 1;
-pub const ACC: usize = 2;
-pub const MAIN_OUT: usize = 3;
+use std::sync::Arc;
 
-/// Road-frame lane of the ramp and of the acceleration lane.
+use super::reference_line::ReferenceLine;
+
+/// Road-frame lane of the ramps, acceleration and deceleration lanes.
 pub const MERGE_LANE: i32 = 0;
-/// Road-frame lanes of the main road, right then left.
-pub const MAIN_LANES: [i32; 2] = [1, 2];
+/// The rightmost lane of the main carriageway.
+pub const FIRST_MAIN_LANE: i32 = 1;
 /// Within this distance (m) of the acceleration lane's end a ramp HDV that has come to a stop
 /// forces its way into the main road (the episode's merge rule), so a CAV must expect it there.
 pub const FORCED_MERGE_ZONE: f64 = 10.0;
 /// Slower than this (m/s) a ramp HDV counts as standing, for the forced merge.
 pub const STANDING_SPEED: f64 = 0.5;
 
-/// Every road-frame lane, lowest (the merge lane) to highest (the main road's left lane).
-pub const LANES: std::ops::RangeInclusive<i32> = MERGE_LANE..=MAIN_LANES[1];
-
-/// The nearest road-frame lane to `lane` (e.g. a lane computed from a predicted position that
-/// strayed off the road).
-pub fn clamp_lane(lane: i32) -> i32 {
-    lane.clamp(*LANES.start(), *LANES.end())
-}
-
-/// The road-frame lane whose centre line is nearest to lateral position `y` (lane `k`'s centre
-/// lies at `k · lane_width`).
-pub fn lane_at(y: f64, lane_width: f64) -> i32 {
-    clamp_lane((y / lane_width).round() as i32)
-}
-
 /// The merge network as embedded in the binary (`sumo_net/merge.net.xml`).
 pub const EMBEDDED_NET: &str = include_str!("../../sumo_net/merge.net.xml");
 
-/// Why the network cannot serve as the merge scenario.
-#[derive(Debug, thiserror::Error)]
-pub enum RoadError {
-    #[error("network lacks what the merge scenario needs: {0}")]
-    Shape(String),
+/// Where one SUMO lane lies in the frame: its frame lane, and `s = s0 + scale · pos` for SUMO's
+/// lane position `pos` (scale 1 on a straight lane; the ratio of the reference line's arc
+/// length to the lane's on a curve), or, on a bending lane beside the reference, piecewise
+/// linear through `knots` (`(pos, s)` at the lane's shape points, which lie across the road
+/// from the reference lane's).
+#[derive(Debug, Clone, PartialEq)]
+pub struct LaneFrame {
+    pub lane: i32,
+    pub s0: f64,
+    pub scale: f64,
+    pub knots: Option<Arc<[(f64, f64)]>>,
 }
 
-/// One SUMO edge placed in the road frame.
+impl LaneFrame {
+    /// A lane whose positions count along `s` one to one from `s0`.
+    pub fn straight(lane: i32, s0: f64) -> LaneFrame {
+        LaneFrame {
+            lane,
+            s0,
+            scale: 1.0,
+            knots: None,
+        }
+    }
+
+    /// Frame `s` of SUMO lane position `pos`.
+    pub fn s_at(&self, pos: f64) -> f64 {
+        let Some(k) = &self.knots else {
+            return self.s0 + pos * self.scale;
+        };
+        // The segment holding `pos`, the first or last one beyond the ends.
+        let i = k.partition_point(|&(p, _)| p < pos).clamp(1, k.len() - 1);
+        let ((p0, s0), (p1, s1)) = (k[i - 1], k[i]);
+        if p1 - p0 < 1e-9 {
+            return s0;
+        }
+        s0 + (pos - p0) * (s1 - s0) / (p1 - p0)
+    }
+}
+
+/// One SUMO edge (a normal edge or a junction's internal edge) placed in the road frame.
 #[derive(Debug, Clone, PartialEq)]
 pub struct EdgeFrame {
-    pub name: &'static str,
-    /// Frame `s` of the edge's start.
-    pub s_start: f64,
-    pub length: f64,
-    /// Frame lane of the edge's lane 0.
-    pub lane_offset: i32,
-    pub lanes: i32,
+    pub name: Arc<str>,
+    /// By SUMO lane index; `None` for a lane that leaves the section (towards an off-ramp).
+    pub lanes: Vec<Option<LaneFrame>>,
+    /// Whether the edge belongs to an on-ramp, before its acceleration lane.
+    pub on_ramp: bool,
 }
 
-/// The merge section in the road frame, read from the running network.
+/// An on-ramp's stretch of the merge lane: the ramp from `ramp_start` to `start`, then the
+/// acceleration lane to `end`, by which its vehicles must have merged.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MergeZone {
+    pub ramp_start: f64,
+    pub start: f64,
+    pub end: f64,
+}
+
+/// Where vehicles enter the section: the main carriageway's source (entry 0), then each on-ramp
+/// in order along the road. Its name is the SUMO route's id and the prefix of its vehicles' ids.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Entry {
+    pub name: String,
+    /// The edges a vehicle entering here drives, to the end of the section.
+    pub route: Vec<Arc<str>>,
+    /// The speed limit where vehicles enter (m/s): SUMO refuses to insert one faster.
+    pub speed_limit: f64,
+}
+
+/// The merge section in the road frame.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Road {
-    pub edges: [EdgeFrame; 4],
+    pub edges: Vec<EdgeFrame>,
     pub lane_width: f64,
-    /// Where the acceleration lane begins and ends (`s`).
-    pub merge_start: f64,
-    pub merge_end: f64,
-    /// End of the section: vehicles arrive here.
+    /// Lanes of the main carriageway (frame lanes 1..=N).
+    pub main_lanes: i32,
+    /// The on-ramps' merge zones, in order along the road.
+    pub zones: Vec<MergeZone>,
+    /// End of the section: vehicles that stay on the main carriageway arrive here.
     pub section_end: f64,
-    /// Frame `s` where ramp vehicles enter.
-    pub ramp_start: f64,
+    /// The last edge of the main carriageway and its lane length: SUMO's place of `section_end`.
+    pub end_edge: (Arc<str>, f64),
+    /// The main carriageway's source, then the on-ramps in the order of `zones`.
+    pub entries: Vec<Entry>,
+    /// Where the road frame's `s` runs in SUMO's plane; `None` for a straight road along x.
+    pub line: Option<Arc<ReferenceLine>>,
+}
+
+impl Entry {
+    pub fn new(name: &str, route: &[&str], speed_limit: f64) -> Entry {
+        Entry {
+            name: name.into(),
+            route: route.iter().map(|&e| Arc::from(e)).collect(),
+            speed_limit,
+        }
+    }
 }
 
 impl Road {
-    /// The merge section from its four edges' (name, length, lane count) in [`EDGES`] order,
-    /// checked against the merge layout.
-    ///
-    /// # Errors
-    /// An edge with another lane count than the layout needs.
-    pub fn from_edges(
-        lane_width: f64,
-        frames: [(&'static str, f64, i32); 4],
-    ) -> Result<Road, RoadError> {
-        for (code, &(name, _, lanes)) in frames.iter().enumerate() {
-            let expected = match code {
-                MAIN_IN | MAIN_OUT => 2,
-                RAMP => 1,
-                _ => 3,
-            };
-            if lanes != expected {
-                return Err(RoadError::Shape(format!(
-                    "edge '{name}' has {lanes} lanes, the merge layout needs {expected}"
-                )));
-            }
+    /// The name of the entry of on-ramp `k` (0-based): `ramp` on a road with one, else `ramp1`,
+    /// `ramp2`, …
+    pub fn ramp_entry_name(ramps: usize, k: usize) -> String {
+        if ramps == 1 {
+            "ramp".into()
+        } else {
+            format!("ramp{}", k + 1)
         }
-        let len = |c: usize| frames[c].1;
-        let merge_start = len(MAIN_IN);
-        let merge_end = merge_start + len(ACC);
-        let section_end = merge_end + len(MAIN_OUT);
-        let ramp_start = merge_start - len(RAMP);
-        let s_start = [0.0, ramp_start, merge_start, merge_end];
-        let lane_offset = [1, 0, 0, 1];
-        let edges = std::array::from_fn(|c| EdgeFrame {
-            name: frames[c].0,
-            s_start: s_start[c],
-            length: frames[c].1,
-            lane_offset: lane_offset[c],
-            lanes: frames[c].2,
-        });
-        Ok(Road {
-            edges,
-            lane_width,
-            merge_start,
-            merge_end,
-            section_end,
-            ramp_start,
-        })
+    }
+
+    /// The merge zone a vehicle at `s` deals with: the first whose end lies at or ahead of it,
+    /// or the last one when it has passed them all.
+    pub fn zone_ahead(&self, s: f64) -> &MergeZone {
+        self.zones
+            .iter()
+            .find(|z| z.end >= s)
+            .unwrap_or_else(|| self.zones.last().expect("a road has a merge zone"))
+    }
+
+    /// Where the first ramp begins (`s`), the lowest `s` of the section.
+    pub fn ramp_start(&self) -> f64 {
+        self.zones.iter().map(|z| z.ramp_start).fold(0.0, f64::min)
+    }
+
+    /// The leftmost frame lane.
+    pub fn top_lane(&self) -> i32 {
+        self.main_lanes
+    }
+
+    /// Every frame lane, the merge lane to the main carriageway's leftmost.
+    pub fn lanes(&self) -> std::ops::RangeInclusive<i32> {
+        MERGE_LANE..=self.top_lane()
+    }
+
+    /// The main carriageway's lanes.
+    pub fn main_lane_range(&self) -> std::ops::RangeInclusive<i32> {
+        FIRST_MAIN_LANE..=self.top_lane()
+    }
+
+    /// The nearest frame lane to `lane` (e.g. a lane computed from a predicted position that
+    /// strayed off the road).
+    pub fn clamp_lane(&self, lane: i32) -> i32 {
+        lane.clamp(MERGE_LANE, self.top_lane())
+    }
+
+    /// The frame lane whose centre line is nearest to lateral position `y` (lane `k`'s centre
+    /// lies at `k · lane_width`).
+    pub fn lane_at(&self, y: f64) -> i32 {
+        self.clamp_lane((y / self.lane_width).round() as i32)
     }
 
     /// Whether a vehicle on the merge lane with its front at `front` and going `speed` stands in
     /// the zone where the merge rule forces it in: the one definition the rule and the planner
     /// (which may not predict such a merge away) share.
     pub fn forces_merge(&self, front: f64, speed: f64) -> bool {
-        speed < STANDING_SPEED && front > self.merge_end - FORCED_MERGE_ZONE
+        speed < STANDING_SPEED && front > self.zone_ahead(front).end - FORCED_MERGE_ZONE
     }
 
-    /// The lanes a vehicle at `s` may occupy: the merge lane exists only up to the merge end.
+    /// The lanes a vehicle at `s` may occupy: the merge lane exists only along a ramp and its
+    /// acceleration lane.
     pub fn lanes_at(&self, s: f64) -> std::ops::RangeInclusive<i32> {
-        if s < self.merge_end {
-            MERGE_LANE..=MAIN_LANES[1]
+        let z = self.zone_ahead(s);
+        if (z.ramp_start..z.end).contains(&s) {
+            self.lanes()
         } else {
-            MAIN_LANES[0]..=MAIN_LANES[1]
+            self.main_lane_range()
         }
     }
 
-    /// The default road (lengths of the shipped network), for unit tests and planning without SUMO.
+    /// The road's heading at `s` in SUMO's plane (rad, 0 = east, counter-clockwise).
+    pub fn heading_at(&self, s: f64) -> f64 {
+        self.line.as_ref().map_or(0.0, |l| l.pose_at(s).1)
+    }
+
+    /// The edge named `name`, if it is part of the frame.
+    pub fn edge(&self, name: &str) -> Option<&EdgeFrame> {
+        self.edges.iter().find(|e| &*e.name == name)
+    }
+
+    /// The default road (the shipped network), for unit tests and planning without SUMO.
     pub fn paper_default() -> Road {
-        let mk = |name, s_start, length, lane_offset, lanes| EdgeFrame {
-            name,
-            s_start,
-            length,
-            lane_offset,
+        let ramp_start = 150.0 - 166.79;
+        let edge = |name: &str, lanes: Vec<Option<LaneFrame>>, on_ramp| EdgeFrame {
+            name: Arc::from(name),
             lanes,
+            on_ramp,
+        };
+        let straight = |lanes: std::ops::Range<i32>, s0| {
+            lanes.map(|l| Some(LaneFrame::straight(l, s0))).collect()
         };
         Road {
-            edges: [
-                mk("main_in", 0.0, 150.0, 1, 2),
-                mk("ramp", 150.0 - 166.79, 166.79, 0, 1),
-                mk("acc", 150.0, 180.0, 0, 3),
-                mk("main_out", 330.0, 130.0, 1, 2),
+            edges: vec![
+                edge("main_in", straight(1..3, 0.0), false),
+                edge("acc", straight(0..3, 150.0), false),
+                edge("main_out", straight(1..3, 330.0), false),
+                edge("ramp", straight(0..1, ramp_start), true),
             ],
             lane_width: 4.5,
-            merge_start: 150.0,
-            merge_end: 330.0,
+            main_lanes: 2,
+            zones: vec![MergeZone {
+                ramp_start,
+                start: 150.0,
+                end: 330.0,
+            }],
             section_end: 460.0,
-            ramp_start: 150.0 - 166.79,
+            end_edge: (Arc::from("main_out"), 130.0),
+            entries: vec![
+                Entry::new("main", &["main_in", "acc", "main_out"], 40.0),
+                Entry::new("ramp", &["ramp", "acc", "main_out"], 40.0),
+            ],
+            line: None,
         }
     }
 }
@@ -171,5 +249,24 @@ mod tests {
         let r = Road::paper_default();
         assert!(r.lanes_at(200.0).contains(&0));
         assert!(!r.lanes_at(340.0).contains(&0));
+        assert_eq!(r.lanes(), 0..=2);
+        assert_eq!(r.lane_at(5.0), 1);
+        assert_eq!(r.lane_at(50.0), 2);
+    }
+
+    #[test]
+    fn each_vehicle_deals_with_the_zone_ahead() {
+        let mut r = Road::paper_default();
+        r.zones.push(MergeZone {
+            ramp_start: 800.0,
+            start: 1000.0,
+            end: 1200.0,
+        });
+        assert_eq!(r.zone_ahead(100.0).end, 330.0);
+        assert_eq!(r.zone_ahead(500.0).end, 1200.0);
+        assert_eq!(r.zone_ahead(5000.0).end, 1200.0);
+        assert!(!r.lanes_at(500.0).contains(&0));
+        assert!(r.lanes_at(900.0).contains(&0));
+        assert!(r.lanes_at(200.0).contains(&0));
     }
 }

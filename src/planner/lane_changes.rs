@@ -9,7 +9,7 @@ use std::sync::Arc;
 
 use crate::model::kinematics::BicycleState;
 use crate::model::math::Point;
-use crate::model::road::{MAIN_LANES, MERGE_LANE};
+use crate::model::road::{FIRST_MAIN_LANE, MERGE_LANE};
 use crate::model::scene::{Origin, Scene};
 use crate::model::trajectory::Trajectory;
 use crate::planner::mastar::{Guard, Mastar, NoPlan, OngoingLaneChange, Plan, Request, StartGuard};
@@ -71,7 +71,7 @@ impl LaneChanges {
         // A merge under way is still a merge: the body overlaps the merge lane until it ends,
         // so the search must allow that (it once rejected every continuation, and the CAV
         // braked hard while SUMO kept moving it sideways).
-        let merging = ongoing.is_some_and(|o| o.target_lane == MAIN_LANES[0])
+        let merging = ongoing.is_some_and(|o| o.target_lane == FIRST_MAIN_LANE)
             && (v.lane == MERGE_LANE || v.lateral < 0.0);
         let cos = v.heading.cos().max(0.5);
         Request {

@@ -18,7 +18,7 @@
 use crate::config::{LowSpeedLaneChanges, PlannerSettings};
 use crate::model::kinematics::{free_flow_time, BicycleState};
 use crate::model::math::Point;
-use crate::model::road::{Road, LANES, MAIN_LANES, MERGE_LANE};
+use crate::model::road::{Road, MERGE_LANE};
 use crate::model::scene::Scene;
 use crate::model::trajectory::{Pose, Trajectory};
 use crate::planner::primitives::{Library, Primitive, Throttle};
@@ -282,24 +282,25 @@ impl Mastar {
         let (y_lo, y_hi) = (st.pos.y - half_across, st.pos.y + half_across);
         let (s_lo, s_hi) = (st.pos.x - half_along, st.pos.x + half_along);
         const EPS: f64 = 0.05;
-        if y_lo < -0.5 * w - EPS || y_hi > 2.5 * w + EPS {
+        if y_lo < -0.5 * w - EPS || y_hi > (f64::from(self.road.top_lane()) + 0.5) * w + EPS {
             return false;
         }
         let in_merge_lane = y_lo < 0.5 * w - EPS;
         if in_merge_lane {
-            // Only ramp vehicles use it, and only until it ends.
-            if !req.must_merge || s_hi > self.road.merge_end {
+            // Only ramp vehicles use it, and only until its zone ends.
+            let zone = self.road.zone_ahead(s_lo);
+            if !req.must_merge || s_hi > zone.end {
                 return false;
             }
             // Crossing between it and the main road only beside the acceleration lane.
             let crossing = y_hi > 0.5 * w + EPS;
-            if crossing && s_lo < self.road.merge_start {
+            if crossing && s_lo < zone.start {
                 return false;
             }
             // Fully in the lane, the CAV must still be able to stop before its end, or the plan
             // could leave it in a state from which the crash is certain.
             let stop = st.speed * st.speed / (2.0 * self.library.emergency_decel);
-            if !crossing && stop > self.road.merge_end - s_hi + 1e-9 {
+            if !crossing && stop > zone.end - s_hi + 1e-9 {
                 return false;
             }
         }
@@ -481,10 +482,14 @@ impl<'p> PhaseSearch<'p> {
     /// a main-road lane.
     fn reached(&self, n: &Node) -> bool {
         if self.req.must_merge {
-            MAIN_LANES.contains(&n.lane) && n.step > 0
+            self.on_main(n) && n.step > 0
         } else {
-            n.state.pos.x - self.s0 >= self.spec.goal_distance && MAIN_LANES.contains(&n.lane)
+            n.state.pos.x - self.s0 >= self.spec.goal_distance && self.on_main(n)
         }
+    }
+
+    fn on_main(&self, n: &Node) -> bool {
+        self.planner.road.main_lane_range().contains(&n.lane)
     }
 
     /// Remaining cost, estimated from below: the time to the goal at free flow (for a ramp CAV,
@@ -497,7 +502,8 @@ impl<'p> PhaseSearch<'p> {
         let to_horizon = self.horizon.saturating_sub(n.step) as f64;
         let to_goal = if self.req.must_merge {
             let road = &self.planner.road;
-            let approach = (road.merge_start - (n.state.pos.x - 0.5 * self.req.length)).max(0.0);
+            let rear = n.state.pos.x - 0.5 * self.req.length;
+            let approach = (road.zone_ahead(rear).start - rear).max(0.0);
             approach / (self.planner.v_max * self.dt)
                 + self.planner.library.lane_change_steps as f64
         } else {
@@ -509,7 +515,7 @@ impl<'p> PhaseSearch<'p> {
     /// Cost charged when a plan reaches the horizon short of its goal.
     fn terminal_cost(&self, n: &Node) -> f64 {
         let lacking = self.lacking_steps(n);
-        if self.req.must_merge && !MAIN_LANES.contains(&n.lane) {
+        if self.req.must_merge && !self.on_main(n) {
             lacking + UNMERGED_PENALTY
         } else {
             lacking
@@ -557,7 +563,7 @@ impl<'p> PhaseSearch<'p> {
                         continue;
                     }
                     let lane = n.lane + p.lane_offset();
-                    if !LANES.contains(&lane) || !self.can_start(p, n) {
+                    if !self.planner.road.lanes().contains(&lane) || !self.can_start(p, n) {
                         continue;
                     }
                     let seg = if n.step == 0 {
@@ -591,7 +597,8 @@ impl<'p> PhaseSearch<'p> {
             LowSpeedLaneChanges::Merge => n.lane == MERGE_LANE,
             LowSpeedLaneChanges::All => true,
         };
-        !(n.lane == MERGE_LANE && front < self.planner.road.merge_start) && (!slow || slide_allowed)
+        let before_zone = front < self.planner.road.zone_ahead(front).start;
+        !(n.lane == MERGE_LANE && before_zone) && (!slow || slide_allowed)
     }
 
     /// Whether the request's guard lets primitive `p`, rolled out as `seg` from the root, start.

@@ -60,7 +60,7 @@ impl Rules {
             !v.on_ramp
                 && target != MERGE_LANE
                 && road.lanes_at(v.s).contains(&target)
-                && !(v.lane == MERGE_LANE && v.front() < road.merge_start)
+                && !(v.lane == MERGE_LANE && v.front() < road.zone_ahead(v.front()).start)
                 && (!slow || slide_ok)
         })
     }

@@ -5,7 +5,7 @@
 //! not by running statistics, so an observation means the same in training and at test time,
 //! in Rust and in Python.
 
-use crate::model::road::{MAIN_LANES, MERGE_LANE};
+use crate::model::road::MERGE_LANE;
 use crate::model::scene::{Kind, Scene};
 
 /// Vehicles observed around the ego.
@@ -54,15 +54,16 @@ pub fn observe(scene: &Scene, i: usize, changing: bool, v_max: f64, out: &mut [f
     out.fill(0.0);
     let road = &scene.road;
     let me = &scene.vehicles[i];
-    let zone = (road.merge_end - road.merge_start).max(1.0);
+    let merge = road.zone_ahead(me.front());
+    let zone = (merge.end - merge.start).max(1.0);
     let on_merge_lane = me.lane == MERGE_LANE;
     let ego = [
         me.speed / v_max,
-        f64::from(me.lane) / f64::from(MAIN_LANES[1]),
+        f64::from(me.lane) / f64::from(road.top_lane()),
         me.lateral / road.lane_width,
         f64::from(u8::from(on_merge_lane)),
         if on_merge_lane {
-            ((road.merge_end - me.front()) / zone).clamp(0.0, 2.0)
+            ((merge.end - me.front()) / zone).clamp(0.0, 2.0)
         } else {
             0.0
         },

@@ -50,11 +50,11 @@ impl ConstantSpeed {
         horizon: usize,
     ) -> Option<usize> {
         let road = &scene.road;
-        let zone = road.merge_end - road.merge_start;
+        let merge = road.zone_ahead(front);
+        let zone = merge.end - merge.start;
         let mut undecided = 1.0;
         for k in 0..=horizon {
-            let xi =
-                ((front + speed * self.dt * k as f64 - road.merge_start) / zone).clamp(0.0, 1.0);
+            let xi = ((front + speed * self.dt * k as f64 - merge.start) / zone).clamp(0.0, 1.0);
             undecided *= 1.0 - xi.powf(self.merge_exponent);
             if undecided <= 0.5 {
                 return Some(k);

@@ -12,7 +12,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::model::road::{clamp_lane, Road, MAIN_LANES, MERGE_LANE};
+use crate::model::road::{Road, MERGE_LANE};
 use crate::model::scene::{Kind, Origin, VehicleState};
 
 /// Neighbour slots of graph (a), in node order after the HDV itself.
@@ -227,11 +227,24 @@ pub fn lane_change_start(now: &VehicleState, next: &VehicleState, lane_width: f6
 }
 
 /// The lane an HDV on `lane` moves to when it changes lanes: the acceleration lane merges left,
-/// the right main lane can only go left (main-road vehicles may not enter the acceleration
-/// lane), the left main lane goes right.
-pub fn lane_change_direction(lane: i32) -> i32 {
-    if lane >= MAIN_LANES[1] {
+/// the rightmost main lane can only go left (main-road vehicles may not enter the acceleration
+/// lane), the leftmost (lane `top`) goes right; a middle lane of a wider road is taken to go
+/// left, the direction of overtaking.
+pub fn lane_change_direction(lane: i32, top: i32) -> i32 {
+    if lane >= top {
         -1
+    } else {
+        1
+    }
+}
+
+/// The ego lane as the model knows it, relative to the road: 0 the merge lane, 2 the leftmost
+/// main lane, 1 any other main lane (the rightmost of the paper's two).
+pub fn lane_class(lane: i32, top: i32) -> u8 {
+    if lane <= MERGE_LANE {
+        0
+    } else if lane >= top {
+        2
     } else {
         1
     }
@@ -240,11 +253,11 @@ pub fn lane_change_direction(lane: i32) -> i32 {
 /// The HDV part of the observation.
 pub fn ego_of(v: &VehicleState, road: &Road) -> Ego {
     Ego {
-        lane: clamp_lane(v.lane) as u8,
+        lane: lane_class(v.lane, road.top_lane()),
         lateral: v.lateral as f32,
         speed: v.speed as f32,
         accel: v.accel as f32,
-        to_merge_end: (road.merge_end - v.front()) as f32,
+        to_merge_end: (road.zone_ahead(v.front()).end - v.front()) as f32,
         from_ramp: v.origin == Origin::Ramp,
     }
 }
@@ -565,9 +578,12 @@ mod tests {
         mid.lateral = 0.9;
         assert!(!is_decision_point(&mid));
         assert!(!is_decision_point(&veh(Kind::Cav, 100.0, 1, 30.0)));
-        assert_eq!(lane_change_direction(0), 1);
-        assert_eq!(lane_change_direction(1), 1);
-        assert_eq!(lane_change_direction(2), -1);
+        assert_eq!(lane_change_direction(0, 2), 1);
+        assert_eq!(lane_change_direction(1, 2), 1);
+        assert_eq!(lane_change_direction(2, 2), -1);
+        assert_eq!(lane_change_direction(2, 3), 1);
+        assert_eq!(lane_class(2, 3), 1);
+        assert_eq!(lane_class(3, 3), 2);
     }
 
     #[test]

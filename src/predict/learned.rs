@@ -28,7 +28,7 @@ use super::longitudinal::Longitudinal;
 use super::model_file::{LaneChangeModel, ModelError};
 use super::Predictor;
 use crate::config::{Config, PredictorKind};
-use crate::model::road::{lane_at, MERGE_LANE};
+use crate::model::road::{Road, MERGE_LANE};
 use crate::model::scene::{Kind, Scene};
 use crate::model::trajectory::Trajectory;
 
@@ -137,7 +137,7 @@ impl Learned {
         let road = &scene.road;
         let w = road.lane_width;
         let v = &scene.vehicles[i];
-        let direction = lane_change_direction(v.lane);
+        let direction = lane_change_direction(v.lane, road.top_lane());
         let mut out = Rollout {
             probabilities: Vec::new(),
             start: None,
@@ -160,14 +160,15 @@ impl Learned {
                 ..ego0
             };
             // On the single-lane ramp edge no lane change is possible.
-            if v.lane == MERGE_LANE && v.front() + dk < road.merge_start {
+            let zone = road.zone_ahead(v.front() + dk);
+            if v.lane == MERGE_LANE && v.front() + dk < zone.start {
                 if record {
                     out.probabilities.push(0.0);
                 }
                 continue;
             }
-            obs.ego.to_merge_end = (road.merge_end - v.front() - dk) as f32;
-            self.observe_at(buf, &mut obs, &ego, plans, k, w);
+            obs.ego.to_merge_end = (zone.end - v.front() - dk) as f32;
+            self.observe_at(buf, &mut obs, &ego, plans, k, road);
             let p = model.probability(&obs, &mut buf.ws);
             if record {
                 out.probabilities.push(p);
@@ -215,7 +216,7 @@ impl Learned {
         ego: &Agent,
         plans: &[&Trajectory],
         k: usize,
-        w: f64,
+        road: &Road,
     ) {
         buf.moved.clear();
         buf.moved.extend(
@@ -229,7 +230,7 @@ impl Learned {
         );
         buf.plan_agents.clear();
         for (n, t) in plans.iter().enumerate() {
-            let a = self.plan_agent(t, k, w);
+            let a = self.plan_agent(t, k, road);
             buf.moved.push(a);
             buf.plan_agents.push((n, a));
         }
@@ -239,7 +240,7 @@ impl Learned {
             obs.cavs = Default::default();
             for (slot, &n) in buf.chosen.iter().enumerate() {
                 for j in 1..=PREVIEW {
-                    let a = self.plan_agent(plans[n], k + j, w);
+                    let a = self.plan_agent(plans[n], k + j, road);
                     obs.cavs[j - 1][slot] = cav_node(ego, j, self.dt, a.s, a.y, a.speed);
                 }
             }
@@ -247,12 +248,12 @@ impl Learned {
     }
 
     /// The CAV following plan `t`, at step `k`.
-    fn plan_agent(&self, t: &Trajectory, k: usize, w: f64) -> Agent {
+    fn plan_agent(&self, t: &Trajectory, k: usize, road: &Road) -> Agent {
         let p = t.at(k, self.dt);
         Agent {
             s: p.s,
             y: p.y,
-            lane: lane_at(p.y, w),
+            lane: road.lane_at(p.y),
             speed: p.speed,
             is_cav: true,
         }

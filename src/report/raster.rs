@@ -3,7 +3,7 @@
 //! road is drawn in its own frame, stretched across (a 14 m wide road over a 470 m section would
 //! be a line otherwise).
 
-use crate::model::road::{MAIN_LANES, MERGE_LANE};
+use crate::model::road::MERGE_LANE;
 use crate::model::scene::{Kind, Scene};
 
 const GRASS: [u8; 3] = [96, 128, 84];
@@ -22,10 +22,10 @@ pub fn section_rgb(scene: &Scene, highlight: &[&str], width: usize, height: usiz
     };
     img.fill_rect(0.0, 0.0, width as f64, height as f64, GRASS);
     let road = &scene.road;
-    let s0 = road.ramp_start.min(0.0);
+    let s0 = road.ramp_start();
     let sx = width as f64 / (road.section_end - s0);
     let w = road.lane_width;
-    let lanes = f64::from(MAIN_LANES[1] + 1);
+    let lanes = f64::from(road.top_lane() + 1);
     // Lane 0's right edge at 80 % of the height, the top lane's left edge at 20 %.
     let sy = 0.6 * height as f64 / (lanes * w);
     let x = |s: f64| (s - s0) * sx;
@@ -39,10 +39,12 @@ pub fn section_rgb(scene: &Scene, highlight: &[&str], width: usize, height: usiz
         img.fill_rect(x(from), top - 1.0, x(to), top + 1.0, MARKING);
         img.fill_rect(x(from), bottom - 1.0, x(to), bottom + 1.0, MARKING);
     };
-    for lane in MAIN_LANES[0]..=MAIN_LANES[1] {
+    for lane in road.main_lane_range() {
         band(&mut img, lane, 0.0, road.section_end);
     }
-    band(&mut img, MERGE_LANE, road.ramp_start, road.merge_end);
+    for z in &road.zones {
+        band(&mut img, MERGE_LANE, z.ramp_start, z.end);
+    }
     for v in &scene.vehicles {
         let colour = if highlight.contains(&&*v.id) {
             HIGHLIGHT

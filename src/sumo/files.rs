@@ -8,7 +8,7 @@ use rand_chacha::ChaCha8Rng;
 
 use crate::config::hdv::{CarFollowing, HdvProfile};
 use crate::config::Config;
-use crate::model::road::EMBEDDED_NET;
+use crate::model::road::{Road, EMBEDDED_NET};
 
 /// Why the episode's SUMO input could not be prepared.
 #[derive(Debug, thiserror::Error)]
@@ -171,8 +171,9 @@ pub struct EpisodeInput {
 }
 
 impl EpisodeInput {
-    /// Writes the network (unless the config names one), vehicle types and routes.
-    pub fn write(config: &Config) -> Result<Self, InputError> {
+    /// Writes the network (unless the config names one), vehicle types and the routes of
+    /// `road` (the network's frame).
+    pub fn write(config: &Config, road: &Road) -> Result<Self, InputError> {
         // Directories of killed runs (SIGINT, SIGKILL) are swept here, by the next run: their
         // names carry their process id.
         crate::io::sweep_stale(&std::env::temp_dir(), INPUT_DIR_PREFIX);
@@ -197,7 +198,7 @@ impl EpisodeInput {
             None => put("merge.net.xml", EMBEDDED_NET)?,
         };
         let vehicle_types = put("vtypes.add.xml", &vehicle_types(config))?;
-        let routes = put("routes.rou.xml", ROUTES)?;
+        let routes = put("routes.rou.xml", &routes_xml(road))?;
         Ok(EpisodeInput {
             _dir: dir,
             net,
@@ -301,66 +302,19 @@ pub fn gui_unavailable() -> Option<String> {
     (!on_path).then(|| format!("{GUI_PROGRAM} is not installed (Debian: apt-get install sumo)"))
 }
 
-/// SUMO route file with the two routes (vehicles are added at run time by entry control).
-pub const ROUTES: &str = "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<!-- the merge scenario's two routes -->\n<routes>\n    <route id=\"main\" edges=\"main_in acc main_out\"/>\n    <route id=\"ramp\" edges=\"ramp acc main_out\"/>\n</routes>\n";
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn shipped_vehicle_types_match_the_defaults() {
-        let shipped = include_str!("../../sumo_net/vtypes.add.xml");
-        assert_eq!(
-            shipped,
-            vehicle_types(&Config::default()),
-            "sumo_net/vtypes.add.xml drifted from the defaults: regenerate it with `bkpbs config --vtypes`"
+/// SUMO route file with one route per entry of `road`, named after it (vehicles are added at
+/// run time by entry control).
+pub fn routes_xml(road: &Road) -> String {
+    let mut xml = String::from(
+        "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<!-- the merge scenario's routes, one per entry -->\n<routes>\n",
+    );
+    for e in &road.entries {
+        let edges: Vec<&str> = e.route.iter().map(|x| &**x).collect();
+        xml += &format!(
+            "    <route id=\"{}\" edges=\"{}\"/>\n",
+            e.name,
+            edges.join(" ")
         );
     }
-
-    fn vtypes_of(profile: &str) -> String {
-        let mut c = Config::default();
-        c.hdv.profile = profile.into();
-        vehicle_types(&c)
-    }
-
-    #[test]
-    fn profiles_change_only_the_hdv_type() {
-        let cav_line = |t: &str| {
-            t.lines()
-                .find(|l| l.contains("id=\"cav\""))
-                .unwrap()
-                .to_string()
-        };
-        let default = vtypes_of("sumo-safe");
-        let krauss = vtypes_of("krauss");
-        let hdv = krauss.lines().find(|l| l.contains("id=\"hdv\"")).unwrap();
-        assert!(hdv.contains("carFollowModel=\"Krauss\"") && hdv.contains("sigma=\"0.5\""));
-        assert!(!hdv.contains("delta="), "Krauss has no δ: {hdv}");
-        assert!(vtypes_of("eidm").contains("carFollowModel=\"EIDM\" laneChangeModel=\"LC2013\""));
-        assert!(vtypes_of("paper").contains("lcAssertive=\"3\""));
-        for p in ["krauss", "eidm", "paper", "heterogeneous"] {
-            assert_eq!(cav_line(&vtypes_of(p)), cav_line(&default), "{p}");
-        }
-    }
-
-    #[test]
-    fn heterogeneous_drivers_are_a_distribution_drawn_from_the_seed() {
-        let t = vtypes_of("heterogeneous");
-        assert!(t.contains("<vTypeDistribution id=\"hdv\">"));
-        assert_eq!(t.matches("<vType id=\"hdv.").count(), 20);
-        assert_eq!(t, vtypes_of("heterogeneous"), "same seed, same drivers");
-        let mut c = Config::default();
-        c.hdv.profile = "heterogeneous".into();
-        c.scenario.seed = 9;
-        assert_ne!(t, vehicle_types(&c), "another seed, other drivers");
-    }
-
-    #[test]
-    fn missing_net_file_is_named() {
-        let mut c = Config::default();
-        c.scenario.net_file = Some("nowhere/merge.net.xml".into());
-        let e = EpisodeInput::write(&c).err().unwrap().to_string();
-        assert!(e.contains("nowhere/merge.net.xml"), "{e}");
-    }
+    xml + "</routes>\n"
 }

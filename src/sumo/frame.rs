@@ -7,43 +7,71 @@
 //! TraCI or libsumo loop reads them one getter at a time (the Python bindings' `Controller`).
 //! Both go through this module, so a controller sees the same scene either way.
 
+use std::path::Path;
 use std::sync::Arc;
 
 use crate::config::Scenario;
-use crate::model::road::{Road, RoadError, EDGES, RAMP};
+use crate::model::road::Road;
 use crate::model::scene::{Kind, Origin, Scene, VehicleState};
-use crate::sumo::{RawVehicleState, Simulation, SumoError};
+use crate::sumo::network::{Layout, Net, NetworkFileError};
+use crate::sumo::RawVehicleState;
 
-/// Why the running network cannot serve as the merge road.
+/// Why a network cannot serve as a merge road.
 #[derive(Debug, thiserror::Error)]
 pub enum NetworkError {
     #[error(transparent)]
-    Shape(#[from] RoadError),
-    #[error(transparent)]
-    Sumo(#[from] SumoError),
+    File(#[from] NetworkFileError),
+    #[error("network {path} cannot be planned on: {what}")]
+    Shape {
+        path: std::path::PathBuf,
+        what: String,
+    },
 }
 
-/// Reads edge lengths, lane counts and the lane width from SUMO and checks the merge layout.
+/// The road frame of the network file at `path`: its layout discovered and every lane placed.
 ///
 /// # Errors
-/// A missing edge or a wrong lane count ([`NetworkError::Shape`]), or SUMO failing.
-pub fn road_from_simulation(sim: &Simulation) -> Result<Road, NetworkError> {
-    let known = sim.edge_ids()?;
-    if let Some(e) = EDGES.iter().find(|e| !known.iter().any(|k| k == *e)) {
-        return Err(RoadError::Shape(format!("edge '{e}' is missing")).into());
+/// An unreadable file, or a network that is not a one-way carriageway with merges.
+pub fn road_from_net_file(path: &Path) -> Result<Road, NetworkError> {
+    let net = Net::read(path)?;
+    road_from_net(&net, path)
+}
+
+/// The road frame of `net` (read from `path`, named in errors).
+pub fn road_from_net(net: &Net, path: &Path) -> Result<Road, NetworkError> {
+    let layout = Layout::discover(net, path)?;
+    crate::sumo::road_frame::road(net, &layout).map_err(|what| NetworkError::Shape {
+        path: path.to_path_buf(),
+        what,
+    })
+}
+
+/// The road frame of the scenario's network: the configured file, or the embedded one.
+///
+/// # Errors
+/// As [`road_from_net_file`].
+pub fn scenario_road(scenario: &Scenario) -> Result<Road, NetworkError> {
+    match &scenario.net_file {
+        Some(path) => road_from_net_file(path),
+        None => Ok(embedded_road()),
     }
-    let mut frames = [("", 0.0, 0); 4];
-    for (frame, name) in frames.iter_mut().zip(EDGES) {
-        let lane0 = format!("{name}_0");
-        *frame = (
-            name,
-            sim.lane_length(&lane0)?,
-            sim.edge_lane_count(name)? as i32,
-        );
-    }
-    // The frame's lane width is that of the first edge's lane 0.
-    let lane_width = sim.lane_width(&format!("{}_0", EDGES[0]))?;
-    Ok(Road::from_edges(lane_width, frames)?)
+}
+
+/// The road frame of the network embedded in the binary (the paper's).
+pub fn embedded_road() -> Road {
+    let path = Path::new("merge.net.xml");
+    let net = Net::parse(path, crate::model::road::EMBEDDED_NET).expect("the embedded net parses");
+    road_from_net(&net, path).expect("the embedded net is a merge")
+}
+
+/// The frame lane of `lane_index` on the edge of code `edge_code`, if the frame has it.
+fn lane_frame(
+    road: &Road,
+    edge_code: i32,
+    lane_index: i32,
+) -> Option<&crate::model::road::LaneFrame> {
+    let e = road.edges.get(usize::try_from(edge_code).ok()?)?;
+    e.lanes.get(usize::try_from(lane_index).ok()?)?.as_ref()
 }
 
 /// Frame `s` and lane of a SUMO (edge code, lane index, lane position); `None` off the section.
@@ -53,20 +81,26 @@ pub fn to_frame(
     lane_index: i32,
     lane_position: f64,
 ) -> Option<(f64, i32)> {
-    let e = road.edges.get(usize::try_from(edge_code).ok()?)?;
-    Some((e.s_start + lane_position, e.lane_offset + lane_index))
+    let f = lane_frame(road, edge_code, lane_index)?;
+    Some((f.s_at(lane_position), f.lane))
 }
 
 /// SUMO lane index on edge `edge_code` of frame lane `lane`, if that edge has it.
 pub fn sumo_lane_index(road: &Road, edge_code: i32, lane: i32) -> Option<i32> {
     let e = road.edges.get(usize::try_from(edge_code).ok()?)?;
-    let idx = lane - e.lane_offset;
-    (0..e.lanes).contains(&idx).then_some(idx)
+    let idx = e
+        .lanes
+        .iter()
+        .position(|l| l.as_ref().is_some_and(|l| l.lane == lane))?;
+    Some(idx as i32)
 }
 
-/// Whether a reading on `edge_code` lies on the ramp edge, before the merge zone.
-pub fn is_on_ramp(edge_code: i32) -> bool {
-    edge_code == RAMP as i32
+/// Whether a reading on `edge_code` lies on an on-ramp, before its merge zone.
+pub fn is_on_ramp(road: &Road, edge_code: i32) -> bool {
+    usize::try_from(edge_code)
+        .ok()
+        .and_then(|c| road.edges.get(c))
+        .is_some_and(|e| e.on_ramp)
 }
 
 /// The speed SUMO is commanded for a planned speed: within [0, v_max]. The one place where
@@ -125,24 +159,35 @@ pub struct Identity {
     pub desired_speed: f64,
 }
 
-/// The code of a SUMO edge of the merge section (its index in [`EDGES`]), as
-/// [`RawVehicleState::edge_code`] carries it; `None` for any other edge (e.g. an internal lane).
-pub fn edge_code(road_id: &str) -> Option<i32> {
-    EDGES.iter().position(|e| *e == road_id).map(|i| i as i32)
+/// The code of a SUMO edge of the merge section (its index in `road.edges`), as
+/// [`RawVehicleState::edge_code`] carries it; `None` for any other edge (e.g. an off-ramp).
+pub fn edge_code(road: &Road, road_id: &str) -> Option<i32> {
+    road.edges
+        .iter()
+        .position(|e| &*e.name == road_id)
+        .map(|i| i as i32)
 }
 
-/// Where a vehicle entered, from the demand's vehicle ids (`main.N`, `ramp.N`); `None` for ids
-/// of another scheme.
+/// The names of the frame's edges in code order, for `Simulation::set_edge_codes`.
+pub fn edge_names(road: &Road) -> Vec<&str> {
+    road.edges.iter().map(|e| &*e.name).collect()
+}
+
+/// Where a vehicle entered, from the demand's vehicle ids (`main.N`, `ramp.N`, `ramp2.N` on a
+/// network of several ramps); `None` for ids of another scheme.
 pub fn origin_from_id(id: &str) -> Option<Origin> {
-    [Origin::Main, Origin::Ramp].into_iter().find(|o| {
-        id.strip_prefix(o.as_str())
-            .is_some_and(|r| r.starts_with('.'))
-    })
+    if id.starts_with("main.") {
+        return Some(Origin::Main);
+    }
+    let rest = id.strip_prefix("ramp")?;
+    rest.trim_start_matches(|c: char| c.is_ascii_digit())
+        .starts_with('.')
+        .then_some(Origin::Ramp)
 }
 
-/// Where a vehicle entered, from the edge it was first seen on: the ramp or else the main road.
-pub fn origin_from_edge(edge_code: i32) -> Origin {
-    if is_on_ramp(edge_code) {
+/// Where a vehicle entered, from the edge it was first seen on: a ramp or else the main road.
+pub fn origin_from_edge(road: &Road, edge_code: i32) -> Origin {
+    if is_on_ramp(road, edge_code) {
         Origin::Ramp
     } else {
         Origin::Main
@@ -156,8 +201,9 @@ pub fn frame_position(road: &Road, raw: &RawVehicleState) -> Option<(f64, i32)> 
 
 /// The vehicle at the frame position [`frame_position`] gave: the centre lies half a length
 /// behind the front bumper, and SUMO's angle (degrees, 0 = north, clockwise) becomes a heading
-/// relative to the road (radians, positive to the left; the road runs east).
+/// relative to the road at the vehicle (radians, positive to the left).
 pub fn state_at(
+    road: &Road,
     scenario: &Scenario,
     who: Identity,
     raw: &RawVehicleState,
@@ -173,11 +219,11 @@ pub fn state_at(
         lateral: raw.lateral_offset,
         speed: raw.speed,
         accel: raw.acceleration,
-        heading: (90.0 - raw.angle).to_radians(),
+        heading: (90.0 - raw.angle).to_radians() - road.heading_at(front),
         desired_speed: who.desired_speed,
         length: scenario.vehicle_length,
         width: scenario.vehicle_width,
-        on_ramp: is_on_ramp(raw.edge_code),
+        on_ramp: is_on_ramp(road, raw.edge_code),
     }
 }
 
@@ -189,7 +235,7 @@ pub fn vehicle_state(
     raw: &RawVehicleState,
 ) -> Option<VehicleState> {
     let (front, lane) = frame_position(road, raw)?;
-    Some(state_at(scenario, who, raw, front, lane))
+    Some(state_at(road, scenario, who, raw, front, lane))
 }
 
 #[cfg(test)]
@@ -198,9 +244,12 @@ mod tests {
 
     #[test]
     fn edge_names_map_to_codes() {
-        assert_eq!(edge_code("main_in"), Some(0));
-        assert_eq!(edge_code("main_out"), Some(3));
-        assert_eq!(edge_code(":n1_0"), None);
+        let r = Road::paper_default();
+        assert_eq!(edge_code(&r, "main_in"), Some(0));
+        assert_eq!(edge_code(&r, "main_out"), Some(2));
+        assert_eq!(edge_code(&r, "ramp"), Some(3));
+        assert_eq!(edge_code(&r, ":n1_0"), None);
+        assert_eq!(embedded_road(), r);
     }
 
     #[test]
@@ -209,13 +258,14 @@ mod tests {
         // main_in lane 1 (left) at 10 m -> frame lane 2, s = 10.
         assert_eq!(to_frame(&r, 0, 1, 10.0), Some((10.0, 2)));
         // acc lane 0 (acceleration lane) -> frame lane 0, s = 150 + pos.
-        assert_eq!(to_frame(&r, 2, 0, 20.0), Some((170.0, 0)));
-        assert_eq!(to_frame(&r, 3, 0, 5.0), Some((335.0, 1)));
+        assert_eq!(to_frame(&r, 1, 0, 20.0), Some((170.0, 0)));
+        assert_eq!(to_frame(&r, 2, 0, 5.0), Some((335.0, 1)));
+        assert_eq!(to_frame(&r, 3, 0, 5.0), Some((150.0 - 166.79 + 5.0, 0)));
         assert_eq!(to_frame(&r, -1, 0, 5.0), None);
-        assert_eq!(sumo_lane_index(&r, 2, 1), Some(1));
+        assert_eq!(sumo_lane_index(&r, 1, 1), Some(1));
         assert_eq!(sumo_lane_index(&r, 0, 1), Some(0));
         assert_eq!(sumo_lane_index(&r, 0, 0), None);
-        assert_eq!(sumo_lane_index(&r, 3, 3), None);
+        assert_eq!(sumo_lane_index(&r, 2, 3), None);
     }
 
     #[test]
@@ -223,6 +273,8 @@ mod tests {
         assert_eq!(origin_from_id("ramp.12"), Some(Origin::Ramp));
         assert_eq!(origin_from_id("main.0"), Some(Origin::Main));
         assert_eq!(origin_from_id("rampage"), None);
+        assert_eq!(origin_from_id("ramp3.7"), Some(Origin::Ramp));
+        assert_eq!(origin_from_id("main2.7"), None);
         assert_eq!(origin_from_id("veh0"), None);
     }
 
@@ -236,7 +288,7 @@ mod tests {
             lane_position: 30.0,
             lateral_offset: 0.5,
             lane_index: 0,
-            edge_code: edge_code("acc").unwrap(),
+            edge_code: edge_code(&road, "acc").unwrap(),
             ..Default::default()
         };
         let who = Identity {

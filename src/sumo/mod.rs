@@ -9,6 +9,7 @@
 pub mod files;
 pub mod frame;
 pub mod network;
+pub mod road_frame;
 
 mod ffi;
 mod quiet;

@@ -21,6 +21,8 @@ pub struct Lane {
     pub index: u32,
     pub length: f64,
     pub width: f64,
+    /// Speed limit (m/s).
+    pub speed: f64,
     pub shape: Vec<Point>,
 }
 
@@ -193,6 +195,7 @@ fn lane(l: roxmltree::Node) -> Result<Lane, String> {
         length: num("length")?,
         // SUMO's default lane width when the attribute is absent.
         width: l.attribute("width").map_or(Ok(3.2), |_| num("width"))?,
+        speed: num("speed").unwrap_or(13.89),
         shape,
     })
 }

@@ -12,7 +12,6 @@ use std::time::Instant;
 use crate::config::Config;
 use crate::episode::metrics::percentile;
 use crate::episode::{self, Driver, EpisodeError, Observer};
-use crate::model::road::lane_at;
 use crate::model::scene::{Kind, Scene};
 use crate::model::trajectory::Trajectory;
 use crate::predict::features::{
@@ -150,7 +149,7 @@ fn observations(
     let mut with_cavs = plain;
     let cands = plans.iter().enumerate().map(|(n, t)| {
         let p = t.at(0, dt);
-        let lane = lane_at(p.y, w);
+        let lane = scene.road.lane_at(p.y);
         (
             n,
             Agent {
@@ -194,7 +193,7 @@ pub fn run(config: &Config, learned: &Learned) -> Result<PredictorBench, Episode
         single: [Vec::new(), Vec::new()],
         per_step: [Vec::new(), Vec::new(), Vec::new()],
     };
-    let demand = crate::episode::demand::generate(&c);
+    let demand = crate::episode::demand::generate_for(&c)?;
     episode::run_observed(&c, Driver::Named("idm-mobil"), &demand, &mut timer)?;
     let med = |v: &mut Vec<f64>| percentile(v, 50.0);
     let pair = |v: &mut Vec<f64>| (percentile(v, 50.0), percentile(v, 99.0));

@@ -191,7 +191,7 @@ fn label_of(v: &VehicleState, next: &Buffered, w: f64, stats: &mut CollectStats)
         return None;
     };
     let dir = lane_change_start(v, &next.scene.vehicles[j], w);
-    if dir != 0 && dir as i32 != lane_change_direction(v.lane) {
+    if dir != 0 && dir as i32 != lane_change_direction(v.lane, next.scene.road.top_lane()) {
         stats.unexpected_direction += 1;
     }
     Some(dir != 0)
@@ -412,7 +412,7 @@ pub fn collect(
             cause: Box::new(cause),
         };
         config.validate().map_err(|c| fail(c.into()))?;
-        let demand = crate::episode::demand::generate(&config);
+        let demand = crate::episode::demand::generate_for(&config).map_err(|c| fail(c.into()))?;
         let mut rec = Recorder::new(
             e as u32,
             spec.seed,

@@ -97,3 +97,113 @@ pub fn send_signal(pid: i32, signal: i32) {
         "kill({pid}, {signal})"
     );
 }
+/// A merge network with `main_lanes` lanes, one on-ramp per entry of `ramps_at` (x of the
+/// merge), edge ids of its own, straight or bending (a gentle arc through the middle), built
+/// by netconvert with its defaults (internal lanes) in `dir`.
+pub fn netconvert_net(
+    dir: &std::path::Path,
+    main_lanes: u32,
+    ramps_at: &[f64],
+    curved: bool,
+) -> std::path::PathBuf {
+    let y = |x: f64| {
+        if curved {
+            0.0004 * (x - 300.0).powi(2)
+        } else {
+            0.0
+        }
+    };
+    let mut nodes = String::from("<nodes>\n<node id=\"start\" x=\"0\" y=\"0\"/>\n");
+    let mut edges = String::from("<edges>\n");
+    let mut cons = String::from("<connections>\n");
+    let mut from = "start".to_string();
+    let mut prev: Option<String> = None;
+    let shape = |x0: f64, x1: f64| {
+        (0..=10)
+            .map(|k| {
+                let x = x0 + (x1 - x0) * k as f64 / 10.0;
+                format!("{x:.2},{:.2}", y(x))
+            })
+            .collect::<Vec<_>>()
+            .join(" ")
+    };
+    let mut x = 0.0;
+    for (k, &xm) in ramps_at.iter().enumerate() {
+        let (a, m) = (format!("j{k}a"), format!("j{k}b"));
+        nodes += &format!(
+            "<node id=\"{a}\" x=\"{xm}\" y=\"{:.2}\"/>\n<node id=\"{m}\" x=\"{}\" y=\"{:.2}\"/>\n",
+            y(xm),
+            xm + 200.0,
+            y(xm + 200.0)
+        );
+        nodes += &format!(
+            "<node id=\"r{k}\" x=\"{}\" y=\"{:.2}\"/>\n",
+            xm - 150.0,
+            y(xm) - 60.0
+        );
+        let before = format!("road{k}");
+        edges += &format!("<edge id=\"{before}\" from=\"{from}\" to=\"{a}\" numLanes=\"{main_lanes}\" speed=\"35\" width=\"3.6\" shape=\"{}\"/>\n", shape(x, xm));
+        edges += &format!("<edge id=\"merge{k}\" from=\"{a}\" to=\"{m}\" numLanes=\"{}\" speed=\"35\" width=\"3.6\" shape=\"{}\"/>\n", main_lanes + 1, shape(xm, xm + 200.0));
+        edges += &format!("<edge id=\"entry{k}\" from=\"r{k}\" to=\"{a}\" numLanes=\"1\" speed=\"30\" width=\"3.6\"/>\n");
+        if let Some(p) = &prev {
+            for i in 0..main_lanes {
+                cons += &format!(
+                    "<connection from=\"{p}\" to=\"{before}\" fromLane=\"{}\" toLane=\"{i}\"/>\n",
+                    i + 1
+                );
+            }
+        }
+        for i in 0..main_lanes {
+            cons += &format!(
+                "<connection from=\"{before}\" to=\"merge{k}\" fromLane=\"{i}\" toLane=\"{}\"/>\n",
+                i + 1
+            );
+        }
+        cons += &format!(
+            "<connection from=\"entry{k}\" to=\"merge{k}\" fromLane=\"0\" toLane=\"0\"/>\n"
+        );
+        prev = Some(format!("merge{k}"));
+        from = m;
+        x = xm + 200.0;
+    }
+    nodes += &format!(
+        "<node id=\"end\" x=\"{}\" y=\"{:.2}\"/>\n</nodes>\n",
+        x + 200.0,
+        y(x + 200.0)
+    );
+    edges += &format!("<edge id=\"tail\" from=\"{from}\" to=\"end\" numLanes=\"{main_lanes}\" speed=\"35\" width=\"3.6\" shape=\"{}\"/>\n</edges>\n", shape(x, x + 200.0));
+    for i in 0..main_lanes {
+        cons += &format!(
+            "<connection from=\"{}\" to=\"tail\" fromLane=\"{}\" toLane=\"{i}\"/>\n",
+            prev.as_ref().unwrap(),
+            i + 1
+        );
+    }
+    cons += "</connections>\n";
+    for (name, text) in [
+        ("n.nod.xml", &nodes),
+        ("n.edg.xml", &edges),
+        ("n.con.xml", &cons),
+    ] {
+        std::fs::write(dir.join(name), text).unwrap();
+    }
+    let out = dir.join("n.net.xml");
+    let status = std::process::Command::new("netconvert")
+        .current_dir(dir)
+        .args([
+            "--node-files",
+            "n.nod.xml",
+            "--edge-files",
+            "n.edg.xml",
+            "--connection-files",
+            "n.con.xml",
+            "--output-file",
+            "n.net.xml",
+        ])
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .status()
+        .unwrap();
+    assert!(status.success(), "netconvert failed on {}", dir.display());
+    out
+}

@@ -46,6 +46,7 @@ class Controller:
         planner: str = "bk-pbs",
         config: _ConfigSource = None,
         model: Optional[_PathArg] = None,
+        net_file: Optional[_PathArg] = None,
         **overrides: Any,
     ) -> None: ...
     def plan(

@@ -120,7 +120,7 @@ fn episode_samples(
 ) -> Result<(Vec<FollowSample>, HashMap<String, String>), EpisodeError> {
     let mut c = config.clone();
     c.scenario.seed = seed;
-    let planned = episode::demand::generate(&c);
+    let planned = episode::demand::generate_for(&c)?;
     let mut recorder = FollowRecorder::default();
     let result = episode::run_observed(&c, Driver::Named("sumo"), &planned, &mut recorder)?;
     let types = result

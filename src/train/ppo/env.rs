@@ -111,7 +111,7 @@ impl MergeEnv {
         reward: RewardSettings,
     ) -> Result<Self, EnvError> {
         config.validate().map_err(EpisodeError::from)?;
-        let demand = agent_demand(config, agents);
+        let demand = agent_demand(config, agents)?;
         let possible = demand
             .iter()
             .filter(|v| v.kind == Kind::Cav)
@@ -284,8 +284,8 @@ impl Drop for MergeEnv {
 
 /// The demand of the episode: as drawn, or with one agent CAV among HDVs (the first CAV
 /// inserted after a 10 s warm-up; every other vehicle an HDV).
-pub fn agent_demand(config: &Config, agents: Agents) -> Vec<PlannedVehicle> {
-    let mut demand = episode::demand::generate(config);
+pub fn agent_demand(config: &Config, agents: Agents) -> Result<Vec<PlannedVehicle>, EpisodeError> {
+    let mut demand = episode::demand::generate_for(config)?;
     if agents == Agents::Single {
         const WARMUP_S: f64 = 10.0;
         let ego = demand
@@ -297,7 +297,7 @@ pub fn agent_demand(config: &Config, agents: Agents) -> Vec<PlannedVehicle> {
             v.kind = if k == ego { Kind::Cav } else { Kind::Hdv };
         }
     }
-    demand
+    Ok(demand)
 }
 
 fn episode_thread(

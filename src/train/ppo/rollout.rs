@@ -89,7 +89,7 @@ pub fn run(
     config.validate()?;
     let keep_segments = matches!(choice, Choice::Sample(_));
     let mut ctl = RlPpo::new(config, net, choice, true);
-    let demand = agent_demand(config, agents);
+    let demand = agent_demand(config, agents)?;
     let result = episode::run_observed(config, Driver::Given(&mut ctl), &demand, &mut NoObserver)?;
     let outcomes: HashMap<&str, Outcome> = result
         .vehicles

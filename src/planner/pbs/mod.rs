@@ -18,6 +18,14 @@
 //! node's full state is rebuilt from its path when it is expanded. A node budget (and optionally
 //! a wall-time budget) bounds a round; when it runs out, or every branch dies, the best node seen
 //! (fewest conflicts, then cost) is returned as a fallback.
+//!
+//! At scale (`Problem::independent_groups`) a round is decomposed by independence detection:
+//! the root's conflicts (and the carried commitments) link agents into groups; each group is
+//! searched on its own, in parallel, with its own node budget; the groups' answers are put
+//! together and checked against each other, and groups whose answers conflict are merged and
+//! searched again, until no conflict crosses a group (or one group is left: the whole round).
+//! Agents without any conflict keep their root plans. Pairs are only checked where their
+//! stretches of road over the horizon come within reach of each other (a sweep over `s`).
 
 use std::sync::Arc;
 use std::time::Instant;
@@ -29,7 +37,9 @@ use crate::model::scene::{Kind, Origin, Scene};
 use crate::model::trajectory::{Pose, Trajectory};
 use crate::planner::mastar::{Mastar, NoPlan, Plan};
 use crate::planner::priority::PriorityGraph;
-use crate::planner::safety::{Body, SafetyRule};
+use crate::planner::safety::{Body, SafetyRule, REACH};
+
+mod groups;
 use crate::predict::Predictor;
 
 /// Bounds of one planning round.
@@ -73,6 +83,8 @@ pub struct Problem<'a> {
     pub horizon: usize,
     pub dt: f64,
     pub budget: Budget,
+    /// Decompose the round into independent groups (see the module documentation).
+    pub independent_groups: bool,
 }
 
 /// Effort and outcome of a round.
@@ -168,6 +180,24 @@ struct State {
     plans: Vec<Option<Arc<Plan>>>,
 }
 
+/// Pairs of `agents` (ascending, each pair `(a, b)` with a < b) whose stretches of road
+/// (`extents`, by agent) come within `safety::REACH` of each other: a sweep in order of the
+/// stretches' starts.
+fn within_reach(extents: &[(f64, f64)], agents: &[usize]) -> Vec<(usize, usize)> {
+    let mut order: Vec<usize> = agents.to_vec();
+    order.sort_by(|&a, &b| extents[a].0.total_cmp(&extents[b].0).then(a.cmp(&b)));
+    let mut pairs = Vec::new();
+    for (k, &a) in order.iter().enumerate() {
+        for &b in &order[k + 1..] {
+            if extents[b].0 > extents[a].1 + REACH {
+                break;
+            }
+            pairs.push((a.min(b), a.max(b)));
+        }
+    }
+    pairs
+}
+
 /// Counts kept while planning a child.
 #[derive(Default)]
 struct Effort {
@@ -204,7 +234,7 @@ impl Problem<'_> {
         let (a0, b0) = (Body::of(ta, 0, self.dt), Body::of(tb, 0, self.dt));
         (1..=self.horizon).find(|&k| {
             let (pa, pb) = (ta.at(k, self.dt), tb.at(k, self.dt));
-            if (pa.s - pb.s).abs() > crate::planner::safety::REACH || (pa.y - pb.y).abs() > 6.0 {
+            if (pa.s - pb.s).abs() > REACH || (pa.y - pb.y).abs() > 6.0 {
                 return false;
             }
             let (ba, bb) = (body(ta, pa), body(tb, pb));
@@ -213,32 +243,54 @@ impl Problem<'_> {
         })
     }
 
+    /// Which agents are in a conflict under trajectories `ts`.
+    pub fn conflicted_agents(&self, ts: &[Arc<Trajectory>]) -> Vec<bool> {
+        let everyone: Vec<usize> = (0..ts.len()).collect();
+        let mut out = vec![false; ts.len()];
+        for (_, a, b) in self.all_conflicts(ts, &everyone) {
+            out[a] = true;
+            out[b] = true;
+        }
+        out
+    }
+
     /// Whether agents `a` and `b` conflict at any step.
     pub fn conflict_between(&self, a: usize, b: usize, ts: &[Arc<Trajectory>]) -> bool {
         self.pair_conflict(a.min(b), a.max(b), ts).is_some()
     }
 
-    /// All conflicting pairs, each at its first step, sorted.
-    fn all_conflicts(&self, ts: &[Arc<Trajectory>]) -> Vec<Conflict> {
-        let n = ts.len();
-        let mut out = Vec::new();
-        for a in 0..n {
-            for b in a + 1..n {
-                if let Some(k) = self.pair_conflict(a, b, ts) {
-                    out.push((k, a, b));
-                }
-            }
-        }
+    /// All conflicting pairs among `agents`, each at its first step, sorted.
+    fn all_conflicts(&self, ts: &[Arc<Trajectory>], agents: &[usize]) -> Vec<Conflict> {
+        let extents = self.extents(ts);
+        let mut out: Vec<Conflict> = within_reach(&extents, agents)
+            .into_iter()
+            .filter_map(|(a, b)| self.pair_conflict(a, b, ts).map(|k| (k, a, b)))
+            .collect();
         out.sort_unstable();
         out
     }
 
-    /// The parent's conflicts with every pair touching a `changed` agent recomputed.
+    /// Each agent's stretch of road over the horizon: the lowest and highest `s` of its
+    /// trajectory. Two agents farther apart than `safety::REACH` at every step never conflict.
+    fn extents(&self, ts: &[Arc<Trajectory>]) -> Vec<(f64, f64)> {
+        ts.iter()
+            .map(|t| {
+                (0..=self.horizon).fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), k| {
+                    let s = t.at(k, self.dt).s;
+                    (lo.min(s), hi.max(s))
+                })
+            })
+            .collect()
+    }
+
+    /// The parent's conflicts with every pair touching a `changed` agent recomputed (pairs
+    /// among `agents`).
     fn updated_conflicts(
         &self,
         parent: &[Conflict],
         changed: &[usize],
         ts: &[Arc<Trajectory>],
+        agents: &[usize],
     ) -> Vec<Conflict> {
         let touched = |a: usize| changed.contains(&a);
         let mut out: Vec<Conflict> = parent
@@ -246,10 +298,15 @@ impl Problem<'_> {
             .copied()
             .filter(|&(_, a, b)| !touched(a) && !touched(b))
             .collect();
+        let extents = self.extents(ts);
+        let near = |a: usize, b: usize| {
+            let ((lo_a, hi_a), (lo_b, hi_b)) = (extents[a], extents[b]);
+            lo_b <= hi_a + REACH && lo_a <= hi_b + REACH
+        };
         for &c in changed {
-            for o in 0..ts.len() {
-                if o == c || (touched(o) && o < c) {
-                    continue; // each changed pair once
+            for &o in agents {
+                if o == c || (touched(o) && o < c) || !near(c, o) {
+                    continue; // each changed pair once; far pairs never conflict
                 }
                 let (a, b) = (c.min(o), c.max(o));
                 if let Some(k) = self.pair_conflict(a, b, ts) {
@@ -333,12 +390,28 @@ impl Problem<'_> {
     }
 
     /// Runs one planning round: Algorithm 1, depth-first from the root until a node without
-    /// conflicts or the end of the budget, then the best node seen as a fallback.
+    /// conflicts or the end of the budget, then the best node seen as a fallback; over the
+    /// whole scene, or group by group (`independent_groups`).
     pub fn solve(&self) -> Solution {
         let start = Instant::now();
         let mut stats = PbsStats::default();
         let root_state = self.plan_root(&mut stats);
-        let mut tree = Tree::new(self.root_node(&root_state));
+        if self.independent_groups {
+            return groups::solve(self, &root_state, start, stats);
+        }
+        let all: Vec<usize> = (0..self.scene.vehicles.len()).collect();
+        self.search(&root_state, &all, start, stats)
+    }
+
+    /// Algorithm 1 over `agents` (the others keep their root trajectories and plans).
+    fn search(
+        &self,
+        root_state: &State,
+        agents: &[usize],
+        start: Instant,
+        mut stats: PbsStats,
+    ) -> Solution {
+        let mut tree = Tree::new(self.root_node(root_state, agents));
         let mut solution = None;
         while let Some(id) = tree.stack.pop() {
             if tree.nodes[id].conflicts.is_empty() {
@@ -349,12 +422,12 @@ impl Problem<'_> {
                 break;
             }
             stats.nodes += 1;
-            let children = self.expand(&tree.nodes, id, &root_state, &mut stats);
+            let children = self.expand(&tree.nodes, id, root_state, agents, &mut stats);
             tree.push_children(children);
         }
         let chosen = solution.unwrap_or(tree.best);
         stats.fallback = solution.is_none();
-        self.answer(&tree.nodes, chosen, &root_state, stats)
+        self.answer(&tree.nodes, chosen, root_state, stats)
     }
 
     /// The root's state: each CAV planned alone (in parallel: they are independent), each HDV
@@ -428,8 +501,8 @@ impl Problem<'_> {
     }
 
     /// The tree's root node, whose state is `root_state`.
-    fn root_node(&self, root_state: &State) -> Node {
-        let conflicts = self.all_conflicts(&root_state.trajectories);
+    fn root_node(&self, root_state: &State, agents: &[usize]) -> Node {
+        let conflicts = self.all_conflicts(&root_state.trajectories, agents);
         Node {
             parent: None,
             edge: None,
@@ -465,6 +538,7 @@ impl Problem<'_> {
         nodes: &[Node],
         id: usize,
         root_state: &State,
+        agents: &[usize],
         stats: &mut PbsStats,
     ) -> Vec<Node> {
         let (_, i, j) = nodes[id].conflicts[0];
@@ -474,8 +548,8 @@ impl Problem<'_> {
         }
         // Both children at once: they are independent.
         let (left, right) = rayon::join(
-            || self.child(&nodes[id], &state, j, i),
-            || self.child(&nodes[id], &state, i, j),
+            || self.child(&nodes[id], &state, j, i, agents),
+            || self.child(&nodes[id], &state, i, j, agents),
         );
         let mut children: Vec<(Node, Effort)> = [left, right]
             .into_iter()
@@ -516,7 +590,14 @@ impl Problem<'_> {
     }
 
     /// The child of `parent` (whose state is `state`) that adds `hi ≺ lo`, unless pruned.
-    fn child(&self, parent: &Node, state: &State, hi: usize, lo: usize) -> Option<(Node, Effort)> {
+    fn child(
+        &self,
+        parent: &Node,
+        state: &State,
+        hi: usize,
+        lo: usize,
+        agents: &[usize],
+    ) -> Option<(Node, Effort)> {
         let mut graph = state.graph.clone();
         if !graph.add(hi, lo) {
             return None;
@@ -533,7 +614,8 @@ impl Problem<'_> {
         if self.conflict_between(hi, lo, &child.trajectories) {
             return None;
         }
-        let conflicts = self.updated_conflicts(&parent.conflicts, &changed, &child.trajectories);
+        let conflicts =
+            self.updated_conflicts(&parent.conflicts, &changed, &child.trajectories, agents);
         Some((
             Node {
                 parent: None,
@@ -652,6 +734,17 @@ mod tests {
         budget: Budget,
         f: impl FnOnce(&Problem) -> R,
     ) -> R {
+        with_grouping(scene, predictor, committed, budget, false, f)
+    }
+
+    fn with_grouping<R>(
+        scene: &Scene,
+        predictor: &dyn Predictor,
+        committed: &[(usize, usize)],
+        budget: Budget,
+        independent_groups: bool,
+        f: impl FnOnce(&Problem) -> R,
+    ) -> R {
         let config = Config::default();
         let planner = Mastar::on_paper_road();
         let rule = SafetyRule::new(&config.planner, 4.5);
@@ -672,6 +765,7 @@ mod tests {
             horizon: 20,
             dt: 0.2,
             budget,
+            independent_groups,
         })
     }
 
@@ -705,6 +799,53 @@ mod tests {
         with_problem(scene, &predictor, &[], budget, |problem| {
             (0..ts.len()).all(|a| (a + 1..ts.len()).all(|b| !problem.conflict_between(a, b, ts)))
         })
+    }
+
+    /// Two merges far apart along the road (one in the merge zone, one 1 km on): each is a
+    /// group of its own; the answer is conflict-free, and the same on one thread as on four.
+    #[test]
+    fn far_apart_conflicts_are_searched_as_independent_groups() {
+        let sp = spy();
+        let vehicles = vec![
+            vehicle("ramp.1", Kind::Cav, Origin::Ramp, 250.0, 0, 25.0),
+            vehicle("main.2", Kind::Cav, Origin::Main, 248.0, 1, 25.0),
+            vehicle("main.3", Kind::Cav, Origin::Main, 1250.0, 1, 28.0),
+            vehicle("main.4", Kind::Hdv, Origin::Main, 1285.0, 1, 22.0),
+            vehicle("main.5", Kind::Cav, Origin::Main, 600.0, 2, 30.0),
+        ];
+        let scene = Scene::on_paper_road(0.0, vehicles);
+        let budget = Budget {
+            nodes: 200,
+            time_ms: None,
+        };
+        let on = |threads: usize| {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            pool.install(|| {
+                with_grouping(&scene, &sp, &[], budget.clone(), true, |p| {
+                    let everyone: Vec<usize> = (0..5).collect();
+                    let root = p.plan_root(&mut PbsStats::default());
+                    let linked = p.all_conflicts(&root.trajectories, &everyone);
+                    (p.solve(), linked)
+                })
+            })
+        };
+        let ((one, linked), (four, _)) = (on(1), on(4));
+        // The root's conflicts link 0–1 and 2–3 only: two groups, and 4 alone.
+        let pairs: Vec<(usize, usize)> = linked.iter().map(|&(_, a, b)| (a, b)).collect();
+        assert!(
+            pairs.contains(&(0, 1))
+                && pairs
+                    .iter()
+                    .all(|&(a, b)| (a, b) == (0, 1) || (a, b) == (2, 3)),
+            "{pairs:?}"
+        );
+        assert!(conflict_free(&one, &scene), "{:?}", one.stats);
+        assert_eq!(one.trajectories, four.trajectories);
+        assert_eq!(one.edges, four.edges);
+        assert!(!one.stats.fallback && one.stats.nodes >= 1);
     }
 
     #[test]

@@ -1,0 +1,159 @@
+//! Independence detection for BK-PBS at scale: a round split into groups of agents that are
+//! searched apart and in parallel.
+//!
+//! The root's conflicts and the carried commitments link agents; each linked set is a group,
+//! every other agent is alone and keeps its root plan. The groups are searched in parallel
+//! (each its own Algorithm 1 with its own node budget), their answers put together, and every
+//! pair of agents of different groups checked: groups whose answers conflict are merged and
+//! searched again from the root, the others keep their answers. This ends when no conflict
+//! crosses a group, or when one group holds every conflicting agent (the whole round's search).
+//! Groups are numbered by their lowest agent and answers gathered in that order, so the result
+//! does not depend on the number of threads.
+
+use std::collections::BTreeMap;
+use std::time::Instant;
+
+use rayon::prelude::*;
+
+use super::{PbsStats, Problem, Solution, State};
+
+/// Disjoint sets of agents (union–find), each named by its lowest member.
+struct Sets {
+    parent: Vec<usize>,
+}
+
+impl Sets {
+    fn new(n: usize) -> Sets {
+        Sets {
+            parent: (0..n).collect(),
+        }
+    }
+
+    fn find(&mut self, a: usize) -> usize {
+        let mut r = a;
+        while self.parent[r] != r {
+            r = self.parent[r];
+        }
+        self.parent[a] = r;
+        r
+    }
+
+    /// Joins the sets of `a` and `b`; whether they were apart.
+    fn union(&mut self, a: usize, b: usize) -> bool {
+        let (ra, rb) = (self.find(a), self.find(b));
+        if ra == rb {
+            return false;
+        }
+        let (lo, hi) = (ra.min(rb), ra.max(rb));
+        self.parent[hi] = lo;
+        true
+    }
+
+    /// The sets of more than one agent, each sorted, ordered by their lowest agent.
+    fn groups(&mut self) -> Vec<Vec<usize>> {
+        let mut by_root: BTreeMap<usize, Vec<usize>> = BTreeMap::new();
+        for a in 0..self.parent.len() {
+            let r = self.find(a);
+            by_root.entry(r).or_default().push(a);
+        }
+        by_root.into_values().filter(|g| g.len() > 1).collect()
+    }
+}
+
+/// The round's answer, group by group (see the module documentation).
+pub(super) fn solve(
+    problem: &Problem<'_>,
+    root: &State,
+    start: Instant,
+    mut stats: PbsStats,
+) -> Solution {
+    let n = problem.scene.vehicles.len();
+    let everyone: Vec<usize> = (0..n).collect();
+    let mut sets = Sets::new(n);
+    for (_, a, b) in problem.all_conflicts(&root.trajectories, &everyone) {
+        sets.union(a, b);
+    }
+    for &(hi, lo) in problem.committed {
+        sets.union(hi, lo);
+    }
+    let mut answers: BTreeMap<Vec<usize>, Solution> = BTreeMap::new();
+    loop {
+        let groups = sets.groups();
+        let todo: Vec<&Vec<usize>> = groups
+            .iter()
+            .filter(|g| !answers.contains_key(*g))
+            .collect();
+        let solved: Vec<Solution> = todo
+            .par_iter()
+            .map(|g| problem.search(root, g, start, PbsStats::default()))
+            .collect();
+        answers.retain(|g, _| groups.contains(g));
+        answers.extend(todo.into_iter().cloned().zip(solved));
+        let whole = combined(root, &answers);
+        let crossing = problem
+            .all_conflicts(&whole.trajectories, &everyone)
+            .into_iter()
+            .filter(|&(_, a, b)| sets.union(a, b))
+            .count();
+        if crossing == 0 {
+            return finish(whole, &answers, &mut stats);
+        }
+    }
+}
+
+/// The root's trajectories and plans with each group's answer for its agents.
+fn combined(root: &State, answers: &BTreeMap<Vec<usize>, Solution>) -> Solution {
+    let mut out = Solution {
+        trajectories: root.trajectories.clone(),
+        plans: root.plans.clone(),
+        edges: root.graph.edges(),
+        stats: PbsStats::default(),
+    };
+    for (group, s) in answers {
+        for &a in group {
+            out.trajectories[a] = s.trajectories[a].clone();
+            out.plans[a] = s.plans[a].clone();
+        }
+        out.edges.extend(s.edges.iter().copied());
+    }
+    out.edges.sort_unstable();
+    out.edges.dedup();
+    out
+}
+
+/// The answer with the effort of every group search added to the root's.
+fn finish(
+    mut whole: Solution,
+    answers: &BTreeMap<Vec<usize>, Solution>,
+    stats: &mut PbsStats,
+) -> Solution {
+    for s in answers.values() {
+        let g = &s.stats;
+        stats.nodes += g.nodes;
+        stats.mastar_calls += g.mastar_calls;
+        stats.mastar_nodes += g.mastar_nodes;
+        stats.predictions += g.predictions;
+        stats.depth = stats.depth.max(g.depth);
+        stats.fallback |= g.fallback;
+        stats.timed_out |= g.timed_out;
+        stats.conflicts_left += g.conflicts_left;
+    }
+    whole.stats = *stats;
+    whole
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sets_merge_and_list_their_groups_by_lowest_member() {
+        let mut s = Sets::new(6);
+        assert!(s.union(4, 2));
+        assert!(s.union(5, 0));
+        assert!(!s.union(0, 5));
+        assert_eq!(s.groups(), vec![vec![0, 5], vec![2, 4]]);
+        s.union(2, 5);
+        assert_eq!(s.groups(), vec![vec![0, 2, 4, 5]]);
+    }
+}

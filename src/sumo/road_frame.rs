@@ -1,0 +1,430 @@
+//! The road frame of a network's layout: every lane of the main carriageway, of the on-ramps
+//! and of the junctions between them (internal lanes) placed in the frame of
+//! `crate::model::road`, so that any reading SUMO gives on the merge section has a frame `s` and
+//! lane, and any frame lane a SUMO lane index to command.
+//!
+//! Main lanes are numbered from the left edge of the carriageway: an edge with the
+//! carriageway's N lanes holds frame lanes 1..=N, an edge with one lane more also holds the
+//! auxiliary lane 0 (an acceleration or deceleration lane). The reference line is the centre
+//! line of each edge's leftmost lane and of the junction lane joining it to the next: a lane
+//! position on an edge maps to the `s` of the same position on its leftmost lane, as SUMO
+//! itself aligns the lanes of an edge (a lane change keeps the position), and a position on a
+//! junction lane to the same fraction of the reference's junction lane. (Projecting each
+//! lane's ends on the reference line instead went wrong by metres where a junction lane bends
+//! the reference line.) Lanes
+//! that leave towards an off-ramp, and the off-ramps, are not part of the frame: a vehicle there
+//! has left the section.
+
+use std::collections::BTreeMap;
+use std::sync::Arc;
+
+use crate::model::road::{
+    EdgeFrame, Entry, LaneFrame, MergeZone, Road, FIRST_MAIN_LANE, MERGE_LANE,
+};
+use crate::sumo::network::{Lane, Layout, MainEdge, Net, OnRamp};
+
+/// Where each main edge lies: its frame-lane offset and the span of its reference lane.
+struct MainFrames<'n> {
+    offsets: BTreeMap<&'n str, i32>,
+    spans: BTreeMap<&'n str, LaneFrame>,
+}
+
+/// The road frame of `layout` (found in `net`); the error says in one phrase why the layout
+/// cannot be planned on.
+pub fn road(net: &Net, layout: &Layout) -> Result<Road, String> {
+    let first = net_edge(net, &layout.main[0].id);
+    let main_lanes = first.lanes.len() as i32;
+    let lane_width = first.lanes[0].width;
+    let (mut edges, main) = main_edges(net, layout, main_lanes)?;
+    let mut internal = main_junctions(net, layout, &main);
+    let mut ramps: Vec<&OnRamp> = layout.on_ramps.iter().collect();
+    ramps.sort_by(|a, b| a.merge_start.total_cmp(&b.merge_start));
+    let mut zones = Vec::new();
+    for ramp in &ramps {
+        let acceleration = &net_edge(net, &ramp.joins).lanes[ramp.lane as usize];
+        let span = &main.spans[ramp.joins.as_str()];
+        let joined = (span.s0, span.s_at(acceleration.length));
+        let zone = ramp_frames(net, ramp, joined, &main.offsets, &mut edges, &mut internal)?;
+        zones.push(zone);
+    }
+    edges.extend(internal.into_edges());
+    let entries = entries(net, layout, &ramps);
+    let last = layout.main.last().expect("a main carriageway");
+    let end_lane = net_edge(net, &last.id).lanes.last().expect("lanes checked");
+    let section_end = main.spans[last.id.as_str()].s_at(end_lane.length);
+    Ok(Road {
+        edges,
+        lane_width,
+        main_lanes,
+        zones,
+        section_end,
+        end_edge: (Arc::from(last.id.as_str()), end_lane.length),
+        entries,
+        line: (!layout.line.is_straight_east()).then(|| Arc::new(layout.line.clone())),
+    })
+}
+
+/// The frames of the main carriageway's edges: every lane of an edge at the `s` of the same
+/// position on its leftmost lane (piecewise through its shape points where it bends).
+fn main_edges<'n>(
+    net: &'n Net,
+    layout: &'n Layout,
+    main_lanes: i32,
+) -> Result<(Vec<EdgeFrame>, MainFrames<'n>), String> {
+    let mut edges = Vec::new();
+    let mut main = MainFrames {
+        offsets: BTreeMap::new(),
+        spans: BTreeMap::new(),
+    };
+    for m in &layout.main {
+        let offset = lane_offset(m, main_lanes)?;
+        let edge = net_edge(net, &m.id);
+        let left = edge.lanes.last().expect("lanes checked");
+        let span = LaneFrame {
+            lane: 0,
+            s0: m.s_start,
+            scale: shape_length(left) / left.length,
+            knots: None,
+        };
+        let lanes = edge
+            .lanes
+            .iter()
+            .map(|l| {
+                Some(LaneFrame {
+                    lane: offset + l.index as i32,
+                    knots: knots(l, left, m.s_start),
+                    ..span.clone()
+                })
+            })
+            .collect();
+        main.offsets.insert(&m.id, offset);
+        main.spans.insert(&m.id, span);
+        edges.push(EdgeFrame {
+            name: Arc::from(m.id.as_str()),
+            lanes,
+            on_ramp: false,
+        });
+    }
+    Ok((edges, main))
+}
+
+/// The junction lanes between consecutive main edges: a position on one maps to the same
+/// fraction of the reference line's stretch through the junction.
+fn main_junctions(net: &Net, layout: &Layout, main: &MainFrames<'_>) -> InternalEdges {
+    let mut internal = InternalEdges::default();
+    for pair in layout.main.windows(2) {
+        let (from, to) = (pair[0].id.as_str(), pair[1].id.as_str());
+        let left = net_edge(net, from).lanes.last().expect("lanes checked");
+        let s_a = main.spans[from].s_at(left.length);
+        let s_b = main.spans[to].s0;
+        for c in net
+            .connections
+            .iter()
+            .filter(|c| c.from == from && c.to == to)
+        {
+            if let Some(via) = c.via.as_ref().and_then(|v| net.internal.get(v)) {
+                let frame = LaneFrame {
+                    lane: main.offsets[from] + c.from_lane as i32,
+                    s0: s_a,
+                    scale: if via.length > 1e-6 {
+                        (s_b - s_a) / via.length
+                    } else {
+                        1.0
+                    },
+                    knots: None,
+                };
+                internal.put(via, frame, false);
+            }
+        }
+    }
+    internal
+}
+
+/// The main entry and one per on-ramp (in `ramps`' order), with their routes to the end.
+fn entries(net: &Net, layout: &Layout, ramps: &[&OnRamp]) -> Vec<Entry> {
+    let main: Vec<Arc<str>> = layout
+        .main
+        .iter()
+        .map(|m| Arc::from(m.id.as_str()))
+        .collect();
+    let limit = |edge: &str| {
+        let lanes = &net_edge(net, edge).lanes;
+        lanes.iter().map(|l| l.speed).fold(f64::INFINITY, f64::min)
+    };
+    let mut out = vec![Entry {
+        name: "main".into(),
+        route: main.clone(),
+        speed_limit: limit(&main[0]),
+    }];
+    for (k, r) in ramps.iter().enumerate() {
+        let join = main
+            .iter()
+            .position(|m| **m == r.joins)
+            .expect("joins the main road");
+        let route = r.edges.iter().map(|e| Arc::from(e.as_str()));
+        out.push(Entry {
+            name: Road::ramp_entry_name(ramps.len(), k),
+            route: route.chain(main[join..].iter().cloned()).collect(),
+            speed_limit: limit(&r.edges[0]),
+        });
+    }
+    out
+}
+
+fn net_edge<'n>(net: &'n Net, id: &str) -> &'n crate::sumo::network::Edge {
+    net.edges.iter().find(|e| e.id == id).expect("a known edge")
+}
+
+/// Frame lane of the edge's lane 0: the carriageway's lanes are aligned on the left.
+fn lane_offset(m: &MainEdge, main_lanes: i32) -> Result<i32, String> {
+    let offset = main_lanes + FIRST_MAIN_LANE - m.lanes as i32;
+    if offset < MERGE_LANE {
+        return Err(format!(
+            "edge '{}' has {} lanes, more than the carriageway's {main_lanes} and one \
+             auxiliary lane",
+            m.id, m.lanes
+        ));
+    }
+    Ok(offset)
+}
+
+/// The knots of lane `l` of an edge whose leftmost lane, the reference, is `left` and starts
+/// at `s0`: SUMO builds an edge's lanes as offsets of one line, so their k-th shape points lie
+/// across the road from each other, and the reference's arc length at its k-th point is the
+/// `s` of the lane's. `None` where a straight line is exact (two shape points, or the reference
+/// itself) or the shapes do not pair up.
+fn knots(l: &Lane, left: &Lane, s0: f64) -> Option<Arc<[(f64, f64)]>> {
+    if l.index == left.index || l.shape.len() != left.shape.len() || l.shape.len() < 3 {
+        return None;
+    }
+    let arcs = |lane: &Lane| {
+        let mut acc = vec![0.0];
+        for w in lane.shape.windows(2) {
+            acc.push(acc.last().expect("non-empty") + (w[1] - w[0]).norm());
+        }
+        acc
+    };
+    let (a, b) = (arcs(l), arcs(left));
+    let (a_len, b_len) = (*a.last()?, *b.last()?);
+    if a_len < 1e-6 || b_len < 1e-6 {
+        return None;
+    }
+    let ratio = l.length / a_len;
+    Some(
+        a.iter()
+            .zip(&b)
+            .map(|(ai, bi)| (ai * ratio, s0 + bi))
+            .collect(),
+    )
+}
+
+/// The length of a lane's centre line (SUMO's `length` may differ: positions run along the
+/// lane in proportion).
+fn shape_length(l: &Lane) -> f64 {
+    l.shape.windows(2).map(|w| (w[1] - w[0]).norm()).sum()
+}
+
+/// The frames of an on-ramp's edges and junction lanes, counted back from where its
+/// acceleration lane begins, and its merge zone (`joined`: where the acceleration lane begins
+/// and ends).
+fn ramp_frames(
+    net: &Net,
+    ramp: &OnRamp,
+    joined: (f64, f64),
+    offsets: &BTreeMap<&str, i32>,
+    edges: &mut Vec<EdgeFrame>,
+    internal: &mut InternalEdges,
+) -> Result<MergeZone, String> {
+    let name = &ramp.edges[0];
+    if ramp.merge_end.is_none() {
+        return Err(format!(
+            "on-ramp '{name}' joins as a lane gain (its lane never ends): no merge to plan"
+        ));
+    }
+    if offsets[ramp.joins.as_str()] + ramp.lane as i32 != MERGE_LANE {
+        return Err(format!(
+            "on-ramp '{name}' feeds lane {} of '{}', not its rightmost auxiliary lane",
+            ramp.lane, ramp.joins
+        ));
+    }
+    let mut s_end = joined.0;
+    let mut next = ramp.joins.as_str();
+    for id in ramp.edges.iter().rev() {
+        let e = net_edge(net, id);
+        if e.lanes.len() != 1 {
+            return Err(format!(
+                "ramp edge '{id}' has {} lanes; ramps of one lane only",
+                e.lanes.len()
+            ));
+        }
+        let via = net
+            .connections
+            .iter()
+            .find(|c| &c.from == id && c.to == next)
+            .and_then(|c| c.via.as_ref())
+            .and_then(|v| net.internal.get(v));
+        if let Some(via) = via {
+            s_end -= via.length;
+            internal.put(via, LaneFrame::straight(MERGE_LANE, s_end), true);
+        }
+        s_end -= e.lanes[0].length;
+        edges.push(EdgeFrame {
+            name: Arc::from(id.as_str()),
+            lanes: vec![Some(LaneFrame::straight(MERGE_LANE, s_end))],
+            on_ramp: true,
+        });
+        next = id;
+    }
+    Ok(MergeZone {
+        ramp_start: s_end,
+        start: joined.0,
+        end: joined.1,
+    })
+}
+
+/// Junction lanes of the frame, gathered into SUMO's internal edges (lane `:j_0_2` is lane 2
+/// of edge `:j_0`).
+#[derive(Default)]
+struct InternalEdges {
+    edges: BTreeMap<String, (Vec<Option<LaneFrame>>, bool)>,
+}
+
+impl InternalEdges {
+    fn put(&mut self, lane: &Lane, frame: LaneFrame, on_ramp: bool) {
+        let suffix = format!("_{}", lane.index);
+        let edge = lane
+            .id
+            .strip_suffix(&suffix)
+            .unwrap_or(&lane.id)
+            .to_string();
+        let (lanes, ramp) = self.edges.entry(edge).or_default();
+        let k = lane.index as usize;
+        if lanes.len() <= k {
+            lanes.resize(k + 1, None);
+        }
+        lanes[k] = Some(frame);
+        *ramp |= on_ramp;
+    }
+
+    fn into_edges(self) -> impl Iterator<Item = EdgeFrame> {
+        self.edges
+            .into_iter()
+            .map(|(name, (lanes, on_ramp))| EdgeFrame {
+                name: Arc::from(name.as_str()),
+                lanes,
+                on_ramp,
+            })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::path::Path;
+
+    fn shipped(name: &str) -> Road {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("sumo_net/{name}.net.xml"));
+        let net = Net::read(&path).unwrap();
+        road(&net, &Layout::discover(&net, &path).unwrap()).unwrap()
+    }
+
+    /// The paper network's frame is the fixed frame the scenario had before networks were
+    /// read: same edges, lanes, positions and zone, to the bit.
+    #[test]
+    fn the_paper_net_gives_the_fixed_frame() {
+        let r = shipped("merge");
+        let fixed = Road::paper_default();
+        assert_eq!(r.edges, fixed.edges);
+        assert_eq!(r.zones, fixed.zones);
+        assert_eq!(r.entries, fixed.entries);
+        assert_eq!(r.end_edge, fixed.end_edge);
+        assert_eq!((r.lane_width, r.main_lanes, r.section_end), (4.5, 2, 460.0));
+        assert_eq!(r.heading_at(200.0), 0.0);
+    }
+
+    #[test]
+    fn three_lanes_with_junction_lanes() {
+        let r = shipped("three-lane");
+        assert_eq!((r.main_lanes, r.lane_width), (3, 3.6));
+        let z = r.zones[0];
+        assert!((z.start - 203.0).abs() < 0.01 && (z.end - 423.0).abs() < 0.01);
+        // The ramp's internal lane lies right before the acceleration lane.
+        let j = r.edge(":a1_3").expect("ramp junction lane mapped");
+        let lf = j.lanes[0].clone().unwrap();
+        assert!(j.on_ramp && lf.lane == 0);
+        assert!((lf.s_at(3.0) - 203.0).abs() < 0.01, "{lf:?}");
+        // A main junction lane from hw_merge lane 1 continues frame lane 1.
+        let j = r.edge(":a2_0").unwrap();
+        assert_eq!(j.lanes[0].as_ref().unwrap().lane, 1);
+        assert!((r.section_end - 631.0).abs() < 0.01);
+    }
+
+    /// The point at SUMO position `pos` of lane `l`: its shape walked in proportion.
+    fn point_at(l: &Lane, pos: f64) -> crate::model::math::Point {
+        let mut left = pos * shape_length(l) / l.length;
+        for w in l.shape.windows(2) {
+            let seg = (w[1] - w[0]).norm();
+            if left <= seg {
+                return w[0] + (w[1] - w[0]) * (left / seg);
+            }
+            left -= seg;
+        }
+        *l.shape.last().unwrap()
+    }
+
+    /// Every metre of every main lane: where the frame puts it, carried back onto the reference
+    /// line at the lane's offset, lies within `tolerance` of the lane shape.
+    fn worst_offset(name: &str) -> f64 {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("sumo_net/{name}.net.xml"));
+        let net = Net::read(&path).unwrap();
+        let layout = Layout::discover(&net, &path).unwrap();
+        let r = road(&net, &layout).unwrap();
+        let mut worst: f64 = 0.0;
+        for m in &layout.main {
+            let frame = r.edge(&m.id).unwrap();
+            for l in &net_edge(&net, &m.id).lanes {
+                let f = frame.lanes[l.index as usize].as_ref().unwrap();
+                let d = f64::from(f.lane - r.top_lane()) * r.lane_width;
+                for k in 0..=(l.length as usize) {
+                    let pos = (k as f64).min(l.length);
+                    let p = layout.line.to_xy(f.s_at(pos), d);
+                    worst = worst.max((p - point_at(l, pos)).norm());
+                }
+            }
+        }
+        worst
+    }
+
+    #[test]
+    fn lanes_lie_where_the_frame_puts_them() {
+        assert!(worst_offset("merge") < 1e-9);
+        assert!(worst_offset("three-lane") < 1e-6);
+        let corridor = worst_offset("corridor");
+        eprintln!("corridor: lanes within {corridor:.3} m of the frame");
+        assert!(corridor < 0.15, "{corridor}");
+    }
+
+    #[test]
+    fn the_corridor_has_three_zones_in_order() {
+        let r = shipped("corridor");
+        assert_eq!(r.zones.len(), 3);
+        assert!(r.zones.windows(2).all(|w| w[0].end < w[1].ramp_start));
+        assert!(r.edge("off1").is_none(), "off-ramps leave the section");
+        let dec = r.edge("hw_off1").unwrap();
+        assert_eq!(
+            dec.lanes
+                .iter()
+                .map(|l| l.as_ref().unwrap().lane)
+                .collect::<Vec<_>>(),
+            [0, 1, 2, 3]
+        );
+        // Curved lanes: the scale departs from 1 but little.
+        let scales: Vec<f64> = r
+            .edges
+            .iter()
+            .flat_map(|e| e.lanes.iter().flatten().map(|l| l.scale))
+            .collect();
+        assert!(scales.iter().all(|s| (s - 1.0).abs() < 0.05), "{scales:?}");
+        assert!(scales.iter().any(|s| (s - 1.0).abs() > 1e-4));
+    }
+}
