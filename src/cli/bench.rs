@@ -21,6 +21,9 @@ pub struct BenchArgs {
     /// Repeats per row (medians are reported).
     #[arg(long, default_value_t = 5)]
     repeats: usize,
+    /// Thread counts to plan with, one row each (default: 1 and every core).
+    #[arg(long, value_delimiter = ',')]
+    threads: Vec<usize>,
     #[command(flatten)]
     scenario: ScenarioArgs,
 }
@@ -29,19 +32,31 @@ pub struct BenchArgs {
 pub struct Bench {
     config: Config,
     planners: Vec<String>,
+    threads: Vec<usize>,
     repeats: usize,
 }
 
 impl BenchArgs {
-    /// Refuses an unknown planner before any of the rows is timed.
+    /// Refuses an unknown planner, a thread count of 0 or a network that is no merge before
+    /// any of the rows is timed.
     pub fn resolve(self) -> Result<Bench> {
         let config = self.scenario.resolve()?;
         for p in &self.planners {
             controller::check(p, &config)?;
         }
+        bkpbs::sumo::frame::scenario_road(&config.scenario)?;
+        if self.threads.contains(&0) {
+            anyhow::bail!("--threads: a thread count must be at least 1");
+        }
+        let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+        let mut threads = self.threads;
+        if threads.is_empty() {
+            threads = if cores > 1 { vec![1, cores] } else { vec![1] };
+        }
         Ok(Bench {
             config,
             planners: self.planners,
+            threads,
             repeats: self.repeats,
         })
     }
@@ -50,11 +65,17 @@ impl BenchArgs {
 /// Prints the settings, then the table of timings.
 pub fn run(b: Bench) -> Result<()> {
     let s = &b.config.scenario;
+    let net = s
+        .net_file
+        .as_ref()
+        .map_or("the embedded network".to_string(), |p| {
+            p.display().to_string()
+        });
     println!(
-        "bench: α={} λ={} seed={} steps={} repeats={}",
-        s.alpha, s.lambda, s.seed, s.steps, b.repeats
+        "bench: α={} λ={} seed={} steps={} repeats={} threads={:?} on {net}",
+        s.alpha, s.lambda, s.seed, s.steps, b.repeats, b.threads
     );
-    let rows = bench::run(&b.config, &b.planners, b.repeats)?;
+    let rows = bench::run(&b.config, &b.planners, &b.threads, b.repeats)?;
     print!("{}", bench::table(&rows));
     Ok(())
 }

@@ -45,6 +45,9 @@ pub struct CollectArgs {
     /// HDV driver profile of the episodes (overrides the config's hdv.profile).
     #[arg(long, value_name = "NAME")]
     hdv_profile: Option<String>,
+    /// SUMO network of the episodes (overrides the config's scenario.net_file).
+    #[arg(long, value_name = "FILE")]
+    net: Option<PathBuf>,
 }
 
 /// A checked collection: the base configuration, the episodes' plan and the data file.
@@ -57,12 +60,16 @@ pub struct Collect {
 impl CollectArgs {
     /// Loads the base configuration and fills the plan's unset flags with the library defaults.
     pub fn resolve(self) -> Result<Collect> {
-        let profile = self.hdv_profile;
+        let (profile, net) = (self.hdv_profile, self.net);
         let base = load_config(self.config.as_deref(), |c| {
             if let Some(p) = profile {
                 c.hdv.profile = p;
             }
+            if net.is_some() {
+                c.scenario.net_file = net;
+            }
         })?;
+        bkpbs::sumo::frame::scenario_road(&base.scenario)?;
         let d = CollectPlan::default();
         let plan = CollectPlan {
             episodes: self.episodes,

@@ -6,7 +6,9 @@ use std::time::Instant;
 use crate::config::Config;
 use crate::episode::demand;
 use crate::episode::metrics::percentile;
+use crate::episode::runner::{Driver, Observer};
 use crate::episode::{self, EpisodeError};
+use crate::model::scene::{Kind, Scene};
 use crate::sumo::files::EpisodeInput;
 use crate::sumo::Simulation;
 
@@ -25,6 +27,55 @@ pub struct BenchRow {
     /// The safety shield's part of the planning time per step: median and maximum (ms).
     pub shield_ms_median: f64,
     pub shield_ms_max: f64,
+    /// Vehicles and CAVs on the section per step, on average.
+    pub vehicles_per_step: f64,
+    pub cavs_per_step: f64,
+}
+
+/// Counts the vehicles and CAVs of every step's scene.
+#[derive(Default)]
+struct Occupancy {
+    steps: u64,
+    vehicles: u64,
+    cavs: u64,
+}
+
+impl Observer for Occupancy {
+    fn observe(&mut self, scene: &Scene) {
+        self.steps += 1;
+        self.vehicles += scene.vehicles.len() as u64;
+        self.cavs += scene
+            .vehicles
+            .iter()
+            .filter(|v| v.kind == Kind::Cav)
+            .count() as u64;
+    }
+}
+
+/// One timed episode of `planner` on a rayon pool of `threads` threads: the row's figures.
+fn timed_episode(config: &Config, planner: &str, threads: usize) -> Result<[f64; 9], EpisodeError> {
+    let planned = demand::generate_for(config)?;
+    let mut seen = Occupancy::default();
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .expect("a thread pool");
+    let r = pool
+        .install(|| episode::run_observed(config, Driver::Named(planner), &planned, &mut seen))?;
+    let t = &r.timing;
+    let steps = config.scenario.steps as f64;
+    let per_step = |n: u64| n as f64 / seen.steps.max(1) as f64;
+    Ok([
+        t.episode_ms_per_step,
+        t.plan_ms_median,
+        t.plan_ms_p99,
+        t.plan_ms_max,
+        r.summary.plan_stats.nodes_expanded as f64 / steps,
+        t.shield_ms_median,
+        t.shield_ms_max,
+        per_step(seen.vehicles),
+        per_step(seen.cavs),
+    ])
 }
 
 /// SUMO stepping the episode's demand (as a plain route file, inserted by SUMO itself) with
@@ -67,29 +118,24 @@ pub fn sumo_alone_ms_per_step(config: &Config) -> Result<f64, EpisodeError> {
     Ok(ms)
 }
 
-/// Runs SUMO alone and each planner `repeats` times, interleaved, and reports medians.
+/// Runs SUMO alone and each planner `repeats` times, interleaved, once per thread count of
+/// `threads` (rayon's pool for the planner), and reports medians.
 pub fn run(
     config: &Config,
     planners: &[String],
+    threads: &[usize],
     repeats: usize,
 ) -> Result<Vec<BenchRow>, EpisodeError> {
+    let runs: Vec<(String, usize)> = planners
+        .iter()
+        .flat_map(|p| threads.iter().map(move |&t| (p.clone(), t)))
+        .collect();
     let mut alone = Vec::new();
-    let mut samples: Vec<Vec<[f64; 7]>> = vec![Vec::new(); planners.len()];
+    let mut samples: Vec<Vec<[f64; 9]>> = vec![Vec::new(); runs.len()];
     for _ in 0..repeats.max(1) {
         alone.push(sumo_alone_ms_per_step(config)?);
-        for (k, name) in planners.iter().enumerate() {
-            let r = episode::run(config, name)?;
-            let t = &r.timing;
-            let nodes = r.summary.plan_stats.nodes_expanded as f64 / config.scenario.steps as f64;
-            samples[k].push([
-                t.episode_ms_per_step,
-                t.plan_ms_median,
-                t.plan_ms_p99,
-                t.plan_ms_max,
-                nodes,
-                t.shield_ms_median,
-                t.shield_ms_max,
-            ]);
+        for (k, (name, t)) in runs.iter().enumerate() {
+            samples[k].push(timed_episode(config, name, *t)?);
         }
     }
     let mut rows = vec![BenchRow {
@@ -97,11 +143,16 @@ pub fn run(
         ms_per_step: percentile(&mut alone, 50.0),
         ..BenchRow::default()
     }];
-    for (name, runs) in planners.iter().zip(samples) {
+    for ((name, t), runs) in runs.iter().zip(samples) {
         let median =
             |i: usize| percentile(&mut runs.iter().map(|r| r[i]).collect::<Vec<_>>(), 50.0);
+        let what = if threads.len() > 1 {
+            format!("{name} ×{t}")
+        } else {
+            name.clone()
+        };
         rows.push(BenchRow {
-            what: name.clone(),
+            what,
             ms_per_step: median(0),
             plan_ms_median: median(1),
             plan_ms_p99: median(2),
@@ -109,6 +160,8 @@ pub fn run(
             nodes_per_step: median(4),
             shield_ms_median: median(5),
             shield_ms_max: median(6),
+            vehicles_per_step: median(7),
+            cavs_per_step: median(8),
         });
     }
     Ok(rows)
@@ -118,7 +171,7 @@ pub fn run(
 pub fn table(rows: &[BenchRow]) -> String {
     let base = rows.first().map_or(1.0, |r| r.ms_per_step);
     let mut out = format!(
-        "{:<12} {:>10} {:>8} {:>12} {:>10} {:>10} {:>11} {:>13} {:>11}\n",
+        "{:<14} {:>10} {:>8} {:>12} {:>10} {:>10} {:>11} {:>13} {:>11} {:>9} {:>6}\n",
         "run",
         "ms/step",
         "ratio",
@@ -127,11 +180,13 @@ pub fn table(rows: &[BenchRow]) -> String {
         "plan max",
         "nodes/step",
         "shield median",
-        "shield max"
+        "shield max",
+        "veh/step",
+        "CAVs"
     );
     for r in rows {
         out += &format!(
-            "{:<12} {:>10.4} {:>7.2}x {:>12.4} {:>10.4} {:>10.4} {:>11.1} {:>13.4} {:>11.4}\n",
+            "{:<14} {:>10.4} {:>7.2}x {:>12.4} {:>10.4} {:>10.4} {:>11.1} {:>13.4} {:>11.4} {:>9.1} {:>6.1}\n",
             r.what,
             r.ms_per_step,
             r.ms_per_step / base,
@@ -140,10 +195,13 @@ pub fn table(rows: &[BenchRow]) -> String {
             r.plan_ms_max,
             r.nodes_per_step,
             r.shield_ms_median,
-            r.shield_ms_max
+            r.shield_ms_max,
+            r.vehicles_per_step,
+            r.cavs_per_step
         );
     }
     out += "(ms; planning figures are per step for all CAVs together, the shield's part of it \
-            apart, medians over the repeats)\n";
+            apart, medians over the repeats; ×N: the planner on N threads; veh/step and CAVs: on \
+            the section per step, on average)\n";
     out
 }
