@@ -250,6 +250,13 @@ fn one_and_two_workers_give_byte_identical_results() {
         stdout.contains("## Controllable collision rate (%), idm-mobil"),
         "{stdout}"
     );
+    assert!(
+        stdout.contains("## Mean travel delay by entry (s)"),
+        "{stdout}"
+    );
+    let by_entry = read(&d.path().join("report/delay_by_entry.csv"));
+    assert!(by_entry.starts_with("planner,entry,inserted,arrived,crashed,mean_delay_s\nsumo,main,"));
+    assert!(by_entry.contains("\nidm-mobil,ramp,"), "{by_entry}");
     for f in [
         "tables.md",
         "delay_l3000.csv",

@@ -229,15 +229,14 @@ pub fn clear_of_leaders(
     let lanes = lanes_of_cav(me, m);
     let horizon = b.dt + m.speed / b.cav_decel;
     let motion = cav_motion(me, m, b);
-    let into_lane_1 = m
-        .lane_change
-        .is_some_and(|lc| me.lane + lc.offset() == FIRST_MAIN_LANE);
+    let target = m.lane_change.map(|lc| me.lane + lc.offset());
+    let into_lane_1 = target == Some(FIRST_MAIN_LANE);
     let lanes_of = |j: usize, o: &VehicleState| {
         let entered = entering.get(j).copied().unwrap_or(0);
-        let merging = if into_lane_1 && on_acceleration_lane(o) {
-            bit(FIRST_MAIN_LANE)
-        } else {
-            0
+        let merging = match target {
+            Some(t) if into_lane_1 && on_acceleration_lane(o) => bit(t),
+            Some(t) if may_enter_from_beyond(me, t, o) => bit(t),
+            _ => 0,
         };
         lanes_of_other(scene, o, horizon, b) | entered | merging
     };
@@ -256,6 +255,21 @@ pub fn clear_of_leaders(
                 };
                 stays_clear(motion, worst, o.rear() - me.front(), b)
             })
+}
+
+/// Whether HDV `o` drives on the main-road lane beyond `target`, seen from CAV `me`'s lane, on a
+/// road of three or more main lanes: it may change into `target`, a middle lane, in the same
+/// second as the CAV (SUMO's LC2013 keeps right and overtakes on the left), and both would be
+/// in it at once. (A CAV in lane 3 changing right beside an HDV in lane 1 that was moving back
+/// left hit it on the corridor.) Never true on two main lanes: the lane beyond is then the
+/// acceleration lane, whose ramp HDVs [`on_acceleration_lane`] covers.
+fn may_enter_from_beyond(me: &VehicleState, target: i32, o: &VehicleState) -> bool {
+    let beyond = 2 * target - me.lane;
+    o.kind == Kind::Hdv
+        && !o.on_ramp
+        && me.lane >= FIRST_MAIN_LANE
+        && beyond >= FIRST_MAIN_LANE
+        && o.lane == beyond
 }
 
 /// Whether a lane change `m` starts leaves the nearest vehicle behind CAV `i` in the target lane
@@ -278,7 +292,8 @@ pub fn clear_of_new_follower(
         .enumerate()
         .filter(|&(j, o)| {
             let entered = entering.get(j).copied().unwrap_or(0);
-            j != i && o.s <= me.s && (lanes_now(o) | entered) & target != 0
+            let beyond = may_enter_from_beyond(me, me.lane + lc.offset(), o);
+            j != i && o.s <= me.s && ((lanes_now(o) | entered) & target != 0 || beyond)
         })
         .map(|(_, o)| o)
         .max_by(|a, c| a.s.total_cmp(&c.s));
@@ -448,6 +463,7 @@ impl Controller for Shielded {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::model::road::Road;
     use crate::model::scene::{Kind, Origin, VehicleState};
 
     fn cav(s: f64, lane: i32, speed: f64) -> VehicleState {
@@ -464,6 +480,31 @@ mod tests {
 
     fn go(speed: f64, lane_change: Option<LaneChange>) -> Maneuver {
         Maneuver { speed, lane_change }
+    }
+
+    /// Three main lanes: a CAV in lane 3 may not change into the middle lane beside an HDV in
+    /// lane 1, which may move into it in the same second; with the HDV far ahead it may. On two
+    /// lanes nothing lies beyond: the rule never fires there.
+    #[test]
+    fn a_middle_lane_is_not_entered_beside_an_hdv_on_its_other_side() {
+        let b = bounds();
+        let mut road = Road::paper_default();
+        road.main_lanes = 3;
+        let scene = |hdv_s: f64, hdv_v: f64| Scene {
+            time: 0.0,
+            road: road.clone(),
+            vehicles: vec![cav(2721.2, 3, 27.3), hdv("h", hdv_s, 1, hdv_v)],
+        };
+        let right = go(27.3, Some(LaneChange::Right));
+        assert!(!is_safe(&scene(2726.1, 23.4), 0, &right, &b, &[]));
+        assert!(is_safe(&scene(2726.1, 23.4), 0, &go(27.3, None), &b, &[]));
+        assert!(is_safe(&scene(2900.0, 23.4), 0, &right, &b, &[]));
+        // Close behind the CAV and faster, the HDV in lane 1 counts as its new follower in
+        // lane 2; slower, it can stay clear.
+        assert!(!is_safe(&scene(2712.0, 34.0), 0, &right, &b, &[]));
+        assert!(is_safe(&scene(2712.0, 23.4), 0, &right, &b, &[]));
+        let me = cav(100.0, 2, 30.0);
+        assert!(!may_enter_from_beyond(&me, 1, &hdv("h", 100.0, 0, 30.0)));
     }
 
     #[test]

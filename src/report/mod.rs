@@ -10,6 +10,7 @@
 //! ([`lane_tracks`]) drawn by [`timespace`], and the collision close-ups of [`explain`].
 
 pub mod calibration;
+pub mod entries;
 pub mod episode_plots;
 pub mod explain;
 pub mod lane_tracks;
@@ -165,12 +166,16 @@ pub fn run(dirs: &[PathBuf], out: Option<&Path>, allow_mixed: bool) -> Result<Re
     };
     let summary = Summary::from_results(&results, &out.join("episodes.csv"))?;
     let dir = out.join(REPORT_DIR);
-    let markdown = tables::markdown(&summary);
+    let by_entry = entries::rows(&results);
+    let markdown = tables::markdown(&summary) + &entries::markdown(&by_entry);
     for f in tables::csv_files(&summary) {
         let p = dir.join(&f.name);
         output::write_atomic(&p, &f.bytes)?;
         files.push(p);
     }
+    let p = dir.join("delay_by_entry.csv");
+    output::write_atomic(&p, &entries::csv(&by_entry))?;
+    files.push(p);
     let p = dir.join("tables.md");
     output::write_atomic(&p, markdown.as_bytes())?;
     files.push(p);
