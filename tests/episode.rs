@@ -108,6 +108,7 @@ fn planned(id: &str, kind: Kind, depart: f64, speed: f64) -> PlannedVehicle {
         kind,
         origin: Origin::Main,
         entry: 0,
+        exit: None,
         depart,
         depart_lane: 0,
         depart_speed: speed,

@@ -115,6 +115,36 @@ fn corridor() {
     every_planner_runs_on(&shipped("corridor"), false, 0.15);
 }
 
+/// Main-road HDVs leave by the corridor's off-ramps (`demand.exit_share`): they arrive at the
+/// off-ramp's end, their free-flow reference is that shorter route, and every vehicle is still
+/// accounted for.
+#[test]
+fn vehicles_leave_by_the_off_ramps() {
+    for planner in ["sumo", "bk-pbs"] {
+        let mut c = Config::default();
+        c.scenario.net_file = Some(shipped("corridor"));
+        c.scenario.steps = 600;
+        c.scenario.lambda = 4000.0;
+        c.demand.exit_share = 0.4;
+        let r = episode::run(&c, planner).unwrap();
+        let s = &r.summary;
+        assert_eq!(s.inserted, s.arrived + s.crashed + s.present, "{planner}");
+        let off: Vec<_> = r
+            .vehicles
+            .iter()
+            .filter(|v| v.distance < 2500.0 && v.origin == bkpbs::model::scene::Origin::Main)
+            .collect();
+        assert!(off.len() > 5, "{planner}: {} leaving", off.len());
+        let arrived = off.iter().filter(|v| v.arrival_time.is_some()).count();
+        assert!(arrived > 0, "{planner}: none arrived at an off-ramp");
+        eprintln!(
+            "{planner}: {} of {} vehicles leave, {arrived} arrived at an off-ramp",
+            off.len(),
+            s.inserted
+        );
+    }
+}
+
 #[test]
 fn nets_written_by_the_test() {
     for (lanes, ramps, curved) in [

@@ -150,6 +150,7 @@ fn agreement_on(mut config: Config, lane_width: f64) {
         kind: Kind::Cav,
         origin: Origin::Main,
         entry: 0,
+        exit: None,
         depart: 0.0,
         depart_lane: 0,
         depart_speed: 25.0,

@@ -148,12 +148,22 @@ pub struct Scenario {
     pub net_file: Option<PathBuf>,
 }
 
+/// Whether a share is zero (then left out of a written configuration).
+fn is_zero(x: &f64) -> bool {
+    *x == 0.0
+}
+
 /// How vehicles are generated.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct Demand {
     /// Share of λ arriving on the ramp; the rest arrives on the two main lanes equally.
     pub ramp_share: f64,
+    /// On a network with off-ramps: the probability that an HDV entering on the main road
+    /// leaves by one of them (each equally likely); it arrives at the off-ramp's end. CAVs and
+    /// ramp HDVs stay on the main road. Written into a campaign's settings only when above 0.
+    #[serde(skip_serializing_if = "is_zero")]
+    pub exit_share: f64,
     /// Insertion speed range (m/s), uniform.
     pub insertion_speed: [f64; 2],
     /// HDV desired speed range (m/s), uniform.
@@ -464,6 +474,7 @@ impl Default for Demand {
     fn default() -> Self {
         Demand {
             ramp_share: 0.2,
+            exit_share: 0.0,
             insertion_speed: [25.0, 35.0],
             hdv_desired_speed: [25.0, 35.0],
             cav_share: CavShare::Exact,
@@ -708,7 +719,9 @@ fn check_scenario(s: &Scenario) -> Result<(), ConfigError> {
 
 /// The speed ranges are pairs bounded by the speed limit, so they have a rule of their own.
 fn check_demand(d: &Demand, v_max: f64) -> Result<(), ConfigError> {
-    check_rows(&rows!(demand: d; ramp_share => Rule::UnitInterval))?;
+    check_rows(
+        &rows!(demand: d; ramp_share => Rule::UnitInterval, exit_share => Rule::UnitInterval),
+    )?;
     for (field, r) in [
         ("demand.insertion_speed", d.insertion_speed),
         ("demand.hdv_desired_speed", d.hdv_desired_speed),

@@ -32,6 +32,8 @@ pub struct PlannedVehicle {
     /// Where it enters: an index into the road's entries (0 the main road, then the ramps), whose
     /// name is also its SUMO route.
     pub entry: usize,
+    /// The off-ramp it leaves by (an index into the road's exits), if any.
+    pub exit: Option<usize>,
     /// Scheduled insertion time (s).
     pub depart: f64,
     /// SUMO lane index on the first edge of the route.
@@ -46,6 +48,35 @@ pub struct PlannedVehicle {
 /// A network file that cannot be read or is not a merge.
 pub fn generate_for(config: &Config) -> Result<Vec<PlannedVehicle>, NetworkError> {
     Ok(generate(config, &scenario_road(&config.scenario)?))
+}
+
+/// Random stream that sends HDVs off by the off-ramps (`demand.exit_share`).
+pub const EXIT_STREAM: u64 = 4;
+
+/// With `demand.exit_share` above 0 and off-ramps on `road`: which main-road HDVs leave, and
+/// by which off-ramp, drawn from a stream of their own (one draw per vehicle, so the rest of the
+/// demand is the same with or without exits).
+fn draw_exits(config: &Config, road: &Road, vehicles: &mut [PlannedVehicle]) {
+    let share = config.demand.exit_share;
+    if share <= 0.0 || road.exits.is_empty() {
+        return;
+    }
+    let mut rng = ChaCha8Rng::seed_from_u64(config.scenario.seed);
+    rng.set_stream(EXIT_STREAM);
+    for v in vehicles {
+        let (leaves, which) = (rng.gen_bool(share), rng.gen_range(0..road.exits.len()));
+        if leaves && v.kind == Kind::Hdv && v.origin == Origin::Main {
+            v.exit = road.exit_route(v.entry, which).map(|_| which);
+        }
+    }
+}
+
+/// The SUMO route of planned vehicle `v` on `road`: its entry's, or the one out by its exit.
+pub fn route_name(road: &Road, v: &PlannedVehicle) -> String {
+    match v.exit {
+        Some(x) => road.exit_route_name(v.entry, x),
+        None => road.entries[v.entry].name.clone(),
+    }
 }
 
 /// Random stream that places the CAVs when `demand.cav_share` is exact.
@@ -63,7 +94,7 @@ pub fn generate(config: &Config, road: &Road) -> Vec<PlannedVehicle> {
     let cavs = exact_cavs(config, events.len());
     let [v_lo, v_hi] = config.demand.insertion_speed;
     let [d_lo, d_hi] = config.demand.hdv_desired_speed;
-    events
+    let mut vehicles = events
         .into_iter()
         .enumerate()
         .map(|(n, (t, entry))| {
@@ -95,13 +126,16 @@ pub fn generate(config: &Config, road: &Road) -> Vec<PlannedVehicle> {
                 kind,
                 origin,
                 entry,
+                exit: None,
                 depart: t,
                 depart_lane,
                 depart_speed: (depart_speed * 100.0).round() / 100.0,
                 desired_speed: (desired_speed * 100.0).round() / 100.0,
             }
         })
-        .collect()
+        .collect::<Vec<_>>();
+    draw_exits(config, road, &mut vehicles);
+    vehicles
 }
 
 /// Arrival events (time on the step grid, entry: 0 the main road, k the k-th of `ramps`
@@ -172,7 +206,7 @@ pub fn route_file(road: &Road, vehicles: &[PlannedVehicle]) -> String {
             "    <vehicle id=\"{}\" type=\"{}\" route=\"{}\" depart=\"{:.2}\" departLane=\"{}\" departPos=\"base\" departSpeed=\"{:.2}\"/>",
             v.id,
             v.kind.as_str(),
-            road.entries[v.entry].name,
+            route_name(road, v),
             v.depart,
             v.depart_lane,
             v.depart_speed
@@ -313,6 +347,53 @@ mod tests {
         assert!(gen(&config(1.0, 3000.0, 1))
             .iter()
             .all(|v| v.kind == Kind::Cav));
+    }
+
+    /// Off-ramps: only main-road HDVs leave, about the share asked for, by an exit their route
+    /// passes; everything else about the demand is the same as without exits.
+    #[test]
+    fn main_road_hdvs_leave_by_the_off_ramps() {
+        let mut road = Road::paper_default();
+        road.exits.push(crate::model::road::Exit {
+            name: "off1".into(),
+            leaves: "acc".into(),
+            edges: vec!["off".into()],
+            end: ("off".into(), 100.0),
+        });
+        let mut c = config(0.5, 3000.0, 5);
+        let plain = generate(&c, &road);
+        c.demand.exit_share = 0.5;
+        let leaving = generate(&c, &road);
+        assert_eq!(plain.len(), leaving.len());
+        let mut n = 0;
+        for (a, b) in plain.iter().zip(&leaving) {
+            assert_eq!(
+                (&a.id, a.kind, a.depart, a.exit),
+                (&b.id, b.kind, b.depart, None)
+            );
+            if let Some(x) = b.exit {
+                n += 1;
+                assert_eq!((b.kind, b.origin, x), (Kind::Hdv, Origin::Main, 0));
+                assert_eq!(route_name(&road, b), "main-off1");
+            }
+        }
+        let main_hdvs = leaving
+            .iter()
+            .filter(|v| v.kind == Kind::Hdv && v.origin == Origin::Main)
+            .count();
+        assert!(
+            n > main_hdvs / 4 && n < 3 * main_hdvs / 4,
+            "{n} of {main_hdvs}"
+        );
+        let xml = routes_xml(&road);
+        assert!(
+            xml.contains("<route id=\"main-off1\" edges=\"main_in acc off\"/>"),
+            "{xml}"
+        );
+        assert!(
+            xml.contains("<route id=\"ramp-off1\" edges=\"ramp acc off\"/>"),
+            "{xml}"
+        );
     }
 
     #[test]

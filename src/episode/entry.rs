@@ -148,6 +148,7 @@ mod tests {
             kind: Kind::Hdv,
             origin,
             entry: usize::from(origin == Origin::Ramp),
+            exit: None,
             depart,
             depart_lane: lane,
             depart_speed: speed,

@@ -288,6 +288,8 @@ struct Tracked {
     last_time: f64,
     last_front: f64,
     last_speed: f64,
+    /// It leaves by an off-ramp, outside the frame: it arrives when SUMO says so.
+    leaves: bool,
 }
 
 struct Episode<'a> {
@@ -408,7 +410,7 @@ impl<'a> Episode<'a> {
             let v = &a.vehicle;
             sim.add_vehicle(
                 &v.id,
-                &self.road.entries[v.entry].name,
+                &demand::route_name(&self.road, v),
                 v.kind.as_str(),
                 v.depart_lane as i32,
                 a.speed,
@@ -456,7 +458,6 @@ impl<'a> Episode<'a> {
 
     fn book_departures(&mut self, sim: &mut Simulation, now: f64) -> Result<(), SumoError> {
         let commanded = self.controller.handling() == CavHandling::Commanded;
-        let (end_edge, end_pos) = self.road.end_edge.clone();
         for id in sim.departed()? {
             let sumo_type = sim.vehicle_type(&id)?;
             let kind = Kind::from_type_id(&sumo_type).unwrap_or(Kind::Hdv);
@@ -478,7 +479,10 @@ impl<'a> Episode<'a> {
                 }
                 Kind::Cav => {}
             }
-            let distance = sim.driving_distance(&id, &end_edge, end_pos)?;
+            // To the end of its route: the section's end, or the end of its off-ramp.
+            let exit = planned.and_then(|p| p.exit);
+            let (end_edge, end_pos) = exit.map_or(&self.road.end_edge, |x| &self.road.exits[x].end);
+            let distance = sim.driving_distance(&id, end_edge, *end_pos)?;
             let sc = &self.config.scenario;
             let record = VehicleRecord {
                 id: id.clone(),
@@ -508,6 +512,7 @@ impl<'a> Episode<'a> {
                 last_time: now,
                 last_front: self.road.section_end - distance,
                 last_speed: speed,
+                leaves: exit.is_some(),
             });
         }
         Ok(())
@@ -569,7 +574,9 @@ impl<'a> Episode<'a> {
             }
             // The front crossed the end within the last step: interpolate at the last speed.
             let remaining = (end - t.last_front).max(0.0);
-            let crossing = if t.last_speed > 0.1 {
+            let crossing = if t.leaves {
+                now
+            } else if t.last_speed > 0.1 {
                 (t.last_time + remaining / t.last_speed).min(now)
             } else {
                 now

@@ -95,6 +95,18 @@ pub struct Entry {
     pub speed_limit: f64,
 }
 
+/// An off-ramp: where vehicles may leave the section (they arrive at its end).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Exit {
+    /// `off1`, `off2`, … in order along the road; a route `ENTRY-NAME` leaves here.
+    pub name: String,
+    /// The main edge it leaves from and the off-ramp's edges.
+    pub leaves: Arc<str>,
+    pub edges: Vec<Arc<str>>,
+    /// The off-ramp's last edge and its lane length: where SUMO has leaving vehicles arrive.
+    pub end: (Arc<str>, f64),
+}
+
 /// The merge section in the road frame.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Road {
@@ -110,6 +122,8 @@ pub struct Road {
     pub end_edge: (Arc<str>, f64),
     /// The main carriageway's source, then the on-ramps in the order of `zones`.
     pub entries: Vec<Entry>,
+    /// The off-ramps, in order along the road.
+    pub exits: Vec<Exit>,
     /// Where the road frame's `s` runs in SUMO's plane; `None` for a straight road along x.
     pub line: Option<Arc<ReferenceLine>>,
 }
@@ -199,6 +213,20 @@ impl Road {
         self.line.as_ref().map_or(0.0, |l| l.pose_at(s).1)
     }
 
+    /// The route of a vehicle entering at `entry` and leaving by exit `exit`: the entry's route
+    /// up to the edge the exit leaves, then the off-ramp; `None` if the exit lies before the
+    /// entry joins.
+    pub fn exit_route(&self, entry: usize, exit: usize) -> Option<Vec<Arc<str>>> {
+        let (e, x) = (self.entries.get(entry)?, self.exits.get(exit)?);
+        let at = e.route.iter().position(|r| *r == x.leaves)?;
+        Some(e.route[..=at].iter().chain(&x.edges).cloned().collect())
+    }
+
+    /// The name of the route from `entry` out by `exit`.
+    pub fn exit_route_name(&self, entry: usize, exit: usize) -> String {
+        format!("{}-{}", self.entries[entry].name, self.exits[exit].name)
+    }
+
     /// The edge named `name`, if it is part of the frame.
     pub fn edge(&self, name: &str) -> Option<&EdgeFrame> {
         self.edges.iter().find(|e| &*e.name == name)
@@ -235,6 +263,7 @@ impl Road {
                 Entry::new("main", &["main_in", "acc", "main_out"], 40.0),
                 Entry::new("ramp", &["ramp", "acc", "main_out"], 40.0),
             ],
+            exits: Vec::new(),
             line: None,
         }
     }

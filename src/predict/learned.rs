@@ -29,7 +29,7 @@ use super::model_file::{LaneChangeModel, ModelError};
 use super::Predictor;
 use crate::config::{Config, PredictorKind};
 use crate::model::road::{Road, MERGE_LANE};
-use crate::model::scene::{Kind, Scene};
+use crate::model::scene::{Kind, Origin, Scene};
 use crate::model::trajectory::Trajectory;
 
 /// b_θ as a [`Predictor`].
@@ -159,9 +159,11 @@ impl Learned {
                 s: ego0.s + dk,
                 ..ego0
             };
-            // On the single-lane ramp edge no lane change is possible.
+            // On the single-lane ramp edge no lane change is possible; a main-road vehicle on
+            // lane 0 is on a deceleration lane, leaving, and does not come back.
             let zone = road.zone_ahead(v.front() + dk);
-            if v.lane == MERGE_LANE && v.front() + dk < zone.start {
+            let leaving = v.lane == MERGE_LANE && v.origin == Origin::Main;
+            if v.lane == MERGE_LANE && v.front() + dk < zone.start || leaving {
                 if record {
                     out.probabilities.push(0.0);
                 }

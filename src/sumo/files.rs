@@ -2,6 +2,7 @@
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -308,13 +309,17 @@ pub fn routes_xml(road: &Road) -> String {
     let mut xml = String::from(
         "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<!-- the merge scenario's routes, one per entry -->\n<routes>\n",
     );
-    for e in &road.entries {
-        let edges: Vec<&str> = e.route.iter().map(|x| &**x).collect();
-        xml += &format!(
-            "    <route id=\"{}\" edges=\"{}\"/>\n",
-            e.name,
-            edges.join(" ")
-        );
+    let mut route = |id: String, edges: &[Arc<str>]| {
+        let edges: Vec<&str> = edges.iter().map(|x| &**x).collect();
+        xml += &format!("    <route id=\"{id}\" edges=\"{}\"/>\n", edges.join(" "));
+    };
+    for (k, e) in road.entries.iter().enumerate() {
+        route(e.name.clone(), &e.route);
+        for x in 0..road.exits.len() {
+            if let Some(edges) = road.exit_route(k, x) {
+                route(road.exit_route_name(k, x), &edges);
+            }
+        }
     }
     xml + "</routes>\n"
 }

@@ -19,7 +19,7 @@ use std::collections::BTreeMap;
 use std::sync::Arc;
 
 use crate::model::road::{
-    EdgeFrame, Entry, LaneFrame, MergeZone, Road, FIRST_MAIN_LANE, MERGE_LANE,
+    EdgeFrame, Entry, Exit, LaneFrame, MergeZone, Road, FIRST_MAIN_LANE, MERGE_LANE,
 };
 use crate::sumo::network::{Lane, Layout, MainEdge, Net, OnRamp};
 
@@ -60,6 +60,7 @@ pub fn road(net: &Net, layout: &Layout) -> Result<Road, String> {
         section_end,
         end_edge: (Arc::from(last.id.as_str()), end_lane.length),
         entries,
+        exits: exits(net, layout),
         line: (!layout.line.is_straight_east()).then(|| Arc::new(layout.line.clone())),
     })
 }
@@ -169,6 +170,27 @@ fn entries(net: &Net, layout: &Layout, ramps: &[&OnRamp]) -> Vec<Entry> {
         });
     }
     out
+}
+
+/// The off-ramps in order along the road, named `off1`, `off2`, …
+fn exits(net: &Net, layout: &Layout) -> Vec<Exit> {
+    let order = |leaves: &str| layout.main.iter().position(|m| m.id == leaves);
+    let mut ramps: Vec<_> = layout.off_ramps.iter().collect();
+    ramps.sort_by_key(|r| order(&r.leaves));
+    ramps
+        .iter()
+        .enumerate()
+        .map(|(k, r)| {
+            let last = r.edges.last().expect("an off-ramp has an edge");
+            let lane = &net_edge(net, last).lanes[0];
+            Exit {
+                name: format!("off{}", k + 1),
+                leaves: Arc::from(r.leaves.as_str()),
+                edges: r.edges.iter().map(|e| Arc::from(e.as_str())).collect(),
+                end: (Arc::from(last.as_str()), lane.length),
+            }
+        })
+        .collect()
 }
 
 fn net_edge<'n>(net: &'n Net, id: &str) -> &'n crate::sumo::network::Edge {
