@@ -173,6 +173,7 @@ pub fn write_demand(
 ) -> PyResult<usize> {
     let config = crate::config::resolve(config, overrides, cell_table(alpha, lam, seed)?)?;
     let road = bkpbs::sumo::frame::scenario_road(&config.scenario).map_err(bad_input)?;
+    demand::check_entries(&config, &road).map_err(bad_input)?;
     let planned = demand::generate(&config, &road);
     write(&out, &demand::route_file(&road, &planned))?;
     Ok(planned.len())
@@ -208,6 +209,7 @@ pub fn write_scenario<'py>(
     write(&vtypes, &files::vehicle_types(&config))?;
     let routes = dir.join("demand.rou.xml");
     let road = bkpbs::sumo::frame::scenario_road(&config.scenario).map_err(bad_input)?;
+    demand::check_entries(&config, &road).map_err(bad_input)?;
     let planned = demand::generate(&config, &road);
     write(&routes, &demand::route_file(&road, &planned))?;
     let d = PyDict::new(py);

@@ -38,6 +38,7 @@ impl DemandArgs {
 /// Generates the demand and writes it atomically, so a failed run leaves no half file.
 pub fn run(d: Demand) -> Result<()> {
     let road = bkpbs::sumo::frame::scenario_road(&d.config.scenario)?;
+    demand::check_entries(&d.config, &road)?;
     let planned = demand::generate(&d.config, &road);
     output::write_atomic(&d.out, demand::route_file(&road, &planned).as_bytes())?;
     println!("{} vehicles written to {}", planned.len(), d.out.display());

@@ -164,6 +164,11 @@ pub struct Demand {
     /// ramp HDVs stay on the main road. Written into a campaign's settings only when above 0.
     #[serde(skip_serializing_if = "is_zero")]
     pub exit_share: f64,
+    /// How `ramp_share` is split over the on-ramps, one weight per ramp in order along the road
+    /// (normalised); empty, the default: equally. Written into a campaign's settings only when
+    /// given.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub ramp_weights: Vec<f64>,
     /// Insertion speed range (m/s), uniform.
     pub insertion_speed: [f64; 2],
     /// HDV desired speed range (m/s), uniform.
@@ -475,6 +480,7 @@ impl Default for Demand {
         Demand {
             ramp_share: 0.2,
             exit_share: 0.0,
+            ramp_weights: Vec::new(),
             insertion_speed: [25.0, 35.0],
             hdv_desired_speed: [25.0, 35.0],
             cav_share: CavShare::Exact,
@@ -722,6 +728,16 @@ fn check_demand(d: &Demand, v_max: f64) -> Result<(), ConfigError> {
     check_rows(
         &rows!(demand: d; ramp_share => Rule::UnitInterval, exit_share => Rule::UnitInterval),
     )?;
+    let weights = &d.ramp_weights;
+    if weights.iter().any(|w| !w.is_finite() || *w < 0.0)
+        || (!weights.is_empty() && weights.iter().sum::<f64>() <= 0.0)
+    {
+        return Err(ConfigError::Invalid {
+            field: "demand.ramp_weights",
+            value: format!("{weights:?}"),
+            reason: "weights must be finite, at least 0, and not all 0",
+        });
+    }
     for (field, r) in [
         ("demand.insertion_speed", d.insertion_speed),
         ("demand.hdv_desired_speed", d.hdv_desired_speed),

@@ -1,8 +1,8 @@
 //! Per-episode traffic demand, generated deterministically from (λ, α, seed).
 //!
 //! Arrivals form Poisson processes: the main road at rate (1 − r)·λ, each vehicle on any main
-//! lane with equal probability, and the on-ramps at rate r·λ together, shared equally, where r
-//! is `demand.ramp_share`.
+//! lane with equal probability, and the on-ramps at rate r·λ together, shared equally or by
+//! `demand.ramp_weights`, where r is `demand.ramp_share`.
 //! α is the share of CAVs among the episode's vehicles (`demand.cav_share = "exact"`, the
 //! paper's definition: round(α·n) CAVs placed at random) or, optionally, each vehicle's
 //! probability of being a CAV (`"probability"`). Insertion speeds and HDV desired speeds are uniform
@@ -14,11 +14,13 @@ use std::fmt::Write as _;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
+use crate::config::ConfigError;
 use crate::config::{CavShare, Config};
+use crate::episode::EpisodeError;
 use crate::model::road::Road;
 use crate::model::scene::{Kind, Origin};
 use crate::sumo::files::routes_xml;
-use crate::sumo::frame::{scenario_road, NetworkError};
+use crate::sumo::frame::scenario_road;
 
 /// Random stream of the demand (other streams of the same seed drive other random choices).
 pub const DEMAND_STREAM: u64 = 1;
@@ -45,9 +47,27 @@ pub struct PlannedVehicle {
 /// The vehicles arriving on the scenario's network (see [`generate`]).
 ///
 /// # Errors
-/// A network file that cannot be read or is not a merge.
-pub fn generate_for(config: &Config) -> Result<Vec<PlannedVehicle>, NetworkError> {
-    Ok(generate(config, &scenario_road(&config.scenario)?))
+/// A network file that cannot be read or is not a merge, or ramp weights that do not fit it.
+pub fn generate_for(config: &Config) -> Result<Vec<PlannedVehicle>, EpisodeError> {
+    let road = scenario_road(&config.scenario)?;
+    check_entries(config, &road)?;
+    Ok(generate(config, &road))
+}
+
+/// Whether the demand's settings fit `road`: one ramp weight per on-ramp, if any are given.
+///
+/// # Errors
+/// [`ConfigError::Invalid`] naming `demand.ramp_weights`.
+pub fn check_entries(config: &Config, road: &Road) -> Result<(), ConfigError> {
+    let (given, ramps) = (config.demand.ramp_weights.len(), road.zones.len());
+    if given == 0 || given == ramps {
+        return Ok(());
+    }
+    Err(ConfigError::Invalid {
+        field: "demand.ramp_weights",
+        value: format!("{given} weights for a network of {ramps} on-ramps"),
+        reason: "give one weight per on-ramp, in order along the road",
+    })
 }
 
 /// Random stream that sends HDVs off by the off-ramps (`demand.exit_share`).
@@ -145,13 +165,21 @@ fn arrivals(config: &Config, ramps: usize, rng: &mut ChaCha8Rng) -> Vec<(f64, us
     let horizon = sc.steps as f64 * sc.dt;
     let last_step = sc.steps.saturating_sub(1) as f64 * sc.dt;
     let rate_main = sc.lambda * (1.0 - config.demand.ramp_share) / 3600.0;
-    let rate_ramp = sc.lambda * config.demand.ramp_share / 3600.0 / ramps.max(1) as f64;
+    let weights = &config.demand.ramp_weights;
+    let rate_ramp = |k: usize| {
+        let all = sc.lambda * config.demand.ramp_share / 3600.0;
+        if weights.len() == ramps {
+            all * weights[k - 1] / weights.iter().sum::<f64>()
+        } else {
+            all / ramps.max(1) as f64
+        }
+    };
     let mut events: Vec<(f64, usize)> = arrival_times(rng, rate_main, horizon)
         .into_iter()
         .map(|t| (t, 0))
         .collect();
     for k in 1..=ramps {
-        let times = arrival_times(rng, rate_ramp, horizon);
+        let times = arrival_times(rng, rate_ramp(k), horizon);
         events.extend(times.into_iter().map(|t| (t, k)));
     }
     events.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
@@ -394,6 +422,41 @@ mod tests {
             xml.contains("<route id=\"ramp-off1\" edges=\"ramp acc off\"/>"),
             "{xml}"
         );
+    }
+
+    /// `demand.ramp_weights` splits the ramps' share; a list that does not fit the network is
+    /// refused naming the setting.
+    #[test]
+    fn ramp_weights_split_the_ramp_demand() {
+        let mut road = Road::paper_default();
+        road.zones.push(crate::model::road::MergeZone {
+            ramp_start: 600.0,
+            start: 800.0,
+            end: 1000.0,
+        });
+        road.entries[1].name = "ramp1".into();
+        road.entries.push(crate::model::road::Entry::new(
+            "ramp2",
+            &["ramp2", "acc", "main_out"],
+            40.0,
+        ));
+        let mut c = config(0.5, 6000.0, 1);
+        c.scenario.steps = 4000;
+        c.demand.ramp_share = 0.5;
+        c.demand.ramp_weights = vec![3.0, 1.0];
+        check_entries(&c, &road).unwrap();
+        let d = generate(&c, &road);
+        let count = |p: &str| d.iter().filter(|v| v.id.starts_with(p)).count() as f64;
+        let ratio = count("ramp1.") / count("ramp2.");
+        assert!((ratio - 3.0).abs() < 0.4, "{ratio}");
+        c.demand.ramp_weights = vec![1.0];
+        let e = check_entries(&c, &road).unwrap_err().to_string();
+        assert!(
+            e.contains("demand.ramp_weights") && e.contains("1 weights for a network of 2"),
+            "{e}"
+        );
+        c.demand.ramp_weights = vec![0.0, 0.0];
+        assert!(c.validate().is_err());
     }
 
     #[test]

@@ -145,6 +145,7 @@ pub enum Driver<'a> {
 pub fn run(config: &Config, planner: &str) -> Result<EpisodeResult, EpisodeError> {
     config.validate()?;
     let road = frame::scenario_road(&config.scenario)?;
+    demand::check_entries(config, &road)?;
     let planned = demand::generate(config, &road);
     run_observed(config, Driver::Named(planner), &planned, &mut NoObserver)
 }

@@ -412,7 +412,7 @@ pub fn collect(
             cause: Box::new(cause),
         };
         config.validate().map_err(|c| fail(c.into()))?;
-        let demand = crate::episode::demand::generate_for(&config).map_err(|c| fail(c.into()))?;
+        let demand = crate::episode::demand::generate_for(&config).map_err(fail)?;
         let mut rec = Recorder::new(
             e as u32,
             spec.seed,
