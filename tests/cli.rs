@@ -286,12 +286,7 @@ fn a_net_without_the_merge_layout_is_refused() {
     assert!(o.status.success(), "{}", stderr(&o));
     // A two-way road is no merge: one line, before SUMO starts.
     let net = d.path().join("two-way.net.xml");
-    std::fs::write(
-        &net,
-        r#"<net><edge id="east"><lane id="east_0" index="0" length="100" shape="0,0 100,0"/></edge>
-           <edge id="west"><lane id="west_0" index="0" length="100" shape="100,5 0,5"/></edge></net>"#,
-    )
-    .unwrap();
+    std::fs::write(&net, common::TWO_WAY_NET).unwrap();
     let out = d.path().join("two-way");
     let o = episode_into(&out, &["--net", net.to_str().unwrap()]);
     assert_clear_failure(&o, "two-way.net.xml", &out);

@@ -157,12 +157,7 @@ fn network_command() {
     assert_eq!(text.matches("off-ramp").count(), 2, "{text}");
     let dir = tempfile::tempdir().unwrap();
     let two_way = dir.path().join("two-way.net.xml");
-    std::fs::write(
-        &two_way,
-        r#"<net><edge id="east"><lane id="east_0" index="0" length="100" shape="0,0 100,0"/></edge>
-           <edge id="west"><lane id="west_0" index="0" length="100" shape="100,5 0,5"/></edge></net>"#,
-    )
-    .unwrap();
+    std::fs::write(&two_way, common::TWO_WAY_NET).unwrap();
     let o = std::process::Command::new(exe)
         .args(["network", two_way.to_str().unwrap()])
         .output()

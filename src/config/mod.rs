@@ -157,7 +157,8 @@ fn is_zero(x: &f64) -> bool {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct Demand {
-    /// Share of λ arriving on the ramp; the rest arrives on the two main lanes equally.
+    /// Share of λ arriving on the ramps (split by `ramp_weights`); the rest arrives on the main
+    /// lanes equally.
     pub ramp_share: f64,
     /// On a network with off-ramps: the probability that an HDV entering on the main road
     /// leaves by one of them (each equally likely); it arrives at the off-ramp's end. CAVs and

@@ -144,9 +144,7 @@ pub enum Driver<'a> {
 /// An invalid config, an unknown planner or unusable predictor, or SUMO failing.
 pub fn run(config: &Config, planner: &str) -> Result<EpisodeResult, EpisodeError> {
     config.validate()?;
-    let road = frame::scenario_road(&config.scenario)?;
-    demand::check_entries(config, &road)?;
-    let planned = demand::generate(config, &road);
+    let planned = demand::generate_for(config)?;
     run_observed(config, Driver::Named(planner), &planned, &mut NoObserver)
 }
 
@@ -333,7 +331,7 @@ impl<'a> Episode<'a> {
         road: Road,
         observer: &'a mut dyn Observer,
     ) -> Self {
-        let sumo_road = road.clone();
+        let entry = EntryControl::new(config, &road, planned);
         Episode {
             config,
             controller,
@@ -346,7 +344,7 @@ impl<'a> Episode<'a> {
             index: HashMap::new(),
             collisions: Vec::new(),
             merge_rule: RampMergeRule::new(config),
-            entry: EntryControl::new(config, &sumo_road, planned),
+            entry,
             readings: VehicleReadings::default(),
             slots: Vec::new(),
             slots_generation: u64::MAX,

@@ -1,4 +1,4 @@
-//! The road frame and SUMO, both directions: the [`Road`] read from the running network, a
+//! The road frame and SUMO, both directions: the [`Road`] of the scenario's network file, a
 //! road-frame [`VehicleState`] from what SUMO reports about one vehicle (edge, lane, lane
 //! position of the front bumper, lateral offset, speed, acceleration and angle), and back from a
 //! frame lane to the SUMO lane index a lane-change command needs.
@@ -57,11 +57,16 @@ pub fn scenario_road(scenario: &Scenario) -> Result<Road, NetworkError> {
     }
 }
 
-/// The road frame of the network embedded in the binary (the paper's).
+/// The road frame of the network embedded in the binary (the paper's), read once per process.
 pub fn embedded_road() -> Road {
-    let path = Path::new("merge.net.xml");
-    let net = Net::parse(path, crate::model::road::EMBEDDED_NET).expect("the embedded net parses");
-    road_from_net(&net, path).expect("the embedded net is a merge")
+    static ROAD: std::sync::OnceLock<Road> = std::sync::OnceLock::new();
+    ROAD.get_or_init(|| {
+        let path = Path::new("merge.net.xml");
+        let net =
+            Net::parse(path, crate::model::road::EMBEDDED_NET).expect("the embedded net parses");
+        road_from_net(&net, path).expect("the embedded net is a merge")
+    })
+    .clone()
 }
 
 /// The frame lane of `lane_index` on the edge of code `edge_code`, if the frame has it.

@@ -6,7 +6,7 @@
 //!
 //! Edge ids are free and internal junction lanes are allowed (netconvert's defaults): the
 //! distance along the main carriageway counts the junctions' internal lanes between its edges.
-//! (Issue 14's first step: the episode runner still uses the fixed frame of `frame.rs`.)
+//! The road frame of the layout is built in `road_frame.rs`.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};

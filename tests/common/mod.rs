@@ -100,6 +100,10 @@ pub fn send_signal(pid: i32, signal: i32) {
 /// A merge network with `main_lanes` lanes, one on-ramp per entry of `ramps_at` (x of the
 /// merge), edge ids of its own, straight or bending (a gentle arc through the middle), built
 /// by netconvert with its defaults (internal lanes) in `dir`.
+/// A two-way road: two carriageways of equal width, neither of which joins the other (no merge).
+pub const TWO_WAY_NET: &str = r#"<net><edge id="east"><lane id="east_0" index="0" length="100" shape="0,0 100,0"/></edge>
+           <edge id="west"><lane id="west_0" index="0" length="100" shape="100,5 0,5"/></edge></net>"#;
+
 pub fn netconvert_net(
     dir: &std::path::Path,
     main_lanes: u32,
