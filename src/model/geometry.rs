@@ -39,11 +39,24 @@ pub fn intersection_test_circle_circle(a: &OrientedBox, b: &OrientedBox) -> bool
 }
 
 /// Exact overlap test of two oriented boxes (touching counts as overlap).
+///
+/// Planning asks this for every pair of nearby vehicles at every step, so the usual answers
+/// come cheaply and exactly: far apart along either axis (farther than the half-extents summed,
+/// which bound the bounding circles) is no overlap without a square root, and two boxes both
+/// heading along the road (heading exactly 0, most of them) are compared as axis-aligned
+/// rectangles, which is what the separating-axis test computes for them, bit for bit.
 pub fn intersection_test_obb_obb(a: &OrientedBox, b: &OrientedBox) -> bool {
+    let d = b.centre - a.centre;
+    let reach = a.half.x + a.half.y + b.half.x + b.half.y;
+    if d.x.abs() > reach || d.y.abs() > reach {
+        return false;
+    }
     if !intersection_test_circle_circle(a, b) {
         return false;
     }
-    let d = b.centre - a.centre;
+    if a.heading == 0.0 && b.heading == 0.0 {
+        return d.x.abs() <= a.half.x + b.half.x && d.y.abs() <= a.half.y + b.half.y;
+    }
     let (aa, ba) = (a.axes(), b.axes());
     for axis in aa.iter().chain(ba.iter()) {
         let ra = a.half.x * aa[0].dot(axis).abs() + a.half.y * aa[1].dot(axis).abs();

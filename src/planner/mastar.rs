@@ -206,6 +206,9 @@ impl Mastar {
             .copied()
             .filter(|t| (t.poses[0].s - req.start.pos.x).abs() < OBSTACLE_RANGE)
             .collect();
+        // Every step a search checks: the check horizon, and a primitive started just before it.
+        let checked = self.settings.horizon + 2 * self.library.lane_change_steps;
+        let near = Obstacles::new(near, checked, self.library.dt);
         let mut expanded = 0;
         for phase in [Phase::Forward, Phase::Fallback] {
             match self.search(req, &near, phase) {
@@ -221,12 +224,7 @@ impl Mastar {
 
     /// One phase of M-A*: A* from the CAV's state to the phase's goal or horizon. Returns the
     /// nodes expanded when it finds no plan.
-    fn search(
-        &self,
-        req: &Request,
-        obstacles: &[&Trajectory],
-        phase: Phase,
-    ) -> Result<Plan, usize> {
+    fn search(&self, req: &Request, obstacles: &Obstacles, phase: Phase) -> Result<Plan, usize> {
         let spec = PhaseSpec::of(phase, &self.settings);
         let problem = PhaseSearch::new(self, req, obstacles, spec);
         let result = astar(
@@ -308,26 +306,50 @@ impl Mastar {
     }
 
     /// Whether the CAV at `st` at `step` is clear of every obstacle (see [`SafetyRule`]).
-    fn safe(
-        &self,
-        st: &BicycleState,
-        step: usize,
-        req: &Request,
-        obstacles: &[&Trajectory],
-    ) -> bool {
-        let dt = self.library.dt;
-        let body = |st: &BicycleState| Body {
-            pose: pose(st),
-            length: req.length,
-            width: req.width,
-            brake: None,
-        };
-        let (me, me_now) = (body(st), body(&req.start));
-        obstacles.iter().all(|t| {
-            let (other, other_now) = (Body::of(t, step, dt), Body::of(t, 0, dt));
-            self.rule
-                .clear(&me, &me_now, &other, &other_now, step as f64 * dt)
-        })
+    /// `me_now` is the CAV's body at the start.
+    fn safe(&self, st: &BicycleState, step: usize, me_now: &Body, obstacles: &Obstacles) -> bool {
+        let me = Body::new(pose(st), me_now.length, me_now.width, None);
+        let t = step as f64 * self.library.dt;
+        let now = obstacles.at(0);
+        match obstacles.by_step.get(step) {
+            Some(bodies) => bodies
+                .iter()
+                .zip(now)
+                .all(|(other, other_now)| self.rule.clear(&me, me_now, other, other_now, t)),
+            None => obstacles
+                .trajectories
+                .iter()
+                .zip(now)
+                .all(|(o, other_now)| {
+                    let other = Body::of(o, step, self.library.dt);
+                    self.rule.clear(&me, me_now, &other, other_now, t)
+                }),
+        }
+    }
+}
+
+/// The obstacles of one M-A* call, with their bodies at every step a search checks, built once:
+/// every node checks every obstacle at every step of every primitive it rolls out, so reading a
+/// pose (and its forward speed) off a trajectory each time would cost more than the checks.
+struct Obstacles<'a> {
+    trajectories: Vec<&'a Trajectory>,
+    /// `by_step[k][o]`: obstacle `o` at step `k`.
+    by_step: Vec<Vec<Body>>,
+}
+
+impl<'a> Obstacles<'a> {
+    fn new(trajectories: Vec<&'a Trajectory>, steps: usize, dt: f64) -> Self {
+        let by_step = (0..=steps)
+            .map(|k| trajectories.iter().map(|t| Body::of(t, k, dt)).collect())
+            .collect();
+        Obstacles {
+            trajectories,
+            by_step,
+        }
+    }
+
+    fn at(&self, step: usize) -> &[Body] {
+        &self.by_step[step]
     }
 }
 
@@ -399,7 +421,9 @@ impl PhaseSpec {
 struct PhaseSearch<'p> {
     planner: &'p Mastar,
     req: &'p Request<'p>,
-    obstacles: &'p [&'p Trajectory],
+    obstacles: &'p Obstacles<'p>,
+    /// The CAV's body at the start.
+    me_now: Body,
     spec: PhaseSpec,
     /// The CAV's start along the road: progress is measured from here.
     s0: f64,
@@ -417,7 +441,7 @@ impl<'p> PhaseSearch<'p> {
     fn new(
         planner: &'p Mastar,
         req: &'p Request<'p>,
-        obstacles: &'p [&'p Trajectory],
+        obstacles: &'p Obstacles<'p>,
         spec: PhaseSpec,
     ) -> Self {
         let horizon = planner.settings.horizon;
@@ -425,6 +449,7 @@ impl<'p> PhaseSearch<'p> {
             planner,
             req,
             obstacles,
+            me_now: Body::new(pose(&req.start), req.length, req.width, None),
             spec,
             s0: req.start.pos.x,
             dt: planner.library.dt,
@@ -461,7 +486,8 @@ impl<'p> PhaseSearch<'p> {
 
     /// Whether the CAV at `st` at `step` is on the road and clear of every obstacle.
     fn free(&self, st: &BicycleState, step: usize) -> bool {
-        self.planner.on_road(st, self.req) && self.planner.safe(st, step, self.req, self.obstacles)
+        self.planner.on_road(st, self.req)
+            && self.planner.safe(st, step, &self.me_now, self.obstacles)
     }
 
     /// Whether coasting on at constant speed from `st` at `step` stays free up to the check

@@ -48,21 +48,30 @@ pub struct Body {
     pub width: f64,
     /// See [`Trajectory::brake`].
     pub brake: Option<f64>,
+    /// Speed along the road (m/s): `pose.speed · cos(pose.heading)`, computed once with the
+    /// body, since the rule asks for it at almost every check and a cosine is most of a check's
+    /// cost.
+    forward: f64,
 }
 
 impl Body {
-    /// The body of `t` at `step`.
-    pub fn of(t: &Trajectory, step: usize, dt: f64) -> Body {
+    pub fn new(pose: Pose, length: f64, width: f64, brake: Option<f64>) -> Body {
         Body {
-            pose: t.at(step, dt),
-            length: t.length,
-            width: t.width,
-            brake: t.brake,
+            pose,
+            length,
+            width,
+            brake,
+            forward: pose.speed * pose.heading.cos(),
         }
     }
 
+    /// The body of `t` at `step`.
+    pub fn of(t: &Trajectory, step: usize, dt: f64) -> Body {
+        Body::new(t.at(step, dt), t.length, t.width, t.brake)
+    }
+
     fn forward_speed(&self) -> f64 {
-        self.pose.speed * self.pose.heading.cos()
+        self.forward
     }
 }
 
@@ -154,15 +163,13 @@ impl SafetyRule {
     /// `follower_brake` from `now` instead.
     fn braking(&self, now: &Body, later: &Body, t: f64) -> Body {
         let stopping = braked(now, self.follower_brake, t);
-        Body {
-            pose: Pose {
-                s: stopping.pose.s,
-                speed: stopping.pose.speed,
-                heading: 0.0,
-                ..later.pose
-            },
-            ..*later
-        }
+        let pose = Pose {
+            s: stopping.pose.s,
+            speed: stopping.pose.speed,
+            heading: 0.0,
+            ..later.pose
+        };
+        Body::new(pose, later.length, later.width, later.brake)
     }
 
     fn same_lane(&self, a: &Body, b: &Body) -> bool {
@@ -200,14 +207,12 @@ impl SafetyRule {
 fn braked(body: &Body, decel: f64, t: f64) -> Body {
     let v0 = body.forward_speed();
     let t_stop = (v0 / decel).min(t);
-    Body {
-        pose: Pose {
-            s: body.pose.s + v0 * t_stop - 0.5 * decel * t_stop * t_stop,
-            speed: v0 - decel * t_stop,
-            ..body.pose
-        },
-        ..*body
-    }
+    let pose = Pose {
+        s: body.pose.s + v0 * t_stop - 0.5 * decel * t_stop * t_stop,
+        speed: v0 - decel * t_stop,
+        ..body.pose
+    };
+    Body::new(pose, body.length, body.width, body.brake)
 }
 
 /// Bumper gap from `back` to `front` (m).
@@ -220,17 +225,13 @@ mod tests {
     use super::*;
 
     fn body(s: f64, y: f64, speed: f64) -> Body {
-        Body {
-            pose: Pose {
-                s,
-                y,
-                heading: 0.0,
-                speed,
-            },
-            length: 5.0,
-            width: 2.0,
-            brake: None,
-        }
+        let pose = Pose {
+            s,
+            y,
+            heading: 0.0,
+            speed,
+        };
+        Body::new(pose, 5.0, 2.0, None)
     }
 
     fn rule() -> SafetyRule {

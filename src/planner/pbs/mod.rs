@@ -125,10 +125,18 @@ type Conflict = (usize, usize, usize);
 /// An agent at the root: trajectory, plan (CAVs), M-A* calls and nodes spent.
 type RootPlan = (Arc<Trajectory>, Option<Arc<Plan>>, u64, u64);
 
+/// An agent replanned in a node: its new trajectory, plan (CAVs) and progress.
+struct Replanned {
+    agent: usize,
+    trajectory: Arc<Trajectory>,
+    plan: Option<Arc<Plan>>,
+    progress: f64,
+}
+
 struct Node {
     parent: Option<usize>,
     edge: Option<(usize, usize)>,
-    changed: Vec<(usize, Arc<Trajectory>, Option<Arc<Plan>>)>,
+    changed: Vec<Replanned>,
     conflicts: Vec<Conflict>,
     cost: f64,
     depth: usize,
@@ -174,10 +182,14 @@ impl Node {
 }
 
 /// The full state of a node.
+#[derive(Clone)]
 struct State {
     graph: PriorityGraph,
     trajectories: Vec<Arc<Trajectory>>,
     plans: Vec<Option<Arc<Plan>>>,
+    /// Each agent's progress ([`Problem::progress`]) along its trajectory, kept with it: a
+    /// node's cost sums them over every agent, and most agents' trajectories are the root's.
+    progress: Vec<f64>,
 }
 
 /// Pairs of `agents` (ascending, each pair `(a, b)` with a < b) whose stretches of road
@@ -318,15 +330,16 @@ impl Problem<'_> {
         out
     }
 
-    /// −Σ forward speeds over steps 1..=horizon of all agents.
-    fn cost(&self, ts: &[Arc<Trajectory>]) -> f64 {
-        -ts.iter()
-            .map(|t| {
-                (1..=self.horizon)
-                    .map(|k| forward(&t.at(k, self.dt)))
-                    .sum::<f64>()
-            })
+    /// Σ forward speeds of `t` over steps 1..=horizon.
+    fn progress(&self, t: &Trajectory) -> f64 {
+        (1..=self.horizon)
+            .map(|k| forward(&t.at(k, self.dt)))
             .sum::<f64>()
+    }
+
+    /// A state's cost: −Σ forward speeds over steps 1..=horizon of all agents.
+    fn cost(state: &State) -> f64 {
+        -state.progress.iter().sum::<f64>()
     }
 
     fn predict(&self, agent: usize, conditioned_on: &[&Trajectory]) -> Arc<Trajectory> {
@@ -362,6 +375,7 @@ impl Problem<'_> {
                 match self.requests.plan(self.planner, k, &obstacles) {
                     Ok(plan) => {
                         effort.mastar_nodes += plan.expanded as u64;
+                        state.progress[k] = self.progress(&plan.trajectory);
                         state.trajectories[k] = Arc::new(plan.trajectory.clone());
                         state.plans[k] = Some(Arc::new(plan));
                     }
@@ -379,6 +393,7 @@ impl Problem<'_> {
                 if !self.merge_is_certain(k) {
                     effort.predictions += 1;
                     state.trajectories[k] = self.predict(k, &cavs);
+                    state.progress[k] = self.progress(&state.trajectories[k]);
                 }
                 if conflicted(&state.trajectories) {
                     return None;
@@ -444,10 +459,12 @@ impl Problem<'_> {
             trajectories.push(t);
             plans.push(p);
         }
+        let progress = trajectories.iter().map(|t| self.progress(t)).collect();
         let mut state = State {
             graph: PriorityGraph::new(n),
             trajectories,
             plans,
+            progress,
         };
         self.keep_commitments(&mut state, stats);
         state
@@ -458,11 +475,7 @@ impl Problem<'_> {
     /// dropped, and the state is left as it was.
     fn keep_commitments(&self, state: &mut State, stats: &mut PbsStats) {
         for &(hi, lo) in self.committed {
-            let mut next = State {
-                graph: state.graph.clone(),
-                trajectories: state.trajectories.clone(),
-                plans: state.plans.clone(),
-            };
+            let mut next = state.clone();
             if !next.graph.add(hi, lo) {
                 continue;
             }
@@ -507,7 +520,7 @@ impl Problem<'_> {
             parent: None,
             edge: None,
             changed: Vec::new(),
-            cost: self.cost(&root_state.trajectories),
+            cost: Self::cost(root_state),
             conflicts,
             depth: 0,
         }
@@ -598,15 +611,10 @@ impl Problem<'_> {
         lo: usize,
         agents: &[usize],
     ) -> Option<(Node, Effort)> {
-        let mut graph = state.graph.clone();
-        if !graph.add(hi, lo) {
+        let mut child = state.clone();
+        if !child.graph.add(hi, lo) {
             return None;
         }
-        let mut child = State {
-            graph,
-            trajectories: state.trajectories.clone(),
-            plans: state.plans.clone(),
-        };
         let mut effort = Effort::default();
         let changed = self.update_plan(&mut child, lo, &mut effort)?;
         // Lowering `lo` must resolve the conflict that caused the branch; when the conflict is
@@ -622,9 +630,14 @@ impl Problem<'_> {
                 edge: Some((hi, lo)),
                 changed: changed
                     .iter()
-                    .map(|&a| (a, child.trajectories[a].clone(), child.plans[a].clone()))
+                    .map(|&a| Replanned {
+                        agent: a,
+                        trajectory: child.trajectories[a].clone(),
+                        plan: child.plans[a].clone(),
+                        progress: child.progress[a],
+                    })
                     .collect(),
-                cost: self.cost(&child.trajectories),
+                cost: Self::cost(&child),
                 conflicts,
                 depth: parent.depth + 1,
             },
@@ -640,19 +653,16 @@ impl Problem<'_> {
             path.push(x);
             at = nodes[x].parent;
         }
-        let mut state = State {
-            graph: root.graph.clone(),
-            trajectories: root.trajectories.clone(),
-            plans: root.plans.clone(),
-        };
+        let mut state = root.clone();
         for &x in path.iter().rev() {
             let node = &nodes[x];
             if let Some((hi, lo)) = node.edge {
                 state.graph.add(hi, lo);
             }
-            for (a, t, p) in &node.changed {
-                state.trajectories[*a] = t.clone();
-                state.plans[*a] = p.clone();
+            for r in &node.changed {
+                state.trajectories[r.agent] = r.trajectory.clone();
+                state.plans[r.agent] = r.plan.clone();
+                state.progress[r.agent] = r.progress;
             }
         }
         state
@@ -660,12 +670,7 @@ impl Problem<'_> {
 }
 
 fn body(t: &Trajectory, pose: Pose) -> Body {
-    Body {
-        pose,
-        length: t.length,
-        width: t.width,
-        brake: t.brake,
-    }
+    Body::new(pose, t.length, t.width, t.brake)
 }
 
 fn forward(p: &Pose) -> f64 {
