@@ -70,7 +70,8 @@ impl Body {
         Body::new(t.at(step, dt), t.length, t.width, t.brake)
     }
 
-    fn forward_speed(&self) -> f64 {
+    /// Speed along the road (m/s).
+    pub fn forward_speed(&self) -> f64 {
         self.forward
     }
 }

@@ -18,6 +18,9 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 
+use std::sync::Arc;
+
+use super::track::Track;
 use super::{PbsStats, Problem, Solution, State};
 
 /// Disjoint sets of agents (union–find), each named by its lowest member.
@@ -73,21 +76,21 @@ pub(super) fn solve(
     let n = problem.scene.vehicles.len();
     let everyone: Vec<usize> = (0..n).collect();
     let mut sets = Sets::new(n);
-    for (_, a, b) in problem.all_conflicts(&root.trajectories, &everyone) {
+    for (_, a, b) in problem.all_conflicts(&root.tracks, &everyone) {
         sets.union(a, b);
     }
     for &(hi, lo) in problem.committed {
         sets.union(hi, lo);
     }
     link_neighbours(problem, &mut sets);
-    let mut answers: BTreeMap<Vec<usize>, Solution> = BTreeMap::new();
+    let mut answers: BTreeMap<Vec<usize>, (State, PbsStats)> = BTreeMap::new();
     loop {
         let groups = sets.groups();
         let todo: Vec<&Vec<usize>> = groups
             .iter()
             .filter(|g| !answers.contains_key(*g))
             .collect();
-        let solved: Vec<Solution> = todo
+        let solved: Vec<(State, PbsStats)> = todo
             .par_iter()
             .map(|g| problem.search(root, g, start, PbsStats::default()))
             .collect();
@@ -95,7 +98,7 @@ pub(super) fn solve(
         answers.extend(todo.into_iter().cloned().zip(solved));
         let whole = combined(root, &answers);
         let crossing = problem
-            .all_conflicts(&whole.trajectories, &everyone)
+            .all_conflicts(&whole.tracks, &everyone)
             .into_iter()
             .filter(|&(_, a, b)| sets.union(a, b))
             .count();
@@ -128,20 +131,26 @@ fn link_neighbours(problem: &Problem<'_>, sets: &mut Sets) {
     }
 }
 
-/// The root's trajectories and plans with each group's answer for its agents.
-fn combined(root: &State, answers: &BTreeMap<Vec<usize>, Solution>) -> Solution {
-    let mut out = Solution {
-        trajectories: root.trajectories.clone(),
+/// The groups' answers put together.
+struct Whole {
+    tracks: Vec<Arc<Track>>,
+    plans: Vec<Option<Arc<crate::planner::mastar::Plan>>>,
+    edges: Vec<(usize, usize)>,
+}
+
+/// The root's tracks and plans with each group's answer for its agents.
+fn combined(root: &State, answers: &BTreeMap<Vec<usize>, (State, PbsStats)>) -> Whole {
+    let mut out = Whole {
+        tracks: root.tracks.clone(),
         plans: root.plans.clone(),
         edges: root.graph.edges(),
-        stats: PbsStats::default(),
     };
-    for (group, s) in answers {
+    for (group, (s, _)) in answers {
         for &a in group {
-            out.trajectories[a] = s.trajectories[a].clone();
+            out.tracks[a] = s.tracks[a].clone();
             out.plans[a] = s.plans[a].clone();
         }
-        out.edges.extend(s.edges.iter().copied());
+        out.edges.extend(s.graph.edges());
     }
     out.edges.sort_unstable();
     out.edges.dedup();
@@ -150,12 +159,11 @@ fn combined(root: &State, answers: &BTreeMap<Vec<usize>, Solution>) -> Solution 
 
 /// The answer with the effort of every group search added to the root's.
 fn finish(
-    mut whole: Solution,
-    answers: &BTreeMap<Vec<usize>, Solution>,
+    whole: Whole,
+    answers: &BTreeMap<Vec<usize>, (State, PbsStats)>,
     stats: &mut PbsStats,
 ) -> Solution {
-    for s in answers.values() {
-        let g = &s.stats;
+    for (_, g) in answers.values() {
         stats.nodes += g.nodes;
         stats.mastar_calls += g.mastar_calls;
         stats.mastar_nodes += g.mastar_nodes;
@@ -165,8 +173,12 @@ fn finish(
         stats.timed_out |= g.timed_out;
         stats.conflicts_left += g.conflicts_left;
     }
-    whole.stats = *stats;
-    whole
+    Solution {
+        trajectories: whole.tracks.iter().map(|t| t.trajectory.clone()).collect(),
+        plans: whole.plans,
+        edges: whole.edges,
+        stats: *stats,
+    }
 }
 
 #[cfg(test)]

@@ -34,13 +34,15 @@ use rayon::prelude::*;
 
 use crate::model::road::MERGE_LANE;
 use crate::model::scene::{Kind, Origin, Scene};
-use crate::model::trajectory::{Pose, Trajectory};
+use crate::model::trajectory::Trajectory;
 use crate::planner::mastar::{Mastar, NoPlan, Plan};
 use crate::planner::priority::PriorityGraph;
-use crate::planner::safety::{Body, SafetyRule, REACH};
+use crate::planner::safety::{SafetyRule, REACH};
 
 mod groups;
+mod track;
 use crate::predict::Predictor;
+use track::Track;
 
 /// Bounds of one planning round.
 #[derive(Debug, Clone, PartialEq)]
@@ -122,15 +124,14 @@ pub struct Solution {
 /// (step, i, j) with i < j.
 type Conflict = (usize, usize, usize);
 
-/// An agent at the root: trajectory, plan (CAVs), M-A* calls and nodes spent.
-type RootPlan = (Arc<Trajectory>, Option<Arc<Plan>>, u64, u64);
+/// An agent at the root: track, plan (CAVs), M-A* calls and nodes spent.
+type RootPlan = (Arc<Track>, Option<Arc<Plan>>, u64, u64);
 
-/// An agent replanned in a node: its new trajectory, plan (CAVs) and progress.
+/// An agent replanned in a node: its new track and plan (CAVs).
 struct Replanned {
     agent: usize,
-    trajectory: Arc<Trajectory>,
+    track: Arc<Track>,
     plan: Option<Arc<Plan>>,
-    progress: f64,
 }
 
 struct Node {
@@ -185,23 +186,38 @@ impl Node {
 #[derive(Clone)]
 struct State {
     graph: PriorityGraph,
-    trajectories: Vec<Arc<Trajectory>>,
+    tracks: Vec<Arc<Track>>,
     plans: Vec<Option<Arc<Plan>>>,
-    /// Each agent's progress ([`Problem::progress`]) along its trajectory, kept with it: a
-    /// node's cost sums them over every agent, and most agents' trajectories are the root's.
-    progress: Vec<f64>,
+}
+
+impl State {
+    /// A node's cost: −Σ forward speeds over steps 1..=horizon of all agents.
+    fn cost(&self) -> f64 {
+        -self.tracks.iter().map(|t| t.progress).sum::<f64>()
+    }
+
+    /// What the search answers from this state.
+    fn solution(self, stats: PbsStats) -> Solution {
+        Solution {
+            edges: self.graph.edges(),
+            trajectories: self.tracks.iter().map(|t| t.trajectory.clone()).collect(),
+            plans: self.plans,
+            stats,
+        }
+    }
 }
 
 /// Pairs of `agents` (ascending, each pair `(a, b)` with a < b) whose stretches of road
-/// (`extents`, by agent) come within `safety::REACH` of each other: a sweep in order of the
+/// (their tracks' extents) come within `safety::REACH` of each other: a sweep in order of the
 /// stretches' starts.
-fn within_reach(extents: &[(f64, f64)], agents: &[usize]) -> Vec<(usize, usize)> {
+fn within_reach(tracks: &[Arc<Track>], agents: &[usize]) -> Vec<(usize, usize)> {
+    let extent = |a: usize| tracks[a].extent;
     let mut order: Vec<usize> = agents.to_vec();
-    order.sort_by(|&a, &b| extents[a].0.total_cmp(&extents[b].0).then(a.cmp(&b)));
+    order.sort_by(|&a, &b| extent(a).0.total_cmp(&extent(b).0).then(a.cmp(&b)));
     let mut pairs = Vec::new();
     for (k, &a) in order.iter().enumerate() {
         for &b in &order[k + 1..] {
-            if extents[b].0 > extents[a].1 + REACH {
+            if extent(b).0 > extent(a).1 + REACH {
                 break;
             }
             pairs.push((a.min(b), a.max(b)));
@@ -237,62 +253,63 @@ impl Problem<'_> {
     }
 
     /// The first step at which pair (a, b) conflicts, if any.
-    fn pair_conflict(&self, a: usize, b: usize, ts: &[Arc<Trajectory>]) -> Option<usize> {
+    fn pair_conflict(&self, a: usize, b: usize, tracks: &[Arc<Track>]) -> Option<usize> {
         let (ca, cb) = (self.is_cav(a), self.is_cav(b));
         if !ca && !cb {
             return None;
         }
-        let (ta, tb) = (&ts[a], &ts[b]);
-        let (a0, b0) = (Body::of(ta, 0, self.dt), Body::of(tb, 0, self.dt));
+        let (ta, tb) = (&tracks[a].bodies, &tracks[b].bodies);
+        let (a0, b0) = (&ta[0], &tb[0]);
         (1..=self.horizon).find(|&k| {
-            let (pa, pb) = (ta.at(k, self.dt), tb.at(k, self.dt));
+            let (ba, bb) = (&ta[k], &tb[k]);
+            let (pa, pb) = (&ba.pose, &bb.pose);
             if (pa.s - pb.s).abs() > REACH || (pa.y - pb.y).abs() > 6.0 {
                 return false;
             }
-            let (ba, bb) = (body(ta, pa), body(tb, pb));
-            (ca && !self.rule.clear(&ba, &a0, &bb, &b0, k as f64 * self.dt))
-                || (cb && !self.rule.clear(&bb, &b0, &ba, &a0, k as f64 * self.dt))
+            (ca && !self.rule.clear(ba, a0, bb, b0, k as f64 * self.dt))
+                || (cb && !self.rule.clear(bb, b0, ba, a0, k as f64 * self.dt))
         })
+    }
+
+    /// The tracks of `ts` over this problem's horizon.
+    fn tracks(&self, ts: &[Arc<Trajectory>]) -> Vec<Arc<Track>> {
+        Track::all(ts, self.horizon, self.dt)
+    }
+
+    /// The track of a newly planned or predicted trajectory.
+    fn track(&self, t: Arc<Trajectory>) -> Arc<Track> {
+        Arc::new(Track::new(t, self.horizon, self.dt))
     }
 
     /// Which agents are in a conflict under trajectories `ts`.
     pub fn conflicted_agents(&self, ts: &[Arc<Trajectory>]) -> Vec<bool> {
         let everyone: Vec<usize> = (0..ts.len()).collect();
         let mut out = vec![false; ts.len()];
-        for (_, a, b) in self.all_conflicts(ts, &everyone) {
+        for (_, a, b) in self.all_conflicts(&self.tracks(ts), &everyone) {
             out[a] = true;
             out[b] = true;
         }
         out
     }
 
-    /// Whether agents `a` and `b` conflict at any step.
+    /// Whether agents `a` and `b` conflict at any step under trajectories `ts`.
     pub fn conflict_between(&self, a: usize, b: usize, ts: &[Arc<Trajectory>]) -> bool {
-        self.pair_conflict(a.min(b), a.max(b), ts).is_some()
+        self.conflicts(a, b, &self.tracks(ts))
+    }
+
+    /// Whether agents `a` and `b` conflict at any step.
+    fn conflicts(&self, a: usize, b: usize, tracks: &[Arc<Track>]) -> bool {
+        self.pair_conflict(a.min(b), a.max(b), tracks).is_some()
     }
 
     /// All conflicting pairs among `agents`, each at its first step, sorted.
-    fn all_conflicts(&self, ts: &[Arc<Trajectory>], agents: &[usize]) -> Vec<Conflict> {
-        let extents = self.extents(ts);
-        let mut out: Vec<Conflict> = within_reach(&extents, agents)
+    fn all_conflicts(&self, tracks: &[Arc<Track>], agents: &[usize]) -> Vec<Conflict> {
+        let mut out: Vec<Conflict> = within_reach(tracks, agents)
             .into_iter()
-            .filter_map(|(a, b)| self.pair_conflict(a, b, ts).map(|k| (k, a, b)))
+            .filter_map(|(a, b)| self.pair_conflict(a, b, tracks).map(|k| (k, a, b)))
             .collect();
         out.sort_unstable();
         out
-    }
-
-    /// Each agent's stretch of road over the horizon: the lowest and highest `s` of its
-    /// trajectory. Two agents farther apart than `safety::REACH` at every step never conflict.
-    fn extents(&self, ts: &[Arc<Trajectory>]) -> Vec<(f64, f64)> {
-        ts.iter()
-            .map(|t| {
-                (0..=self.horizon).fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), k| {
-                    let s = t.at(k, self.dt).s;
-                    (lo.min(s), hi.max(s))
-                })
-            })
-            .collect()
     }
 
     /// The parent's conflicts with every pair touching a `changed` agent recomputed (pairs
@@ -301,7 +318,7 @@ impl Problem<'_> {
         &self,
         parent: &[Conflict],
         changed: &[usize],
-        ts: &[Arc<Trajectory>],
+        tracks: &[Arc<Track>],
         agents: &[usize],
     ) -> Vec<Conflict> {
         let touched = |a: usize| changed.contains(&a);
@@ -310,9 +327,8 @@ impl Problem<'_> {
             .copied()
             .filter(|&(_, a, b)| !touched(a) && !touched(b))
             .collect();
-        let extents = self.extents(ts);
         let near = |a: usize, b: usize| {
-            let ((lo_a, hi_a), (lo_b, hi_b)) = (extents[a], extents[b]);
+            let ((lo_a, hi_a), (lo_b, hi_b)) = (tracks[a].extent, tracks[b].extent);
             lo_b <= hi_a + REACH && lo_a <= hi_b + REACH
         };
         for &c in changed {
@@ -321,7 +337,7 @@ impl Problem<'_> {
                     continue; // each changed pair once; far pairs never conflict
                 }
                 let (a, b) = (c.min(o), c.max(o));
-                if let Some(k) = self.pair_conflict(a, b, ts) {
+                if let Some(k) = self.pair_conflict(a, b, tracks) {
                     out.push((k, a, b));
                 }
             }
@@ -330,23 +346,11 @@ impl Problem<'_> {
         out
     }
 
-    /// Σ forward speeds of `t` over steps 1..=horizon.
-    fn progress(&self, t: &Trajectory) -> f64 {
-        (1..=self.horizon)
-            .map(|k| forward(&t.at(k, self.dt)))
-            .sum::<f64>()
-    }
-
-    /// A state's cost: −Σ forward speeds over steps 1..=horizon of all agents.
-    fn cost(state: &State) -> f64 {
-        -state.progress.iter().sum::<f64>()
-    }
-
-    fn predict(&self, agent: usize, conditioned_on: &[&Trajectory]) -> Arc<Trajectory> {
-        Arc::new(
-            self.predictor
-                .predict(self.scene, agent, conditioned_on, self.horizon),
-        )
+    fn predict(&self, agent: usize, conditioned_on: &[&Trajectory]) -> Arc<Track> {
+        let t = self
+            .predictor
+            .predict(self.scene, agent, conditioned_on, self.horizon);
+        self.track(Arc::new(t))
     }
 
     /// Replans `lowered` and every agent below it that is no longer clear of a higher one.
@@ -360,23 +364,21 @@ impl Problem<'_> {
         let mut changed = Vec::new();
         for k in state.graph.topological_from(lowered) {
             let higher = state.graph.ancestors(k);
-            let conflicted = |ts: &[Arc<Trajectory>]| {
-                higher
-                    .iter()
-                    .any(|&h| self.pair_conflict(k.min(h), k.max(h), ts).is_some())
-            };
-            if k != lowered && !conflicted(&state.trajectories) {
+            let conflicted =
+                |tracks: &[Arc<Track>]| higher.iter().any(|&h| self.conflicts(k, h, tracks));
+            if k != lowered && !conflicted(&state.tracks) {
                 continue;
             }
             if self.is_cav(k) {
-                let obstacles: Vec<&Trajectory> =
-                    higher.iter().map(|&h| &*state.trajectories[h]).collect();
+                let obstacles: Vec<&Trajectory> = higher
+                    .iter()
+                    .map(|&h| &*state.tracks[h].trajectory)
+                    .collect();
                 effort.mastar_calls += 1;
                 match self.requests.plan(self.planner, k, &obstacles) {
                     Ok(plan) => {
                         effort.mastar_nodes += plan.expanded as u64;
-                        state.progress[k] = self.progress(&plan.trajectory);
-                        state.trajectories[k] = Arc::new(plan.trajectory.clone());
+                        state.tracks[k] = self.track(Arc::new(plan.trajectory.clone()));
                         state.plans[k] = Some(Arc::new(plan));
                     }
                     Err(e) => {
@@ -388,14 +390,13 @@ impl Problem<'_> {
                 let cavs: Vec<&Trajectory> = higher
                     .iter()
                     .filter(|&&h| self.is_cav(h))
-                    .map(|&h| &*state.trajectories[h])
+                    .map(|&h| &*state.tracks[h].trajectory)
                     .collect();
                 if !self.merge_is_certain(k) {
                     effort.predictions += 1;
-                    state.trajectories[k] = self.predict(k, &cavs);
-                    state.progress[k] = self.progress(&state.trajectories[k]);
+                    state.tracks[k] = self.predict(k, &cavs);
                 }
-                if conflicted(&state.trajectories) {
+                if conflicted(&state.tracks) {
                     return None;
                 }
             }
@@ -415,17 +416,19 @@ impl Problem<'_> {
             return groups::solve(self, &root_state, start, stats);
         }
         let all: Vec<usize> = (0..self.scene.vehicles.len()).collect();
-        self.search(&root_state, &all, start, stats)
+        let (state, stats) = self.search(&root_state, &all, start, stats);
+        state.solution(stats)
     }
 
-    /// Algorithm 1 over `agents` (the others keep their root trajectories and plans).
+    /// Algorithm 1 over `agents` (the others keep their root trajectories and plans): the
+    /// chosen node's state, and the effort.
     fn search(
         &self,
         root_state: &State,
         agents: &[usize],
         start: Instant,
         mut stats: PbsStats,
-    ) -> Solution {
+    ) -> (State, PbsStats) {
         let mut tree = Tree::new(self.root_node(root_state, agents));
         let mut solution = None;
         while let Some(id) = tree.stack.pop() {
@@ -450,21 +453,19 @@ impl Problem<'_> {
     fn plan_root(&self, stats: &mut PbsStats) -> State {
         let n = self.scene.vehicles.len();
         let root: Vec<RootPlan> = (0..n).into_par_iter().map(|a| self.root_plan(a)).collect();
-        let mut trajectories = Vec::with_capacity(n);
+        let mut tracks = Vec::with_capacity(n);
         let mut plans = Vec::with_capacity(n);
         for (a, (t, p, calls, nodes)) in root.into_iter().enumerate() {
             stats.mastar_calls += calls;
             stats.mastar_nodes += nodes;
             stats.predictions += u64::from(!self.is_cav(a));
-            trajectories.push(t);
+            tracks.push(t);
             plans.push(p);
         }
-        let progress = trajectories.iter().map(|t| self.progress(t)).collect();
         let mut state = State {
             graph: PriorityGraph::new(n),
-            trajectories,
+            tracks,
             plans,
-            progress,
         };
         self.keep_commitments(&mut state, stats);
         state
@@ -496,13 +497,17 @@ impl Problem<'_> {
         if self.is_cav(a) {
             match self.requests.plan(self.planner, a, &[]) {
                 Ok(p) => (
-                    Arc::new(p.trajectory.clone()),
+                    self.track(Arc::new(p.trajectory.clone())),
                     Some(Arc::new(p.clone())),
                     1,
                     p.expanded as u64,
                 ),
                 Err(e) => (
-                    Arc::new(self.requests.fallback(self.planner, a, self.horizon)),
+                    self.track(Arc::new(self.requests.fallback(
+                        self.planner,
+                        a,
+                        self.horizon,
+                    ))),
                     None,
                     1,
                     e.expanded as u64,
@@ -515,12 +520,12 @@ impl Problem<'_> {
 
     /// The tree's root node, whose state is `root_state`.
     fn root_node(&self, root_state: &State, agents: &[usize]) -> Node {
-        let conflicts = self.all_conflicts(&root_state.trajectories, agents);
+        let conflicts = self.all_conflicts(&root_state.tracks, agents);
         Node {
             parent: None,
             edge: None,
             changed: Vec::new(),
-            cost: Self::cost(root_state),
+            cost: root_state.cost(),
             conflicts,
             depth: 0,
         }
@@ -582,24 +587,18 @@ impl Problem<'_> {
         children.into_iter().map(|(c, _)| c).collect()
     }
 
-    /// The round's answer from node `chosen`: its full state, with its depth and conflicts
-    /// left recorded in `stats`.
+    /// The search's answer, node `chosen`: its full state, with its depth and conflicts left
+    /// recorded in `stats`.
     fn answer(
         &self,
         nodes: &[Node],
         chosen: usize,
         root_state: &State,
         mut stats: PbsStats,
-    ) -> Solution {
+    ) -> (State, PbsStats) {
         stats.depth = nodes[chosen].depth as u64;
         stats.conflicts_left = nodes[chosen].conflicts.len() as u64;
-        let state = self.materialize(nodes, chosen, root_state);
-        Solution {
-            edges: state.graph.edges(),
-            trajectories: state.trajectories,
-            plans: state.plans,
-            stats,
-        }
+        (self.materialize(nodes, chosen, root_state), stats)
     }
 
     /// The child of `parent` (whose state is `state`) that adds `hi ≺ lo`, unless pruned.
@@ -619,11 +618,10 @@ impl Problem<'_> {
         let changed = self.update_plan(&mut child, lo, &mut effort)?;
         // Lowering `lo` must resolve the conflict that caused the branch; when the conflict is
         // only `hi`'s (e.g. `hi` follows `lo` too closely), only lowering `hi` can.
-        if self.conflict_between(hi, lo, &child.trajectories) {
+        if self.conflicts(hi, lo, &child.tracks) {
             return None;
         }
-        let conflicts =
-            self.updated_conflicts(&parent.conflicts, &changed, &child.trajectories, agents);
+        let conflicts = self.updated_conflicts(&parent.conflicts, &changed, &child.tracks, agents);
         Some((
             Node {
                 parent: None,
@@ -632,12 +630,11 @@ impl Problem<'_> {
                     .iter()
                     .map(|&a| Replanned {
                         agent: a,
-                        trajectory: child.trajectories[a].clone(),
+                        track: child.tracks[a].clone(),
                         plan: child.plans[a].clone(),
-                        progress: child.progress[a],
                     })
                     .collect(),
-                cost: Self::cost(&child),
+                cost: child.cost(),
                 conflicts,
                 depth: parent.depth + 1,
             },
@@ -660,21 +657,12 @@ impl Problem<'_> {
                 state.graph.add(hi, lo);
             }
             for r in &node.changed {
-                state.trajectories[r.agent] = r.trajectory.clone();
+                state.tracks[r.agent] = r.track.clone();
                 state.plans[r.agent] = r.plan.clone();
-                state.progress[r.agent] = r.progress;
             }
         }
         state
     }
-}
-
-fn body(t: &Trajectory, pose: Pose) -> Body {
-    Body::new(pose, t.length, t.width, t.brake)
-}
-
-fn forward(p: &Pose) -> f64 {
-    p.speed * p.heading.cos()
 }
 
 #[cfg(test)]
@@ -832,7 +820,7 @@ mod tests {
                 with_grouping(&scene, &sp, &[], budget.clone(), true, |p| {
                     let everyone: Vec<usize> = (0..5).collect();
                     let root = p.plan_root(&mut PbsStats::default());
-                    let linked = p.all_conflicts(&root.trajectories, &everyone);
+                    let linked = p.all_conflicts(&root.tracks, &everyone);
                     (p.solve(), linked)
                 })
             })
