@@ -63,12 +63,8 @@ impl Controller for BkPbs {
         let decel = self.config.planner.emergency_decel;
         let now = scene.time;
         self.lane_changes.forget_finished(now);
-        let requests = SceneRequests {
-            scene,
-            lane_changes: &self.lane_changes,
-            dt,
-            guard: self.guard.as_ref().map(|g| g as &dyn StartGuard),
-        };
+        let guard = self.guard.as_ref().map(|g| g as &dyn StartGuard);
+        let requests = SceneRequests::new(scene, &self.lane_changes, dt, guard);
         let committed = self.commitments.in_scene(scene, now);
         let problem = self.problem(scene, &requests, &committed);
         let solution = problem.solve();

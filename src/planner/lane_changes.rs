@@ -12,7 +12,9 @@ use crate::model::math::Point;
 use crate::model::road::{FIRST_MAIN_LANE, MERGE_LANE};
 use crate::model::scene::{Origin, Scene};
 use crate::model::trajectory::Trajectory;
-use crate::planner::mastar::{Guard, Mastar, NoPlan, OngoingLaneChange, Plan, Request, StartGuard};
+use crate::planner::mastar::{
+    FirstMoves, Guard, Mastar, NoPlan, OngoingLaneChange, Plan, Request, StartGuard,
+};
 use crate::planner::pbs::RequestFor;
 
 /// Commanded lane changes: vehicle → (time the change ends, target lane).
@@ -91,17 +93,42 @@ impl LaneChanges {
                 scene,
                 agent: i,
             }),
+            first_moves: None,
         }
     }
 }
 
 /// How BK-PBS plans each agent of a scene: the M-A* request of its current state, continuing
-/// the lane change it has under way, its starts passing `guard`.
+/// the lane change it has under way, its starts passing `guard`; each agent's first moves are
+/// kept for the round (every search of it starts from the same state).
 pub struct SceneRequests<'a> {
-    pub scene: &'a Scene,
-    pub lane_changes: &'a LaneChanges,
-    pub dt: f64,
-    pub guard: Option<&'a dyn StartGuard>,
+    scene: &'a Scene,
+    lane_changes: &'a LaneChanges,
+    dt: f64,
+    guard: Option<&'a dyn StartGuard>,
+    first_moves: Vec<FirstMoves>,
+}
+
+impl<'a> SceneRequests<'a> {
+    pub fn new(
+        scene: &'a Scene,
+        lane_changes: &'a LaneChanges,
+        dt: f64,
+        guard: Option<&'a dyn StartGuard>,
+    ) -> Self {
+        let first_moves = scene
+            .vehicles
+            .iter()
+            .map(|_| FirstMoves::default())
+            .collect();
+        SceneRequests {
+            scene,
+            lane_changes,
+            dt,
+            guard,
+            first_moves,
+        }
+    }
 }
 
 impl RequestFor for SceneRequests<'_> {
@@ -111,11 +138,13 @@ impl RequestFor for SceneRequests<'_> {
         agent: usize,
         obstacles: &[&Trajectory],
     ) -> Result<Plan, NoPlan> {
-        planner.plan(
-            &self
-                .lane_changes
-                .request(self.scene, agent, self.dt, obstacles, self.guard),
-        )
+        let req = self
+            .lane_changes
+            .request(self.scene, agent, self.dt, obstacles, self.guard);
+        planner.plan(&Request {
+            first_moves: Some(&self.first_moves[agent]),
+            ..req
+        })
     }
 
     fn fallback(&self, planner: &Mastar, agent: usize, horizon: usize) -> Trajectory {
@@ -205,12 +234,7 @@ mod tests {
         let scene = Scene::on_paper_road(10.0, vec![ramp_cav(250.0, 0, 1.8, 25.0)]);
         let mut lc = LaneChanges::default();
         lc.start(&scene.vehicles[0].id, 9.6, 1.0, 1);
-        let requests = SceneRequests {
-            scene: &scene,
-            lane_changes: &lc,
-            dt: 0.2,
-            guard: None,
-        };
+        let requests = SceneRequests::new(&scene, &lc, 0.2, None);
         let m = planner();
         let t = requests.fallback(&m, 0, 20);
         assert_eq!(t.poses.len(), 21);

@@ -15,6 +15,8 @@
 //! distance d', lane changes penalised so braking is preferred. Goals: a main-road CAV must get
 //! d ahead on a main-road lane; a ramp CAV must reach a main-road lane (within the merge zone).
 
+use std::sync::OnceLock;
+
 use crate::config::{LowSpeedLaneChanges, PlannerSettings};
 use crate::model::kinematics::{free_flow_time, BicycleState};
 use crate::model::math::Point;
@@ -94,6 +96,9 @@ pub struct Request<'a> {
     pub obstacles: &'a [&'a Trajectory],
     /// The check a lane change started now must pass (none: every start the search finds free).
     pub guard: Option<Guard<'a>>,
+    /// Where the moves from this start are kept between searches (none: worked out each time).
+    /// It must belong to this start, guard and lane change under way.
+    pub first_moves: Option<&'a FirstMoves>,
 }
 
 /// A plan found by M-A*.
@@ -121,6 +126,18 @@ impl Plan {
             .unwrap_or(&self.trajectory.poses[0]);
         p.speed * p.heading.cos()
     }
+}
+
+/// A move from a node: how it starts, the lane it ends in and its states at each step.
+type Move = (FirstMove, i32, Vec<BicycleState>);
+
+/// The moves from one CAV's start, per phase, worked out once and shared by every search from
+/// that start. BK-PBS replans a CAV against one set of obstacles after another within a round;
+/// its first moves (the primitives rolled out exactly from its state, the guard asked about
+/// each lane change) do not depend on the obstacles, and were a sixth of a round's time.
+#[derive(Debug, Default)]
+pub struct FirstMoves {
+    by_phase: [OnceLock<Vec<Move>>; 2],
 }
 
 /// No plan in either phase.
@@ -389,6 +406,7 @@ const FALLBACK_PRIMITIVES: [Primitive; 4] = [
 /// budget and what a lane change costs on top of its steps. The two phases differ only in these.
 #[derive(Debug, Clone, Copy)]
 struct PhaseSpec {
+    phase: Phase,
     primitives: &'static [Primitive],
     goal_distance: f64,
     budget: usize,
@@ -400,12 +418,14 @@ impl PhaseSpec {
     fn of(phase: Phase, settings: &PlannerSettings) -> Self {
         match phase {
             Phase::Forward => PhaseSpec {
+                phase,
                 primitives: &FORWARD_PRIMITIVES,
                 goal_distance: settings.goal_distance,
                 budget: settings.phase1_budget,
                 lane_change_penalty: settings.phase1_lane_change_penalty,
             },
             Phase::Fallback => PhaseSpec {
+                phase,
                 primitives: &FALLBACK_PRIMITIVES,
                 goal_distance: settings.fallback_goal_distance,
                 budget: settings.phase2_budget,
@@ -572,10 +592,20 @@ impl<'p> PhaseSearch<'p> {
             .collect()
     }
 
+    /// The moves from `n`; from the root, kept in the request's [`FirstMoves`] if it has one.
+    fn moves(&self, n: &Node) -> Vec<Move> {
+        match self.req.first_moves {
+            Some(kept) if n.step == 0 => kept.by_phase[self.spec.phase as usize]
+                .get_or_init(|| self.work_out_moves(n))
+                .clone(),
+            _ => self.work_out_moves(n),
+        }
+    }
+
     /// The moves from `n`, each with the lane it ends in and its states at each step: at the
     /// root the lane change under way, if any, is continued; otherwise every primitive of the
     /// phase that is available and keeps to the road's lanes.
-    fn moves(&self, n: &Node) -> Vec<(FirstMove, i32, Vec<BicycleState>)> {
+    fn work_out_moves(&self, n: &Node) -> Vec<Move> {
         match (n.step, self.req.ongoing) {
             (0, Some(lc)) if lc.steps_left > 0 => {
                 let seg = self.continue_lane_change(&n.state, lc);
@@ -801,6 +831,7 @@ mod tests {
             width: 2.0,
             obstacles,
             guard: None,
+            first_moves: None,
         }
     }
 

@@ -742,12 +742,7 @@ mod tests {
         let planner = Mastar::on_paper_road();
         let rule = SafetyRule::new(&config.planner, 4.5);
         let lane_changes = LaneChanges::default();
-        let requests = SceneRequests {
-            scene,
-            lane_changes: &lane_changes,
-            dt: 0.2,
-            guard: None,
-        };
+        let requests = SceneRequests::new(scene, &lane_changes, 0.2, None);
         f(&Problem {
             scene,
             planner: &planner,
