@@ -5,7 +5,9 @@
 //! deterministic. A closed set keyed by `key(node)` keeps the first expansion of each key.
 
 use std::cmp::{Ordering, Reverse};
-use std::collections::{BinaryHeap, HashSet};
+use std::collections::BinaryHeap;
+
+use rustc_hash::FxHashSet;
 use std::hash::Hash;
 
 use ordered_float::OrderedFloat;
@@ -92,7 +94,8 @@ where
     // Arena of generated nodes: (node, parent, g).
     let mut arena: Vec<(N, usize, f64)> = Vec::new();
     let mut open = BinaryHeap::new();
-    let mut closed: HashSet<K> = HashSet::new();
+    // Keys are small tuples of integers: a fast hash, not a DoS-resistant one.
+    let mut closed: FxHashSet<K> = FxHashSet::default();
     let h0 = heuristic(&start);
     arena.push((start, usize::MAX, 0.0));
     open.push(Entry {
@@ -129,8 +132,9 @@ where
             };
         }
         expanded += 1;
-        let node = arena[seq].0.clone();
-        for (next, cost) in successors(&node) {
+        // Gathered before any is stored: the arena may move as it grows.
+        let generated: Vec<(N, f64)> = successors(&arena[seq].0).into_iter().collect();
+        for (next, cost) in generated {
             if closed.contains(&key(&next)) {
                 continue;
             }
@@ -156,6 +160,7 @@ where
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::collections::HashSet;
 
     type Cell = (i32, i32);
 
