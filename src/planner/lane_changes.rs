@@ -15,6 +15,7 @@ use crate::model::trajectory::Trajectory;
 use crate::planner::mastar::{
     FirstMoves, Guard, Mastar, NoPlan, OngoingLaneChange, Plan, Request, StartGuard,
 };
+use crate::planner::memo::SearchMemo;
 use crate::planner::pbs::RequestFor;
 
 /// Commanded lane changes: vehicle → (time the change ends, target lane).
@@ -99,14 +100,16 @@ impl LaneChanges {
 }
 
 /// How BK-PBS plans each agent of a scene: the M-A* request of its current state, continuing
-/// the lane change it has under way, its starts passing `guard`; each agent's first moves are
-/// kept for the round (every search of it starts from the same state).
+/// the lane change it has under way, its starts passing `guard`. Each agent's first moves are
+/// kept for the round (every search of it starts from the same state), and so is every answer
+/// (the same search asked again is looked up: [`SearchMemo`]).
 pub struct SceneRequests<'a> {
     scene: &'a Scene,
     lane_changes: &'a LaneChanges,
     dt: f64,
     guard: Option<&'a dyn StartGuard>,
     first_moves: Vec<FirstMoves>,
+    memo: SearchMemo,
 }
 
 impl<'a> SceneRequests<'a> {
@@ -127,6 +130,7 @@ impl<'a> SceneRequests<'a> {
             dt,
             guard,
             first_moves,
+            memo: SearchMemo::default(),
         }
     }
 }
@@ -138,12 +142,14 @@ impl RequestFor for SceneRequests<'_> {
         agent: usize,
         obstacles: &[&Trajectory],
     ) -> Result<Plan, NoPlan> {
-        let req = self
-            .lane_changes
-            .request(self.scene, agent, self.dt, obstacles, self.guard);
-        planner.plan(&Request {
-            first_moves: Some(&self.first_moves[agent]),
-            ..req
+        self.memo.answer(agent, obstacles, || {
+            let req = self
+                .lane_changes
+                .request(self.scene, agent, self.dt, obstacles, self.guard);
+            planner.plan(&Request {
+                first_moves: Some(&self.first_moves[agent]),
+                ..req
+            })
         })
     }
 

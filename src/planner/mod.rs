@@ -5,6 +5,7 @@
 
 pub mod lane_changes;
 pub mod mastar;
+pub mod memo;
 pub mod pbs;
 pub mod primitives;
 pub mod priority;
