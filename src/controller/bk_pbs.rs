@@ -153,7 +153,7 @@ impl BkPbs {
                 nodes: pbs.node_budget,
                 time_ms: (pbs.time_budget_ms > 0.0).then_some(pbs.time_budget_ms),
             },
-            independent_groups: pbs.independent_groups,
+            independent_groups: pbs.independent_groups.applies(scene.vehicles.len()),
         }
     }
 }
