@@ -6,6 +6,8 @@
 
 use std::sync::Arc;
 
+use rayon::prelude::*;
+
 use super::shield::{self, Bounds};
 use super::{execute, CavBelief, CavHandling, Command, Controller, PlanStats, Source};
 use crate::config::Config;
@@ -13,7 +15,7 @@ use crate::model::road::Road;
 use crate::model::scene::{Kind, Scene};
 use crate::model::trajectory::Trajectory;
 use crate::planner::lane_changes::{LaneChanges, SceneRequests};
-use crate::planner::mastar::{Mastar, Plan, StartGuard};
+use crate::planner::mastar::{Mastar, NoPlan, Plan, StartGuard};
 use crate::planner::pbs::{Budget, PbsStats, Problem, RequestFor, Solution};
 use crate::predict::Predictor;
 
@@ -76,13 +78,28 @@ impl Controller for BkPbs {
             .stats
             .fallback
             .then(|| problem.conflicted_agents(&solution.trajectories));
-        for (i, v) in scene.vehicles.iter().enumerate() {
-            if v.kind != Kind::Cav {
+        // Repairs are independent of each other (each against the node's trajectories): in
+        // parallel, then used in order.
+        let executed: Vec<Option<Executed>> = (0..scene.vehicles.len())
+            .into_par_iter()
+            .map(|i| {
+                let in_conflict = conflicted.as_ref().is_some_and(|c| c[i]);
+                (scene.vehicles[i].kind == Kind::Cav)
+                    .then(|| executed_plan(&problem, &solution, &requests, i, in_conflict))
+            })
+            .collect();
+        for ((i, v), executed) in scene.vehicles.iter().enumerate().zip(executed) {
+            let Some(Executed {
+                plan,
+                source: planned_by,
+                repair,
+            }) = executed
+            else {
                 continue;
+            };
+            if let Some(result) = &repair {
+                execute::count_search(&mut stats, result.as_ref().map(|p| p.as_ref()));
             }
-            let in_conflict = conflicted.as_ref().is_some_and(|c| c[i]);
-            let (plan, planned_by) =
-                executed_plan(&problem, &solution, &requests, i, in_conflict, &mut stats);
             let lane = self.lane_changes.planning_lane(scene, i, dt);
             let changing = self.lane_changes.ongoing(&v.id, now, dt).is_some();
             let source = execute::source_of(planned_by, plan.is_some(), changing);
@@ -172,24 +189,35 @@ fn search_stats(s: &PbsStats) -> PlanStats {
     }
 }
 
-/// The plan CAV `i` executes and where it came from: the chosen node's, or a repair when the
-/// node left it without one or, after a fallback, `in_conflict`: planned alone against every
-/// other trajectory of the node. `None` when even the repair finds no plan.
+/// The plan a CAV executes (`None` when even a repair finds none), where it came from, and
+/// the repair's search if one was run.
+struct Executed {
+    plan: Option<Arc<Plan>>,
+    source: Source,
+    repair: Option<Result<Arc<Plan>, NoPlan>>,
+}
+
+/// What CAV `i` executes: the chosen node's plan, or a repair when the node left it without
+/// one or, after a fallback, `in_conflict`: planned alone against every other trajectory of
+/// the node.
 fn executed_plan(
     problem: &Problem<'_>,
     solution: &Solution,
     requests: &SceneRequests<'_>,
     i: usize,
     in_conflict: bool,
-    stats: &mut PlanStats,
-) -> (Option<Arc<Plan>>, Source) {
+) -> Executed {
     if !in_conflict && solution.plans[i].is_some() {
         let source = if solution.stats.fallback {
             Source::PbsBestNode
         } else {
             Source::PbsSolution
         };
-        return (solution.plans[i].clone(), source);
+        return Executed {
+            plan: solution.plans[i].clone(),
+            source,
+            repair: None,
+        };
     }
     let others: Vec<&Trajectory> = solution
         .trajectories
@@ -198,9 +226,12 @@ fn executed_plan(
         .filter(|(j, _)| *j != i)
         .map(|(_, t)| &**t)
         .collect();
-    let result = requests.plan(problem.planner, i, &others);
-    execute::count_search(stats, result.as_ref());
-    (result.ok().map(Arc::new), Source::Repair)
+    let result = requests.plan(problem.planner, i, &others).map(Arc::new);
+    Executed {
+        plan: result.as_ref().ok().cloned(),
+        source: Source::Repair,
+        repair: Some(result),
+    }
 }
 
 /// Priority edges carried across rounds: recursive feasibility of cut-ins.

@@ -44,7 +44,9 @@ pub fn intersection_test_circle_circle(a: &OrientedBox, b: &OrientedBox) -> bool
 /// come cheaply and exactly: far apart along either axis (farther than the half-extents summed,
 /// which bound the bounding circles) is no overlap without a square root, and two boxes both
 /// heading along the road (heading exactly 0, most of them) are compared as axis-aligned
-/// rectangles, which is what the separating-axis test computes for them, bit for bit.
+/// rectangles, which is what the separating-axis test computes for them, bit for bit. Inlined:
+/// called with boxes just built on the stack, the call cost more than the usual answer.
+#[inline(always)]
 pub fn intersection_test_obb_obb(a: &OrientedBox, b: &OrientedBox) -> bool {
     let d = b.centre - a.centre;
     let reach = a.half.x + a.half.y + b.half.x + b.half.y;

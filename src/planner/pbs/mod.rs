@@ -302,10 +302,11 @@ impl Problem<'_> {
         self.pair_conflict(a.min(b), a.max(b), tracks).is_some()
     }
 
-    /// All conflicting pairs among `agents`, each at its first step, sorted.
+    /// All conflicting pairs among `agents`, each at its first step, sorted (checked in
+    /// parallel: on a full corridor there are thousands of pairs within reach).
     fn all_conflicts(&self, tracks: &[Arc<Track>], agents: &[usize]) -> Vec<Conflict> {
         let mut out: Vec<Conflict> = within_reach(tracks, agents)
-            .into_iter()
+            .into_par_iter()
             .filter_map(|(a, b)| self.pair_conflict(a, b, tracks).map(|k| (k, a, b)))
             .collect();
         out.sort_unstable();

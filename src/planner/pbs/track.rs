@@ -7,6 +7,8 @@
 
 use std::sync::Arc;
 
+use rayon::prelude::*;
+
 use crate::model::trajectory::Trajectory;
 use crate::planner::safety::Body;
 
@@ -42,10 +44,10 @@ impl Track {
         }
     }
 
-    /// Tracks of `trajectories`, in order.
+    /// Tracks of `trajectories`, in order (made in parallel).
     pub fn all(trajectories: &[Arc<Trajectory>], horizon: usize, dt: f64) -> Vec<Arc<Track>> {
         trajectories
-            .iter()
+            .par_iter()
             .map(|t| Arc::new(Track::new(t.clone(), horizon, dt)))
             .collect()
     }
