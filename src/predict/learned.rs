@@ -21,7 +21,7 @@ use std::sync::Arc;
 
 use super::features::{
     cav_node, ego_of, lane_change_direction, neighbours, select_cavs, Agent, Observation,
-    LATERAL_AT_REST, PREVIEW,
+    LATERAL_AT_REST, PREVIEW, SENSING_RANGE,
 };
 use super::infer::Workspace;
 use super::longitudinal::Longitudinal;
@@ -147,6 +147,13 @@ impl Learned {
         let model = self.model(conditioned);
         let ego0 = Agent::of(v, w);
         self.collect_others(&mut buf.others, scene, i, plans);
+        // A vehicle that stays beyond the sensing range over the whole rollout is never a
+        // neighbour (a metre to spare over rounding): left out, each step scans only the few
+        // that can be, not every vehicle of a full corridor.
+        let span = self.dt * horizon as f64;
+        buf.others.retain(|(a, _)| {
+            (a.s - ego0.s).abs() <= SENSING_RANGE + 1.0 + (a.speed - v.speed).abs() * span
+        });
         let mut obs = Observation {
             ego: ego_of(v, road),
             ..Observation::default()
