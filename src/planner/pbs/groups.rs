@@ -21,7 +21,7 @@ use rayon::prelude::*;
 use std::sync::Arc;
 
 use super::track::Track;
-use super::{PbsStats, Problem, Solution, State};
+use super::{Conflict, PbsStats, Problem, Solution, State};
 
 /// Disjoint sets of agents (union–find), each named by its lowest member.
 struct Sets {
@@ -76,7 +76,8 @@ pub(super) fn solve(
     let n = problem.scene.vehicles.len();
     let everyone: Vec<usize> = (0..n).collect();
     let mut sets = Sets::new(n);
-    for (_, a, b) in problem.all_conflicts(&root.tracks, &everyone) {
+    let root_conflicts = problem.all_conflicts(&root.tracks, &everyone);
+    for &(_, a, b) in &root_conflicts {
         sets.union(a, b);
     }
     for &(hi, lo) in problem.committed {
@@ -92,7 +93,12 @@ pub(super) fn solve(
             .collect();
         let solved: Vec<(State, PbsStats)> = todo
             .par_iter()
-            .map(|g| problem.search(root, g, start, PbsStats::default()))
+            .map(|g| {
+                // A group holds both agents of each root conflict it holds any of.
+                let within = |&&(_, a, _): &&Conflict| g.binary_search(&a).is_ok();
+                let conflicts = root_conflicts.iter().filter(within).copied().collect();
+                problem.search(root, g, conflicts, start, PbsStats::default())
+            })
             .collect();
         answers.retain(|g, _| groups.contains(g));
         answers.extend(todo.into_iter().cloned().zip(solved));

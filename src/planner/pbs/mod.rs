@@ -176,6 +176,18 @@ impl Tree {
 }
 
 impl Node {
+    /// The tree's root node, whose state is `root_state`, with its conflicts.
+    fn root(root_state: &State, conflicts: Vec<Conflict>) -> Node {
+        Node {
+            parent: None,
+            edge: None,
+            changed: Vec::new(),
+            cost: root_state.cost(),
+            conflicts,
+            depth: 0,
+        }
+    }
+
     /// Whether this node is a better fallback than `other`: fewer conflicts, then cheaper.
     fn better_than(&self, other: &Node) -> bool {
         (self.conflicts.len(), self.cost) < (other.conflicts.len(), other.cost)
@@ -417,20 +429,22 @@ impl Problem<'_> {
             return groups::solve(self, &root_state, start, stats);
         }
         let all: Vec<usize> = (0..self.scene.vehicles.len()).collect();
-        let (state, stats) = self.search(&root_state, &all, start, stats);
+        let conflicts = self.all_conflicts(&root_state.tracks, &all);
+        let (state, stats) = self.search(&root_state, &all, conflicts, start, stats);
         state.solution(stats)
     }
 
-    /// Algorithm 1 over `agents` (the others keep their root trajectories and plans): the
-    /// chosen node's state, and the effort.
+    /// Algorithm 1 over `agents` (the others keep their root trajectories and plans), whose
+    /// conflicts at the root are `root_conflicts`: the chosen node's state, and the effort.
     fn search(
         &self,
         root_state: &State,
         agents: &[usize],
+        root_conflicts: Vec<Conflict>,
         start: Instant,
         mut stats: PbsStats,
     ) -> (State, PbsStats) {
-        let mut tree = Tree::new(self.root_node(root_state, agents));
+        let mut tree = Tree::new(Node::root(root_state, root_conflicts));
         let mut solution = None;
         while let Some(id) = tree.stack.pop() {
             if tree.nodes[id].conflicts.is_empty() {
@@ -516,19 +530,6 @@ impl Problem<'_> {
             }
         } else {
             (self.predict(a, &[]), None, 0, 0)
-        }
-    }
-
-    /// The tree's root node, whose state is `root_state`.
-    fn root_node(&self, root_state: &State, agents: &[usize]) -> Node {
-        let conflicts = self.all_conflicts(&root_state.tracks, agents);
-        Node {
-            parent: None,
-            edge: None,
-            changed: Vec::new(),
-            cost: root_state.cost(),
-            conflicts,
-            depth: 0,
         }
     }
 
