@@ -89,17 +89,14 @@ impl Controller for BkPbs {
             })
             .collect();
         for ((i, v), executed) in scene.vehicles.iter().enumerate().zip(executed) {
-            let Some(Executed {
-                plan,
-                source: planned_by,
-                repair,
-            }) = executed
-            else {
-                continue;
+            let (plan, planned_by) = match executed {
+                None => continue,
+                Some(Executed::Node(plan, source)) => (Some(plan), source),
+                Some(Executed::Repair(result)) => {
+                    execute::count_search(&mut stats, result.as_ref().map(|p| p.as_ref()));
+                    (result.ok(), Source::Repair)
+                }
             };
-            if let Some(result) = &repair {
-                execute::count_search(&mut stats, result.as_ref().map(|p| p.as_ref()));
-            }
             let lane = self.lane_changes.planning_lane(scene, i, dt);
             let changing = self.lane_changes.ongoing(&v.id, now, dt).is_some();
             let source = execute::source_of(planned_by, plan.is_some(), changing);
@@ -189,12 +186,11 @@ fn search_stats(s: &PbsStats) -> PlanStats {
     }
 }
 
-/// The plan a CAV executes (`None` when even a repair finds none), where it came from, and
-/// the repair's search if one was run.
-struct Executed {
-    plan: Option<Arc<Plan>>,
-    source: Source,
-    repair: Option<Result<Arc<Plan>, NoPlan>>,
+/// What a CAV executes: the chosen node's plan (and whether that node solved the round), or a
+/// repair's answer (no plan: even the repair found none).
+enum Executed {
+    Node(Arc<Plan>, Source),
+    Repair(Result<Arc<Plan>, NoPlan>),
 }
 
 /// What CAV `i` executes: the chosen node's plan, or a repair when the node left it without
@@ -207,17 +203,13 @@ fn executed_plan(
     i: usize,
     in_conflict: bool,
 ) -> Executed {
-    if !in_conflict && solution.plans[i].is_some() {
+    if let (false, Some(plan)) = (in_conflict, &solution.plans[i]) {
         let source = if solution.stats.fallback {
             Source::PbsBestNode
         } else {
             Source::PbsSolution
         };
-        return Executed {
-            plan: solution.plans[i].clone(),
-            source,
-            repair: None,
-        };
+        return Executed::Node(plan.clone(), source);
     }
     let others: Vec<&Trajectory> = solution
         .trajectories
@@ -226,12 +218,7 @@ fn executed_plan(
         .filter(|(j, _)| *j != i)
         .map(|(_, t)| &**t)
         .collect();
-    let result = requests.plan(problem.planner, i, &others).map(Arc::new);
-    Executed {
-        plan: result.as_ref().ok().cloned(),
-        source: Source::Repair,
-        repair: Some(result),
-    }
+    Executed::Repair(requests.plan(problem.planner, i, &others).map(Arc::new))
 }
 
 /// Priority edges carried across rounds: recursive feasibility of cut-ins.

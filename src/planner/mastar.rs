@@ -211,6 +211,11 @@ impl Mastar {
         }
     }
 
+    /// Steps a plan is checked against obstacles up to: T plus a lane change.
+    fn check_horizon(&self) -> usize {
+        self.settings.horizon + self.library.lane_change_steps
+    }
+
     fn lane_y(&self, lane: i32) -> f64 {
         lane as f64 * self.road.lane_width
     }
@@ -223,9 +228,7 @@ impl Mastar {
             .copied()
             .filter(|t| (t.poses[0].s - req.start.pos.x).abs() < OBSTACLE_RANGE)
             .collect();
-        // Every step a search checks: the check horizon, and a primitive started just before it.
-        let checked = self.settings.horizon + 2 * self.library.lane_change_steps;
-        let near = Obstacles::new(near, checked, self.library.dt);
+        let near = Obstacles::new(&near, self.check_horizon(), self.library.dt);
         let mut expanded = 0;
         for phase in [Phase::Forward, Phase::Fallback] {
             match self.search(req, &near, phase) {
@@ -327,42 +330,32 @@ impl Mastar {
     fn safe(&self, st: &BicycleState, step: usize, me_now: &Body, obstacles: &Obstacles) -> bool {
         let me = Body::new(pose(st), me_now.length, me_now.width, None);
         let t = step as f64 * self.library.dt;
-        let now = obstacles.at(0);
-        match obstacles.by_step.get(step) {
-            Some(bodies) => bodies
-                .iter()
-                .zip(now)
-                .all(|(other, other_now)| self.rule.clear(&me, me_now, other, other_now, t)),
-            None => obstacles
-                .trajectories
-                .iter()
-                .zip(now)
-                .all(|(o, other_now)| {
-                    let other = Body::of(o, step, self.library.dt);
-                    self.rule.clear(&me, me_now, &other, other_now, t)
-                }),
-        }
+        obstacles
+            .at(step)
+            .iter()
+            .zip(obstacles.at(0))
+            .all(|(other, other_now)| self.rule.clear(&me, me_now, other, other_now, t))
     }
 }
 
 /// The obstacles of one M-A* call, with their bodies at every step a search checks, built once:
 /// every node checks every obstacle at every step of every primitive it rolls out, so reading a
 /// pose (and its forward speed) off a trajectory each time would cost more than the checks.
-struct Obstacles<'a> {
-    trajectories: Vec<&'a Trajectory>,
-    /// `by_step[k][o]`: obstacle `o` at step `k`.
+///
+/// A search checks no step past the check horizon T + one lane change: a node at T ends its
+/// plan, a move from a node before T spans at most a lane change, and a plan's tail is checked
+/// up to the check horizon.
+struct Obstacles {
+    /// `by_step[k][o]`: obstacle `o` at step `k`, for k up to the check horizon.
     by_step: Vec<Vec<Body>>,
 }
 
-impl<'a> Obstacles<'a> {
-    fn new(trajectories: Vec<&'a Trajectory>, steps: usize, dt: f64) -> Self {
-        let by_step = (0..=steps)
+impl Obstacles {
+    fn new(trajectories: &[&Trajectory], check_horizon: usize, dt: f64) -> Self {
+        let by_step = (0..=check_horizon)
             .map(|k| trajectories.iter().map(|t| Body::of(t, k, dt)).collect())
             .collect();
-        Obstacles {
-            trajectories,
-            by_step,
-        }
+        Obstacles { by_step }
     }
 
     fn at(&self, step: usize) -> &[Body] {
@@ -441,7 +434,7 @@ impl PhaseSpec {
 struct PhaseSearch<'p> {
     planner: &'p Mastar,
     req: &'p Request<'p>,
-    obstacles: &'p Obstacles<'p>,
+    obstacles: &'p Obstacles,
     /// The CAV's body at the start.
     me_now: Body,
     spec: PhaseSpec,
@@ -461,7 +454,7 @@ impl<'p> PhaseSearch<'p> {
     fn new(
         planner: &'p Mastar,
         req: &'p Request<'p>,
-        obstacles: &'p Obstacles<'p>,
+        obstacles: &'p Obstacles,
         spec: PhaseSpec,
     ) -> Self {
         let horizon = planner.settings.horizon;
@@ -474,7 +467,7 @@ impl<'p> PhaseSearch<'p> {
             s0: req.start.pos.x,
             dt: planner.library.dt,
             horizon,
-            check_horizon: horizon + planner.library.lane_change_steps,
+            check_horizon: planner.check_horizon(),
         }
     }
 

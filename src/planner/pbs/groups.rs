@@ -22,6 +22,7 @@ use std::sync::Arc;
 
 use super::track::Track;
 use super::{Conflict, PbsStats, Problem, Solution, State};
+use crate::planner::mastar::Plan;
 
 /// Disjoint sets of agents (union–find), each named by its lowest member.
 struct Sets {
@@ -140,7 +141,7 @@ fn link_neighbours(problem: &Problem<'_>, sets: &mut Sets) {
 /// The groups' answers put together.
 struct Whole {
     tracks: Vec<Arc<Track>>,
-    plans: Vec<Option<Arc<crate::planner::mastar::Plan>>>,
+    plans: Vec<Option<Arc<Plan>>>,
     edges: Vec<(usize, usize)>,
 }
 
