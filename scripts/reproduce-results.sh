@@ -1,0 +1,126 @@
+#!/usr/bin/env bash
+# Re-runs every committed result under results/ with the command in its README, into a scratch
+# directory, and compares each committed file byte for byte (wall-clock files excepted:
+# timings.csv). Prints one line per result and exits 1 if any file differs.
+#
+#   scripts/reproduce-results.sh [--with-training] [BIN]
+#
+# BIN defaults to target/release/bkpbs. The PPO training run (results/rl-ppo's learning curve
+# and policy, ~45 min on 2 cores) is re-run only with --with-training; its evaluation campaigns
+# always are.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+with_training=0
+if [ "${1:-}" = "--with-training" ]; then
+    with_training=1
+    shift
+fi
+BIN=$(realpath "${1:-target/release/bkpbs}")
+[ -x "$BIN" ] || { echo "reproduce: error: $BIN is not an executable (cargo build --release)" >&2; exit 1; }
+scratch=$(mktemp -d)
+trap 'rm -rf "$scratch"' EXIT
+failed=0
+
+# compare DIR_COMMITTED DIR_NEW: every committed file but timings.csv and README.md must match.
+compare() {
+    local committed=$1 new=$2 bad=0
+    while IFS= read -r f; do
+        case "$f" in */timings.csv | */README.md | ./plots/*) continue ;; esac
+        if ! cmp -s "$committed/$f" "$new/$f"; then
+            echo "  differs: $committed/$f"
+            bad=1
+        fi
+    done < <(cd "$committed" && find . -type f | sort)
+    return $bad
+}
+
+# result NAME COMMITTED_DIR: runs the rest of the line (with $OUT as its --out), then compares.
+result() {
+    local name=$1 committed=$2
+    shift 2
+    local out="$scratch/$name"
+    mkdir -p "$(dirname "$out")"
+    local start=$SECONDS
+    if ! "$@" --out "$out" >"$scratch/$name.log" 2>&1; then
+        echo "$name: FAILED to run (log below)"; tail -5 "$scratch/$name.log"; failed=1; return
+    fi
+    rm -rf "$out/episodes"
+    if compare "$committed" "$out"; then
+        echo "$name: identical ($((SECONDS - start)) s)"
+    else
+        echo "$name: DIFFERS"; failed=1
+    fi
+}
+
+result paper-grid results/paper-grid "$BIN" campaign
+result safety-on results/safety/shield-on "$BIN" campaign --planners bk-mastar,bk-pbs \
+    --alphas 0.4,0.6,0.8 --lambdas 2500,3000 --seeds 25
+result safety-off results/safety/shield-off "$BIN" campaign --planners bk-mastar,bk-pbs \
+    --alphas 0.4,0.6,0.8 --lambdas 2500,3000 --seeds 25 --config results/safety/shield-off.toml
+result three-lane results/networks/three-lane "$BIN" campaign --config results/networks/three-lane.toml \
+    --planners sumo,idm-mobil,bk-mastar,bk-pbs --alphas 0.4,0.8 --lambdas 2500,3000 --seeds 5
+result corridor results/networks/corridor "$BIN" campaign --config results/networks/corridor.toml \
+    --planners sumo,idm-mobil,bk-mastar,bk-pbs --alphas 0.4,0.8 --lambdas 5000,6000 --seeds 5 --steps 1000
+result profiles-matched results/profiles/matched "$BIN" campaign --config results/profiles/matched.toml \
+    --hdv-profiles sumo-safe,paper,heterogeneous,krauss,eidm --alphas 0.4,0.8 --lambdas 3000 --seeds 10
+result profiles-mismatch results/profiles/mismatch "$BIN" campaign --config results/profiles/mismatch.toml \
+    --alphas 0.4,0.8 --lambdas 3000 --seeds 10
+result profiles-paper-grid results/profiles/paper-grid "$BIN" campaign --config results/profiles/matched.toml \
+    --hdv-profiles paper --seeds 20
+result rl-shield-off results/rl-ppo/shield-off "$BIN" campaign --planners rl-ppo --seeds 10
+result rl-shield-on results/rl-ppo/shield-on "$BIN" campaign --planners rl-ppo --seeds 10 \
+    --config results/rl-ppo/shield-on.toml
+
+# The paper grid's traced episode and its figures.
+start=$SECONDS
+plots="$scratch/plots/bk-pbs_a0.5_l3000_s0"
+if "$BIN" episode --planner bk-pbs --alpha 0.5 --lambda 3000 --seed 0 --trajectories --out "$plots" >/dev/null 2>&1 \
+    && "$BIN" plot "$plots" >/dev/null 2>&1 && compare results/paper-grid/plots "$scratch/plots"; then
+    echo "paper-grid-plots: identical ($((SECONDS - start)) s)"
+else
+    echo "paper-grid-plots: DIFFERS"; failed=1
+fi
+
+# The calibration matrix writes into its own directory beside the lateral evaluations.
+mkdir -p "$scratch/calibration"
+start=$SECONDS
+if "$BIN" calibrate --matrix --out "$scratch/calibration" >"$scratch/calibration.log" 2>&1; then
+    bad=0
+    for f in longitudinal_matrix.csv longitudinal_matrix.md longitudinal_matrix.png longitudinal_matrix.svg; do
+        cmp -s "results/calibration/$f" "$scratch/calibration/$f" || { echo "  differs: results/calibration/$f"; bad=1; }
+    done
+    if [ $bad = 0 ]; then echo "calibration-matrix: identical ($((SECONDS - start)) s)"; else echo "calibration-matrix: DIFFERS"; failed=1; fi
+else
+    echo "calibration-matrix: FAILED to run"; tail -5 "$scratch/calibration.log"; failed=1
+fi
+
+start=$SECONDS
+bad=0
+for p in sumo-safe paper heterogeneous krauss eidm; do
+    "$BIN" collect --hdv-profile $p --episodes 100 --seed-base 90000 --out "$scratch/eval-$p.bin" >/dev/null 2>&1
+    "$BIN" eval-predictor --data "$scratch/eval-$p.bin" >"$scratch/lateral-$p.txt" 2>/dev/null
+    cmp -s "results/calibration/lateral/$p.txt" "$scratch/lateral-$p.txt" || { echo "  differs: lateral/$p.txt"; bad=1; }
+    for q in paper heterogeneous krauss eidm; do
+        "$BIN" eval-predictor --model models/profiles/$q/gcn-conditioned.json --data "$scratch/eval-$p.bin" \
+            >"$scratch/lateral-$q-$p.txt" 2>/dev/null
+        cmp -s "results/calibration/lateral/trained-on-$q/$p.txt" "$scratch/lateral-$q-$p.txt" \
+            || { echo "  differs: lateral/trained-on-$q/$p.txt"; bad=1; }
+    done
+    rm -f "$scratch/eval-$p.bin"
+done
+if [ $bad = 0 ]; then echo "calibration-lateral: identical ($((SECONDS - start)) s)"; else echo "calibration-lateral: DIFFERS"; failed=1; fi
+
+if [ $with_training = 1 ]; then
+    start=$SECONDS
+    "$BIN" train-rl --out "$scratch/rl-train" --steps 10000000 >"$scratch/rl-train.log" 2>&1
+    bad=0
+    for f in learning_curve.csv learning_curve.png learning_curve.svg evaluation.csv; do
+        cmp -s "results/rl-ppo/$f" "$scratch/rl-train/$f" || { echo "  differs: results/rl-ppo/$f"; bad=1; }
+    done
+    if [ $bad = 0 ]; then echo "rl-training: identical ($((SECONDS - start)) s)"; else echo "rl-training: DIFFERS"; failed=1; fi
+else
+    echo "rl-training: skipped (--with-training re-runs it, ~45 min)"
+fi
+
+exit $failed
