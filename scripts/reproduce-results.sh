@@ -26,7 +26,7 @@ failed=0
 compare() {
     local committed=$1 new=$2 bad=0
     while IFS= read -r f; do
-        case "$f" in */timings.csv | */README.md | ./plots/*) continue ;; esac
+        case "$f" in */timings.csv | */README.md | */.gitignore | ./plots/*) continue ;; esac
         if ! cmp -s "$committed/$f" "$new/$f"; then
             echo "  differs: $committed/$f"
             bad=1
