@@ -1,8 +1,10 @@
-//! The source tree keeps its architecture: folders are layers and import only downwards, the
-//! top level holds only the crate roots, and no function outside tests
-//! grows past what can be read at once. These checks read the source files; they fail with the
-//! offending file and line, so a newcomer sees which rule a change broke.
+//! The source tree keeps its architecture: folders are layers and import only downwards, no two
+//! modules import each other (directly or round a loop), the top level holds only the crate
+//! roots, and no file or function outside tests grows past what can be read at once. These checks
+//! read the source files; they fail with the offending file and line, so a newcomer sees which
+//! rule a change broke.
 
+use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
 /// The layers of `src/`, lowest first. A module may name `crate::X` only for an `X` listed at or
@@ -28,7 +30,10 @@ const LAYERS: [&str; 13] = [
 const TOP_LEVEL_FILES: [&str; 2] = ["lib.rs", "main.rs"];
 
 /// Longest function body, in lines, outside tests.
-const MAX_FUNCTION_LINES: usize = 80;
+const MAX_FUNCTION_LINES: usize = 60;
+
+/// Longest file, in lines outside its test modules: one concept, read in one sitting.
+const MAX_FILE_LINES: usize = 600;
 
 fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -233,6 +238,333 @@ fn no_function_outside_tests_is_longer_than_the_limit() {
     );
 }
 
+/// `text` with every `#[cfg(test)]` item blanked out (its lines kept, empty), so that line
+/// numbers still point into the file.
+fn without_tests(text: &str) -> Vec<String> {
+    let lines: Vec<&str> = text.lines().collect();
+    let mut out: Vec<String> = lines.iter().map(|l| l.to_string()).collect();
+    let mut i = 0;
+    while i < lines.len() {
+        if code_part(lines[i]).trim_start().starts_with("#[cfg(test)]") {
+            let end = end_of_item(&lines, i + 1);
+            for line in &mut out[i..=end] {
+                line.clear();
+            }
+            i = end + 1;
+        } else {
+            i += 1;
+        }
+    }
+    out
+}
+
+/// Lines of `text` outside its test modules (blank lines and comments count: they are read).
+fn lines_outside_tests(text: &str) -> usize {
+    let lines: Vec<&str> = text.lines().collect();
+    let kept = without_tests(text);
+    lines
+        .iter()
+        .zip(&kept)
+        .filter(|(l, k)| !k.is_empty() || l.trim().is_empty())
+        .count()
+}
+
+/// The names of the file modules that `text` declares under `#[cfg(test)]` (`mod tests;`):
+/// such a file is a test module of its own.
+fn test_module_files(text: &str) -> Vec<String> {
+    let lines: Vec<&str> = text.lines().collect();
+    let mut out = Vec::new();
+    for (k, line) in lines.iter().enumerate() {
+        if !code_part(line).trim_start().starts_with("#[cfg(test)]") {
+            continue;
+        }
+        let Some(next) = lines.get(k + 1) else {
+            continue;
+        };
+        let next = code_part(next).trim();
+        let decl = next.strip_prefix("pub ").unwrap_or(next);
+        if let Some(name) = decl.strip_prefix("mod ").and_then(|r| r.strip_suffix(';')) {
+            out.push(name.trim().to_string());
+        }
+    }
+    out
+}
+
+/// Every `.rs` file of `dirs` that is not a test module, with its text.
+fn library_files(dirs: &[&str]) -> Vec<(PathBuf, String)> {
+    let mut files = Vec::new();
+    for dir in dirs {
+        files.extend(rust_files(&root().join(dir)).into_iter().map(|f| {
+            let text = std::fs::read_to_string(&f).unwrap();
+            (f, text)
+        }));
+    }
+    let mut tests = BTreeSet::new();
+    for (file, text) in &files {
+        let folder = if file
+            .file_name()
+            .is_some_and(|n| n == "mod.rs" || n == "lib.rs")
+        {
+            file.parent().unwrap().to_path_buf()
+        } else {
+            file.with_extension("")
+        };
+        for name in test_module_files(text) {
+            tests.insert(folder.join(format!("{name}.rs")));
+            tests.insert(folder.join(&name).join("mod.rs"));
+        }
+    }
+    files.retain(|(f, _)| !tests.contains(f));
+    files
+}
+
+#[test]
+fn no_file_outside_tests_is_longer_than_the_limit() {
+    let mut long = Vec::new();
+    for (file, text) in library_files(&["src", "bindings/src"]) {
+        let n = lines_outside_tests(&text);
+        if n > MAX_FILE_LINES {
+            long.push(format!(
+                "{}: {n} lines outside tests",
+                file.strip_prefix(root()).unwrap().display()
+            ));
+        }
+    }
+    assert!(
+        long.is_empty(),
+        "files over {MAX_FILE_LINES} lines (split them by concept, tests into a sibling \
+         `tests.rs`):\n{}",
+        long.join("\n")
+    );
+}
+
+/// The module path of a file of `src/` (`src/campaign/results.rs` → `["campaign", "results"]`).
+fn module_of(src: &Path, file: &Path) -> Vec<String> {
+    let rel = file.strip_prefix(src).unwrap().with_extension("");
+    let mut parts: Vec<String> = rel
+        .components()
+        .map(|c| c.as_os_str().to_str().unwrap().to_string())
+        .collect();
+    if parts
+        .last()
+        .is_some_and(|p| p == "mod" || p == "lib" || p == "main")
+    {
+        parts.pop();
+    }
+    parts
+}
+
+/// The `use` declarations and inline paths of `code` (test items removed), as module paths
+/// relative to the crate: `crate::a::b::{c, d::e}` gives `a::b::c` and `a::b::d::e`;
+/// `super::x` is resolved against `own`, the module the code is in.
+fn named_paths(code: &str, own: &[String]) -> Vec<Vec<String>> {
+    let mut out = Vec::new();
+    for statement in code.split(';') {
+        for start in ["crate::", "super::"] {
+            let mut rest = statement;
+            while let Some(i) = rest.find(start) {
+                let before = rest[..i].chars().last();
+                let tail = &rest[i..];
+                rest = &rest[i + start.len()..];
+                if before.is_some_and(|c| c.is_alphanumeric() || c == '_' || c == ':') {
+                    continue;
+                }
+                for path in expand_braces(&take_path(tail)) {
+                    if let Some(p) = absolute(&path, own) {
+                        out.push(p);
+                    }
+                }
+            }
+        }
+    }
+    out
+}
+
+/// The path that starts `text`: identifiers, `::`, and one balanced `{…}` group.
+fn take_path(text: &str) -> String {
+    let mut depth = 0;
+    let mut end = text.len();
+    for (k, c) in text.char_indices() {
+        match c {
+            '{' => depth += 1,
+            '}' if depth > 0 => {
+                depth -= 1;
+                if depth == 0 {
+                    end = k + 1;
+                    break;
+                }
+            }
+            c if depth == 0 && !(c.is_alphanumeric() || c == '_' || c == ':') => {
+                end = k;
+                break;
+            }
+            _ => {}
+        }
+    }
+    text[..end].split_whitespace().collect()
+}
+
+/// `a::{b, c::{d, e}}` → `a::b`, `a::c::d`, `a::c::e` (`self` names the prefix itself).
+fn expand_braces(path: &str) -> Vec<String> {
+    let Some(open) = path.find('{') else {
+        return vec![path.trim_end_matches(':').to_string()];
+    };
+    let prefix = &path[..open];
+    let inner = &path[open + 1..path.rfind('}').unwrap_or(path.len())];
+    let mut parts = Vec::new();
+    let (mut depth, mut from) = (0, 0);
+    for (k, c) in inner.char_indices() {
+        match c {
+            '{' => depth += 1,
+            '}' => depth -= 1,
+            ',' if depth == 0 => {
+                parts.push(&inner[from..k]);
+                from = k + 1;
+            }
+            _ => {}
+        }
+    }
+    parts.push(&inner[from..]);
+    parts
+        .into_iter()
+        .map(str::trim)
+        .filter(|p| !p.is_empty())
+        .flat_map(|p| {
+            let p = p.split(" as ").next().unwrap();
+            let joined = if p == "self" {
+                prefix.trim_end_matches(':').to_string()
+            } else {
+                format!("{prefix}{p}")
+            };
+            expand_braces(&joined)
+        })
+        .collect()
+}
+
+/// `crate::a::b` → `[a, b]`; `super::x` against `own`; anything else is not the crate's.
+fn absolute(path: &str, own: &[String]) -> Option<Vec<String>> {
+    let mut parts: Vec<&str> = path.split("::").filter(|p| !p.is_empty()).collect();
+    let mut base: Vec<String> = match parts.first()? {
+        &"crate" => Vec::new(),
+        &"super" => own.to_vec(),
+        _ => return None,
+    };
+    parts.remove(0);
+    if path.starts_with("super::") {
+        base.pop();
+        while parts.first() == Some(&"super") {
+            parts.remove(0);
+            base.pop();
+        }
+    }
+    base.extend(parts.iter().map(|p| p.to_string()));
+    Some(base)
+}
+
+/// The module (among `modules`) that a path names: its longest prefix that is a module.
+fn module_named(path: &[String], modules: &BTreeSet<Vec<String>>) -> Option<Vec<String>> {
+    (1..=path.len())
+        .rev()
+        .map(|n| path[..n].to_vec())
+        .find(|p| modules.contains(p))
+}
+
+/// The import graph of `files` (module path → modules it names), leaving out a module's
+/// names of its own ancestors: a child may use what its parent offers (the parent is the
+/// folder's front door and re-exports the child), which is not a loop between two rooms.
+fn import_graph(files: &[(Vec<String>, String)]) -> BTreeMap<Vec<String>, BTreeSet<Vec<String>>> {
+    let modules: BTreeSet<Vec<String>> = files.iter().map(|(m, _)| m.clone()).collect();
+    let mut graph = BTreeMap::new();
+    for (own, text) in files {
+        let code: Vec<String> = without_tests(text)
+            .iter()
+            .map(|l| code_part(l).to_string())
+            .collect();
+        let targets: BTreeSet<Vec<String>> = named_paths(&code.join("\n"), own)
+            .iter()
+            .filter_map(|p| module_named(p, &modules))
+            .filter(|m| m != own && !own.starts_with(m))
+            .collect();
+        graph.insert(own.clone(), targets);
+    }
+    graph
+}
+
+/// The loops of `graph`: each strongly connected set of two or more modules (Tarjan).
+fn import_loops(graph: &BTreeMap<Vec<String>, BTreeSet<Vec<String>>>) -> Vec<Vec<Vec<String>>> {
+    struct Walk<'g> {
+        graph: &'g BTreeMap<Vec<String>, BTreeSet<Vec<String>>>,
+        index: BTreeMap<&'g Vec<String>, (usize, usize)>,
+        stack: Vec<&'g Vec<String>>,
+        loops: Vec<Vec<Vec<String>>>,
+    }
+    fn visit<'g>(w: &mut Walk<'g>, v: &'g Vec<String>) {
+        let n = w.index.len();
+        w.index.insert(v, (n, n));
+        w.stack.push(v);
+        for t in w.graph.get(v).into_iter().flatten() {
+            let Some((t, _)) = w.graph.get_key_value(t) else {
+                continue;
+            };
+            if !w.index.contains_key(t) {
+                visit(w, t);
+                let low = w.index[v].1.min(w.index[t].1);
+                w.index.get_mut(v).unwrap().1 = low;
+            } else if w.stack.contains(&t) {
+                let low = w.index[v].1.min(w.index[t].0);
+                w.index.get_mut(v).unwrap().1 = low;
+            }
+        }
+        if w.index[v].0 == w.index[v].1 {
+            let at = w.stack.iter().position(|m| *m == v).unwrap();
+            let component: Vec<Vec<String>> = w.stack.drain(at..).cloned().collect();
+            if component.len() > 1 {
+                w.loops.push(component);
+            }
+        }
+    }
+    let mut walk = Walk {
+        graph,
+        index: BTreeMap::new(),
+        stack: Vec::new(),
+        loops: Vec::new(),
+    };
+    for v in graph.keys() {
+        if !walk.index.contains_key(v) {
+            visit(&mut walk, v);
+        }
+    }
+    walk.loops
+}
+
+#[test]
+fn no_two_modules_import_each_other() {
+    for dir in ["src", "bindings/src"] {
+        let src = root().join(dir);
+        let files: Vec<(Vec<String>, String)> = library_files(&[dir])
+            .into_iter()
+            .filter(|(f, _)| !f.ends_with("main.rs"))
+            .map(|(f, text)| (module_of(&src, &f), text))
+            .collect();
+        let loops = import_loops(&import_graph(&files));
+        let shown: Vec<String> = loops
+            .iter()
+            .map(|l| {
+                l.iter()
+                    .map(|m| m.join("::"))
+                    .collect::<Vec<_>>()
+                    .join(" <-> ")
+            })
+            .collect();
+        assert!(
+            shown.is_empty(),
+            "{dir}: modules that import each other (move what both need into one of them, or \
+             below both):\n{}",
+            shown.join("\n")
+        );
+    }
+}
+
 #[test]
 fn the_checks_themselves_see_what_they_look_for() {
     // A regression guard for the scanners: an upward path, a test module and a long function.
@@ -250,4 +582,57 @@ fn the_checks_themselves_see_what_they_look_for() {
     let found = functions(&text);
     assert_eq!(found.len(), 1, "{found:?}");
     assert_eq!((found[0].0.as_str(), found[0].2), ("long", 92));
+    assert!(MAX_FUNCTION_LINES < 92);
+
+    // A long file is long outside its tests only.
+    let long = format!(
+        "{}#[cfg(test)]\nmod tests {{\n{}}}\n",
+        "x;\n".repeat(601),
+        "y;\n".repeat(900)
+    );
+    assert_eq!(lines_outside_tests(&long), 601);
+    assert!(lines_outside_tests(&long) > MAX_FILE_LINES);
+    assert_eq!(
+        test_module_files("#[cfg(test)]\nmod tests;\nmod real;\n"),
+        ["tests"]
+    );
+
+    // Paths as `use` writes them, resolved from the module that writes them.
+    let own = vec!["campaign".to_string(), "results".to_string()];
+    let named = named_paths(
+        "use super::validate::{key, Table};\nuse crate::episode::{self, metrics::Summary}",
+        &own,
+    );
+    let mut shown: Vec<String> = named.iter().map(|p| p.join("::")).collect();
+    shown.sort();
+    assert_eq!(
+        shown,
+        [
+            "campaign::validate::Table",
+            "campaign::validate::key",
+            "episode",
+            "episode::metrics::Summary"
+        ]
+    );
+
+    // A loop between two rooms is found; a child naming its parent is not a loop.
+    let m = |p: &str| p.split("::").map(str::to_string).collect::<Vec<_>>();
+    let files = vec![
+        (m("campaign"), "pub use results::Results;".to_string()),
+        (
+            m("campaign::results"),
+            "use super::validate::check; use super::Grid;".to_string(),
+        ),
+        (
+            m("campaign::validate"),
+            "use crate::campaign::results::key;".to_string(),
+        ),
+        (m("campaign::grid"), "use super::Settings;".to_string()),
+    ];
+    let loops = import_loops(&import_graph(&files));
+    assert_eq!(loops.len(), 1, "{loops:?}");
+    assert_eq!(loops[0].len(), 2);
+    assert!(
+        loops[0].contains(&m("campaign::results")) && loops[0].contains(&m("campaign::validate"))
+    );
 }
