@@ -137,61 +137,24 @@ impl Network {
 
     /// The raw logit of the inputs encoded in `ws.xa` (and, conditioned, `ws.xb`).
     pub fn logit(&self, ws: &mut Workspace) -> f32 {
-        let h = ws.h.as_mut_slice();
-        let m = ws.m.as_mut_slice();
-        // Block A: node embeddings, their mean (the normalised fully connected propagation),
-        // the graph convolution.
-        m.fill(0.0);
-        for (k, x) in ws.xa.as_slice().chunks_exact(FEATURES_A).enumerate() {
-            if k > 0 && x[0] == 0.0 {
-                add(m, &self.absent_a.as_slice()[k * HIDDEN..(k + 1) * HIDDEN]);
-            } else {
-                self.a_embed.apply(x, h, true);
-                add(m, h);
-            }
-        }
-        scale(m, 1.0 / NODES_A as f32);
-        let (za, zb) = ws.z.as_mut_slice().split_at_mut(HIDDEN);
-        self.a_conv.apply(m, za, true);
-        // Block B: the same per preview step, averaged over the steps. The node means of the
-        // steps with CAVs are gathered first, so the graph convolution runs on two steps at a
-        // time (each weight column loaded once for both).
+        self.block_a(ws);
         if let (Some(be), Some(bc)) = (&self.b_embed, &self.b_conv) {
+            let (_, zb) = ws.z.as_mut_slice().split_at_mut(HIDDEN);
             zb.fill(0.0);
-            let means = ws.means.as_mut_slice();
-            let mut busy = 0;
-            for step in ws.xb.as_slice().chunks_exact(FEATURES_B * CAV_NODES) {
-                if step.chunks_exact(FEATURES_B).all(|x| x[0] == 0.0) {
-                    add(zb, self.empty_step.as_slice());
-                    continue;
-                }
-                let m = &mut means[busy * HIDDEN..(busy + 1) * HIDDEN];
-                m.fill(0.0);
-                for x in step.chunks_exact(FEATURES_B) {
-                    if x[0] == 0.0 {
-                        add(m, self.absent_b.as_slice());
-                    } else {
-                        be.apply(x, h, true);
-                        add(m, h);
-                    }
-                }
-                scale(m, 1.0 / CAV_NODES as f32);
-                busy += 1;
-            }
-            let g = ws.g.as_mut_slice();
-            let mut pairs = means[..busy * HIDDEN].chunks_exact(2 * HIDDEN);
-            for pair in &mut pairs {
-                let (m0, m1) = pair.split_at(HIDDEN);
-                let (g0, g1) = g.split_at_mut(HIDDEN);
-                bc.apply2(m0, m1, g0, g1);
-                add(zb, g0);
-                add(zb, g1);
-            }
-            let rest = pairs.remainder();
-            if !rest.is_empty() {
-                bc.apply(rest, &mut g[..HIDDEN], true);
-                add(zb, &g[..HIDDEN]);
-            }
+            let busy = step_means(
+                self,
+                be,
+                ws.xb.as_slice(),
+                ws.means.as_mut_slice(),
+                ws.h.as_mut_slice(),
+                zb,
+            );
+            convolve_means(
+                bc,
+                &ws.means.as_slice()[..busy * HIDDEN],
+                ws.g.as_mut_slice(),
+                zb,
+            );
             scale(zb, 1.0 / PREVIEW as f32);
         }
         let zlen = if self.conditioned { 2 * HIDDEN } else { HIDDEN };
@@ -202,6 +165,79 @@ impl Network {
         let mut o = [0.0f32];
         self.out.apply(a2, &mut o, false);
         o[0]
+    }
+
+    /// Block A into the first half of `ws.z`: node embeddings, their mean (the normalised
+    /// fully connected propagation), the graph convolution.
+    #[inline]
+    fn block_a(&self, ws: &mut Workspace) {
+        let h = ws.h.as_mut_slice();
+        let m = ws.m.as_mut_slice();
+        m.fill(0.0);
+        for (k, x) in ws.xa.as_slice().chunks_exact(FEATURES_A).enumerate() {
+            if k > 0 && x[0] == 0.0 {
+                add(m, &self.absent_a.as_slice()[k * HIDDEN..(k + 1) * HIDDEN]);
+            } else {
+                self.a_embed.apply(x, h, true);
+                add(m, h);
+            }
+        }
+        scale(m, 1.0 / NODES_A as f32);
+        self.a_conv
+            .apply(m, &mut ws.z.as_mut_slice()[..HIDDEN], true);
+    }
+}
+
+/// Block B, first half: the node mean of each preview step with CAVs into `means` (in order;
+/// returns how many), while a step without CAVs adds its precomputed output to `zb` at once.
+/// The means are gathered first so that the graph convolution can run on two steps at a time.
+#[inline]
+fn step_means(
+    net: &Network,
+    be: &Layer,
+    xb: &[f32],
+    means: &mut [f32],
+    h: &mut [f32],
+    zb: &mut [f32],
+) -> usize {
+    let mut busy = 0;
+    for step in xb.chunks_exact(FEATURES_B * CAV_NODES) {
+        if step.chunks_exact(FEATURES_B).all(|x| x[0] == 0.0) {
+            add(zb, net.empty_step.as_slice());
+            continue;
+        }
+        let m = &mut means[busy * HIDDEN..(busy + 1) * HIDDEN];
+        m.fill(0.0);
+        for x in step.chunks_exact(FEATURES_B) {
+            if x[0] == 0.0 {
+                add(m, net.absent_b.as_slice());
+            } else {
+                be.apply(x, h, true);
+                add(m, h);
+            }
+        }
+        scale(m, 1.0 / CAV_NODES as f32);
+        busy += 1;
+    }
+    busy
+}
+
+/// Block B, second half: the graph convolution of each step mean, added into `zb`, two steps
+/// at a time (each weight column loaded once for both); `g` holds two outputs.
+#[inline]
+fn convolve_means(bc: &Layer, means: &[f32], g: &mut [f32], zb: &mut [f32]) {
+    let mut pairs = means.chunks_exact(2 * HIDDEN);
+    for pair in &mut pairs {
+        let (m0, m1) = pair.split_at(HIDDEN);
+        let (g0, g1) = g.split_at_mut(HIDDEN);
+        bc.apply2(m0, m1, g0, g1);
+        add(zb, g0);
+        add(zb, g1);
+    }
+    let rest = pairs.remainder();
+    if !rest.is_empty() {
+        bc.apply(rest, &mut g[..HIDDEN], true);
+        add(zb, &g[..HIDDEN]);
     }
 }
 

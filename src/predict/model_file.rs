@@ -132,58 +132,15 @@ impl ModelFile {
         Ok(m)
     }
 
+    /// The file fits this build: its feature layout, its layers, its parameter counts, finite
+    /// and bounded parameters and calibration.
     fn check(&self, path: &Path) -> Result<(), ModelError> {
+        self.check_layout(path)?;
         let shape = |what: String| ModelError::Shape {
             path: path.to_path_buf(),
             what,
         };
-        let current = FeatureLayout::current();
-        if self.layout != current {
-            return Err(ModelError::Layout {
-                path: path.to_path_buf(),
-                what: format!(
-                    "file has {} × {} node features (a) and {} × {} × {} (b), this build {} × {} and {} × {} × {}",
-                    self.layout.nodes_a,
-                    self.layout.features_a,
-                    self.layout.preview,
-                    self.layout.cav_nodes,
-                    self.layout.features_b,
-                    current.nodes_a,
-                    current.features_a,
-                    current.preview,
-                    current.cav_nodes,
-                    current.features_b
-                ),
-            });
-        }
-        let arch = Architecture::new(self.conditioned);
-        if self.architecture != arch {
-            return Err(shape(format!(
-                "its layers differ from this build's {} network",
-                if self.conditioned {
-                    "conditioned"
-                } else {
-                    "unconditioned"
-                }
-            )));
-        }
-        if self.params.len() != arch.n_params {
-            return Err(shape(format!(
-                "{} network parameters, the architecture needs {}",
-                self.params.len(),
-                arch.n_params
-            )));
-        }
-        let lr = Logistic {
-            conditioned: self.conditioned,
-        };
-        if self.baseline.params.len() != lr.n_params() {
-            return Err(shape(format!(
-                "{} baseline parameters, the logistic regression needs {}",
-                self.baseline.params.len(),
-                lr.n_params()
-            )));
-        }
+        self.check_shapes().map_err(shape)?;
         if self
             .params
             .iter()
@@ -204,6 +161,64 @@ impl ModelFile {
             {
                 return Err(shape(format!("calibration out of range: {c:?}")));
             }
+        }
+        Ok(())
+    }
+
+    /// The node features the file was trained on are this build's.
+    fn check_layout(&self, path: &Path) -> Result<(), ModelError> {
+        let current = FeatureLayout::current();
+        if self.layout == current {
+            return Ok(());
+        }
+        Err(ModelError::Layout {
+            path: path.to_path_buf(),
+            what: format!(
+                "file has {} × {} node features (a) and {} × {} × {} (b), this build {} × {} and {} × {} × {}",
+                self.layout.nodes_a,
+                self.layout.features_a,
+                self.layout.preview,
+                self.layout.cav_nodes,
+                self.layout.features_b,
+                current.nodes_a,
+                current.features_a,
+                current.preview,
+                current.cav_nodes,
+                current.features_b
+            ),
+        })
+    }
+
+    /// The network's layers and both parameter counts are this build's; the error says which
+    /// differs.
+    fn check_shapes(&self) -> Result<(), String> {
+        let arch = Architecture::new(self.conditioned);
+        if self.architecture != arch {
+            return Err(format!(
+                "its layers differ from this build's {} network",
+                if self.conditioned {
+                    "conditioned"
+                } else {
+                    "unconditioned"
+                }
+            ));
+        }
+        if self.params.len() != arch.n_params {
+            return Err(format!(
+                "{} network parameters, the architecture needs {}",
+                self.params.len(),
+                arch.n_params
+            ));
+        }
+        let lr = Logistic {
+            conditioned: self.conditioned,
+        };
+        if self.baseline.params.len() != lr.n_params() {
+            return Err(format!(
+                "{} baseline parameters, the logistic regression needs {}",
+                self.baseline.params.len(),
+                lr.n_params()
+            ));
         }
         Ok(())
     }

@@ -93,6 +93,18 @@ impl Net {
             internal: BTreeMap::new(),
             connections: Vec::new(),
         };
+        net.read_edges(&doc, &bad)?;
+        net.read_connections(&doc, &bad)?;
+        Ok(net)
+    }
+
+    /// The normal edges (in file order) and the junctions' internal lanes; edges of another
+    /// function (walking areas, crossings) are left out.
+    fn read_edges(
+        &mut self,
+        doc: &roxmltree::Document,
+        bad: &impl Fn(String) -> NetworkFileError,
+    ) -> Result<(), NetworkFileError> {
         for e in doc
             .root_element()
             .children()
@@ -107,16 +119,27 @@ impl Net {
                 .map(|l| lane(l).map_err(|w| bad(format!("edge '{id}': {w}"))))
                 .collect::<Result<Vec<Lane>, _>>()?;
             if e.attribute("function") == Some("internal") {
-                net.internal
+                self.internal
                     .extend(lanes.into_iter().map(|l| (l.id.clone(), l)));
             } else if e.attribute("function").is_none() {
-                net.edges.push(Edge {
+                self.edges.push(Edge {
                     id: id.to_string(),
                     lanes,
                 });
             }
         }
-        let normal: BTreeSet<&str> = net.edges.iter().map(|e| e.id.as_str()).collect();
+        Ok(())
+    }
+
+    /// The connections between normal edges (those into or out of an internal lane are the
+    /// junction's own and left out).
+    fn read_connections(
+        &mut self,
+        doc: &roxmltree::Document,
+        bad: &impl Fn(String) -> NetworkFileError,
+    ) -> Result<(), NetworkFileError> {
+        let normal: BTreeSet<&str> = self.edges.iter().map(|e| e.id.as_str()).collect();
+        let mut connections = Vec::new();
         for c in doc
             .root_element()
             .children()
@@ -135,7 +158,7 @@ impl Net {
                     ))
                 })
             };
-            net.connections.push(Connection {
+            connections.push(Connection {
                 from: get("from").into(),
                 from_lane: num("fromLane")?,
                 to: get("to").into(),
@@ -143,7 +166,8 @@ impl Net {
                 via: c.attribute("via").map(String::from),
             });
         }
-        Ok(net)
+        self.connections = connections;
+        Ok(())
     }
 
     fn edge(&self, id: &str) -> &Edge {

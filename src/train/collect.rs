@@ -377,6 +377,31 @@ pub fn collect(
     plan: &CollectPlan,
     mut progress: impl FnMut(usize, &CollectStats),
 ) -> Result<Dataset, CollectError> {
+    check_plan(plan)?;
+    let mut samples = Vec::new();
+    let mut stats = CollectStats::default();
+    for e in 0..plan.episodes {
+        let mut rec = collect_episode(base, plan, e)?;
+        rec.stats.episodes = 1;
+        stats += rec.stats;
+        samples.append(&mut rec.samples);
+        progress(e + 1, &stats);
+    }
+    let meta = CollectMeta {
+        plan: plan.clone(),
+        rollout_predictor: "constant".into(),
+        stats,
+        bkpbs_version: env!("CARGO_PKG_VERSION").into(),
+    };
+    Ok(Dataset {
+        meta: serde_json::to_string(&meta).expect("metadata serialises"),
+        samples,
+    })
+}
+
+/// A plan that names at least one planner, α and λ, known planners only, and a negative
+/// sampling share in (0, 1].
+fn check_plan(plan: &CollectPlan) -> Result<(), CollectError> {
     if plan.planners.is_empty() || plan.alphas.is_empty() || plan.lambdas.is_empty() {
         return Err(CollectError::Plan(
             "planners, alphas and lambdas need at least one value each".into(),
@@ -393,49 +418,38 @@ pub fn collect(
             return Err(controller::UnknownPlanner(p.clone()).into());
         }
     }
-    let mut samples = Vec::new();
-    let mut stats = CollectStats::default();
-    for e in 0..plan.episodes {
-        let spec = plan.episode(e);
-        let mut config = base.clone();
-        config.scenario.alpha = spec.alpha;
-        config.scenario.lambda = spec.lambda;
-        config.scenario.seed = spec.seed;
-        config.scenario.steps = plan.steps;
-        config.predictor.kind = PredictorKind::Constant;
-        let fail = |cause: EpisodeError| CollectError::Episode {
-            episode: e,
-            planner: spec.planner.clone(),
-            alpha: spec.alpha,
-            lambda: spec.lambda,
-            seed: spec.seed,
-            cause: Box::new(cause),
-        };
-        config.validate().map_err(|c| fail(c.into()))?;
-        let demand = crate::episode::demand::generate_for(&config).map_err(fail)?;
-        let mut rec = Recorder::new(
-            e as u32,
-            spec.seed,
-            config.scenario.dt,
-            plan.main_negative_keep,
-        );
-        episode::run_observed(&config, Driver::Named(&spec.planner), &demand, &mut rec)
-            .map_err(fail)?;
-        rec.stats.episodes = 1;
-        stats += rec.stats;
-        samples.append(&mut rec.samples);
-        progress(e + 1, &stats);
-    }
-    let meta = CollectMeta {
-        plan: plan.clone(),
-        rollout_predictor: "constant".into(),
-        stats,
-        bkpbs_version: env!("CARGO_PKG_VERSION").into(),
+    Ok(())
+}
+
+/// Episode `e` of the plan, run with the constant-speed predictor (so the data never depends
+/// on a learned model) and recorded.
+fn collect_episode(base: &Config, plan: &CollectPlan, e: usize) -> Result<Recorder, CollectError> {
+    let spec = plan.episode(e);
+    let mut config = base.clone();
+    config.scenario.alpha = spec.alpha;
+    config.scenario.lambda = spec.lambda;
+    config.scenario.seed = spec.seed;
+    config.scenario.steps = plan.steps;
+    config.predictor.kind = PredictorKind::Constant;
+    let fail = |cause: EpisodeError| CollectError::Episode {
+        episode: e,
+        planner: spec.planner.clone(),
+        alpha: spec.alpha,
+        lambda: spec.lambda,
+        seed: spec.seed,
+        cause: Box::new(cause),
     };
-    Ok(Dataset {
-        meta: serde_json::to_string(&meta).expect("metadata serialises"),
-        samples,
-    })
+    config.validate().map_err(|c| fail(c.into()))?;
+    let demand = crate::episode::demand::generate_for(&config).map_err(fail)?;
+    let mut rec = Recorder::new(
+        e as u32,
+        spec.seed,
+        config.scenario.dt,
+        plan.main_negative_keep,
+    );
+    episode::run_observed(&config, Driver::Named(&spec.planner), &demand, &mut rec)
+        .map_err(fail)?;
+    Ok(rec)
 }
 
 /// The collection metadata of a data file, if it has any.

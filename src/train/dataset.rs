@@ -141,26 +141,9 @@ impl Dataset {
             return Err(DataError::Magic { path: p() });
         }
         let mut r = Reader { bytes, at: 8 };
-        let head = r
-            .u32s::<6>()
-            .ok_or_else(|| truncated("header cut short".into()))?;
-        if head[0] != FORMAT_VERSION {
-            return Err(DataError::Version {
-                path: p(),
-                found: head[0],
-                expected: FORMAT_VERSION,
-            });
-        }
-        let expected = [SLOTS.len(), CAV_NODES, PREVIEW, RECORD_BYTES].map(|x| x as u32);
-        if head[1..5] != expected {
-            return Err(DataError::Layout {
-                path: p(),
-                found: format!("{:?}", &head[1..5]),
-                expected: format!("{expected:?}"),
-            });
-        }
+        let meta_len = read_layout(&mut r, path)?;
         let meta = r
-            .take(head[5] as usize)
+            .take(meta_len)
             .ok_or_else(|| truncated("metadata cut short".into()))?;
         let meta = std::str::from_utf8(meta)
             .map_err(|_| DataError::Corrupt {
@@ -172,27 +155,7 @@ impl Dataset {
             .take(8)
             .map(|b| u64::from_le_bytes(b.try_into().expect("8 bytes")))
             .ok_or_else(|| truncated("record count cut short".into()))?;
-        let body = bytes.len() - r.at;
-        let need = count
-            .checked_mul(RECORD_BYTES as u64)
-            .ok_or_else(|| DataError::Corrupt {
-                path: p(),
-                what: format!("record count {count} is impossible"),
-            })?;
-        if (body as u64) < need {
-            return Err(truncated(format!(
-                "header announces {count} records ({need} bytes) but only {body} bytes follow"
-            )));
-        }
-        if body as u64 > need {
-            return Err(DataError::Corrupt {
-                path: p(),
-                what: format!(
-                    "{} bytes follow the last of its {count} records",
-                    body as u64 - need
-                ),
-            });
-        }
+        check_body_length(path, count, bytes.len() - r.at)?;
         let mut samples = Vec::with_capacity(count as usize);
         for (index, rec) in bytes[r.at..].chunks_exact(RECORD_BYTES).enumerate() {
             let s = decode_record(rec).map_err(|what| DataError::Corrupt {
@@ -203,6 +166,58 @@ impl Dataset {
         }
         Ok(Dataset { meta, samples })
     }
+}
+
+/// The header after the magic: this format version and this build's record layout, or the
+/// error naming what the file has instead. Returns the metadata's length.
+fn read_layout(r: &mut Reader, path: &Path) -> Result<usize, DataError> {
+    let head = r.u32s::<6>().ok_or_else(|| DataError::Truncated {
+        path: path.to_path_buf(),
+        what: "header cut short".into(),
+    })?;
+    if head[0] != FORMAT_VERSION {
+        return Err(DataError::Version {
+            path: path.to_path_buf(),
+            found: head[0],
+            expected: FORMAT_VERSION,
+        });
+    }
+    let expected = [SLOTS.len(), CAV_NODES, PREVIEW, RECORD_BYTES].map(|x| x as u32);
+    if head[1..5] != expected {
+        return Err(DataError::Layout {
+            path: path.to_path_buf(),
+            found: format!("{:?}", &head[1..5]),
+            expected: format!("{expected:?}"),
+        });
+    }
+    Ok(head[5] as usize)
+}
+
+/// The `body` bytes after the record count hold exactly `count` records: fewer is a cut-off
+/// file, more is not a file this format wrote.
+fn check_body_length(path: &Path, count: u64, body: usize) -> Result<(), DataError> {
+    let corrupt = |what: String| DataError::Corrupt {
+        path: path.to_path_buf(),
+        what,
+    };
+    let need = count
+        .checked_mul(RECORD_BYTES as u64)
+        .ok_or_else(|| corrupt(format!("record count {count} is impossible")))?;
+    if (body as u64) < need {
+        return Err(DataError::Truncated {
+            path: path.to_path_buf(),
+            what: format!(
+                "header announces {count} records ({need} bytes) but only {body} bytes follow"
+            ),
+        });
+    }
+    if body as u64 > need {
+        return Err(corrupt(format!(
+            "{} bytes follow the last of its {count} records",
+            body as u64 - need
+        )));
+    }
+    Ok(())
 }
 
 struct Reader<'a> {
@@ -299,40 +314,8 @@ fn decode_record(rec: &[u8]) -> Result<Sample, String> {
         },
         ..Observation::default()
     };
-    let nflags: [u8; 6] = std::array::from_fn(|_| r.u8());
-    r.take(2);
-    for (n, f) in obs.neighbours.iter_mut().zip(nflags) {
-        if f > 3 {
-            return Err(format!("neighbour flags {f}"));
-        }
-        let v = [r.f32(), r.f32(), r.f32()];
-        if v.iter().any(|x| !x.is_finite()) {
-            return Err(format!("neighbour values {v:?}"));
-        }
-        *n = Neighbour {
-            present: f & 1 == 1,
-            ds: v[0],
-            dy: v[1],
-            speed: v[2],
-            is_cav: f & 2 == 2,
-        };
-    }
-    let present: [u8; PREVIEW * CAV_NODES] = std::array::from_fn(|_| r.u8());
-    for (c, p) in obs.cavs.iter_mut().flatten().zip(present) {
-        if p > 1 {
-            return Err(format!("CAV presence byte {p}"));
-        }
-        let v = [r.f32(), r.f32(), r.f32()];
-        if v.iter().any(|x| !x.is_finite()) {
-            return Err(format!("CAV values {v:?}"));
-        }
-        *c = CavNode {
-            present: p == 1,
-            ds: v[0],
-            dy: v[1],
-            speed: v[2],
-        };
-    }
+    decode_neighbours(&mut r, &mut obs.neighbours)?;
+    decode_cavs(&mut r, &mut obs.cavs)?;
     Ok(Sample {
         episode,
         step,
@@ -341,6 +324,54 @@ fn decode_record(rec: &[u8]) -> Result<Sample, String> {
         weight,
         obs,
     })
+}
+
+/// Three finite values (relative s, lateral offset, speed) of one graph node.
+fn finite_triple(r: &mut Reader, what: &str) -> Result<[f32; 3], String> {
+    let v = [r.f32(), r.f32(), r.f32()];
+    if v.iter().any(|x| !x.is_finite()) {
+        return Err(format!("{what} values {v:?}"));
+    }
+    Ok(v)
+}
+
+/// The neighbour slots: a flag byte each (present, is a CAV), two bytes of padding, then
+/// their values.
+fn decode_neighbours(r: &mut Reader, neighbours: &mut [Neighbour]) -> Result<(), String> {
+    let nflags: [u8; 6] = std::array::from_fn(|_| r.u8());
+    r.take(2);
+    for (n, f) in neighbours.iter_mut().zip(nflags) {
+        if f > 3 {
+            return Err(format!("neighbour flags {f}"));
+        }
+        let v = finite_triple(r, "neighbour")?;
+        *n = Neighbour {
+            present: f & 1 == 1,
+            ds: v[0],
+            dy: v[1],
+            speed: v[2],
+            is_cav: f & 2 == 2,
+        };
+    }
+    Ok(())
+}
+
+/// The preview of the higher-priority CAVs: a presence byte per node, then their values.
+fn decode_cavs(r: &mut Reader, cavs: &mut [[CavNode; CAV_NODES]; PREVIEW]) -> Result<(), String> {
+    let present: [u8; PREVIEW * CAV_NODES] = std::array::from_fn(|_| r.u8());
+    for (c, p) in cavs.iter_mut().flatten().zip(present) {
+        if p > 1 {
+            return Err(format!("CAV presence byte {p}"));
+        }
+        let v = finite_triple(r, "CAV")?;
+        *c = CavNode {
+            present: p == 1,
+            ds: v[0],
+            dy: v[1],
+            speed: v[2],
+        };
+    }
+    Ok(())
 }
 
 #[cfg(test)]
