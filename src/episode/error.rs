@@ -1,0 +1,107 @@
+//! Why an episode could not complete: [`EpisodeError`], and [`sumo_errors`], which reads SUMO's
+//! own reason off its console.
+//!
+//! Apart from the runner because every caller of an episode (the CLI, training, campaigns, the
+//! Python bindings) handles these errors without needing to know how the episode is stepped.
+
+use crate::config::ConfigError;
+use crate::controller::BuildError;
+use crate::sumo::files::InputError;
+use crate::sumo::frame::NetworkError;
+use crate::sumo::SumoError;
+
+/// Why an episode could not complete.
+#[derive(Debug, thiserror::Error)]
+pub enum EpisodeError {
+    #[error(transparent)]
+    Config(#[from] ConfigError),
+    #[error(transparent)]
+    Input(#[from] InputError),
+    #[error(transparent)]
+    Controller(#[from] BuildError),
+    #[error("cannot start SUMO on net {net}: {cause}")]
+    Start {
+        net: std::path::PathBuf,
+        cause: SumoError,
+    },
+    #[error(transparent)]
+    Road(#[from] NetworkError),
+    #[error("SUMO failed at step {step} (t = {time:.1} s): {cause}")]
+    Step {
+        step: u32,
+        time: f64,
+        cause: SumoError,
+    },
+    /// `sumo.gui` asked for sumo-gui where it cannot run.
+    #[error("cannot show the episode: {0}")]
+    NoGui(String),
+    /// A stop signal (Ctrl-C, `kill`) arrived: the episode ended early, SUMO was closed and
+    /// its input removed; nothing was written.
+    #[error("interrupted by {} at step {step}; nothing written", crate::io::interrupt::name(*.signal))]
+    Interrupted { step: u32, signal: i32 },
+    /// A failure with SUMO's own reason: libsumo reports only "Process Error", the reason goes
+    /// to SUMO's (captured) console.
+    #[error("{cause}; SUMO said: {said}")]
+    Sumo {
+        cause: Box<EpisodeError>,
+        said: String,
+        /// All SUMO printed, for `sumo.log`.
+        log: String,
+    },
+}
+
+impl EpisodeError {
+    /// This error with SUMO's error messages from `log` (what it printed meanwhile), if any.
+    pub fn with_sumo_log(self, log: String) -> EpisodeError {
+        match sumo_errors(&log) {
+            Some(said) => EpisodeError::Sumo {
+                cause: Box::new(self),
+                said,
+                log,
+            },
+            None => self,
+        }
+    }
+
+    /// What SUMO printed before the failure, when it said why.
+    pub fn sumo_log(&self) -> Option<&str> {
+        match self {
+            EpisodeError::Sumo { log, .. } => Some(log),
+            _ => None,
+        }
+    }
+}
+
+/// SUMO's `Error:` messages in `log`, with their indented continuation lines ("In file …"), on
+/// one line.
+pub fn sumo_errors(log: &str) -> Option<String> {
+    let mut parts: Vec<&str> = Vec::new();
+    let mut in_error = false;
+    for line in log.lines() {
+        if let Some(message) = line.strip_prefix("Error: ") {
+            parts.push(message.trim());
+            in_error = true;
+        } else if in_error && line.starts_with(' ') && !line.trim().is_empty() {
+            parts.push(line.trim());
+        } else {
+            in_error = false;
+        }
+    }
+    (!parts.is_empty()).then(|| parts.join(" "))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sumo_errors_are_read_off_sumo_s_console() {
+        let log = "Warning: something\nError: invalid document structure\n In file 'x.net.xml'\n \
+                   At line/column 2/1.\n\nQuitting (on error).\n";
+        assert_eq!(
+            sumo_errors(log).unwrap(),
+            "invalid document structure In file 'x.net.xml' At line/column 2/1."
+        );
+        assert_eq!(sumo_errors("Warning: only this\n"), None);
+    }
+}

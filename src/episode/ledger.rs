@@ -1,0 +1,282 @@
+//! The episode's ledger: who is where. Every vehicle SUMO inserted gets a line (its
+//! [`VehicleRecord`] and where it was last seen) the step it departs; collisions and arrivals
+//! close lines; every reading of a vehicle on the section updates one.
+//!
+//! It exists so that the accounting that `vehicles.csv`, `collisions.csv` and the summary are
+//! computed from lives in one place, apart from the stepping: the ledger never talks to SUMO,
+//! the runner hands it what SUMO said.
+
+use std::collections::HashMap;
+use std::sync::Arc;
+
+use crate::config::{Config, Scenario, TStarSpeed};
+use crate::episode::demand::PlannedVehicle;
+use crate::episode::metrics::{CollisionEvent, Outcome, VehicleRecord};
+use crate::model::kinematics::free_flow_time;
+use crate::model::road::Road;
+use crate::model::scene::{Kind, Origin};
+use crate::sumo::{frame, Collision, VehicleReadings};
+
+/// A vehicle's line in the ledger: its record, and where it was last seen on the section
+/// (for interpolating its arrival).
+pub struct Tracked {
+    pub id: Arc<str>,
+    pub record: VehicleRecord,
+    last_time: f64,
+    last_front: f64,
+    last_speed: f64,
+    /// It leaves by an off-ramp, outside the frame: it arrives when SUMO says so.
+    leaves: bool,
+}
+
+impl Tracked {
+    /// Who it is, for the translation of its readings into the road frame.
+    pub fn identity(&self) -> frame::Identity {
+        frame::Identity {
+            id: self.id.clone(),
+            kind: self.record.kind,
+            origin: self.record.origin,
+            desired_speed: self.record.desired_speed,
+        }
+    }
+}
+
+/// What the demand planned for a vehicle SUMO just inserted.
+pub struct Expected {
+    pub origin: Origin,
+    pub desired_speed: f64,
+    /// The insertion speed drawn (m/s).
+    pub speed: f64,
+    /// The scheduled departure time (s).
+    pub depart: f64,
+    /// The off-ramp it leaves by, if any.
+    pub exit: Option<usize>,
+}
+
+/// A vehicle SUMO just inserted, as SUMO describes it.
+pub struct Departure {
+    pub id: String,
+    pub sumo_type: String,
+    pub kind: Kind,
+    /// Route distance from its insertion position to the end of its route (m).
+    pub distance: f64,
+    pub expected: Expected,
+}
+
+/// The ledger at the end of an episode: what its summary and CSV files are computed from.
+pub struct Books {
+    pub scheduled: usize,
+    pub vehicles: Vec<VehicleRecord>,
+    pub collisions: Vec<CollisionEvent>,
+    /// Sum and count of the speeds of every reading on the section.
+    pub speed_sum: f64,
+    pub speed_samples: u64,
+}
+
+/// Who is where: the demand's plan, a line per inserted vehicle, the collisions.
+pub struct Ledger<'a> {
+    scenario: &'a Scenario,
+    t_star_speed: TStarSpeed,
+    section_end: f64,
+    planned: HashMap<&'a str, &'a PlannedVehicle>,
+    scheduled: usize,
+    tracked: Vec<Tracked>,
+    index: HashMap<Arc<str>, usize>,
+    collisions: Vec<CollisionEvent>,
+    /// Tracked index of each reading, valid for `slots_generation`.
+    slots: Vec<Option<usize>>,
+    slots_generation: u64,
+    speed_sum: f64,
+    speed_samples: u64,
+}
+
+impl<'a> Ledger<'a> {
+    pub fn new(config: &'a Config, road: &Road, planned: &'a [PlannedVehicle]) -> Self {
+        Ledger {
+            scenario: &config.scenario,
+            t_star_speed: config.metrics.t_star_speed,
+            section_end: road.section_end,
+            planned: planned.iter().map(|p| (p.id.as_str(), p)).collect(),
+            scheduled: planned.len(),
+            tracked: Vec::new(),
+            index: HashMap::new(),
+            collisions: Vec::new(),
+            slots: Vec::new(),
+            slots_generation: u64::MAX,
+            speed_sum: 0.0,
+            speed_samples: 0,
+        }
+    }
+
+    /// What the demand planned for `id`, departing at `now`; a vehicle it did not plan counts
+    /// as a main-road one wanting `v_max`, inserted standing, on time.
+    pub fn expected(&self, id: &str, now: f64) -> Expected {
+        let planned = self.planned.get(id).copied();
+        Expected {
+            origin: planned.map_or(Origin::Main, |p| p.origin),
+            desired_speed: planned.map_or(self.scenario.v_max, |p| p.desired_speed),
+            speed: planned.map_or(0.0, |p| p.depart_speed),
+            depart: planned.map_or(now, |p| p.depart),
+            exit: planned.and_then(|p| p.exit),
+        }
+    }
+
+    /// Opens the line of a vehicle that departed at `now`.
+    pub fn book_departure(&mut self, d: Departure, now: f64) {
+        let sc = self.scenario;
+        let e = d.expected;
+        let record = VehicleRecord {
+            id: d.id.clone(),
+            kind: d.kind,
+            sumo_type: d.sumo_type,
+            origin: e.origin,
+            scheduled_depart: e.depart,
+            scheduled_speed: e.speed,
+            // Lane and speed are filled in from the first reading, in this same step.
+            insert_lane: -1,
+            insert_time: now,
+            insert_speed: f64::NAN,
+            desired_speed: e.desired_speed,
+            distance: d.distance,
+            t_star: free_flow_time(d.distance, e.speed, sc.free_flow_accel, sc.v_max),
+            outcome: Outcome::Present,
+            arrival_time: None,
+            crash_time: None,
+            crashed_with: Vec::new(),
+            controllable_crash: false,
+        };
+        let key: Arc<str> = Arc::from(d.id.as_str());
+        self.index.insert(key.clone(), self.tracked.len());
+        self.tracked.push(Tracked {
+            id: key,
+            record,
+            last_time: now,
+            last_front: self.section_end - d.distance,
+            last_speed: e.speed,
+            leaves: e.exit.is_some(),
+        });
+    }
+
+    /// Books the collisions SUMO reported at `now`: each becomes an event, and each vehicle in
+    /// one is marked crashed, with whom.
+    pub fn book_collisions(&mut self, collisions: Vec<Collision>, now: f64) {
+        for c in collisions {
+            let kind_of = |id: &str, type_id: &str| {
+                Kind::from_type_id(type_id)
+                    .or_else(|| self.index.get(id).map(|&k| self.tracked[k].record.kind))
+            };
+            let event = CollisionEvent {
+                time: now,
+                collider_kind: kind_of(&c.collider, &c.collider_type),
+                victim_kind: kind_of(&c.victim, &c.victim_type),
+                collider: c.collider,
+                victim: c.victim,
+                lane: c.lane,
+                position: c.position,
+            };
+            let controllable = event.controllable();
+            for (me, other) in [
+                (&event.collider, &event.victim),
+                (&event.victim, &event.collider),
+            ] {
+                if let Some(&k) = self.index.get(me.as_str()) {
+                    let r = &mut self.tracked[k].record;
+                    r.outcome = Outcome::Crashed;
+                    r.crash_time.get_or_insert(now);
+                    r.crashed_with.push(other.clone());
+                    r.controllable_crash |= controllable;
+                }
+            }
+            self.collisions.push(event);
+        }
+    }
+
+    /// Books the vehicles SUMO reported arrived at `now`, at the time their front crossed the
+    /// section's end.
+    pub fn book_arrivals(&mut self, arrived: Vec<String>, now: f64) {
+        let end = self.section_end;
+        for id in arrived {
+            let Some(&k) = self.index.get(id.as_str()) else {
+                continue;
+            };
+            let t = &mut self.tracked[k];
+            if t.record.outcome != Outcome::Present {
+                continue; // SUMO 1.15 lists vehicles removed by a collision as arrived too
+            }
+            // The front crossed the end within the last step: interpolate at the last speed.
+            let remaining = (end - t.last_front).max(0.0);
+            let crossing = if t.leaves {
+                now
+            } else if t.last_speed > 0.1 {
+                (t.last_time + remaining / t.last_speed).min(now)
+            } else {
+                now
+            };
+            t.record.outcome = Outcome::Arrived;
+            t.record.arrival_time = Some(crossing.max(t.last_time));
+        }
+    }
+
+    /// Matches this step's readings to lines (again only when the set of vehicles changed).
+    pub fn match_readings(&mut self, readings: &VehicleReadings) {
+        if self.slots_generation != readings.generation {
+            self.slots.clear();
+            self.slots.extend(
+                readings
+                    .ids
+                    .iter()
+                    .map(|id| self.index.get(id.as_str()).copied()),
+            );
+            self.slots_generation = readings.generation;
+        }
+    }
+
+    /// The line of reading `i`, as [`Ledger::match_readings`] matched it; `None` for a vehicle
+    /// without one.
+    pub fn slot(&self, i: usize) -> Option<usize> {
+        self.slots.get(i).copied().flatten()
+    }
+
+    /// Line `k`.
+    pub fn tracked(&self, k: usize) -> &Tracked {
+        &self.tracked[k]
+    }
+
+    /// Notes a reading of line `k` on the section at `now`: front bumper at `front` on road
+    /// lane `lane`, at `speed`. The first one gives the insertion lane and speed.
+    pub fn note_reading(
+        &mut self,
+        k: usize,
+        now: f64,
+        (front, lane): (f64, i32),
+        speed: f64,
+    ) -> &Tracked {
+        let sc = self.scenario;
+        let t = &mut self.tracked[k];
+        if t.record.insert_lane < 0 {
+            t.record.insert_lane = lane;
+            t.record.insert_speed = speed;
+            if self.t_star_speed == TStarSpeed::Inserted {
+                let r = &mut t.record;
+                r.t_star = free_flow_time(r.distance, speed, sc.free_flow_accel, sc.v_max);
+            }
+        }
+        t.last_time = now;
+        t.last_front = front;
+        t.last_speed = speed;
+        self.speed_sum += speed;
+        self.speed_samples += 1;
+        t
+    }
+
+    /// The ledger closed: its records in order of departure, and the collisions.
+    pub fn close(self) -> Books {
+        Books {
+            scheduled: self.scheduled,
+            vehicles: self.tracked.into_iter().map(|t| t.record).collect(),
+            collisions: self.collisions,
+            speed_sum: self.speed_sum,
+            speed_samples: self.speed_samples,
+        }
+    }
+}

@@ -1,0 +1,35 @@
+//! The runner's window for onlookers: an [`Observer`] sees each step's scene, what the
+//! controller decided on it and which vehicles collided, without touching the runner.
+//!
+//! It exists so that recording data (the predictor's training set, `trace.jsonl`, benchmarks,
+//! the RL environment) is a caller's business: the lock-step loop stays one loop, and each
+//! recorder is written against this trait alone.
+
+use crate::controller::{Command, Controller};
+use crate::model::scene::Scene;
+
+/// Sees the scene of every step, before the controller plans: for recording data (e.g. the
+/// predictor's training set) without touching the runner.
+pub trait Observer {
+    fn observe(&mut self, scene: &Scene);
+
+    /// Sees what the controller decided in the step whose scene was just observed, and what it
+    /// believed (when tracing; see [`Controller::set_tracing`]).
+    fn planned(&mut self, _scene: &Scene, _commands: &[Command], _controller: &dyn Controller) {}
+
+    /// Hears of each vehicle removed in a collision, in the step it happened (before the
+    /// scene of that step is observed).
+    fn removed_in_collision(&mut self, _id: &str) {}
+
+    /// Whether [`Observer::planned`] needs the controller's beliefs (turns its tracing on).
+    fn wants_beliefs(&self) -> bool {
+        false
+    }
+}
+
+/// An observer that looks away.
+pub struct NoObserver;
+
+impl Observer for NoObserver {
+    fn observe(&mut self, _scene: &Scene) {}
+}
