@@ -118,66 +118,91 @@ fn attributes(pairs: &[(&str, &str)]) -> BTreeMap<String, String> {
 /// The built-in profile `name`, if there is one.
 pub fn built_in(name: &str) -> Option<HdvProfile> {
     let p = match name {
-        "sumo-safe" => HdvProfile {
-            description: "SUMO's IDM with [idm]'s parameters, LC2013, ramp HDVs merging only into \
-                          gaps SUMO judges safe (the default)"
-                .into(),
-            ..HdvProfile::default()
-        },
-        "paper" => HdvProfile {
-            description: "closest to the paper's simulator: ramp HDVs accept gaps by a \
-                          log-normal critical time gap (median 1.0 s) without SUMO's safety \
-                          check; assertive, impatient, little cooperative main-road lane changes"
-                .into(),
-            attributes: attributes(&[
-                ("lcAssertive", "3"),
-                ("lcCooperative", "0.2"),
-                ("lcSpeedGain", "2"),
-                ("lcImpatience", "0.8"),
-            ]),
-            ramp_merge: RampMergeStyle::GapAcceptance {
-                median_s: 1.0,
-                log_sd: 0.5,
-            },
-            ..HdvProfile::default()
-        },
-        "heterogeneous" => HdvProfile {
-            description: "IDM drivers of 20 types, each drawing T, s0, a and b uniformly from \
-                          the ranges Treiber and Kesting report for highway traffic"
-                .into(),
-            draws: [
-                ("tau", [0.8, 2.0]),
-                ("minGap", [1.0, 3.0]),
-                ("accel", [0.8, 2.5]),
-                ("decel", [1.0, 3.0]),
-            ]
-            .iter()
-            .map(|(k, r)| (k.to_string(), *r))
-            .collect(),
-            ..HdvProfile::default()
-        },
-        "krauss" => HdvProfile {
-            description: "SUMO's Krauss model with driver imperfection sigma = 0.5".into(),
-            car_following: CarFollowing::Krauss,
-            attributes: attributes(&[("sigma", "0.5")]),
-            ..HdvProfile::default()
-        },
-        "eidm" => HdvProfile {
-            description: "SUMO's Extended IDM with reaction time 0.5 s and estimation errors \
-                          of gap, speed and leader speed"
-                .into(),
-            car_following: CarFollowing::Eidm,
-            attributes: attributes(&[
-                ("treaction", "0.5"),
-                ("sigmagap", "0.1"),
-                ("sigmaerror", "0.1"),
-                ("sigmaleader", "0.1"),
-            ]),
-            ..HdvProfile::default()
-        },
+        "sumo-safe" => sumo_safe(),
+        "paper" => paper(),
+        "heterogeneous" => heterogeneous(),
+        "krauss" => krauss(),
+        "eidm" => eidm(),
         _ => return None,
     };
     Some(p)
+}
+
+/// `sumo-safe`, the default: SUMO's IDM and LC2013 as they are.
+fn sumo_safe() -> HdvProfile {
+    HdvProfile {
+        description: "SUMO's IDM with [idm]'s parameters, LC2013, ramp HDVs merging only into \
+                      gaps SUMO judges safe (the default)"
+            .into(),
+        ..HdvProfile::default()
+    }
+}
+
+/// `paper`: drivers as close to the paper's simulator as SUMO allows.
+fn paper() -> HdvProfile {
+    HdvProfile {
+        description: "closest to the paper's simulator: ramp HDVs accept gaps by a \
+                      log-normal critical time gap (median 1.0 s) without SUMO's safety \
+                      check; assertive, impatient, little cooperative main-road lane changes"
+            .into(),
+        attributes: attributes(&[
+            ("lcAssertive", "3"),
+            ("lcCooperative", "0.2"),
+            ("lcSpeedGain", "2"),
+            ("lcImpatience", "0.8"),
+        ]),
+        ramp_merge: RampMergeStyle::GapAcceptance {
+            median_s: 1.0,
+            log_sd: 0.5,
+        },
+        ..HdvProfile::default()
+    }
+}
+
+/// `heterogeneous`: IDM drivers of many types, each drawn from highway ranges.
+fn heterogeneous() -> HdvProfile {
+    HdvProfile {
+        description: "IDM drivers of 20 types, each drawing T, s0, a and b uniformly from \
+                      the ranges Treiber and Kesting report for highway traffic"
+            .into(),
+        draws: [
+            ("tau", [0.8, 2.0]),
+            ("minGap", [1.0, 3.0]),
+            ("accel", [0.8, 2.5]),
+            ("decel", [1.0, 3.0]),
+        ]
+        .iter()
+        .map(|(k, r)| (k.to_string(), *r))
+        .collect(),
+        ..HdvProfile::default()
+    }
+}
+
+/// `krauss`: SUMO's default car-following model with imperfect drivers.
+fn krauss() -> HdvProfile {
+    HdvProfile {
+        description: "SUMO's Krauss model with driver imperfection sigma = 0.5".into(),
+        car_following: CarFollowing::Krauss,
+        attributes: attributes(&[("sigma", "0.5")]),
+        ..HdvProfile::default()
+    }
+}
+
+/// `eidm`: the Extended IDM with reaction time and estimation errors.
+fn eidm() -> HdvProfile {
+    HdvProfile {
+        description: "SUMO's Extended IDM with reaction time 0.5 s and estimation errors \
+                      of gap, speed and leader speed"
+            .into(),
+        car_following: CarFollowing::Eidm,
+        attributes: attributes(&[
+            ("treaction", "0.5"),
+            ("sigmagap", "0.1"),
+            ("sigmaerror", "0.1"),
+            ("sigmaleader", "0.1"),
+        ]),
+        ..HdvProfile::default()
+    }
 }
 
 impl HdvSettings {

@@ -15,6 +15,7 @@
 //! the acceleration lane may slide (`planner.low_speed_lane_changes`): see the README, "Merge
 //! deadlock".
 
+use crate::config::Scenario;
 use crate::model::kinematics::{Bicycle, BicycleState, Input};
 use crate::model::math::{wrap_angle, Point};
 
@@ -118,7 +119,7 @@ impl Library {
             accel: 2.0,
             decel: 2.0,
             emergency_decel: 6.0,
-            lane_change_steps: (lane_change_duration / dt).round().max(1.0) as usize,
+            lane_change_steps: Scenario::lane_change_steps_of(lane_change_duration, dt),
             lane_width,
             min_lane_change_speed: 10.0,
             slides_below_min_speed: false,

@@ -29,7 +29,7 @@ use super::model_file::{LaneChangeModel, ModelError};
 use super::Predictor;
 use crate::config::{Config, PredictorKind};
 use crate::model::road::{Road, MERGE_LANE};
-use crate::model::scene::{Kind, Origin, Scene};
+use crate::model::scene::{Kind, Origin, Scene, VehicleState};
 use crate::model::trajectory::Trajectory;
 
 /// b_θ as a [`Predictor`].
@@ -88,7 +88,7 @@ impl Learned {
             conditioned,
             unconditioned,
             dt: s.dt,
-            lane_change_steps: (s.lane_change_duration / s.dt).round().max(1.0) as usize,
+            lane_change_steps: s.lane_change_steps(),
             decision_probability: config.predictor.decision_probability,
             hdv_brake: config.idm.max_decel,
             longitudinal: Longitudinal::ConstantSpeed,
@@ -135,7 +135,6 @@ impl Learned {
         record: bool,
     ) -> Rollout {
         let road = &scene.road;
-        let w = road.lane_width;
         let v = &scene.vehicles[i];
         let direction = lane_change_direction(v.lane, road.top_lane());
         let mut out = Rollout {
@@ -143,17 +142,10 @@ impl Learned {
             start: None,
             direction,
         };
-        let conditioned = !plans.is_empty();
-        let model = self.model(conditioned);
-        let ego0 = Agent::of(v, w);
+        let model = self.model(!plans.is_empty());
+        let ego0 = Agent::of(v, road.lane_width);
         self.collect_others(&mut buf.others, scene, i, plans);
-        // A vehicle that stays beyond the sensing range over the whole rollout is never a
-        // neighbour (a metre to spare over rounding): left out, each step scans only the few
-        // that can be, not every vehicle of a full corridor.
-        let span = self.dt * horizon as f64;
-        buf.others.retain(|(a, _)| {
-            (a.s - ego0.s).abs() <= SENSING_RANGE + 1.0 + (a.speed - v.speed).abs() * span
-        });
+        self.drop_never_neighbours(&mut buf.others, &ego0, v.speed, horizon);
         let mut obs = Observation {
             ego: ego_of(v, road),
             ..Observation::default()
@@ -162,21 +154,17 @@ impl Learned {
         let mut undecided = 1.0;
         for k in 0..horizon {
             let dk = v.speed * self.dt * k as f64;
-            let ego = Agent {
-                s: ego0.s + dk,
-                ..ego0
-            };
-            // On the single-lane ramp edge no lane change is possible; a main-road vehicle on
-            // lane 0 is on a deceleration lane, leaving, and does not come back.
-            let zone = road.zone_ahead(v.front() + dk);
-            let leaving = v.lane == MERGE_LANE && v.origin == Origin::Main;
-            if v.lane == MERGE_LANE && v.front() + dk < zone.start || leaving {
+            let Some(zone_end) = lane_change_zone_end(road, v, dk) else {
                 if record {
                     out.probabilities.push(0.0);
                 }
                 continue;
-            }
-            obs.ego.to_merge_end = (zone.end - v.front() - dk) as f32;
+            };
+            let ego = Agent {
+                s: ego0.s + dk,
+                ..ego0
+            };
+            obs.ego.to_merge_end = (zone_end - v.front() - dk) as f32;
             self.observe_at(buf, &mut obs, &ego, plans, k, road);
             let p = model.probability(&obs, &mut buf.ws);
             if record {
@@ -189,6 +177,23 @@ impl Learned {
             }
         }
         out
+    }
+
+    /// Leaves out of `others` every vehicle that stays beyond the sensing range of the HDV at
+    /// `ego0` driving at `speed` over the whole rollout of `horizon` steps (a metre to spare over
+    /// rounding): it is never a neighbour, so each step scans only the few that can be, not every
+    /// vehicle of a full corridor.
+    fn drop_never_neighbours(
+        &self,
+        others: &mut Vec<(Agent, bool)>,
+        ego0: &Agent,
+        speed: f64,
+        horizon: usize,
+    ) {
+        let span = self.dt * horizon as f64;
+        others.retain(|(a, _)| {
+            (a.s - ego0.s).abs() <= SENSING_RANGE + 1.0 + (a.speed - speed).abs() * span
+        });
     }
 
     /// Every scene vehicle but `i`, now, and whether a given plan replaces it: a scene vehicle
@@ -284,6 +289,62 @@ impl Learned {
             brake: (v.kind == Kind::Hdv).then_some(self.hdv_brake),
         }
     }
+
+    /// HDV `i`, caught mid-manoeuvre at lateral position `y0`: SUMO finishes the change at
+    /// constant lateral speed in the direction of its heading (without one: back to its lane's
+    /// centre), and nothing more is predicted.
+    fn finishing_manoeuvre(&self, scene: &Scene, i: usize, y0: f64, horizon: usize) -> Trajectory {
+        let v = &scene.vehicles[i];
+        let w = scene.road.lane_width;
+        let step = w / self.lane_change_steps as f64;
+        let dir = if v.heading.abs() > 1e-6 {
+            v.heading.signum()
+        } else {
+            -v.lateral.signum()
+        };
+        let target = if dir > 0.0 {
+            (y0 / w).ceil() * w
+        } else {
+            (y0 / w).floor() * w
+        };
+        self.trajectory(
+            scene,
+            i,
+            |k| {
+                let y = y0 + dir * step * k as f64;
+                if dir > 0.0 {
+                    y.min(target)
+                } else {
+                    y.max(target)
+                }
+            },
+            horizon,
+        )
+    }
+
+    /// HDV `i` at lateral position `y0` executing the rollout's decision `r`: from the step after
+    /// the predicted start, one lane in `r.direction` over the lane-change duration; without a
+    /// start, its lane kept.
+    fn executing_decision(
+        &self,
+        scene: &Scene,
+        i: usize,
+        y0: f64,
+        r: &Rollout,
+        horizon: usize,
+    ) -> Trajectory {
+        let w = scene.road.lane_width;
+        let lc = self.lane_change_steps as f64;
+        self.trajectory(
+            scene,
+            i,
+            |k| match r.start {
+                Some(m) if k > m => y0 + r.direction as f64 * w * ((k - m) as f64 / lc).min(1.0),
+                _ => y0,
+            },
+            horizon,
+        )
+    }
 }
 
 impl Predictor for Learned {
@@ -299,37 +360,12 @@ impl Predictor for Learned {
         horizon: usize,
     ) -> Trajectory {
         let v = &scene.vehicles[i];
-        let w = scene.road.lane_width;
-        let y0 = v.lane as f64 * w + v.lateral;
-        let step = w / self.lane_change_steps as f64;
+        let y0 = v.lane as f64 * scene.road.lane_width + v.lateral;
         if v.kind != Kind::Hdv {
             return self.trajectory(scene, i, |_| y0, horizon);
         }
         if v.lateral.abs() >= LATERAL_AT_REST {
-            // Mid-manoeuvre: SUMO finishes it at constant lateral speed.
-            let dir = if v.heading.abs() > 1e-6 {
-                v.heading.signum()
-            } else {
-                -v.lateral.signum()
-            };
-            let target = if dir > 0.0 {
-                (y0 / w).ceil() * w
-            } else {
-                (y0 / w).floor() * w
-            };
-            return self.trajectory(
-                scene,
-                i,
-                |k| {
-                    let y = y0 + dir * step * k as f64;
-                    if dir > 0.0 {
-                        y.min(target)
-                    } else {
-                        y.max(target)
-                    }
-                },
-                horizon,
-            );
+            return self.finishing_manoeuvre(scene, i, y0, horizon);
         }
         let r = BUFFERS.with(|b| {
             self.rollout_with(
@@ -341,16 +377,21 @@ impl Predictor for Learned {
                 false,
             )
         });
-        let lc = self.lane_change_steps as f64;
-        self.trajectory(
-            scene,
-            i,
-            |k| match r.start {
-                Some(m) if k > m => y0 + r.direction as f64 * w * ((k - m) as f64 / lc).min(1.0),
-                _ => y0,
-            },
-            horizon,
-        )
+        self.executing_decision(scene, i, y0, &r, horizon)
+    }
+}
+
+/// The end of the merge zone ahead of HDV `v` once it has driven `dk` further, or `None` where
+/// it cannot change lanes: on the single-lane ramp edge, before the zone, no lane change is
+/// possible, and a main-road vehicle on lane 0 is on a deceleration lane, leaving, and does not
+/// come back.
+fn lane_change_zone_end(road: &Road, v: &VehicleState, dk: f64) -> Option<f64> {
+    let zone = road.zone_ahead(v.front() + dk);
+    let leaving = v.lane == MERGE_LANE && v.origin == Origin::Main;
+    if v.lane == MERGE_LANE && v.front() + dk < zone.start || leaving {
+        None
+    } else {
+        Some(zone.end)
     }
 }
 

@@ -1,0 +1,50 @@
+//! How SUMO runs an episode and what an episode writes besides its results.
+//!
+//! Apart from the scenario because it says how the simulator is run rather than what it
+//! simulates: the same scenario runs in-process or in sumo-gui, with or without trajectories
+//! written.
+
+use std::path::PathBuf;
+
+use serde::{Deserialize, Serialize};
+
+/// How SUMO is run.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct SumoSettings {
+    /// Let SUMO print its warnings and step log.
+    pub verbose: bool,
+    /// Additional SUMO files (detectors, extra vehicles, …) loaded with the vehicle types.
+    pub additional_files: Vec<PathBuf>,
+    /// Extra SUMO command-line options, appended last.
+    pub extra_args: Vec<String>,
+    /// Run the episode in SUMO's own sumo-gui (through libtraci) instead of in-process
+    /// libsumo; the results are the same. Needs a display.
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub gui: bool,
+    /// Pause of sumo-gui per step (ms); default: real time (one step length).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub gui_delay_ms: Option<f64>,
+}
+
+/// Optional outputs of an episode. A campaign does not record them in its settings: they do
+/// not change results, so runs with and without them may share a directory.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct OutputSettings {
+    /// One row per vehicle and step (README: "Trajectories").
+    pub trajectories: TrajectoryFormat,
+}
+
+/// Whether and how an episode writes its trajectories.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum TrajectoryFormat {
+    /// None written.
+    #[default]
+    None,
+    /// `trajectories.csv`: SUMO's and the road frame's view, and the maneuvers sent.
+    Csv,
+    /// `trajectories.fcd.xml`: SUMO's floating-car-data format.
+    Fcd,
+}
