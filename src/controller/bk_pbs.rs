@@ -2,173 +2,98 @@
 //! executes the first primitive of its plan. A CAV the chosen node leaves without a plan (no
 //! plan even alone), or still in conflict after a fallback, is repaired: planned alone against
 //! every other trajectory of that node, and if that fails too, it brakes at the emergency
-//! deceleration. Every CAV always gets a maneuver.
+//! deceleration. Every CAV always gets a maneuver. What it shares with `bk-mastar` lives in
+//! [`crate::controller::search_planner`].
 
 use std::sync::Arc;
 
 use rayon::prelude::*;
 
-use super::shield::{self, Bounds};
-use super::{execute, CavBelief, CavHandling, Command, Controller, PlanStats, Source};
 use crate::config::Config;
+use crate::controller::search_planner::{all_but, Round, RoundPlanner, SearchCore, SearchPlanner};
+use crate::controller::{Command, PlanStats, Source};
 use crate::model::road::Road;
 use crate::model::scene::{Kind, Scene};
-use crate::model::trajectory::Trajectory;
-use crate::planner::lane_changes::{LaneChanges, SceneRequests};
-use crate::planner::mastar::{Mastar, NoPlan, Plan, StartGuard};
+use crate::planner::lane_changes::SceneRequests;
+use crate::planner::mastar::{NoPlan, Plan};
 use crate::planner::pbs::{Budget, PbsStats, Problem, RequestFor, Solution};
 use crate::predict::Predictor;
 
 /// Centralised priority-based planner.
-pub struct BkPbs {
-    config: Config,
-    predictor: Box<dyn Predictor>,
-    planner: Mastar,
-    lane_changes: LaneChanges,
-    commitments: Commitments,
-    /// The shield's check of lane-change starts, when the shield is on.
-    guard: Option<Bounds>,
-    stats: PlanStats,
-    tracing: bool,
-    beliefs: Vec<CavBelief>,
-}
+pub type BkPbs = SearchPlanner<Joint>;
 
 impl BkPbs {
     /// With `predictor` for HDVs (conditioned on higher-priority CAVs when it can be), on `road`.
     pub fn new(config: &Config, predictor: Box<dyn Predictor>, road: &Road) -> Self {
-        BkPbs {
-            config: config.clone(),
-            predictor,
-            planner: Mastar::from_config(config, road.clone()),
-            lane_changes: LaneChanges::default(),
-            guard: shield::start_guard(config),
+        let rounds = Joint {
             commitments: Commitments::default(),
-            stats: PlanStats::default(),
-            tracing: false,
-            beliefs: Vec::new(),
-        }
+        };
+        SearchPlanner::with_rounds(config, predictor, road, rounds)
     }
 }
 
-impl Controller for BkPbs {
-    fn name(&self) -> &'static str {
-        "bk-pbs"
-    }
+/// BK-PBS's round: every CAV planned jointly, the commitments of earlier rounds kept.
+pub struct Joint {
+    commitments: Commitments,
+}
 
-    fn handling(&self) -> CavHandling {
-        CavHandling::Commanded
-    }
+impl RoundPlanner for Joint {
+    const NAME: &'static str = "bk-pbs";
 
-    fn plan(&mut self, scene: &Scene, out: &mut Vec<Command>) {
-        let sc = &self.config.scenario;
-        let (dt, lc_steps) = (sc.dt, sc.lane_change_steps());
-        let decel = self.config.planner.emergency_decel;
-        let now = scene.time;
-        self.lane_changes.forget_finished(now);
-        let guard = self.guard.as_ref().map(|g| g as &dyn StartGuard);
-        let requests = SceneRequests::new(scene, &self.lane_changes, dt, guard);
-        let committed = self.commitments.in_scene(scene, now);
-        let problem = self.problem(scene, &requests, &committed);
+    fn plan_round(
+        &mut self,
+        core: &SearchCore,
+        scene: &Scene,
+        round: &mut Round,
+        out: &mut Vec<Command>,
+    ) {
+        let requests = SceneRequests::new(scene, &core.lane_changes, core.dt(), core.guard());
+        let committed = self.commitments.in_scene(scene, scene.time);
+        let problem = problem(core, scene, &requests, &committed);
         let solution = problem.solve();
-        let mut stats = search_stats(&solution.stats);
-        let mut starts = Vec::new();
-        let mut beliefs = Vec::new();
-        // After a fallback, the CAVs still in conflict are repaired.
-        let conflicted = solution
-            .stats
-            .fallback
-            .then(|| problem.conflicted_agents(&solution.trajectories));
-        // Repairs are independent of each other (each against the node's trajectories): in
-        // parallel, then used in order.
-        let executed: Vec<Option<Executed>> = (0..scene.vehicles.len())
-            .into_par_iter()
-            .map(|i| {
-                let in_conflict = conflicted.as_ref().is_some_and(|c| c[i]);
-                (scene.vehicles[i].kind == Kind::Cav)
-                    .then(|| executed_plan(&problem, &solution, &requests, i, in_conflict))
-            })
-            .collect();
-        for ((i, v), executed) in scene.vehicles.iter().enumerate().zip(executed) {
+        round.stats += search_stats(&solution.stats);
+        let executed = executed_plans(&problem, &solution, &requests);
+        for (i, executed) in executed.into_iter().enumerate() {
+            let Some(executed) = executed else { continue };
             let (plan, planned_by) = match executed {
-                None => continue,
-                Some(Executed::Node(plan, source)) => (Some(plan), source),
-                Some(Executed::Repair(result)) => {
-                    execute::count_search(&mut stats, result.as_ref().map(|p| p.as_ref()));
+                Executed::Node(plan, source) => (Some(plan), source),
+                Executed::Repair(result) => {
+                    round.count_search(result.as_ref().map(|p| p.as_ref()));
                     (result.ok(), Source::Repair)
                 }
             };
-            let lane = self.lane_changes.planning_lane(scene, i, dt);
-            let changing = self.lane_changes.ongoing(&v.id, now, dt).is_some();
-            let source = execute::source_of(planned_by, plan.is_some(), changing);
-            if self.tracing {
-                let others = solution.trajectories.iter().map(|t| &**t).enumerate();
-                let planned = plan.as_ref().map(|p| &p.trajectory);
-                beliefs.push(execute::belief(scene, i, planned, others));
-            }
-            let (maneuver, target) =
-                execute::maneuver_for(plan.as_deref(), v, lane, decel, dt, &mut stats);
-            if let Some(target) = target {
-                starts.push((i, v.id.clone(), target));
-            }
-            out.push(Command {
-                vehicle: i,
-                maneuver,
-                source,
-            });
+            let others = solution.trajectories.iter().map(|t| &**t).enumerate();
+            out.push(round.command(core, scene, i, plan.as_deref(), planned_by, others));
         }
-        self.beliefs = beliefs;
-        let lc_duration = lc_steps as f64 * dt;
+        let until = round.starts_end(core, scene);
         self.commitments
-            .record(scene, &solution.edges, &starts, now + lc_duration);
-        // Recorded after the loop: `requests` reads the changes under way while CAVs are planned.
-        for (_, id, target) in starts {
-            self.lane_changes.start(&id, now, lc_duration, target);
-        }
-        self.stats = stats;
-    }
-
-    fn last_stats(&self) -> PlanStats {
-        self.stats
-    }
-
-    fn set_tracing(&mut self, on: bool) {
-        self.tracing = on;
-    }
-
-    fn beliefs(&self) -> Vec<CavBelief> {
-        self.beliefs.clone()
-    }
-
-    fn lane_change_cancelled(&mut self, id: &str) {
-        self.lane_changes.cancel(id);
+            .record(scene, &solution.edges, &round.starts, until);
     }
 }
 
-impl BkPbs {
-    /// This step's BK-PBS problem: every CAV of `scene`, planned with M-A* and judged by the
-    /// same safety rule M-A* plans with.
-    fn problem<'a>(
-        &'a self,
-        scene: &'a Scene,
-        requests: &'a SceneRequests<'a>,
-        committed: &'a [(usize, usize)],
-    ) -> Problem<'a> {
-        let pbs = &self.config.pbs;
-        Problem {
-            scene,
-            planner: &self.planner,
-            predictor: self.predictor.as_ref(),
-            requests,
-            committed,
-            rule: &self.planner.rule,
-            horizon: self.config.planner.horizon + self.config.scenario.lane_change_steps(),
-            dt: self.config.scenario.dt,
-            budget: Budget {
-                nodes: pbs.node_budget,
-                time_ms: (pbs.time_budget_ms > 0.0).then_some(pbs.time_budget_ms),
-            },
-            independent_groups: pbs.independent_groups.applies(scene.vehicles.len()),
-        }
+/// This step's BK-PBS problem: every CAV of `scene`, planned with M-A* and judged by the same
+/// safety rule M-A* plans with, over the check horizon.
+fn problem<'a>(
+    core: &'a SearchCore,
+    scene: &'a Scene,
+    requests: &'a SceneRequests<'a>,
+    committed: &'a [(usize, usize)],
+) -> Problem<'a> {
+    let pbs = &core.config.pbs;
+    Problem {
+        scene,
+        planner: &core.planner,
+        predictor: core.predictor.as_ref(),
+        requests,
+        committed,
+        rule: &core.planner.rule,
+        horizon: core.horizon(),
+        dt: core.dt(),
+        budget: Budget {
+            nodes: pbs.node_budget,
+            time_ms: (pbs.time_budget_ms > 0.0).then_some(pbs.time_budget_ms),
+        },
+        independent_groups: pbs.independent_groups.applies(scene.vehicles.len()),
     }
 }
 
@@ -193,6 +118,29 @@ enum Executed {
     Repair(Result<Arc<Plan>, NoPlan>),
 }
 
+/// What each agent executes (`None` for HDVs). After a fallback, the CAVs still in conflict
+/// are repaired; repairs are independent of each other (each against the node's trajectories):
+/// made in parallel, then used in order.
+fn executed_plans(
+    problem: &Problem<'_>,
+    solution: &Solution,
+    requests: &SceneRequests<'_>,
+) -> Vec<Option<Executed>> {
+    let scene = problem.scene;
+    let conflicted = solution
+        .stats
+        .fallback
+        .then(|| problem.conflicted_agents(&solution.trajectories));
+    (0..scene.vehicles.len())
+        .into_par_iter()
+        .map(|i| {
+            let in_conflict = conflicted.as_ref().is_some_and(|c| c[i]);
+            (scene.vehicles[i].kind == Kind::Cav)
+                .then(|| executed_plan(problem, solution, requests, i, in_conflict))
+        })
+        .collect()
+}
+
 /// What CAV `i` executes: the chosen node's plan, or a repair when the node left it without
 /// one or, after a fallback, `in_conflict`: planned alone against every other trajectory of
 /// the node.
@@ -211,13 +159,7 @@ fn executed_plan(
         };
         return Executed::Node(plan.clone(), source);
     }
-    let others: Vec<&Trajectory> = solution
-        .trajectories
-        .iter()
-        .enumerate()
-        .filter(|(j, _)| *j != i)
-        .map(|(_, t)| &**t)
-        .collect();
+    let others = all_but(solution.trajectories.iter().map(|t| &**t), i);
     Executed::Repair(requests.plan(problem.planner, i, &others).map(Arc::new))
 }
 
@@ -279,7 +221,7 @@ impl Commitments {
 mod tests {
 
     use super::*;
-    use crate::model::road::Road;
+    use crate::controller::Controller;
     use crate::model::scene::{Origin, VehicleState};
     use crate::predict::ConstantSpeed;
 

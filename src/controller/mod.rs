@@ -11,6 +11,7 @@ pub mod idm;
 pub mod idm_mobil;
 pub mod mobil;
 pub mod rl_ppo;
+pub mod search_planner;
 pub mod shield;
 pub mod sumo_native;
 

@@ -212,7 +212,7 @@ impl Mastar {
     }
 
     /// Steps a plan is checked against obstacles up to: T plus a lane change.
-    fn check_horizon(&self) -> usize {
+    pub fn check_horizon(&self) -> usize {
         self.settings.horizon + self.library.lane_change_steps
     }
 

@@ -20,9 +20,11 @@ use rayon::prelude::*;
 
 use std::sync::Arc;
 
-use super::track::Track;
-use super::{Conflict, PbsStats, Problem, Solution, State};
 use crate::planner::mastar::Plan;
+use crate::planner::pbs::conflicts::Conflict;
+use crate::planner::pbs::track::Track;
+use crate::planner::pbs::tree::State;
+use crate::planner::pbs::{PbsStats, Problem, Solution};
 
 /// Disjoint sets of agents (union–find), each named by its lowest member.
 struct Sets {
