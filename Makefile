@@ -3,7 +3,7 @@ SHELL := /bin/bash
 CARGO ?= cargo
 DEMO_OUT ?= out/demo
 
-.PHONY: deps demo test build net pytest
+.PHONY: deps demo test build net pytest docs
 
 deps:
 	@bash scripts/ensure-deps.sh
@@ -43,3 +43,11 @@ pytest: deps
 # sources; an unchanged network keeps its file (see sumo_net/README.md).
 net: deps
 	bash sumo_net/build_net.sh
+
+# The user guide (docs/, an mdBook) rendered into docs/book/, mdbook installed first if missing;
+# then the API documentation, with rustdoc's warnings as errors.
+MDBOOK ?= $(shell command -v mdbook 2>/dev/null || echo $(or $(CARGO_HOME),$(HOME)/.cargo)/bin/mdbook)
+docs:
+	@if ! [ -x "$(MDBOOK)" ]; then $(CARGO) install mdbook --locked; fi
+	$(MDBOOK) build docs
+	RUSTDOCFLAGS="-D warnings" $(CARGO) doc --no-deps
