@@ -273,3 +273,51 @@ impl Painter for LaneFigure<'_> {
         Ok(())
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::report::lane_tracks::{Mark, Stretch};
+    use crate::report::plot::tests::assert_valid_and_deterministic;
+
+    /// Two lanes: a CAV that changes from lane 0 to lane 1 and collides, an HDV on lane 1.
+    fn tracks() -> LaneTracks {
+        let stretch = |id: &str, cav, points: &[(f64, f64, f64)]| Stretch {
+            id: id.into(),
+            cav,
+            points: points.to_vec(),
+        };
+        let mut t = LaneTracks {
+            dt: 1.0,
+            ..Default::default()
+        };
+        t.lanes.insert(
+            0,
+            vec![stretch("c", true, &[(0.0, 0.0, 20.0), (1.0, 20.0, 21.0)])],
+        );
+        t.lanes.insert(
+            1,
+            vec![
+                stretch("c", true, &[(2.0, 41.0, 22.0), (3.0, 60.0, 18.0)]),
+                stretch("h", false, &[(0.0, 30.0, 10.0), (3.0, 61.0, 11.0)]),
+            ],
+        );
+        let mark = |lane, t, s| Mark { lane, t, s };
+        t.lane_changes = vec![mark(0, 2.0, 41.0), mark(1, 2.0, 41.0)];
+        t.collisions = vec![mark(1, 3.0, 60.0)];
+        t
+    }
+
+    #[test]
+    fn both_views_render_valid_and_deterministic() {
+        let tracks = tracks();
+        for view in [View::TimeSpace, View::SpeedField] {
+            let figure = LaneFigure {
+                tracks: &tracks,
+                view,
+                title: "bk-pbs, α = 0.5".into(),
+            };
+            assert_valid_and_deterministic(|| figure.render());
+        }
+    }
+}

@@ -16,7 +16,7 @@ pub mod heatmap;
 pub mod lines;
 pub mod scatter;
 #[cfg(test)]
-mod tests;
+pub(in crate::report) mod tests;
 
 use plotters::coord::types::RangedCoordf64;
 use plotters::coord::Shift;

@@ -1,4 +1,5 @@
-//! Smoke tests of every figure: each renders from small hand-built data into a valid PNG and
+//! Smoke tests of every figure of this module (the lane figures' are in
+//! [`crate::report::timespace`], with the same check): each renders from small hand-built data into a valid PNG and
 //! SVG, and rendering twice gives the same bytes (figures are compared byte for byte across
 //! runs, so nothing may depend on time, addresses or hash order).
 
@@ -8,7 +9,9 @@ const PNG_SIGNATURE: [u8; 8] = [0x89, b'P', b'N', b'G', b'\r', b'\n', 0x1a, b'\n
 
 /// Renders twice with `render`, checks both files are well formed, and the second run
 /// repeats the first byte for byte.
-fn assert_valid_and_deterministic(render: impl Fn() -> Result<Figure, PlotError>) {
+pub(in crate::report) fn assert_valid_and_deterministic(
+    render: impl Fn() -> Result<Figure, PlotError>,
+) {
     let first = render().expect("renders");
     assert!(first.png.len() > PNG_SIGNATURE.len());
     assert_eq!(first.png[..8], PNG_SIGNATURE, "PNG signature");
