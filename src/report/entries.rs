@@ -2,7 +2,7 @@
 //! `ramp1.N`, `ramp2.N`, … on a network of several ramps), per planner, pooled over the whole
 //! grid, from a campaign's `vehicles.csv`.
 
-use crate::campaign::results::Results;
+use crate::campaign::results::{Results, Row};
 
 /// One (planner, entry) of the table.
 #[derive(Debug, Clone, PartialEq)]
@@ -25,77 +25,96 @@ pub fn rows(res: &Results) -> Vec<EntryRow> {
     else {
         return Vec::new();
     };
-    // Planners labelled as in the other tables: with their HDV profile when there are several.
-    let several = t
+    let several_profiles = t
         .rows
         .iter()
         .any(|r| r.cell.hdv_profile != t.rows[0].cell.hdv_profile);
-    let label = |r: &crate::campaign::results::Row| match several {
+    let mut tallies: Vec<Tally> = Vec::new();
+    for r in &t.rows {
+        let field = |k: usize| r.fields.get(k).unwrap_or("");
+        let planner = planner_label(r, several_profiles);
+        Tally::find_or_add(&mut tallies, planner, entry_of(field(id)))
+            .count(field(outcome), field(delay));
+    }
+    let mut rows: Vec<EntryRow> = tallies.into_iter().map(Tally::finish).collect();
+    sort_in_grid_order(&mut rows, &res.planners);
+    rows
+}
+
+/// The entry a vehicle id names: the part before the first dot (`ramp1.7` is `ramp1`).
+fn entry_of(id: &str) -> &str {
+    id.split('.').next().unwrap_or("")
+}
+
+/// The planner labelled as in the other tables: with its HDV profile when there are several.
+fn planner_label(r: &Row, several_profiles: bool) -> String {
+    match several_profiles {
         true => format!("{} ({})", r.cell.planner, r.cell.hdv_profile),
         false => r.cell.planner.clone(),
-    };
-    let mut out: Vec<(EntryRow, f64)> = Vec::new();
-    for r in &t.rows {
-        let entry = r
-            .fields
-            .get(id)
-            .unwrap_or("")
-            .split('.')
-            .next()
-            .unwrap_or("");
-        let planner = label(r);
-        let at = match out
+    }
+}
+
+/// A row being counted, with the sum of its arrived vehicles' delays.
+struct Tally {
+    row: EntryRow,
+    delay_sum: f64,
+}
+
+impl Tally {
+    /// The tally of (`planner`, `entry`), appended empty if it is the first of its vehicles.
+    fn find_or_add<'t>(tallies: &'t mut Vec<Tally>, planner: String, entry: &str) -> &'t mut Tally {
+        let at = tallies
             .iter()
-            .position(|(e, _)| e.planner == planner && e.entry == entry)
-        {
-            Some(k) => k,
-            None => {
-                out.push((
-                    EntryRow {
-                        planner,
-                        entry: entry.to_string(),
-                        inserted: 0,
-                        arrived: 0,
-                        mean_delay: None,
-                        crashed: 0,
-                    },
-                    0.0,
-                ));
-                out.len() - 1
-            }
-        };
-        let (row, sum) = &mut out[at];
-        let result = r.fields.get(outcome).unwrap_or("");
-        row.inserted += usize::from(result != "undeparted");
-        row.crashed += usize::from(result == "crashed");
-        if let (true, Ok(d)) = (
-            result == "arrived",
-            r.fields.get(delay).unwrap_or("").parse::<f64>(),
-        ) {
-            row.arrived += 1;
-            *sum += d;
+            .position(|t| t.row.planner == planner && t.row.entry == entry);
+        let at = at.unwrap_or_else(|| {
+            tallies.push(Tally {
+                row: EntryRow {
+                    planner,
+                    entry: entry.to_string(),
+                    inserted: 0,
+                    arrived: 0,
+                    mean_delay: None,
+                    crashed: 0,
+                },
+                delay_sum: 0.0,
+            });
+            tallies.len() - 1
+        });
+        &mut tallies[at]
+    }
+
+    /// Counts one vehicle by its `outcome` and `delay_s` fields.
+    fn count(&mut self, outcome: &str, delay: &str) {
+        self.row.inserted += usize::from(outcome != "undeparted");
+        self.row.crashed += usize::from(outcome == "crashed");
+        if let (true, Ok(d)) = (outcome == "arrived", delay.parse::<f64>()) {
+            self.row.arrived += 1;
+            self.delay_sum += d;
         }
     }
-    // Grid order of the planners (then profiles, as they appeared), `main` before the ramps.
+
+    /// The row, its mean delay over the vehicles that arrived.
+    fn finish(self) -> EntryRow {
+        let Tally { mut row, delay_sum } = self;
+        row.mean_delay = (row.arrived > 0).then(|| delay_sum / row.arrived as f64);
+        row
+    }
+}
+
+/// Grid order of the planners (then profiles, as they appeared), `main` before the ramps, the
+/// ramps in natural order (`ramp2` before `ramp10`).
+fn sort_in_grid_order(rows: &mut [EntryRow], planners: &[String]) {
     let order = |p: &str| {
         let name = p.split(" (").next().unwrap_or(p);
-        res.planners
+        planners
             .iter()
             .position(|q| q == name)
             .unwrap_or(usize::MAX)
     };
-    let mut rows: Vec<EntryRow> = out
-        .into_iter()
-        .map(|(mut e, sum)| {
-            e.mean_delay = (e.arrived > 0).then(|| sum / e.arrived as f64);
-            e
-        })
-        .collect();
     rows.sort_by_key(|e| {
         let natural = (e.entry.len(), e.entry.clone());
         (order(&e.planner), e.entry != "main", natural)
     });
-    rows
 }
 
 /// The rows as `delay_by_entry.csv`.

@@ -184,6 +184,18 @@ fn md_header(first: &str, alphas: &[f64]) -> String {
 /// The Markdown report: explanation, delay tables per λ (lowest mean per column in bold),
 /// collision-rate grids per planner.
 pub fn markdown(s: &Summary) -> String {
+    let mut md = md_intro(s);
+    for &l in &s.lambdas {
+        md += &md_delay_section(s, l);
+    }
+    for p in &s.planners {
+        md += &md_collision_section(s, p);
+    }
+    md
+}
+
+/// The title and what the grid holds and how its entries read.
+fn md_intro(s: &Summary) -> String {
     let mut md = String::from("# Campaign report\n\n");
     md += &format!(
         "{} planners × {} α × {} λ, {} seeds per cell ({} episodes). Each entry: mean over \
@@ -196,56 +208,60 @@ pub fn markdown(s: &Summary) -> String {
         s.seeds,
         s.groups.iter().map(|g| g.episodes).sum::<usize>(),
     );
-    for &l in &s.lambdas {
-        md += &format!(
-            "## Mean travel delay (s), λ = {} veh/h\n\n",
-            lambda_label(l)
-        );
-        md += "Per episode the mean delay of the vehicles that arrived without collision, then \
-               the mean over seeds. Bold: lowest mean in the column.\n\n";
-        md += &md_header("planner", &s.alphas);
-        // Lowest mean per column, compared as printed so that ties are all bold.
-        let best: Vec<Option<String>> = s
-            .alphas
-            .iter()
-            .map(|&a| {
-                s.planners
-                    .iter()
-                    .filter_map(|p| delay_of(s.get(p, a, l)).map(|e| e.mean))
-                    .min_by(f64::total_cmp)
-                    .map(|m| format!("{m:.2}"))
-            })
-            .collect();
-        for p in &s.planners {
-            md += &format!("| {p} |");
-            for (i, &a) in s.alphas.iter().enumerate() {
-                let e = delay_of(s.get(p, a, l));
-                let cell = md_cell(e, 2, 1.0, s.seeds);
-                let bold = e.is_some_and(|e| Some(format!("{:.2}", e.mean)) == best[i]);
-                md += &if bold {
-                    format!(" **{cell}** |")
-                } else {
-                    format!(" {cell} |")
-                };
-            }
-            md += "\n";
-        }
-        md += "\n";
-    }
-    for p in &s.planners {
-        md += &format!("## Controllable collision rate (%), {p}\n\n");
-        md += "Vehicles removed in collisions involving a CAV, per vehicle inserted.\n\n";
-        md += &md_header("λ (veh/h)", &s.alphas);
-        for &l in &s.lambdas {
-            md += &format!("| {} |", lambda_label(l));
-            for &a in &s.alphas {
-                md += &format!(" {} |", md_cell(rate_of(s.get(p, a, l)), 2, 100.0, s.seeds));
-            }
-            md += "\n";
-        }
-        md += "\n";
-    }
     md
+}
+
+/// The mean delay at λ `l`: rows planners, columns α, the lowest mean per column in bold.
+fn md_delay_section(s: &Summary, l: f64) -> String {
+    let mut md = format!(
+        "## Mean travel delay (s), λ = {} veh/h\n\n",
+        lambda_label(l)
+    );
+    md += "Per episode the mean delay of the vehicles that arrived without collision, then \
+           the mean over seeds. Bold: lowest mean in the column.\n\n";
+    md += &md_header("planner", &s.alphas);
+    // Lowest mean per column, compared as printed so that ties are all bold.
+    let best: Vec<Option<String>> = s
+        .alphas
+        .iter()
+        .map(|&a| {
+            s.planners
+                .iter()
+                .filter_map(|p| delay_of(s.get(p, a, l)).map(|e| e.mean))
+                .min_by(f64::total_cmp)
+                .map(|m| format!("{m:.2}"))
+        })
+        .collect();
+    for p in &s.planners {
+        md += &format!("| {p} |");
+        for (i, &a) in s.alphas.iter().enumerate() {
+            let e = delay_of(s.get(p, a, l));
+            let cell = md_cell(e, 2, 1.0, s.seeds);
+            let bold = e.is_some_and(|e| Some(format!("{:.2}", e.mean)) == best[i]);
+            md += &if bold {
+                format!(" **{cell}** |")
+            } else {
+                format!(" {cell} |")
+            };
+        }
+        md += "\n";
+    }
+    md + "\n"
+}
+
+/// The controllable collision rate of planner `p` in percent: rows λ, columns α.
+fn md_collision_section(s: &Summary, p: &str) -> String {
+    let mut md = format!("## Controllable collision rate (%), {p}\n\n");
+    md += "Vehicles removed in collisions involving a CAV, per vehicle inserted.\n\n";
+    md += &md_header("λ (veh/h)", &s.alphas);
+    for &l in &s.lambdas {
+        md += &format!("| {} |", lambda_label(l));
+        for &a in &s.alphas {
+            md += &format!(" {} |", md_cell(rate_of(s.get(p, a, l)), 2, 100.0, s.seeds));
+        }
+        md += "\n";
+    }
+    md + "\n"
 }
 
 /// A planner label as a file-name part: `bk-pbs (paper)` becomes `bk-pbs_paper`.

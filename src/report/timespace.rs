@@ -3,13 +3,14 @@
 //! thin, lane changes and collisions marked) and the speed field (mean speed over s and t per
 //! lane).
 
-use plotters::coord::types::RangedCoordf64;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 use super::lane_tracks::LaneTracks;
-use super::plot::{drawing_failed, render, viridis, ColourBar, Figure, Painter, PlotError, FONT};
+use super::plot::{
+    drawing_failed, render, viridis, Chart, ColourBar, Figure, Painter, PlotError, FONT,
+};
 
 const PANEL_W: u32 = 1000;
 const PANEL_H: u32 = 280;
@@ -17,9 +18,6 @@ const SIDE_W: u32 = 220;
 /// Bin sizes of the speed field.
 const FIELD_DT_S: f64 = 4.0;
 const FIELD_DS_M: f64 = 25.0;
-
-/// A lane panel's chart: t and s in metres and seconds.
-type Chart<'a, DB> = ChartContext<'a, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>;
 
 /// Which of the two figures.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -100,22 +98,25 @@ impl LaneFigure<'_> {
             .bold_line_style(RGBColor(225, 225, 225))
             .draw()
             .map_err(drawing_failed)?;
+        let vmax = self.speed_max();
         match self.view {
-            View::TimeSpace => self.draw_lines(&mut chart, lane),
-            View::SpeedField => self.draw_field(&mut chart, lane),
+            View::TimeSpace => self.draw_lines(&mut chart, lane, vmax)?,
+            View::SpeedField => self.draw_field(&mut chart, lane, vmax)?,
         }
+        self.draw_marks(&mut chart, lane)
     }
 
-    /// One coloured segment per pair of consecutive samples; HDVs first, so CAVs stay on top.
+    /// One segment per pair of consecutive samples, coloured by speed on 0..`vmax`; HDVs first,
+    /// so CAVs stay on top.
     fn draw_lines<DB: DrawingBackend>(
         &self,
         chart: &mut Chart<'_, DB>,
         lane: i32,
+        vmax: f64,
     ) -> Result<(), String>
     where
         DB::ErrorType: 'static,
     {
-        let vmax = self.speed_max();
         let stretches = self.tracks.lanes.get(&lane).map_or(&[][..], |v| &v[..]);
         for cav in [false, true] {
             let width = if cav { 4 } else { 1 };
@@ -130,7 +131,7 @@ impl LaneFigure<'_> {
             });
             chart.draw_series(segments).map_err(drawing_failed)?;
         }
-        self.draw_marks(chart, lane)
+        Ok(())
     }
 
     /// Lane changes (black triangles) and collisions (red crosses).
@@ -164,16 +165,17 @@ impl LaneFigure<'_> {
         Ok(())
     }
 
-    /// Mean speed per bin of [`FIELD_DT_S`] × [`FIELD_DS_M`]; empty bins stay white.
+    /// Mean speed per bin of [`FIELD_DT_S`] × [`FIELD_DS_M`], coloured on 0..`vmax`; empty bins
+    /// stay white.
     fn draw_field<DB: DrawingBackend>(
         &self,
         chart: &mut Chart<'_, DB>,
         lane: i32,
+        vmax: f64,
     ) -> Result<(), String>
     where
         DB::ErrorType: 'static,
     {
-        let vmax = self.speed_max();
         let mut bins: std::collections::BTreeMap<(i64, i64), (f64, u32)> = Default::default();
         for st in self.tracks.lanes.get(&lane).into_iter().flatten() {
             for &(t, s, v) in &st.points {
@@ -193,7 +195,7 @@ impl LaneFigure<'_> {
             )
         });
         chart.draw_series(cells).map_err(drawing_failed)?;
-        self.draw_marks(chart, lane)
+        Ok(())
     }
 }
 
@@ -269,5 +271,53 @@ impl Painter for LaneFigure<'_> {
             y += 28;
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::report::lane_tracks::{Mark, Stretch};
+    use crate::report::plot::tests::assert_valid_and_deterministic;
+
+    /// Two lanes: a CAV that changes from lane 0 to lane 1 and collides, an HDV on lane 1.
+    fn tracks() -> LaneTracks {
+        let stretch = |id: &str, cav, points: &[(f64, f64, f64)]| Stretch {
+            id: id.into(),
+            cav,
+            points: points.to_vec(),
+        };
+        let mut t = LaneTracks {
+            dt: 1.0,
+            ..Default::default()
+        };
+        t.lanes.insert(
+            0,
+            vec![stretch("c", true, &[(0.0, 0.0, 20.0), (1.0, 20.0, 21.0)])],
+        );
+        t.lanes.insert(
+            1,
+            vec![
+                stretch("c", true, &[(2.0, 41.0, 22.0), (3.0, 60.0, 18.0)]),
+                stretch("h", false, &[(0.0, 30.0, 10.0), (3.0, 61.0, 11.0)]),
+            ],
+        );
+        let mark = |lane, t, s| Mark { lane, t, s };
+        t.lane_changes = vec![mark(0, 2.0, 41.0), mark(1, 2.0, 41.0)];
+        t.collisions = vec![mark(1, 3.0, 60.0)];
+        t
+    }
+
+    #[test]
+    fn both_views_render_valid_and_deterministic() {
+        let tracks = tracks();
+        for view in [View::TimeSpace, View::SpeedField] {
+            let figure = LaneFigure {
+                tracks: &tracks,
+                view,
+                title: "bk-pbs, α = 0.5".into(),
+            };
+            assert_valid_and_deterministic(|| figure.render());
+        }
     }
 }
