@@ -28,7 +28,7 @@ use serde::{Deserialize, Serialize};
 
 use super::grid::{Cell, Grid, Shard, ShardError};
 use crate::config::{Config, ConfigError, TrajectoryFormat};
-use crate::controller::{UnknownPlanner, PLANNERS};
+use crate::controller::{PlannerKind, UnknownPlanner, PLANNERS};
 
 /// Scenario keys a campaign sets itself.
 const PER_CELL_KEYS: [&str; 4] = ["alpha", "lambda", "seed", "steps"];
@@ -392,11 +392,8 @@ fn check_planners(planners: &[String], origin: String) -> Result<(), SettingsErr
     if planners.is_empty() {
         return Err(SettingsError::Empty { origin });
     }
-    match planners.iter().find(|p| !PLANNERS.contains(&p.as_str())) {
-        Some(p) => Err(SettingsError::Planner {
-            origin,
-            planner: UnknownPlanner(p.clone()),
-        }),
+    match planners.iter().find_map(|p| p.parse::<PlannerKind>().err()) {
+        Some(planner) => Err(SettingsError::Planner { origin, planner }),
         None => Ok(()),
     }
 }

@@ -4,20 +4,16 @@ use anyhow::Result;
 use clap::Args;
 
 use bkpbs::config::Config;
-use bkpbs::controller;
+use bkpbs::controller::PlannerKind;
 use bkpbs::episode::bench;
 
 use super::scenario::ScenarioArgs;
 
 #[derive(Args)]
 pub struct BenchArgs {
-    /// Controllers to time next to SUMO alone.
-    #[arg(
-        long,
-        value_delimiter = ',',
-        default_value = "sumo,idm-mobil,bk-mastar,bk-pbs,rl-ppo"
-    )]
-    planners: Vec<String>,
+    /// Controllers to time next to SUMO alone [default: all].
+    #[arg(long, value_enum, value_delimiter = ',')]
+    planners: Vec<PlannerKind>,
     /// Repeats per row (medians are reported).
     #[arg(long, default_value_t = 5)]
     repeats: usize,
@@ -41,8 +37,12 @@ impl BenchArgs {
     /// any of the rows is timed.
     pub fn resolve(self) -> Result<Bench> {
         let config = self.scenario.resolve()?;
-        for p in &self.planners {
-            controller::check(p, &config)?;
+        let mut planners = self.planners;
+        if planners.is_empty() {
+            planners = PlannerKind::ALL.to_vec();
+        }
+        for p in &planners {
+            p.check(&config)?;
         }
         bkpbs::sumo::frame::scenario_road(&config.scenario)?;
         if self.threads.contains(&0) {
@@ -55,7 +55,7 @@ impl BenchArgs {
         }
         Ok(Bench {
             config,
-            planners: self.planners,
+            planners: planners.iter().map(|p| p.name().to_string()).collect(),
             threads,
             repeats: self.repeats,
         })

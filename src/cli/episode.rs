@@ -6,18 +6,19 @@ use anyhow::{Context, Result};
 use clap::Args;
 
 use bkpbs::config::{Config, PredictorKind, Scenario};
+use bkpbs::controller::PlannerKind;
+use bkpbs::episode;
 use bkpbs::episode::trace::Tracer;
 use bkpbs::episode::Driver;
 use bkpbs::sumo::files as sumo_files;
-use bkpbs::{controller, episode};
 
 use super::scenario::{ScenarioArgs, TrajectoryArgs};
 
 #[derive(Args)]
 pub struct EpisodeArgs {
-    /// Controller of the CAVs: sumo, idm-mobil, bk-mastar or bk-pbs.
-    #[arg(long, default_value = "bk-pbs")]
-    planner: String,
+    /// Controller of the CAVs.
+    #[arg(long, value_enum, default_value_t = PlannerKind::BkPbs)]
+    planner: PlannerKind,
     #[command(flatten)]
     scenario: ScenarioArgs,
     /// Directory for the CSV files [default: out/<planner>_a<α>_l<λ>_s<seed>].
@@ -45,7 +46,7 @@ pub struct EpisodeArgs {
 /// A checked episode: the planner exists for this configuration and the output place is known.
 pub struct Episode {
     config: Config,
-    planner: String,
+    planner: PlannerKind,
     out: PathBuf,
     trace: bool,
 }
@@ -69,10 +70,10 @@ impl EpisodeArgs {
         if let Some(why) = config.sumo.gui.then(sumo_files::gui_unavailable).flatten() {
             anyhow::bail!("cannot show the episode: {why}");
         }
-        controller::check(&self.planner, &config)?;
+        self.planner.check(&config)?;
         let out = self
             .out
-            .unwrap_or_else(|| default_out(&self.planner, &config.scenario));
+            .unwrap_or_else(|| default_out(self.planner, &config.scenario));
         bkpbs::io::ensure_writable_dir(&out)?;
         Ok(Episode {
             config,
@@ -84,7 +85,7 @@ impl EpisodeArgs {
 }
 
 /// `out/<planner>_a<α>_l<λ>_s<seed>`: runs of different settings never overwrite each other.
-fn default_out(planner: &str, s: &Scenario) -> PathBuf {
+fn default_out(planner: PlannerKind, s: &Scenario) -> PathBuf {
     PathBuf::from(format!(
         "out/{}_a{}_l{}_s{}",
         planner, s.alpha, s.lambda, s.seed
@@ -114,7 +115,7 @@ pub fn run(e: Episode) -> Result<()> {
     let result = if e.trace {
         let demand = episode::demand::generate_for(&e.config)?;
         let mut tracer = Tracer::new(&e.config);
-        let planner = Driver::Named(&e.planner);
+        let planner = Driver::Named(e.planner.name());
         let result = episode::run_observed(&e.config, planner, &demand, &mut tracer)
             .map_err(|err| keep_sumo_log(err, &e.out))?;
         result.write(&e.out).with_context(saving)?;
@@ -122,7 +123,7 @@ pub fn run(e: Episode) -> Result<()> {
         result
     } else {
         let result =
-            episode::run(&e.config, &e.planner).map_err(|err| keep_sumo_log(err, &e.out))?;
+            episode::run(&e.config, e.planner.name()).map_err(|err| keep_sumo_log(err, &e.out))?;
         result.write(&e.out).with_context(saving)?;
         result
     };

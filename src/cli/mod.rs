@@ -41,7 +41,7 @@ pub enum Command {
     /// Draw an episode's time–space diagram and speed field (from `episode --trajectories`).
     Plot(plot::PlotArgs),
     /// The merge layout found in a SUMO network: main carriageway, on-ramps with their
-    /// acceleration lanes, off-ramps (episodes still run on the paper's layout only).
+    /// acceleration lanes, off-ramps (what `--net` of episode, campaign and bench will run).
     Network(network::NetworkArgs),
     /// Show the configuration (defaults = the paper's) or the SUMO vehicle types it implies.
     Config(config::ConfigArgs),

@@ -1,8 +1,8 @@
 //! Controllers: a scene in, one maneuver per CAV out.
 //!
 //! Every planner of the project implements [`Controller`]; the episode runner applies what it
-//! returns through SUMO's speed and lane-change calls. New planners appear by name in
-//! [`by_name`] and [`PLANNERS`].
+//! returns through SUMO's speed and lane-change calls. New planners are added to
+//! [`PlannerKind`], the one list of them.
 
 pub mod bk_mastar;
 pub mod bk_pbs;
@@ -10,6 +10,7 @@ pub mod execute;
 pub mod idm;
 pub mod idm_mobil;
 pub mod mobil;
+pub mod planner_kind;
 pub mod rl_ppo;
 pub mod search_planner;
 pub mod shield;
@@ -20,6 +21,8 @@ use crate::model::road::Road;
 use crate::model::scene::Scene;
 use crate::model::trajectory::Trajectory;
 use crate::predict::PredictorError;
+
+pub use planner_kind::{PlannerKind, UnknownPlanner, PLANNERS};
 
 /// A lateral move to the neighbouring lane.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -196,15 +199,7 @@ pub trait Controller {
     fn lane_change_cancelled(&mut self, _id: &str) {}
 }
 
-/// Names accepted by [`by_name`].
-pub const PLANNERS: [&str; 5] = ["sumo", "idm-mobil", "bk-mastar", "bk-pbs", "rl-ppo"];
-
-/// An unknown planner name.
-#[derive(Debug, thiserror::Error)]
-#[error("unknown planner '{0}' (known: {known})", known = PLANNERS.join(", "))]
-pub struct UnknownPlanner(pub String);
-
-/// Why [`by_name`] could not build a controller: an unknown name, or a predictor model file
+/// Why a controller could not be built: an unknown name, or a predictor model or policy file
 /// the configuration names that cannot be used.
 #[derive(Debug, thiserror::Error)]
 pub enum BuildError {
@@ -216,64 +211,26 @@ pub enum BuildError {
     Policy(#[from] crate::policy::model_file::PolicyError),
 }
 
-/// Builds the controller called `name` for the road SUMO runs; planners predict HDVs with the
-/// predictor `config.predictor` selects ([`crate::predict::configured`]). The search-based
-/// planners (bk-mastar, bk-pbs) sit behind the safety shield when `config.safety.shield` is on,
-/// the `rl-ppo` policy when `config.rl.shield` is.
+/// Builds the controller called `name` ([`PlannerKind::build`] for names from outside:
+/// settings files, Python).
 ///
 /// # Errors
-/// An unknown name, or a predictor model file that cannot be used.
+/// An unknown name, or a predictor model or policy file that cannot be used.
 pub fn by_name(
     name: &str,
     config: &Config,
     road: &Road,
 ) -> Result<Box<dyn Controller>, BuildError> {
-    let searched: Box<dyn Controller> = match name {
-        "sumo" => return Ok(Box::new(sumo_native::SumoNative)),
-        "idm-mobil" => return Ok(Box::new(idm_mobil::IdmMobil::new(config))),
-        "bk-mastar" => Box::new(bk_mastar::BkMastar::new(
-            config,
-            crate::predict::configured(config)?,
-            road,
-        )),
-        "bk-pbs" => Box::new(bk_pbs::BkPbs::new(
-            config,
-            crate::predict::configured(config)?,
-            road,
-        )),
-        "rl-ppo" => {
-            let policy: Box<dyn Controller> = Box::new(rl_ppo::RlPpo::from_config(config)?);
-            return Ok(if config.rl.shield {
-                Box::new(shield::Shielded::new(policy, config))
-            } else {
-                policy
-            });
-        }
-        other => return Err(UnknownPlanner(other.to_string()).into()),
-    };
-    Ok(if config.safety.shield {
-        Box::new(shield::Shielded::new(searched, config))
-    } else {
-        searched
-    })
+    name.parse::<PlannerKind>()?.build(config, road)
 }
 
-/// Checks, before any SUMO starts, that [`by_name`] will build `name` under `config`: the name is
-/// known and the predictor it needs loads.
+/// Checks, before any SUMO starts, that [`by_name`] will build `name` under `config`
+/// ([`PlannerKind::check`]).
 ///
 /// # Errors
 /// As [`by_name`].
 pub fn check(name: &str, config: &Config) -> Result<(), BuildError> {
-    match name {
-        "sumo" | "idm-mobil" => Ok(()),
-        "bk-mastar" | "bk-pbs" => crate::predict::configured(config)
-            .map(drop)
-            .map_err(Into::into),
-        "rl-ppo" => crate::policy::model_file::load(config.rl.policy.as_deref())
-            .map(drop)
-            .map_err(Into::into),
-        other => Err(UnknownPlanner(other.to_string()).into()),
-    }
+    name.parse::<PlannerKind>()?.check(config)
 }
 
 #[cfg(test)]

@@ -414,9 +414,7 @@ fn check_plan(plan: &CollectPlan) -> Result<(), CollectError> {
         )));
     }
     for p in &plan.planners {
-        if !controller::PLANNERS.contains(&p.as_str()) {
-            return Err(controller::UnknownPlanner(p.clone()).into());
-        }
+        p.parse::<controller::PlannerKind>()?;
     }
     Ok(())
 }
