@@ -10,6 +10,7 @@ pub mod gui;
 pub mod merge_rule;
 pub mod metrics;
 pub mod output;
+pub mod record;
 pub mod runner;
 pub mod trace;
 pub mod trajectories;

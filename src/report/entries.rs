@@ -30,7 +30,7 @@ pub fn rows(res: &Results) -> Vec<EntryRow> {
         .rows
         .iter()
         .any(|r| r.cell.hdv_profile != t.rows[0].cell.hdv_profile);
-    let label = |r: &crate::campaign::results::Row| match several {
+    let label = |r: &crate::campaign::table::Row| match several {
         true => format!("{} ({})", r.cell.planner, r.cell.hdv_profile),
         false => r.cell.planner.clone(),
     };
