@@ -11,7 +11,8 @@ use pyo3::types::PyDict;
 use bkpbs::config::Config;
 use bkpbs::controller::{UnknownPlanner, PLANNERS};
 use bkpbs::episode::demand;
-use bkpbs::episode::output::{self, episode_row, EPISODE_COLUMNS};
+use bkpbs::episode::output;
+use bkpbs::episode::cells::{Cell, Value};
 use bkpbs::episode::{self, EpisodeError, EpisodeResult};
 use bkpbs::model::road::EMBEDDED_NET;
 use bkpbs::sumo::files;
@@ -72,35 +73,21 @@ pub(crate) fn cell_table(alpha: f64, lam: f64, seed: i64) -> PyResult<toml::Tabl
     ]))
 }
 
-/// Columns of `episode.csv` that hold decimals (the others are counts, or the planner).
-const FLOAT_COLUMNS: [&str; 8] = [
-    "alpha",
-    "lambda",
-    "controllable_collision_rate",
-    "mean_delay_s",
-    "mean_delay_cav_s",
-    "mean_delay_hdv_s",
-    "throughput_veh_h",
-    "mean_speed_mps",
-];
-
-/// The `episode.csv` row as a dict: the same numbers, typed (empty cells are `None`).
+/// The `episode.csv` row as a dict: the values the row is written from, typed and at full
+/// precision (a float is the `f64` itself, not its CSV text; empty cells are `None`).
 pub(crate) fn summary_dict<'py>(
     py: Python<'py>,
     r: &EpisodeResult,
 ) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
-    for (col, cell) in EPISODE_COLUMNS.iter().zip(episode_row(&r.summary)) {
-        if cell.is_empty() {
-            d.set_item(col, py.None())?;
-        } else if FLOAT_COLUMNS.contains(col) {
-            d.set_item(col, cell.parse::<f64>().unwrap_or(f64::NAN))?;
-        } else if let Ok(i) = cell.parse::<i64>() {
-            d.set_item(col, i)?;
-        } else if let Ok(x) = cell.parse::<f64>() {
-            d.set_item(col, x)?;
-        } else {
-            d.set_item(col, cell)?;
+    for Cell { column, value } in r.summary.cells() {
+        match value {
+            Value::Text(s) => d.set_item(column, s)?,
+            Value::Int(i) => d.set_item(column, i)?,
+            Value::UInt(u) => d.set_item(column, u)?,
+            Value::Bool(b) => d.set_item(column, b)?,
+            Value::Float { value, .. } => d.set_item(column, value)?,
+            Value::Empty => d.set_item(column, py.None())?,
         }
     }
     Ok(d)
@@ -125,9 +112,10 @@ fn run_detached(py: Python<'_>, planner: &str, config: &Config) -> PyResult<Epis
 }
 
 /// Runs one episode of `planner` at penetration `alpha`, arrival rate `lam` (veh/h) and
-/// `seed` in the core's episode loop (SUMO in-process) and returns its summary: the numbers of
-/// `episode.csv`. `config` (dict, TOML text or file) and keyword overrides (`steps=100`,
-/// `idm={"accel": 2.0}`) set the rest; `out` also writes the episode's CSV files there.
+/// `seed` in the core's episode loop (SUMO in-process) and returns its summary: the values
+/// `episode.csv` is written from, at full precision. `config` (dict, TOML text or file) and
+/// keyword overrides (`steps=100`, `idm={"accel": 2.0}`) set the rest; `out` also writes the
+/// episode's CSV files there.
 #[pyfunction]
 #[pyo3(signature = (planner, alpha, lam, seed, *, config = None, out = None, **overrides))]
 #[allow(clippy::too_many_arguments)]

@@ -173,7 +173,7 @@ impl PyMergeEnv {
         Ok(PyBytes::new(py, &bytes))
     }
 
-    /// The finished episode's summary (the numbers of `episode.csv`), once done.
+    /// The finished episode's summary (the values of `episode.csv`, at full precision), once done.
     fn summary<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyDict>>> {
         match self.env.as_ref().and_then(|e| e.result()) {
             Some(r) => crate::episode::summary_dict(py, r).map(Some),

@@ -67,3 +67,14 @@ def scene() -> List[Dict[str, Any]]:
         vehicle("main.7", "cav", "main_out", 1, 50.0, 34.0),
         vehicle("main.8", "hdv", "main_out", 0, 80.0, 28.0),
     ]
+
+
+def csv_text(value: Any, like: str) -> str:
+    """A summary value as `episode.csv` writes it: a float with the decimals the CSV text `like`
+    shows (fixed per column; none for an integral α or λ), an int or text as is, None empty."""
+    if value is None:
+        return ""
+    if isinstance(value, float):
+        decimals = len(like.partition(".")[2])
+        return f"{value:.{decimals}f}"
+    return str(value)

@@ -8,7 +8,8 @@
 use std::path::{Path, PathBuf};
 
 use super::grid::{Cell, Grid, Shard};
-use super::results::{self, episodes_header, key, Results, ResultsError, Row, CELL_COLUMNS};
+use super::results::{self, episodes_header, Results, ResultsError};
+use super::table::{key, Row, CELL_COLUMNS};
 use super::worker::{DONE_FILE, ERROR_FILE};
 use crate::episode::output::{TIMING_COLUMNS, VEHICLE_COLUMNS};
 

@@ -22,6 +22,7 @@ pub mod grid;
 pub mod pool;
 pub mod results;
 pub mod settings;
+pub mod table;
 pub mod tasks;
 pub mod validate;
 pub mod worker;
@@ -91,12 +92,34 @@ pub struct RunSummary {
 /// bar on stderr only when stderr is a terminal.
 pub fn run(settings: &Settings, out: &Path, exe: &Path) -> Result<RunSummary, CampaignError> {
     let start = Instant::now();
-    let tasks::Plan {
-        requests,
-        shard_size,
+    let plan = tasks::prepare(settings, out)?;
+    announce(settings, &plan);
+    let (shard_size, already_done) = (plan.shard_size, plan.already_done);
+    let (ran, failed_now) = run_requests(settings, exe, plan.requests);
+    let results = tasks::collect(settings, out)?;
+    let summary = RunSummary {
+        grid: settings.grid.len(),
+        shard: shard_size,
         already_done,
-    } = tasks::prepare(settings, out)?;
-    let cells = settings.grid.cells();
+        ran,
+        failed: results.failures.rows.len(),
+        collected: results.episodes.rows.len(),
+        wall_s: start.elapsed().as_secs_f64(),
+        interrupted: crate::io::interrupt::requested(),
+    };
+    println!(
+        "campaign: ran {} episodes ({} failed) in {:.1} s; {} episodes collected in {}",
+        summary.ran,
+        failed_now,
+        summary.wall_s,
+        summary.collected,
+        out.join("episodes.csv").display()
+    );
+    Ok(summary)
+}
+
+/// The status line before a run: the grid, the shard, what is done and what will run.
+fn announce(settings: &Settings, plan: &tasks::Plan) {
     let g = &settings.grid;
     let profiles = match g.profiles.len() {
         1 => String::new(),
@@ -110,12 +133,17 @@ pub fn run(settings: &Settings, out: &Path, exe: &Path) -> Result<RunSummary, Ca
         g.seeds.len(),
         g.len(),
         settings.shard,
-        shard_size,
-        already_done,
-        requests.len(),
-        settings.workers.min(requests.len()),
+        plan.shard_size,
+        plan.already_done,
+        plan.requests.len(),
+        settings.workers.min(plan.requests.len()),
     );
+}
 
+/// Runs the episodes in the worker pool with a progress bar, naming each failure as it
+/// happens; returns how many ran and how many of them failed.
+fn run_requests(settings: &Settings, exe: &Path, requests: Vec<worker::Request>) -> (usize, usize) {
+    let cells = settings.grid.cells();
     let bar = progress_bar(requests.len() as u64);
     let mut failed_now = 0;
     let mut ran = 0;
@@ -141,27 +169,7 @@ pub fn run(settings: &Settings, out: &Path, exe: &Path) -> Result<RunSummary, Ca
         bar.inc(1);
     });
     bar.finish_and_clear();
-
-    let results = tasks::collect(settings, out)?;
-    let summary = RunSummary {
-        grid: g.len(),
-        shard: shard_size,
-        already_done,
-        ran,
-        failed: results.failures.rows.len(),
-        collected: results.episodes.rows.len(),
-        wall_s: start.elapsed().as_secs_f64(),
-        interrupted: crate::io::interrupt::requested(),
-    };
-    println!(
-        "campaign: ran {} episodes ({} failed) in {:.1} s; {} episodes collected in {}",
-        summary.ran,
-        failed_now,
-        summary.wall_s,
-        summary.collected,
-        out.join("episodes.csv").display()
-    );
-    Ok(summary)
+    (ran, failed_now)
 }
 
 fn progress_bar(len: u64) -> ProgressBar {

@@ -231,59 +231,83 @@ fn drive(
         }
         let next = queue.lock().unwrap_or_else(|e| e.into_inner()).pop_front();
         let Some(req) = next else { break };
-        let failed = |error: String| {
-            record_failure(&req.dir, &error);
-            Reply {
-                position: req.position,
-                outcome: Outcome::Failed { error },
+        match serve(exe, worker.take(), &req, timeout) {
+            Turn::NoWorker(reply) => {
+                let _ = tx.send(reply);
             }
-        };
-        let w = match worker.take() {
-            Some(w) => w,
-            None => match Worker::spawn(exe) {
-                Ok(w) => w,
-                Err(e) => {
-                    let _ = tx.send(failed(format!(
-                        "cannot start worker {} {WORKER_SUBCOMMAND}: {e}",
-                        exe.display()
-                    )));
-                    continue;
+            Turn::Done(reply, kept) => {
+                worker = kept;
+                if tx.send(reply).is_err() {
+                    break;
                 }
-            },
-        };
-        let mut w = w;
-        let reply = match w.exchange(&req, timeout) {
-            Ok(reply) => {
-                worker = Some(w);
-                reply
             }
-            Err(ExchangeError::Stopped) => {
-                w.stop();
-                break;
-            }
-            Err(ExchangeError::Broken(_)) if interrupt::requested().is_some() => {
-                w.kill();
-                break;
-            }
-            Err(ExchangeError::Broken(why)) => {
-                let status = w.kill();
-                failed(format!(
-                    "worker process died during the episode ({why}; {status})"
-                ))
-            }
-            Err(ExchangeError::TimedOut(t)) => {
-                w.stop();
-                failed(format!(
-                    "episode exceeded the episode timeout of {} s and was stopped",
-                    t.as_secs_f64()
-                ))
-            }
-        };
-        if tx.send(reply).is_err() {
-            break;
+            Turn::Stop => break,
         }
     }
     if let Some(w) = worker {
         w.finish();
+    }
+}
+
+/// What one request came to on a pool thread.
+enum Turn {
+    /// No worker could be started: the failed reply.
+    NoWorker(Reply),
+    /// The reply, and the worker if it can take the next request.
+    Done(Reply, Option<Worker>),
+    /// A stop signal ended the run (the worker is stopped).
+    Stop,
+}
+
+/// A failed reply to `req`, recorded in its episode directory.
+fn failed(req: &Request, error: String) -> Reply {
+    record_failure(&req.dir, &error);
+    Reply {
+        position: req.position,
+        outcome: Outcome::Failed { error },
+    }
+}
+
+/// Runs `req` on `worker` (started from `exe` if there is none yet); a worker that broke or
+/// overran the timeout is ended.
+fn serve(exe: &Path, worker: Option<Worker>, req: &Request, timeout: Option<Duration>) -> Turn {
+    let mut w = match worker {
+        Some(w) => w,
+        None => match Worker::spawn(exe) {
+            Ok(w) => w,
+            Err(e) => {
+                return Turn::NoWorker(failed(
+                    req,
+                    format!(
+                        "cannot start worker {} {WORKER_SUBCOMMAND}: {e}",
+                        exe.display()
+                    ),
+                ))
+            }
+        },
+    };
+    match w.exchange(req, timeout) {
+        Ok(reply) => Turn::Done(reply, Some(w)),
+        Err(ExchangeError::Stopped) => {
+            w.stop();
+            Turn::Stop
+        }
+        Err(ExchangeError::Broken(_)) if interrupt::requested().is_some() => {
+            w.kill();
+            Turn::Stop
+        }
+        Err(ExchangeError::Broken(why)) => {
+            let status = w.kill();
+            let why = format!("worker process died during the episode ({why}; {status})");
+            Turn::Done(failed(req, why), None)
+        }
+        Err(ExchangeError::TimedOut(t)) => {
+            w.stop();
+            let why = format!(
+                "episode exceeded the episode timeout of {} s and was stopped",
+                t.as_secs_f64()
+            );
+            Turn::Done(failed(req, why), None)
+        }
     }
 }

@@ -6,10 +6,9 @@ use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
 use super::grid::Cell;
-use crate::episode::output::{self, WriteError, EPISODE_COLUMNS, TIMING_COLUMNS, VEHICLE_COLUMNS};
-
-/// The columns that name a cell; every collected file starts with them.
-pub const CELL_COLUMNS: [&str; 5] = ["planner", "alpha", "lambda", "seed", "hdv_profile"];
+use super::table::{key, CellKey, Row, Table, CELL_COLUMNS};
+use crate::episode::metrics::Summary;
+use crate::episode::output::{self, WriteError, TIMING_COLUMNS, VEHICLE_COLUMNS};
 
 /// The collected files of a campaign directory.
 pub const FILES: [&str; 4] = [
@@ -44,45 +43,6 @@ pub enum ResultsError {
     Row(#[from] super::validate::RowError),
 }
 
-/// One CSV row and the cell it belongs to.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Row {
-    pub cell: Cell,
-    /// The whole row, cell columns included.
-    pub fields: csv::StringRecord,
-}
-
-/// One collected file: its header and rows.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Table {
-    pub header: Vec<String>,
-    pub rows: Vec<Row>,
-}
-
-impl Table {
-    /// An empty table with `header`.
-    pub fn new(header: Vec<String>) -> Table {
-        Table {
-            header,
-            rows: Vec::new(),
-        }
-    }
-
-    /// Index of a column, if present.
-    pub fn column(&self, name: &str) -> Option<usize> {
-        self.header.iter().position(|h| h == name)
-    }
-
-    fn to_csv(&self) -> Vec<u8> {
-        let mut w = csv::Writer::from_writer(Vec::new());
-        w.write_record(&self.header).expect("writing to memory");
-        for r in &self.rows {
-            w.write_record(&r.fields).expect("writing to memory");
-        }
-        w.into_inner().expect("writing to memory")
-    }
-}
-
 fn with_cell_columns(rest: &[&str]) -> Vec<String> {
     CELL_COLUMNS
         .iter()
@@ -93,7 +53,7 @@ fn with_cell_columns(rest: &[&str]) -> Vec<String> {
 
 /// Header of `episodes.csv` (the episode columns already start with the cell).
 pub fn episodes_header() -> Vec<String> {
-    EPISODE_COLUMNS.iter().map(|s| s.to_string()).collect()
+    Summary::columns().iter().map(|s| s.to_string()).collect()
 }
 /// Header of `vehicles.csv`.
 pub fn vehicles_header() -> Vec<String> {
@@ -184,20 +144,6 @@ pub fn read_table(path: &Path, header: &[String]) -> Result<Table, ResultsError>
         table.rows.push(Row { cell, fields });
     }
     Ok(table)
-}
-
-/// Identity of a cell for lookups: planner, α and λ (by value), seed, HDV profile.
-pub type CellKey = (String, u64, u64, u64, String);
-
-/// Identity of a cell for lookups (α and λ by value).
-pub fn key(c: &Cell) -> CellKey {
-    (
-        c.planner.clone(),
-        c.alpha.to_bits(),
-        c.lambda.to_bits(),
-        c.seed,
-        c.hdv_profile.clone(),
-    )
 }
 
 /// A table's rows grouped by cell, in file order within a cell.
@@ -295,28 +241,42 @@ impl Results {
     /// differ (they are wall-clock). A failure is kept only for cells nobody finished.
     pub fn merge(parts: &[(PathBuf, Results)]) -> Result<Results, ResultsError> {
         let mut merged = Results::default();
-        // Which part supplies each cell.
+        for (_, part) in parts {
+            for (mine, theirs) in [
+                (&mut merged.planners, &part.planners),
+                (&mut merged.profiles, &part.profiles),
+            ] {
+                for name in theirs {
+                    if !mine.contains(name) {
+                        mine.push(name.clone());
+                    }
+                }
+            }
+        }
+        let owner = merged.take_episodes(parts)?;
+        merged.take_the_rest(parts, owner);
+        merged.sort();
+        Ok(merged)
+    }
+
+    /// Takes each cell's episode row from the first part that has it; returns which part
+    /// supplies each cell. A later part's row for the same cell must be identical, and so must
+    /// its vehicle rows.
+    fn take_episodes(
+        &mut self,
+        parts: &[(PathBuf, Results)],
+    ) -> Result<HashMap<CellKey, usize>, ResultsError> {
         let mut owner: HashMap<CellKey, usize> = HashMap::new();
         let vehicles: Vec<HashMap<CellKey, Vec<&csv::StringRecord>>> = parts
             .iter()
             .map(|(_, part)| rows_by_cell(&part.vehicles))
             .collect();
         for (i, (dir, part)) in parts.iter().enumerate() {
-            for p in &part.planners {
-                if !merged.planners.contains(p) {
-                    merged.planners.push(p.clone());
-                }
-            }
-            for h in &part.profiles {
-                if !merged.profiles.contains(h) {
-                    merged.profiles.push(h.clone());
-                }
-            }
             for row in &part.episodes.rows {
                 let k = key(&row.cell);
                 let Some(&j) = owner.get(&k) else {
                     owner.insert(k, i);
-                    merged.episodes.rows.push(row.clone());
+                    self.episodes.rows.push(row.clone());
                     continue;
                 };
                 let first = parts[j]
@@ -339,10 +299,16 @@ impl Results {
                 }
             }
         }
+        Ok(owner)
+    }
+
+    /// Takes the vehicle and timing rows of each cell from the part that supplied its episode
+    /// row, and the failures of cells nobody finished (the first part's).
+    fn take_the_rest(&mut self, parts: &[(PathBuf, Results)], mut owner: HashMap<CellKey, usize>) {
         for (i, (_, part)) in parts.iter().enumerate() {
             for (mine, theirs) in [
-                (&mut merged.vehicles, &part.vehicles),
-                (&mut merged.timings, &part.timings),
+                (&mut self.vehicles, &part.vehicles),
+                (&mut self.timings, &part.timings),
             ] {
                 mine.rows.extend(
                     theirs
@@ -355,12 +321,10 @@ impl Results {
             for r in &part.failures.rows {
                 if let std::collections::hash_map::Entry::Vacant(v) = owner.entry(key(&r.cell)) {
                     v.insert(usize::MAX);
-                    merged.failures.rows.push(r.clone());
+                    self.failures.rows.push(r.clone());
                 }
             }
         }
-        merged.sort();
-        Ok(merged)
     }
 
     /// Writes the four files into `dir`, each atomically.

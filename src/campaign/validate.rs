@@ -5,8 +5,8 @@
 use std::collections::HashSet;
 use std::path::{Path, PathBuf};
 
-use super::results::{key, Table, CELL_COLUMNS};
-use crate::episode::output::EPISODE_COLUMNS;
+use super::table::{key, Table, CELL_COLUMNS};
+use crate::episode::metrics::Summary;
 
 /// The first thing wrong with a collected `episodes.csv`.
 #[derive(Debug, thiserror::Error)]
@@ -27,10 +27,15 @@ pub enum RowError {
     },
 }
 
+/// The rules below name columns of [`Summary`] (a test checks they exist); every other
+/// column must hold a non-negative number.
+///
 /// Mean delays may be empty (an episode without arrivals) and slightly negative (a vehicle
 /// inserted faster than its drawn speed beats t* by rounding), never by a second.
 const DELAYS: [&str; 3] = ["mean_delay_s", "mean_delay_cav_s", "mean_delay_hdv_s"];
 const LOWEST_DELAY: f64 = -1.0;
+/// A fraction of the inserted vehicles: at most 1.
+const RATE: &str = "controllable_collision_rate";
 
 /// What `column` may hold, as a reason if `value` breaks it.
 fn problem(column: &str, value: &str) -> Option<&'static str> {
@@ -47,7 +52,7 @@ fn problem(column: &str, value: &str) -> Option<&'static str> {
         Some("is below -1 s, shorter than the free-flow time allows")
     } else if !delay && x < 0.0 {
         Some("is negative")
-    } else if column == "controllable_collision_rate" && x > 1.0 {
+    } else if column == RATE && x > 1.0 {
         Some("is a rate above 1")
     } else {
         None
@@ -67,7 +72,7 @@ pub fn check_episodes(path: &Path, table: &Table) -> Result<(), RowError> {
             });
         }
         // The cell columns are checked when the row is read.
-        for (column, value) in EPISODE_COLUMNS
+        for (column, value) in Summary::columns()
             .iter()
             .zip(row.fields.iter())
             .skip(CELL_COLUMNS.len())
@@ -89,6 +94,14 @@ pub fn check_episodes(path: &Path, table: &Table) -> Result<(), RowError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn rules_name_summary_columns() {
+        for column in DELAYS.iter().chain([&RATE]) {
+            assert!(Summary::columns().contains(column), "{column}");
+        }
+        assert_eq!(&Summary::columns()[..CELL_COLUMNS.len()], CELL_COLUMNS);
+    }
 
     #[test]
     fn values_out_of_range_are_named() {

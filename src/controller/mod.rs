@@ -123,44 +123,47 @@ pub enum CavHandling {
     Commanded,
 }
 
-/// Search effort of one planning round (deterministic counts, reported in `episode.csv`).
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
-pub struct PlanStats {
-    /// Single-CAV searches (M-A* calls).
-    pub searches: u64,
-    /// Nodes expanded over all searches.
-    pub nodes_expanded: u64,
-    /// Plans that needed phase 2.
-    pub phase2_plans: u64,
-    /// CAVs with no plan at all, which braked at the emergency deceleration.
-    pub fallbacks: u64,
-    /// BK-PBS: high-level nodes expanded.
-    pub pbs_nodes: u64,
-    /// BK-PBS: depth of the chosen node (summed over steps in episode totals).
-    pub pbs_depth: u64,
-    /// HDV predictions made (BK-PBS: root and conditioned re-predictions).
-    pub predictions: u64,
-    /// BK-PBS rounds that ended without a conflict-free node (best node used).
-    pub pbs_fallbacks: u64,
-    /// BK-PBS rounds stopped by the optional wall-time budget.
-    pub time_budget_hits: u64,
-    /// CAV maneuvers the safety shield replaced ([`shield::Shielded`]).
-    pub shield_overrides: u64,
+/// Defines [`PlanStats`] from one list of (field, `episode.csv` column): the struct, its serde
+/// names (the episode summary's columns) and its field-by-field sum, so a new count is written
+/// once and can be neither left out of the sum nor out of the CSV.
+macro_rules! plan_stats {
+    ($($(#[doc = $doc:literal])* $field:ident => $column:literal,)*) => {
+        /// Search effort of one planning round (deterministic counts, reported in
+        /// `episode.csv` under their serde names).
+        #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
+        pub struct PlanStats {
+            $($(#[doc = $doc])* #[serde(rename = $column)] pub $field: u64,)*
+        }
+
+        impl std::ops::AddAssign for PlanStats {
+            fn add_assign(&mut self, o: Self) {
+                $(self.$field += o.$field;)*
+            }
+        }
+    };
 }
 
-impl std::ops::AddAssign for PlanStats {
-    fn add_assign(&mut self, o: Self) {
-        self.searches += o.searches;
-        self.nodes_expanded += o.nodes_expanded;
-        self.phase2_plans += o.phase2_plans;
-        self.fallbacks += o.fallbacks;
-        self.pbs_nodes += o.pbs_nodes;
-        self.pbs_depth += o.pbs_depth;
-        self.predictions += o.predictions;
-        self.pbs_fallbacks += o.pbs_fallbacks;
-        self.time_budget_hits += o.time_budget_hits;
-        self.shield_overrides += o.shield_overrides;
-    }
+plan_stats! {
+    /// Single-CAV searches (M-A* calls).
+    searches => "plan_searches",
+    /// Nodes expanded over all searches.
+    nodes_expanded => "plan_nodes_expanded",
+    /// Plans that needed phase 2.
+    phase2_plans => "plan_phase2",
+    /// CAVs with no plan at all, which braked at the emergency deceleration.
+    fallbacks => "plan_fallbacks",
+    /// BK-PBS: high-level nodes expanded.
+    pbs_nodes => "pbs_nodes",
+    /// BK-PBS: depth of the chosen node (summed over steps in episode totals).
+    pbs_depth => "pbs_depth_sum",
+    /// HDV predictions made (BK-PBS: root and conditioned re-predictions).
+    predictions => "predictions",
+    /// BK-PBS rounds that ended without a conflict-free node (best node used).
+    pbs_fallbacks => "pbs_fallbacks",
+    /// BK-PBS rounds stopped by the optional wall-time budget.
+    time_budget_hits => "time_budget_hits",
+    /// CAV maneuvers the safety shield replaced ([`shield::Shielded`]).
+    shield_overrides => "shield_overrides",
 }
 
 /// A CAV controller, called once per step.

@@ -1,7 +1,12 @@
 //! Episode metrics (paper eq. 1 and section VI): per-vehicle records, travel delay against the
 //! free-flow time t*, collision attribution, and the one-row episode summary.
 
+use std::sync::OnceLock;
+
+use serde::Serialize;
+
 use crate::controller::PlanStats;
+use crate::episode::cells;
 use crate::model::scene::{Kind, Origin};
 
 /// How a vehicle's episode ended.
@@ -100,8 +105,12 @@ impl CollisionEvent {
     }
 }
 
-/// The episode's one-row summary (reproducible: no wall-clock figure in it).
-#[derive(Debug, Clone, PartialEq)]
+/// The episode's one-row summary (reproducible: no wall-clock figure in it): the one definition
+/// of the `episode.csv` row. Its serde names, in field order, are the columns (the planner's
+/// [`PlanStats`] inline, under theirs); a float's `serialize_with` gives its CSV decimals
+/// ([`record`]). Adding a metric is adding a field here and computing it in
+/// [`Summary::compute`].
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
 pub struct Summary {
     pub planner: String,
     pub alpha: f64,
@@ -121,20 +130,45 @@ pub struct Summary {
     pub present: usize,
     /// Vehicles removed in collisions involving a CAV.
     pub controllable_crashed: usize,
+    #[serde(serialize_with = "cells::decimals::<6, _>")]
     pub controllable_collision_rate: f64,
     /// Collisions between two HDVs (events), out of any controller's reach.
     pub hdv_collisions: usize,
     pub hdv_crashed: usize,
+    #[serde(serialize_with = "cells::opt_decimals::<4, _>")]
     pub mean_delay_s: Option<f64>,
+    #[serde(serialize_with = "cells::opt_decimals::<4, _>")]
     pub mean_delay_cav_s: Option<f64>,
+    #[serde(serialize_with = "cells::opt_decimals::<4, _>")]
     pub mean_delay_hdv_s: Option<f64>,
+    #[serde(serialize_with = "cells::decimals::<2, _>")]
     pub throughput_veh_h: f64,
     /// Mean speed over all vehicle-steps (m/s).
+    #[serde(serialize_with = "cells::decimals::<4, _>")]
     pub mean_speed_mps: f64,
     /// Vehicles standing (< 1 m/s) on the acceleration lane at the end (a jam indicator).
     pub ramp_queue_end: usize,
     /// Planner effort over the episode.
     pub plan_stats: PlanStats,
+}
+
+impl Summary {
+    /// The `episode.csv` columns, in order.
+    pub fn columns() -> &'static [&'static str] {
+        static COLUMNS: OnceLock<Vec<&'static str>> = OnceLock::new();
+        COLUMNS.get_or_init(|| {
+            Summary::default()
+                .cells()
+                .into_iter()
+                .map(|c| c.column)
+                .collect()
+        })
+    }
+
+    /// The summary's cells, one per column: the typed values the CSV row is written from.
+    pub fn cells(&self) -> Vec<cells::Cell> {
+        cells::cells(self).expect("the summary is a flat record")
+    }
 }
 
 /// Arithmetic mean, summed in order; `None` for no values. The one mean of the project: the
@@ -165,6 +199,7 @@ pub struct SummaryInput<'a> {
 }
 
 impl Summary {
+    /// The summary of an episode's records.
     pub fn compute(inp: &SummaryInput) -> Summary {
         let v = inp.vehicles;
         let count = |f: &dyn Fn(&VehicleRecord) -> bool| v.iter().filter(|r| f(r)).count();

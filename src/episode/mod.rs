@@ -18,6 +18,7 @@ pub mod merge_rule;
 pub mod metrics;
 pub mod observer;
 pub mod output;
+pub mod cells;
 mod recording;
 pub mod runner;
 mod step_times;

@@ -22,80 +22,9 @@ fn csv_bytes(header: &[&str], rows: impl Iterator<Item = Vec<String>>) -> Vec<u8
     w.into_inner().expect("writing to memory")
 }
 
-/// Columns of `episode.csv`.
-pub const EPISODE_COLUMNS: [&str; 33] = [
-    "planner",
-    "alpha",
-    "lambda",
-    "seed",
-    "hdv_profile",
-    "steps",
-    "scheduled",
-    "inserted",
-    "undeparted",
-    "inserted_cav",
-    "arrived",
-    "crashed",
-    "present",
-    "controllable_crashed",
-    "controllable_collision_rate",
-    "hdv_collisions",
-    "hdv_crashed",
-    "mean_delay_s",
-    "mean_delay_cav_s",
-    "mean_delay_hdv_s",
-    "throughput_veh_h",
-    "mean_speed_mps",
-    "ramp_queue_end",
-    "plan_searches",
-    "plan_nodes_expanded",
-    "plan_phase2",
-    "plan_fallbacks",
-    "pbs_nodes",
-    "pbs_depth_sum",
-    "predictions",
-    "pbs_fallbacks",
-    "time_budget_hits",
-    "shield_overrides",
-];
-
-/// The summary as one `episode.csv` row.
-pub fn episode_row(s: &Summary) -> Vec<String> {
-    vec![
-        s.planner.clone(),
-        format!("{}", s.alpha),
-        format!("{}", s.lambda),
-        s.seed.to_string(),
-        s.hdv_profile.clone(),
-        s.steps.to_string(),
-        s.scheduled.to_string(),
-        s.inserted.to_string(),
-        s.undeparted.to_string(),
-        s.inserted_cav.to_string(),
-        s.arrived.to_string(),
-        s.crashed.to_string(),
-        s.present.to_string(),
-        s.controllable_crashed.to_string(),
-        format!("{:.6}", s.controllable_collision_rate),
-        s.hdv_collisions.to_string(),
-        s.hdv_crashed.to_string(),
-        opt(s.mean_delay_s, 4),
-        opt(s.mean_delay_cav_s, 4),
-        opt(s.mean_delay_hdv_s, 4),
-        format!("{:.2}", s.throughput_veh_h),
-        format!("{:.4}", s.mean_speed_mps),
-        s.ramp_queue_end.to_string(),
-        s.plan_stats.searches.to_string(),
-        s.plan_stats.nodes_expanded.to_string(),
-        s.plan_stats.phase2_plans.to_string(),
-        s.plan_stats.fallbacks.to_string(),
-        s.plan_stats.pbs_nodes.to_string(),
-        s.plan_stats.pbs_depth.to_string(),
-        s.plan_stats.predictions.to_string(),
-        s.plan_stats.pbs_fallbacks.to_string(),
-        s.plan_stats.time_budget_hits.to_string(),
-        s.plan_stats.shield_overrides.to_string(),
-    ]
+/// The summary as one `episode.csv` row (its columns are [`Summary::columns`]).
+fn episode_row(s: &Summary) -> Vec<String> {
+    s.cells().iter().map(|c| c.value.csv_text()).collect()
 }
 
 /// Columns of `timing.csv`.
@@ -208,7 +137,7 @@ impl EpisodeResult {
     /// `episode.csv` as bytes.
     pub fn episode_csv(&self) -> Vec<u8> {
         csv_bytes(
-            &EPISODE_COLUMNS,
+            Summary::columns(),
             std::iter::once(episode_row(&self.summary)),
         )
     }
@@ -282,24 +211,62 @@ mod tests {
         assert!(e.to_string().contains("file/x.csv"), "{e}");
     }
 
+    /// The episode.csv bytes of a summary, header and all, as they were before the summary
+    /// became a serde struct: the columns, their order and each float's decimals.
     #[test]
-    fn episode_row_has_one_cell_per_column() {
-        let s = crate::episode::metrics::Summary::compute(&crate::episode::metrics::SummaryInput {
-            planner: "p",
-            hdv_profile: "sumo-safe",
-            alpha: 0.5,
+    fn episode_csv_keeps_its_columns_and_decimals() {
+        let s = Summary {
+            planner: "bk-pbs".into(),
+            alpha: 0.6,
             lambda: 3000.0,
-            seed: 0,
-            steps: 1,
-            dt: 0.2,
-            scheduled: 0,
-            vehicles: &[],
-            collisions: &[],
-            speed_sum: 0.0,
-            speed_samples: 0,
-            ramp_queue_end: 0,
-            plan_stats: Default::default(),
-        });
-        assert_eq!(episode_row(&s).len(), EPISODE_COLUMNS.len());
+            seed: 7,
+            hdv_profile: "sumo-safe".into(),
+            steps: 400,
+            scheduled: 9,
+            inserted: 8,
+            undeparted: 1,
+            inserted_cav: 5,
+            arrived: 6,
+            crashed: 1,
+            present: 1,
+            controllable_crashed: 1,
+            controllable_collision_rate: 1.0 / 8.0 + 1e-9,
+            hdv_collisions: 0,
+            hdv_crashed: 0,
+            mean_delay_s: Some(1.0 / 3.0),
+            mean_delay_cav_s: None,
+            mean_delay_hdv_s: Some(-0.00004),
+            throughput_veh_h: 270.0 + 1.0 / 7.0,
+            mean_speed_mps: 29.123456,
+            ramp_queue_end: 2,
+            plan_stats: crate::controller::PlanStats {
+                searches: 1,
+                nodes_expanded: 2,
+                phase2_plans: 3,
+                fallbacks: 4,
+                pbs_nodes: 5,
+                pbs_depth: 6,
+                predictions: 7,
+                pbs_fallbacks: 8,
+                time_budget_hits: 9,
+                shield_overrides: 10,
+            },
+        };
+        let text = String::from_utf8(csv_bytes(
+            Summary::columns(),
+            std::iter::once(episode_row(&s)),
+        ))
+        .unwrap();
+        assert_eq!(
+            text,
+            "planner,alpha,lambda,seed,hdv_profile,steps,scheduled,inserted,undeparted,\
+             inserted_cav,arrived,crashed,present,controllable_crashed,\
+             controllable_collision_rate,hdv_collisions,hdv_crashed,mean_delay_s,\
+             mean_delay_cav_s,mean_delay_hdv_s,throughput_veh_h,mean_speed_mps,ramp_queue_end,\
+             plan_searches,plan_nodes_expanded,plan_phase2,plan_fallbacks,pbs_nodes,\
+             pbs_depth_sum,predictions,pbs_fallbacks,time_budget_hits,shield_overrides\n\
+             bk-pbs,0.6,3000,7,sumo-safe,400,9,8,1,5,6,1,1,1,0.125000,0,0,0.3333,,-0.0000,\
+             270.14,29.1235,2,1,2,3,4,5,6,7,8,9,10\n"
+        );
     }
 }

@@ -2,7 +2,8 @@
 //! `ramp1.N`, `ramp2.N`, … on a network of several ramps), per planner, pooled over the whole
 //! grid, from a campaign's `vehicles.csv`.
 
-use crate::campaign::results::{Results, Row};
+use crate::campaign::results::Results;
+use crate::campaign::table::Row;
 
 /// One (planner, entry) of the table.
 #[derive(Debug, Clone, PartialEq)]

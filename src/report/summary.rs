@@ -3,7 +3,9 @@
 use std::path::{Path, PathBuf};
 
 use super::stats::Estimate;
-use crate::campaign::results::{Results, Table};
+use crate::campaign::grid::Cell;
+use crate::campaign::results::Results;
+use crate::campaign::table::Table;
 
 /// A column missing from, or a value unreadable in, `episodes.csv`.
 #[derive(Debug, thiserror::Error)]
@@ -57,7 +59,8 @@ fn column(t: &Table, path: &Path, name: &'static str) -> Result<usize, SummaryEr
     })
 }
 
-/// The `episodes.csv` columns averaged per group, in the order of [`Group`]'s estimates.
+/// The `episodes.csv` columns (of [`crate::episode::metrics::Summary::columns`]) averaged per
+/// group, in the order of [`Group`]'s estimates.
 const SAMPLED: [&str; 4] = [
     "mean_delay_s",
     "controllable_collision_rate",
@@ -67,7 +70,7 @@ const SAMPLED: [&str; 4] = [
 
 /// A row's values in the [`SAMPLED`] columns (at `columns`); empty fields are `None`.
 fn sampled_values(
-    row: &crate::campaign::results::Row,
+    row: &crate::campaign::table::Row,
     columns: &[usize; 4],
     path: &Path,
 ) -> Result<[Option<f64>; 4], SummaryError> {
@@ -87,6 +90,91 @@ fn sampled_values(
     Ok(out)
 }
 
+/// Names a group's planner: with its HDV profile in brackets when the rows hold several.
+struct Labels {
+    several_profiles: bool,
+}
+
+impl Labels {
+    fn of(t: &Table) -> Labels {
+        let several_profiles = t
+            .rows
+            .iter()
+            .any(|r| r.cell.hdv_profile != t.rows[0].cell.hdv_profile);
+        Labels { several_profiles }
+    }
+
+    fn label(&self, planner: &str, profile: &str) -> String {
+        match self.several_profiles {
+            true => format!("{planner} ({profile})"),
+            false => planner.to_string(),
+        }
+    }
+}
+
+/// A group being filled: its episodes so far and their [`SAMPLED`] values.
+type Filling = (Group, [Vec<f64>; 4]);
+
+/// Adds one row's values to the last group, or starts a group when the row's (planner, α, λ)
+/// differs from the last one's (the rows are sorted, so a group's rows are adjacent).
+fn add_row(groups: &mut Vec<Filling>, name: String, c: &Cell, vals: [Option<f64>; 4]) {
+    let same = |g: &Group| g.planner == name && g.alpha == c.alpha && g.lambda == c.lambda;
+    if !groups.last().is_some_and(|(g, _)| same(g)) {
+        let group = Group {
+            planner: name.clone(),
+            alpha: c.alpha,
+            lambda: c.lambda,
+            episodes: 0,
+            delay: None,
+            collision_rate: None,
+            throughput: None,
+            mean_speed: None,
+        };
+        groups.push((group, Default::default()));
+    }
+    let (g, samples) = groups.last_mut().expect("just pushed");
+    g.episodes += 1;
+    for (s, v) in samples.iter_mut().zip(vals) {
+        s.extend(v);
+    }
+}
+
+/// A filled group with its estimates.
+fn estimated((mut g, [d, r, tp, v]): Filling) -> Group {
+    g.delay = Estimate::of(&d);
+    g.collision_rate = Estimate::of(&r);
+    g.throughput = Estimate::of(&tp);
+    g.mean_speed = Estimate::of(&v);
+    g
+}
+
+/// The distinct values of one axis of the rows, sorted.
+fn axis(t: &Table, of: impl Fn(&Cell) -> f64) -> Vec<f64> {
+    let mut values: Vec<f64> = Vec::new();
+    for row in &t.rows {
+        let x = of(&row.cell);
+        if !values.contains(&x) {
+            values.push(x);
+        }
+    }
+    values.sort_by(f64::total_cmp);
+    values
+}
+
+/// The planner labels in grid order (planner, then HDV profile), those with a group only.
+fn planner_order(res: &Results, labels: &Labels, groups: &[Group]) -> Vec<String> {
+    let mut seen: Vec<String> = Vec::new();
+    for p in &res.planners {
+        for h in &res.profiles {
+            let name = labels.label(p, h);
+            if groups.iter().any(|g| g.planner == name) && !seen.contains(&name) {
+                seen.push(name);
+            }
+        }
+    }
+    seen
+}
+
 impl Summary {
     /// Groups the (sorted) episode rows; `path` names the file in errors.
     pub fn from_results(res: &Results, path: &Path) -> Result<Summary, SummaryError> {
@@ -95,76 +183,18 @@ impl Summary {
         for (slot, name) in columns.iter_mut().zip(SAMPLED) {
             *slot = column(t, path, name)?;
         }
-        let mut groups: Vec<(Group, [Vec<f64>; 4])> = Vec::new();
-        let mut alphas: Vec<f64> = Vec::new();
-        let mut lambdas: Vec<f64> = Vec::new();
-        let several_profiles = t
-            .rows
-            .iter()
-            .any(|r| r.cell.hdv_profile != t.rows[0].cell.hdv_profile);
-        let label = |planner: &str, profile: &str| match several_profiles {
-            true => format!("{planner} ({profile})"),
-            false => planner.to_string(),
-        };
+        let labels = Labels::of(t);
+        let mut groups: Vec<Filling> = Vec::new();
         for row in &t.rows {
-            let c = &row.cell;
             let vals = sampled_values(row, &columns, path)?;
-            let name = label(&c.planner, &c.hdv_profile);
-            let same = |g: &Group| g.planner == name && g.alpha == c.alpha && g.lambda == c.lambda;
-            if !groups.last().is_some_and(|(g, _)| same(g)) {
-                groups.push((
-                    Group {
-                        planner: name.clone(),
-                        alpha: c.alpha,
-                        lambda: c.lambda,
-                        episodes: 0,
-                        delay: None,
-                        collision_rate: None,
-                        throughput: None,
-                        mean_speed: None,
-                    },
-                    Default::default(),
-                ));
-            }
-            let (g, samples) = groups.last_mut().expect("just pushed");
-            g.episodes += 1;
-            for (s, v) in samples.iter_mut().zip(vals) {
-                s.extend(v);
-            }
-            if !alphas.contains(&c.alpha) {
-                alphas.push(c.alpha);
-            }
-            if !lambdas.contains(&c.lambda) {
-                lambdas.push(c.lambda);
-            }
+            let name = labels.label(&row.cell.planner, &row.cell.hdv_profile);
+            add_row(&mut groups, name, &row.cell, vals);
         }
-        alphas.sort_by(f64::total_cmp);
-        lambdas.sort_by(f64::total_cmp);
-        let groups: Vec<Group> = groups
-            .into_iter()
-            .map(|(mut g, [d, r, tp, v])| {
-                g.delay = Estimate::of(&d);
-                g.collision_rate = Estimate::of(&r);
-                g.throughput = Estimate::of(&tp);
-                g.mean_speed = Estimate::of(&v);
-                g
-            })
-            .collect();
-        let planners = res
-            .planners
-            .iter()
-            .flat_map(|p| res.profiles.iter().map(move |h| label(p, h)))
-            .filter(|name| groups.iter().any(|g| &g.planner == name))
-            .fold(Vec::new(), |mut seen: Vec<String>, name| {
-                if !seen.contains(&name) {
-                    seen.push(name);
-                }
-                seen
-            });
+        let groups: Vec<Group> = groups.into_iter().map(estimated).collect();
         Ok(Summary {
-            planners,
-            alphas,
-            lambdas,
+            planners: planner_order(res, &labels, &groups),
+            alphas: axis(t, |c| c.alpha),
+            lambdas: axis(t, |c| c.lambda),
             seeds: groups.iter().map(|g| g.episodes).max().unwrap_or(0),
             groups,
         })
@@ -175,5 +205,18 @@ impl Summary {
         self.groups
             .iter()
             .find(|g| g.planner == planner && g.alpha == alpha && g.lambda == lambda)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sampled_columns_are_episode_summary_columns() {
+        let columns = crate::episode::metrics::Summary::columns();
+        for name in SAMPLED {
+            assert!(columns.contains(&name), "{name}");
+        }
     }
 }

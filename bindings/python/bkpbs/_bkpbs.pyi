@@ -120,7 +120,7 @@ class MergeEnvCore:
     def render_rgb(self, width: int = 600, height: int = 150) -> bytes:
         """height × width × 3 RGB bytes of the current step."""
     def summary(self) -> Optional[Dict[str, Any]]:
-        """The finished episode's ``episode.csv`` numbers, once done."""
+        """The finished episode's ``episode.csv`` values (as ``run_episode`` returns them), once done."""
     def close(self) -> None: ...
     @staticmethod
     def feature_names() -> List[str]: ...
@@ -189,7 +189,9 @@ def run_episode(
     out: Optional[_PathArg] = None,
     **overrides: Any,
 ) -> Dict[str, Any]:
-    """Runs one episode in the core's loop; returns the ``episode.csv`` row as a dict."""
+    """Runs one episode in the core's loop; returns the ``episode.csv`` row as a dict of the values
+    it is written from: ``str``, ``int`` and full-precision ``float`` (not rounded to the CSV's
+    decimals), ``None`` for an empty cell."""
 
 def write_demand(
     out: _PathArg,

@@ -1,0 +1,63 @@
+//! One collected CSV file in memory: a header and rows, each row led by the cell (planner, α,
+//! λ, seed, HDV profile) it belongs to. Apart from the reading and merging of results
+//! ([`super::results`]) so that the checks of the rows ([`super::validate`]) can use it without
+//! the two importing each other.
+
+use super::grid::Cell;
+
+/// The columns that name a cell; every collected file starts with them.
+pub const CELL_COLUMNS: [&str; 5] = ["planner", "alpha", "lambda", "seed", "hdv_profile"];
+
+/// One CSV row and the cell it belongs to.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Row {
+    pub cell: Cell,
+    /// The whole row, cell columns included.
+    pub fields: csv::StringRecord,
+}
+
+/// One collected file: its header and rows.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Table {
+    pub header: Vec<String>,
+    pub rows: Vec<Row>,
+}
+
+impl Table {
+    /// An empty table with `header`.
+    pub fn new(header: Vec<String>) -> Table {
+        Table {
+            header,
+            rows: Vec::new(),
+        }
+    }
+
+    /// Index of a column, if present.
+    pub fn column(&self, name: &str) -> Option<usize> {
+        self.header.iter().position(|h| h == name)
+    }
+
+    /// The table as CSV bytes, header first.
+    pub fn to_csv(&self) -> Vec<u8> {
+        let mut w = csv::Writer::from_writer(Vec::new());
+        w.write_record(&self.header).expect("writing to memory");
+        for r in &self.rows {
+            w.write_record(&r.fields).expect("writing to memory");
+        }
+        w.into_inner().expect("writing to memory")
+    }
+}
+
+/// Identity of a cell for lookups: planner, α and λ (by value), seed, HDV profile.
+pub type CellKey = (String, u64, u64, u64, String);
+
+/// Identity of a cell for lookups (α and λ by value).
+pub fn key(c: &Cell) -> CellKey {
+    (
+        c.planner.clone(),
+        c.alpha.to_bits(),
+        c.lambda.to_bits(),
+        c.seed,
+        c.hdv_profile.clone(),
+    )
+}
