@@ -10,9 +10,9 @@ use pyo3::types::PyDict;
 
 use bkpbs::config::Config;
 use bkpbs::controller::{UnknownPlanner, PLANNERS};
+use bkpbs::episode::cells::{Cell, Value};
 use bkpbs::episode::demand;
 use bkpbs::episode::output;
-use bkpbs::episode::cells::{Cell, Value};
 use bkpbs::episode::{self, EpisodeError, EpisodeResult};
 use bkpbs::model::road::EMBEDDED_NET;
 use bkpbs::sumo::files;

@@ -81,7 +81,7 @@ pub enum RampMergeStyle {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct HdvProfile {
-    /// What the profile models, for `bkpbs config` and the README.
+    /// What the profile models, for `bkpbs config` and the guide.
     pub description: String,
     pub car_following: CarFollowing,
     /// Further SUMO vType attributes as SUMO spells them (`sigma`, `lcAssertive`,

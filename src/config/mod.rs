@@ -74,7 +74,7 @@ pub struct Config {
     pub mobil: Mobil,
     /// Stochastic merge decision of HDVs on the ramp.
     pub ramp_merge: RampMerge,
-    /// Who the human drivers are (README: "HDV driver profiles").
+    /// Who the human drivers are (the guide's scenarios chapter, docs/src/scenarios.md).
     pub hdv: HdvSettings,
     /// Motion primitives and M-A* (BK-M-A*, BK-PBS).
     pub planner: PlannerSettings,

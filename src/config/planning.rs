@@ -8,7 +8,7 @@ use std::path::PathBuf;
 
 use serde::{Deserialize, Serialize};
 
-/// Motion primitives and the multi-phase A* (DESIGN §5, §10).
+/// Motion primitives and the multi-phase A* (the paper's section IV; the guide's planners chapter, docs/src/planners.md, gives the defaults it leaves open).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct PlannerSettings {
@@ -30,7 +30,7 @@ pub struct PlannerSettings {
     /// Extra cost (in steps) per step a lane change is put off within a plan. Without it a
     /// change possible now and one a second later cost the same, the search may pick the later
     /// one, and the next round puts it off again: a ramp CAV ran the acceleration lane's length
-    /// beside a gap it kept planning to take (see the README, "Merge deadlock").
+    /// beside a gap it kept planning to take (docs/src/planners.md tells the deadlock and its rules).
     pub lane_change_deferral_penalty: f64,
     /// Acceleration of the `accelerate` primitive (m/s²).
     pub accel: f64,
@@ -43,7 +43,7 @@ pub struct PlannerSettings {
     /// Which lane changes below `min_lane_change_speed` are planned as SUMO executes them there
     /// (a slide: one lane per second, the body along the road) instead of not at all: only
     /// merges out of the acceleration lane by default, so a ramp CAV that had to slow down is
-    /// not stuck at the lane end (see the README, "Merge deadlock").
+    /// not stuck at the lane end (docs/src/planners.md tells the deadlock and its rules).
     pub low_speed_lane_changes: LowSpeedLaneChanges,
     /// The planned CAV's box is inflated by this much along the road (m, each end), to absorb
     /// the small differences between planned and executed motion.
@@ -252,7 +252,7 @@ pub enum PredictorKind {
     Constant,
 }
 
-/// The safety shield (README: "Safety shield"): every CAV's next step of bk-mastar and bk-pbs
+/// The safety shield (docs/src/planners.md): every CAV's next step of bk-mastar and bk-pbs
 /// checked against bounded worst-case behaviour of the others, and replaced when unsafe.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -267,7 +267,7 @@ impl Default for SafetySettings {
     }
 }
 
-/// The RL-PPO baseline (README: "RL-PPO").
+/// The RL-PPO baseline (docs/src/python-and-rl.md).
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct RlSettings {

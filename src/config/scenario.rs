@@ -121,8 +121,8 @@ pub enum CavShare {
     Probability,
 }
 
-/// Choices in how the episode metrics are computed (see the README's "How metrics are
-/// computed").
+/// Choices in how the episode metrics are computed (the guide's metrics chapter,
+/// docs/src/metrics.md, says what each choice changes).
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct MetricsSettings {

@@ -32,7 +32,7 @@ pub struct SumoSettings {
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct OutputSettings {
-    /// One row per vehicle and step (README: "Trajectories").
+    /// One row per vehicle and step (columns in docs/src/metrics.md).
     pub trajectories: TrajectoryFormat,
 }
 

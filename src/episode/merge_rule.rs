@@ -1,4 +1,4 @@
-//! Stochastic merging of ramp HDVs (DESIGN §3), applied through TraCI.
+//! Stochastic merging of ramp HDVs (the scenario of docs/src/scenarios.md), applied through TraCI.
 //!
 //! A ramp HDV on the acceleration lane that has not yet decided draws, each step, a decision with
 //! probability ξ^k, where ξ ∈ [0, 1] is the share of the merge zone its front has driven and k is

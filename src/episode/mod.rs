@@ -9,6 +9,7 @@
 //! [`error`]; what a caller may watch through is the [`Observer`] of [`observer`].
 
 pub mod bench;
+pub mod cells;
 pub mod demand;
 pub mod entry;
 pub mod error;
@@ -18,7 +19,6 @@ pub mod merge_rule;
 pub mod metrics;
 pub mod observer;
 pub mod output;
-pub mod cells;
 mod recording;
 pub mod runner;
 mod step_times;

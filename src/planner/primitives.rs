@@ -12,8 +12,8 @@
 //! keeping its forward speed), so there a lane change is a *slide*: the same lateral path with
 //! the body kept along the road. Without it a ramp CAV that had slowed down could never merge and
 //! stood at the end of the acceleration lane while gaps passed. By default only merges out of
-//! the acceleration lane may slide (`planner.low_speed_lane_changes`): see the README, "Merge
-//! deadlock".
+//! the acceleration lane may slide (`planner.low_speed_lane_changes`): the guide's planners
+//! chapter (docs/src/planners.md) tells the deadlock this prevents.
 
 use crate::config::Scenario;
 use crate::model::kinematics::{Bicycle, BicycleState, Input};

@@ -3,7 +3,7 @@
 - :class:`MergeEnv` (registered as ``bkpbs/Merge-v0``): one CAV among HDVs, as the paper trains
   its RL-PPO baseline; observation = the ego and its 14 nearest vehicles in the road frame
   (``MergeEnv.feature_names``), action = one of the six motion primitives
-  (``MergeEnv.action_names``), reward as ``bkpbs train-rl``'s (README, "RL-PPO").
+  (``MergeEnv.action_names``), reward as ``bkpbs train-rl``'s (the guide's Python and RL chapter).
 - :class:`MergeParallelEnv`: a PettingZoo ``ParallelEnv`` with every CAV an agent (the shared
   policy of the paper's test set-up); agents appear when inserted and leave when they arrive
   (truncated) or crash (terminated).

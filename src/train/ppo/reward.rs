@@ -1,4 +1,4 @@
-//! The reward of the RL-PPO merge policy (README, "RL-PPO"): per CAV and step, the paper's two
+//! The reward of the RL-PPO merge policy (docs/src/python-and-rl.md): per CAV and step, the paper's two
 //! terms (tracking a target speed, avoiding collision) and two this project adds.
 
 use serde::{Deserialize, Serialize};
