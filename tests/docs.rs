@@ -1,5 +1,5 @@
 //! The documentation stays true to the code it describes, without mdbook: every relative link
-//! of the guide (README.md, bindings/README.md, docs/src/, results/**/README.md) names a file
+//! of the guide (README.md, bindings/README.md, docs/src/, the READMEs of results/, models/ and sumo_net/) names a file
 //! that exists and a heading that is there, every `bkpbs …` command in its shell blocks is one
 //! the binary accepts, and no doc comment in the code cites a README section or DESIGN §, which
 //! move (the guide's chapters are the place to link instead). Each check fails with file and
@@ -37,13 +37,15 @@ fn doc_files(root: &Path) -> Vec<PathBuf> {
     let mut found = Vec::new();
     walk(&root.join("docs/src"), &mut found);
     files.extend(found.iter().filter(|p| has_ext(p, "md")).cloned());
-    found.clear();
-    walk(&root.join("results"), &mut found);
-    files.extend(
-        found
-            .into_iter()
-            .filter(|p| p.file_name().is_some_and(|n| n == "README.md")),
-    );
+    for dir in ["results", "models", "sumo_net"] {
+        found.clear();
+        walk(&root.join(dir), &mut found);
+        files.extend(
+            found
+                .drain(..)
+                .filter(|p| p.file_name().is_some_and(|n| n == "README.md")),
+        );
+    }
     files
         .into_iter()
         .map(|p| p.strip_prefix(root).map(Path::to_path_buf).unwrap_or(p))
