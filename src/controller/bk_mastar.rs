@@ -4,7 +4,7 @@
 //! executed; a CAV without a plan in either phase brakes at the emergency deceleration, and the
 //! step records a fallback.
 
-use super::shield::{self, Bounds};
+use super::shield::{self, WorstCase};
 use super::{execute, CavBelief, CavHandling, Command, Controller, PlanStats, Source};
 use crate::config::Config;
 use crate::model::road::Road;
@@ -22,7 +22,7 @@ pub struct BkMastar {
     planner: Mastar,
     lane_changes: LaneChanges,
     /// The shield's check of lane-change starts, when the shield is on.
-    guard: Option<Bounds>,
+    guard: Option<WorstCase>,
     stats: PlanStats,
     tracing: bool,
     beliefs: Vec<CavBelief>,

@@ -8,7 +8,7 @@ use std::sync::Arc;
 
 use rayon::prelude::*;
 
-use super::shield::{self, Bounds};
+use super::shield::{self, WorstCase};
 use super::{execute, CavBelief, CavHandling, Command, Controller, PlanStats, Source};
 use crate::config::Config;
 use crate::model::road::Road;
@@ -27,7 +27,7 @@ pub struct BkPbs {
     lane_changes: LaneChanges,
     commitments: Commitments,
     /// The shield's check of lane-change starts, when the shield is on.
-    guard: Option<Bounds>,
+    guard: Option<WorstCase>,
     stats: PlanStats,
     tracing: bool,
     beliefs: Vec<CavBelief>,
