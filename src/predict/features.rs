@@ -13,7 +13,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::model::road::{Road, MERGE_LANE};
-use crate::model::scene::{Kind, Origin, VehicleState};
+use crate::model::scene::{Kind, Origin, VehicleState, CHANGING_LATERAL};
 
 /// Neighbour slots of graph (a), in node order after the HDV itself.
 pub const SLOTS: [Slot; 6] = [
@@ -195,11 +195,12 @@ impl Subset {
 /// Whether `v` is at a decision point: an HDV that could start a lane change at the next step
 /// (off the single-lane ramp edge, not already moving sideways). Only these are samples.
 pub fn is_decision_point(v: &VehicleState) -> bool {
-    v.kind == Kind::Hdv && !v.on_ramp && v.lateral.abs() < LATERAL_AT_REST
+    v.kind == Kind::Hdv && !v.on_ramp && !v.changing_lanes()
 }
 
-/// Below this lateral offset (m) a vehicle counts as on its lane's centre.
-pub const LATERAL_AT_REST: f64 = 1e-3;
+/// Below this lateral offset (m) a vehicle counts as on its lane's centre: the one threshold of
+/// [`VehicleState::changing_lanes`], under the name the learned predictor still uses.
+pub const LATERAL_AT_REST: f64 = CHANGING_LATERAL;
 /// A lateral move larger than this (m) in one step is a lane change (SUMO moves 0.9 m per step
 /// at speed, less when nearly standing).
 pub const LATERAL_MOVE: f64 = 0.05;
@@ -211,7 +212,7 @@ pub const LATERAL_MOVE: f64 = 0.05;
 /// lane at the midpoint, so the first step of a manoeuvre is the first step with a lateral move
 /// from a centred position; later steps of the same manoeuvre start off-centre and never count.
 pub fn lane_change_start(now: &VehicleState, next: &VehicleState, lane_width: f64) -> i8 {
-    if now.lateral.abs() >= LATERAL_AT_REST {
+    if now.changing_lanes() {
         return 0;
     }
     let y0 = now.lane as f64 * lane_width + now.lateral;
