@@ -211,8 +211,11 @@ pub const LATERAL_MOVE: f64 = 0.05;
 /// SUMO's continuous lane change moves the vehicle sideways at constant speed and switches its
 /// lane at the midpoint, so the first step of a manoeuvre is the first step with a lateral move
 /// from a centred position; later steps of the same manoeuvre start off-centre and never count.
+/// A start leaves the vehicle changing lanes at `next` (its first step moves it at least 0.2 m,
+/// see [`CHANGING_LATERAL`]); the last step of a change, from under that threshold back to the
+/// centre, is a lateral move too and must not count as one.
 pub fn lane_change_start(now: &VehicleState, next: &VehicleState, lane_width: f64) -> i8 {
-    if now.changing_lanes() {
+    if now.changing_lanes() || !next.changing_lanes() {
         return 0;
     }
     let y0 = now.lane as f64 * lane_width + now.lateral;
@@ -620,6 +623,9 @@ mod tests {
         assert_eq!(lane_change_start(&a, &b, 4.5), -1);
         a.lateral = 0.0;
         b.lateral = 0.0;
+        assert_eq!(lane_change_start(&a, &b, 4.5), 0);
+        // The last step of a slow change (0.08 m from the centre, then on it) is no start.
+        a.lateral = -0.08;
         assert_eq!(lane_change_start(&a, &b, 4.5), 0);
     }
 
