@@ -19,8 +19,6 @@ pub struct IdmMobil {
     mobil: Mobil,
     dt: f64,
     v_max: f64,
-    /// Lateral offset (m) beyond which a vehicle counts as mid lane change.
-    settle: f64,
     last_change: HashMap<Arc<str>, f64>,
 }
 
@@ -31,14 +29,13 @@ impl IdmMobil {
             mobil: config.mobil.clone(),
             dt: config.scenario.dt,
             v_max: config.scenario.v_max,
-            settle: 0.1,
             last_change: HashMap::new(),
         }
     }
 
     fn lane_change(&self, scene: &Scene, i: usize) -> Option<LaneChange> {
         let me = &scene.vehicles[i];
-        if me.on_ramp || me.lateral.abs() > self.settle {
+        if me.on_ramp || me.changing_lanes() {
             return None;
         }
         if me.lane == MERGE_LANE {

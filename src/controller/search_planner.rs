@@ -9,7 +9,7 @@
 use std::sync::Arc;
 
 use crate::config::Config;
-use crate::controller::shield::{self, Bounds};
+use crate::controller::shield::{self, WorstCase};
 use crate::controller::{execute, CavBelief, CavHandling, Command, Controller, PlanStats, Source};
 use crate::model::road::Road;
 use crate::model::scene::Scene;
@@ -41,7 +41,7 @@ pub struct SearchCore {
     pub planner: Mastar,
     pub lane_changes: LaneChanges,
     /// The shield's check of lane-change starts, when the shield is on.
-    guard: Option<Bounds>,
+    guard: Option<WorstCase>,
 }
 
 impl SearchCore {

@@ -104,17 +104,14 @@ impl EntryControl {
         out
     }
 
-    /// The speed a vehicle with front at `front` in `lane` may enter with, if any.
+    /// The speed a vehicle with front at `front` in `lane` may enter with, if any. Its leader
+    /// may be a vehicle changing into or out of `lane`
+    /// ([`other_lane`](crate::model::scene::VehicleState::other_lane)).
     fn entry_speed(&self, scene: &Scene, lane: i32, front: f64, wanted: f64) -> Option<f64> {
         let leader = scene
             .vehicles
             .iter()
-            .filter(|v| {
-                v.lane == lane
-                    || (v.lateral.abs() > 0.5
-                        && (v.lane - lane).abs() == 1
-                        && v.lateral.signum() as i32 == lane - v.lane)
-            })
+            .filter(|v| v.lane == lane || v.other_lane() == Some(lane))
             .filter(|v| v.front() > front - self.length)
             .min_by(|a, b| a.rear().total_cmp(&b.rear()));
         let Some(l) = leader else {

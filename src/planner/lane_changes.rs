@@ -3,6 +3,15 @@
 //! CAVs change lanes only when told (lane-change mode 0), so the planner knows exactly which
 //! changes are under way: it must continue them (SUMO is moving the vehicle sideways), not
 //! re-command or cancel them.
+//!
+//! This timer is not the lateral-offset test [`changing_lanes`] under another name: that reads
+//! the offset SUMO reports and answers "is this vehicle off its lane centre now?" for any
+//! vehicle. The timer answers "which change did the planner command, toward which lane, and for
+//! how many more steps?" for its own CAVs: the offset points to the lane a vehicle comes from
+//! once it has switched lanes at the midpoint, and tells no steps left, which the planner needs
+//! to continue the change in its plan.
+//!
+//! [`changing_lanes`]: crate::model::scene::VehicleState::changing_lanes
 
 use std::collections::HashMap;
 use std::sync::Arc;

@@ -1,4 +1,5 @@
-//! What the lane-change model b_θ sees of one HDV at one step (paper IV.D, DESIGN §5, §10).
+//! What the lane-change model b_θ sees of one HDV at one step (paper IV.D; the features and scales
+//! are told in the guide's predictor chapter, docs/src/predictor.md).
 //!
 //! An [`Observation`] holds physical quantities (m, m/s): (a) the HDV itself and the leading and
 //! following vehicle on its own lane and on each adjacent lane within [`SENSING_RANGE`], and
@@ -195,11 +196,9 @@ impl Subset {
 /// Whether `v` is at a decision point: an HDV that could start a lane change at the next step
 /// (off the single-lane ramp edge, not already moving sideways). Only these are samples.
 pub fn is_decision_point(v: &VehicleState) -> bool {
-    v.kind == Kind::Hdv && !v.on_ramp && v.lateral.abs() < LATERAL_AT_REST
+    v.kind == Kind::Hdv && !v.on_ramp && v.on_lane_centre()
 }
 
-/// Below this lateral offset (m) a vehicle counts as on its lane's centre.
-pub const LATERAL_AT_REST: f64 = 1e-3;
 /// A lateral move larger than this (m) in one step is a lane change (SUMO moves 0.9 m per step
 /// at speed, less when nearly standing).
 pub const LATERAL_MOVE: f64 = 0.05;
@@ -210,8 +209,9 @@ pub const LATERAL_MOVE: f64 = 0.05;
 /// SUMO's continuous lane change moves the vehicle sideways at constant speed and switches its
 /// lane at the midpoint, so the first step of a manoeuvre is the first step with a lateral move
 /// from a centred position; later steps of the same manoeuvre start off-centre and never count.
+/// The last step of a change ends on the centre but starts off it, so it never counts.
 pub fn lane_change_start(now: &VehicleState, next: &VehicleState, lane_width: f64) -> i8 {
-    if now.lateral.abs() >= LATERAL_AT_REST {
+    if !now.on_lane_centre() {
         return 0;
     }
     let y0 = now.lane as f64 * lane_width + now.lateral;
@@ -619,6 +619,9 @@ mod tests {
         assert_eq!(lane_change_start(&a, &b, 4.5), -1);
         a.lateral = 0.0;
         b.lateral = 0.0;
+        assert_eq!(lane_change_start(&a, &b, 4.5), 0);
+        // The last step of a slow change (0.08 m from the centre, then on it) is no start.
+        a.lateral = -0.08;
         assert_eq!(lane_change_start(&a, &b, 4.5), 0);
     }
 

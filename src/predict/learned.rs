@@ -20,8 +20,8 @@ use std::cell::RefCell;
 use std::sync::Arc;
 
 use super::features::{
-    cav_node, ego_of, lane_change_direction, neighbours, select_cavs, Agent, Observation,
-    LATERAL_AT_REST, PREVIEW, SENSING_RANGE,
+    cav_node, ego_of, lane_change_direction, neighbours, select_cavs, Agent, Observation, PREVIEW,
+    SENSING_RANGE,
 };
 use super::infer::Workspace;
 use super::longitudinal::Longitudinal;
@@ -364,7 +364,7 @@ impl Predictor for Learned {
         if v.kind != Kind::Hdv {
             return self.trajectory(scene, i, |_| y0, horizon);
         }
-        if v.lateral.abs() >= LATERAL_AT_REST {
+        if !v.on_lane_centre() {
             return self.finishing_manoeuvre(scene, i, y0, horizon);
         }
         let r = BUFFERS.with(|b| {

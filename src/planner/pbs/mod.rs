@@ -85,9 +85,6 @@ pub trait RequestFor: Sync {
     fn fallback(&self, planner: &Mastar, agent: usize, horizon: usize) -> Trajectory;
 }
 
-/// Lateral offset (m) toward the main road from which a ramp HDV's merge is under way.
-const MERGE_UNDER_WAY: f64 = 0.1;
-
 /// One planning problem: a scene and how to plan and predict in it.
 pub struct Problem<'a> {
     pub scene: &'a Scene,
@@ -174,7 +171,7 @@ impl Problem<'_> {
         v.kind == Kind::Hdv
             && v.origin == Origin::Ramp
             && v.lane == MERGE_LANE
-            && (v.lateral > MERGE_UNDER_WAY || forced)
+            && (v.other_lane() == Some(MERGE_LANE + 1) || forced)
     }
 
     /// The tracks of `ts` over this problem's horizon.

@@ -1,0 +1,398 @@
+//! The shield's pure worst-case check: is one CAV's next step safe whatever the others do
+//! within bounds, and if not, what is the least intrusive safe step instead.
+//!
+//! This is the second of the crate's two safety models, and the last word. The first,
+//! [`crate::planner::safety::SafetyRule`], is the planners' own: it judges whole *predicted*
+//! trajectories, pair by pair over the planning horizon (inflated bodies must not overlap; a
+//! gap of `safe_gap` + reaction time + stopping-distance difference in the lane), so a plan is
+//! only as safe as the HDV predictions it was made against. The shield trusts no prediction
+//! and looks one step ahead: it takes the maneuver actually about to be sent, the scene as it
+//! is now, and bounded worst cases of every other vehicle ([`WorstCase`]: everyone may brake at
+//! its emergency deceleration, a lane change under way completes, a ramp HDV near the lane end
+//! may merge at any moment), and steps the motion as SUMO integrates it, checking the bumper
+//! gap against `planner.margin_long` at every step end. Both models share their braking
+//! numbers (`planner.emergency_decel`, `idm.decel` for a cut-in's follower) so that a plan the
+//! rule admits is rarely overridden here.
+//!
+//! Worst cases: every other vehicle may brake at its emergency deceleration (HDVs
+//! `idm.max_decel`, SUMO's emergencyDecel; CAVs `planner.emergency_decel`) and keeps its lane; a
+//! lane change under way completes, so a vehicle off its lane centre occupies both lanes; a ramp
+//! HDV on the acceleration lane may merge into main lane 1 at any time. A CAV's maneuver is safe
+//! when, executed for one step and followed by braking at `planner.emergency_decel`, the CAV never
+//! comes closer than the margin to any vehicle ahead of it (by centre) in any lane it occupies,
+//! and, if it starts a lane change, the follower in the target lane stays clear of it braking at
+//! its comfortable deceleration `idm.decel`. Motion is stepped as SUMO steps it (Euler: a step's
+//! end speed times `dt`), and gaps are checked at step ends, where SUMO checks collisions.
+//!
+//! An unsafe maneuver is replaced by the least intrusive safe one: keep the lane (a lane-change
+//! start is cancelled; one under way is left to finish), at the highest safe speed between the
+//! strongest braking and the planned speed, else the strongest braking.
+
+use crate::config::Config;
+use crate::controller::Maneuver;
+use crate::model::road::{FIRST_MAIN_LANE, FORCED_MERGE_ZONE, MERGE_LANE};
+use crate::model::scene::{Kind, Origin, Scene, VehicleState};
+
+/// The shield's worst-case braking model: how hard every vehicle may brake (and an HDV
+/// accelerate), and the gap kept at every step end.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct WorstCase {
+    /// Step length (s).
+    pub dt: f64,
+    /// Hardest braking of a CAV, the checked one included (m/s², positive).
+    pub cav_decel: f64,
+    /// Hardest braking of an HDV (m/s², positive).
+    pub hdv_decel: f64,
+    /// Strongest acceleration of an HDV (m/s²): how soon a ramp HDV can reach the forced-merge
+    /// zone.
+    pub hdv_accel: f64,
+    /// Braking a lane change may ask of the new follower at most (m/s², positive).
+    pub follower_decel: f64,
+    /// Smallest bumper gap kept at every step end (m).
+    pub margin: f64,
+}
+
+impl WorstCase {
+    /// The worst cases of `config`; the margin is the planner's longitudinal box inflation
+    /// (`planner.margin_long`), which absorbs the difference between modelled and executed motion.
+    pub fn from_config(config: &Config) -> Self {
+        WorstCase {
+            dt: config.scenario.dt,
+            cav_decel: config.planner.emergency_decel,
+            hdv_decel: config.idm.max_decel,
+            hdv_accel: config.idm.accel,
+            follower_decel: config.idm.decel,
+            margin: config.planner.margin_long,
+        }
+    }
+
+    fn emergency_decel(&self, kind: Kind) -> f64 {
+        match kind {
+            Kind::Cav => self.cav_decel,
+            Kind::Hdv => self.hdv_decel,
+        }
+    }
+}
+
+/// Lane bit of a lane set (lanes outside 0..64 are no lane of this road).
+pub fn bit(lane: i32) -> u64 {
+    if (0..64).contains(&lane) {
+        1 << lane
+    } else {
+        0
+    }
+}
+
+/// Lanes vehicle `v` occupies: its own, and the other one of a lane change under way
+/// ([`VehicleState::other_lane`]: moving to it or from it, either way it occupies both).
+fn lanes_now(v: &VehicleState) -> u64 {
+    bit(v.lane) | v.other_lane().map_or(0, bit)
+}
+
+/// A ramp HDV on the acceleration lane: it may start its merge at any moment (SUMO's lane-change
+/// model decides when). A CAV changing into lane 1 beside it must let it (a CAV in lane 2 and a
+/// ramp HDV 16 m ahead of it once moved into lane 1 in the same step: each saw the lane free);
+/// a CAV already driving in lane 1 is not asked to, see [`may_merge`].
+fn on_acceleration_lane(v: &VehicleState) -> bool {
+    v.kind == Kind::Hdv && v.origin == Origin::Ramp && v.lane == MERGE_LANE && !v.on_ramp
+}
+
+/// A ramp HDV whose merge will happen whatever the CAVs do: on the acceleration lane within
+/// [`FORCED_MERGE_ZONE`] of its end, or able to come to a stand there within `horizon` seconds
+/// (accelerating at `b.hdv_accel`, then braking at `b.hdv_decel`), where the merge rule forces
+/// it in once it stands. A creeping HDV a metre short of the zone is one such. Merges already
+/// under way count through the lateral offset ([`VehicleState::other_lane`]). Other ramp HDVs are not
+/// assumed to merge at any moment: that assumption cost a fifth of the throughput and no
+/// collision it prevented was seen.
+pub fn may_merge(scene: &Scene, v: &VehicleState, horizon: f64, b: &WorstCase) -> bool {
+    let zone = scene.road.zone_ahead(v.front()).end - FORCED_MERGE_ZONE;
+    let can_stand_in_zone = || {
+        farthest_stand(v.speed, horizon, b.hdv_accel, b.hdv_decel)
+            .is_some_and(|reach| v.front() + reach >= zone)
+    };
+    on_acceleration_lane(v) && (v.front() + v.speed * horizon >= zone || can_stand_in_zone())
+}
+
+/// How far ahead a vehicle at `speed` can be standing within `horizon` seconds, accelerating
+/// at `accel` and then braking at `decel` (none if it cannot stop within the horizon).
+pub(super) fn farthest_stand(speed: f64, horizon: f64, accel: f64, decel: f64) -> Option<f64> {
+    if speed > decel * horizon {
+        return None;
+    }
+    let t_accel = (horizon * decel - speed) / (accel + decel);
+    let peak = speed + accel * t_accel;
+    Some(0.5 * (speed + peak) * t_accel + peak * peak / (2.0 * decel))
+}
+
+/// Lanes another vehicle may occupy within `horizon` seconds under the worst cases.
+fn lanes_of_other(scene: &Scene, v: &VehicleState, horizon: f64, b: &WorstCase) -> u64 {
+    let merge = if may_merge(scene, v, horizon, b) {
+        bit(FIRST_MAIN_LANE)
+    } else {
+        0
+    };
+    lanes_now(v) | merge
+}
+
+/// Lanes the CAV occupies while executing `m`: its lanes now and the target of a change it starts.
+fn lanes_of_cav(v: &VehicleState, m: &Maneuver) -> u64 {
+    lanes_now(v) | m.lane_change.map_or(0, |lc| bit(v.lane + lc.offset()))
+}
+
+/// One vehicle's worst-case longitudinal motion: `first` as the speed at the end of the first
+/// step (none: braking from the start), then braking at `decel` to a stop, or stopped dead after
+/// `reach` metres (the end of the acceleration lane, where SUMO halts a vehicle on the spot).
+#[derive(Debug, Clone, Copy)]
+struct Motion {
+    speed: f64,
+    first: Option<f64>,
+    decel: f64,
+    reach: f64,
+}
+
+impl Motion {
+    fn speed_after(&self, step: usize, previous: f64, dt: f64) -> f64 {
+        match (step, self.first) {
+            (1, Some(v)) => v,
+            _ => (previous - self.decel * dt).max(0.0),
+        }
+    }
+}
+
+/// Whether `back`, `gap` metres (bumper to bumper) behind `front`, stays at least `margin` behind
+/// it at every step end until it stands, both moving as SUMO steps them.
+fn stays_clear(back: Motion, front: Motion, gap: f64, b: &WorstCase) -> bool {
+    let (mut vb, mut vf, mut gap, mut moved) = (back.speed, front.speed, gap, 0.0);
+    for step in 1..=10_000 {
+        vb = back.speed_after(step, vb, b.dt);
+        vf = front.speed_after(step, vf, b.dt);
+        let advance = (vf * b.dt).min(front.reach - moved).max(0.0);
+        moved += advance;
+        gap += advance - vb * b.dt;
+        if gap < b.margin {
+            return false;
+        }
+        if vb <= 0.0 {
+            // The one behind stands; the one in front never moves backwards.
+            return true;
+        }
+    }
+    true
+}
+
+/// The CAV's own worst case after `m`: `m.speed` for one step, then its emergency braking.
+fn cav_motion(v: &VehicleState, m: &Maneuver, b: &WorstCase) -> Motion {
+    Motion {
+        speed: v.speed,
+        first: Some(m.speed),
+        decel: b.cav_decel,
+        reach: f64::INFINITY,
+    }
+}
+
+/// How far `v` can drive before its lane ends: to the end of the acceleration lane for a vehicle
+/// on it, else without limit.
+fn reach(scene: &Scene, v: &VehicleState) -> f64 {
+    if v.lane == MERGE_LANE {
+        (scene.road.zone_ahead(v.front()).end - v.front()).max(0.0)
+    } else {
+        f64::INFINITY
+    }
+}
+
+/// The end of the acceleration lane, as a standing vehicle in front of a CAV that occupies that
+/// lane alone: the CAV must be able to stop before it.
+fn clear_of_lane_end(scene: &Scene, v: &VehicleState, m: &Maneuver, b: &WorstCase) -> bool {
+    if lanes_of_cav(v, m) != bit(MERGE_LANE) {
+        return true;
+    }
+    let wall = Motion {
+        speed: 0.0,
+        first: None,
+        decel: b.cav_decel,
+        reach: 0.0,
+    };
+    stays_clear(
+        cav_motion(v, m, b),
+        wall,
+        scene.road.zone_ahead(v.front()).end - v.front(),
+        b,
+    )
+}
+
+/// CAV `i`'s maneuver `m` under check, with `entering[j]` the lanes scene vehicle `j` enters
+/// by a lane change sent this same step: the question both checks ([`clear_of_leaders`],
+/// [`clear_of_new_follower`]) answer.
+#[derive(Debug, Clone, Copy)]
+pub struct Candidate<'a> {
+    pub scene: &'a Scene,
+    pub i: usize,
+    pub m: &'a Maneuver,
+    pub b: &'a WorstCase,
+    pub entering: &'a [u64],
+}
+
+impl<'a> Candidate<'a> {
+    /// The CAV under check.
+    fn me(&self) -> &'a VehicleState {
+        &self.scene.vehicles[self.i]
+    }
+
+    /// The lane the maneuver changes into, if it starts a change.
+    fn target(&self) -> Option<i32> {
+        self.m.lane_change.map(|lc| self.me().lane + lc.offset())
+    }
+
+    /// The lanes scene vehicle `j` enters by a lane change sent this step.
+    fn entered(&self, j: usize) -> u64 {
+        self.entering.get(j).copied().unwrap_or(0)
+    }
+
+    /// Every other vehicle of the scene, with its index.
+    fn others(&self) -> impl Iterator<Item = (usize, &'a VehicleState)> + '_ {
+        let i = self.i;
+        self.scene
+            .vehicles
+            .iter()
+            .enumerate()
+            .filter(move |&(j, _)| j != i)
+    }
+}
+
+/// Whether the CAV executing its maneuver stays clear of every vehicle ahead of it in a lane it
+/// occupies (vehicles on the acceleration lane stop dead at its end), and of that lane's end
+/// when it occupies that lane alone.
+pub fn clear_of_leaders(c: &Candidate) -> bool {
+    let (scene, me, m, b) = (c.scene, c.me(), c.m, c.b);
+    let lanes = lanes_of_cav(me, m);
+    let horizon = b.dt + m.speed / b.cav_decel;
+    let motion = cav_motion(me, m, b);
+    let target = c.target();
+    let into_lane_1 = target == Some(FIRST_MAIN_LANE);
+    let lanes_of = |j: usize, o: &VehicleState| {
+        let merging = match target {
+            Some(t) if into_lane_1 && on_acceleration_lane(o) => bit(t),
+            Some(t) if may_enter_from_beyond(me, t, o) => bit(t),
+            _ => 0,
+        };
+        lanes_of_other(scene, o, horizon, b) | c.entered(j) | merging
+    };
+    clear_of_lane_end(scene, me, m, b)
+        && c.others()
+            .filter(|&(j, o)| o.s > me.s && lanes_of(j, o) & lanes != 0)
+            .all(|(_, o)| {
+                let worst = Motion {
+                    speed: o.speed,
+                    first: None,
+                    decel: b.emergency_decel(o.kind),
+                    reach: reach(scene, o),
+                };
+                stays_clear(motion, worst, o.rear() - me.front(), b)
+            })
+}
+
+/// Whether HDV `o` drives on the main-road lane beyond `target`, seen from CAV `me`'s lane, on a
+/// road of three or more main lanes: it may change into `target`, a middle lane, in the same
+/// second as the CAV (SUMO's LC2013 keeps right and overtakes on the left), and both would be
+/// in it at once. (A CAV in lane 3 changing right beside an HDV in lane 1 that was moving back
+/// left hit it on the corridor.) Never true on two main lanes: the lane beyond is then the
+/// acceleration lane, whose ramp HDVs [`on_acceleration_lane`] covers.
+pub(super) fn may_enter_from_beyond(me: &VehicleState, target: i32, o: &VehicleState) -> bool {
+    let beyond = 2 * target - me.lane;
+    o.kind == Kind::Hdv
+        && !o.on_ramp
+        && me.lane >= FIRST_MAIN_LANE
+        && beyond >= FIRST_MAIN_LANE
+        && o.lane == beyond
+}
+
+/// Whether a lane change the maneuver starts leaves the nearest vehicle behind the CAV in the
+/// target lane able to stay clear braking at `follower_decel` (true when it starts none).
+pub fn clear_of_new_follower(c: &Candidate) -> bool {
+    let Some(target) = c.target() else {
+        return true;
+    };
+    let (me, b) = (c.me(), c.b);
+    let follower = c
+        .others()
+        .filter(|&(j, o)| {
+            let beyond = may_enter_from_beyond(me, target, o);
+            o.s <= me.s && ((lanes_now(o) | c.entered(j)) & bit(target) != 0 || beyond)
+        })
+        .map(|(_, o)| o)
+        .max_by(|a, c| a.s.total_cmp(&c.s));
+    follower.map_or(true, |f| {
+        let back = Motion {
+            speed: f.speed,
+            first: None,
+            decel: b.follower_decel,
+            reach: f64::INFINITY,
+        };
+        stays_clear(back, cav_motion(me, c.m, b), me.rear() - f.front(), b)
+    })
+}
+
+/// Whether CAV `i` may execute `m` under the shield's worst cases, `entering[j]` being the lanes
+/// scene vehicle `j` enters by a lane change sent this same step (CAVs the shield already let
+/// start one: two CAVs may not change into the same lane at once, as bk-mastar's, planned
+/// apart, once did).
+pub fn is_safe(scene: &Scene, i: usize, m: &Maneuver, b: &WorstCase, entering: &[u64]) -> bool {
+    let c = Candidate {
+        scene,
+        i,
+        m,
+        b,
+        entering,
+    };
+    clear_of_leaders(&c) && clear_of_new_follower(&c)
+}
+
+/// The least intrusive safe replacement of CAV `i`'s maneuver `m`, or `None` when `m` is safe
+/// (or when even the replacement would be `m` itself). Keeps the lane (cancels a lane-change
+/// start; a change under way continues, as SUMO is already moving the car) at the highest safe
+/// speed in [strongest braking, planned speed], else brakes as hard as the CAV can.
+pub fn replacement(
+    scene: &Scene,
+    i: usize,
+    m: &Maneuver,
+    b: &WorstCase,
+    entering: &[u64],
+) -> Option<Maneuver> {
+    if is_safe(scene, i, m, b, entering) {
+        return None;
+    }
+    let keep = |speed| Maneuver {
+        speed,
+        lane_change: None,
+    };
+    let safe = |speed| {
+        clear_of_leaders(&Candidate {
+            scene,
+            i,
+            m: &keep(speed),
+            b,
+            entering,
+        })
+    };
+    let v = &scene.vehicles[i];
+    let strongest = (v.speed - b.cav_decel * b.dt).max(0.0).min(m.speed);
+    let speed = if m.lane_change.is_some() && safe(m.speed) {
+        m.speed
+    } else if !safe(strongest) {
+        strongest
+    } else {
+        // Safety only improves as the first step gets slower: bisect the highest safe speed.
+        let (mut lo, mut hi) = (strongest, m.speed);
+        while hi - lo > 1e-3 {
+            let mid = 0.5 * (lo + hi);
+            if safe(mid) {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        lo
+    };
+    let out = keep(speed);
+    (out != *m).then_some(out)
+}

@@ -1,0 +1,354 @@
+use super::check::{
+    clear_of_leaders, clear_of_new_follower, farthest_stand, may_enter_from_beyond, may_merge,
+    Candidate,
+};
+use super::*;
+use crate::model::road::{Road, FORCED_MERGE_ZONE};
+use crate::model::scene::{Kind, Origin, VehicleState};
+
+fn cav(s: f64, lane: i32, speed: f64) -> VehicleState {
+    VehicleState::on_lane("cav", Kind::Cav, Origin::Main, s, lane, speed)
+}
+
+fn hdv(id: &str, s: f64, lane: i32, speed: f64) -> VehicleState {
+    VehicleState::on_lane(id, Kind::Hdv, Origin::Main, s, lane, speed)
+}
+
+fn worst_case() -> WorstCase {
+    WorstCase::from_config(&Config::default())
+}
+
+fn go(speed: f64, lane_change: Option<LaneChange>) -> Maneuver {
+    Maneuver { speed, lane_change }
+}
+
+/// Three main lanes: a CAV in lane 3 may not change into the middle lane beside an HDV in
+/// lane 1, which may move into it in the same second; with the HDV far ahead it may. On two
+/// lanes nothing lies beyond: the rule never fires there.
+#[test]
+fn a_middle_lane_is_not_entered_beside_an_hdv_on_its_other_side() {
+    let b = worst_case();
+    let mut road = Road::paper_default();
+    road.main_lanes = 3;
+    let scene = |hdv_s: f64, hdv_v: f64| Scene {
+        time: 0.0,
+        road: road.clone(),
+        vehicles: vec![cav(2721.2, 3, 27.3), hdv("h", hdv_s, 1, hdv_v)],
+    };
+    let right = go(27.3, Some(LaneChange::Right));
+    assert!(!is_safe(&scene(2726.1, 23.4), 0, &right, &b, &[]));
+    assert!(is_safe(&scene(2726.1, 23.4), 0, &go(27.3, None), &b, &[]));
+    assert!(is_safe(&scene(2900.0, 23.4), 0, &right, &b, &[]));
+    // Close behind the CAV and faster, the HDV in lane 1 counts as its new follower in
+    // lane 2; slower, it can stay clear.
+    assert!(!is_safe(&scene(2712.0, 34.0), 0, &right, &b, &[]));
+    assert!(is_safe(&scene(2712.0, 23.4), 0, &right, &b, &[]));
+    let me = cav(100.0, 2, 30.0);
+    assert!(!may_enter_from_beyond(&me, 1, &hdv("h", 100.0, 0, 30.0)));
+}
+
+#[test]
+fn a_cav_closing_fast_on_a_standing_car_is_slowed() {
+    let b = worst_case();
+    // 75 m to a standing car at 30 m/s: the planned +2 m/s² is unsafe, braking is not needed
+    // in full.
+    let scene = Scene::on_paper_road(0.0, vec![cav(100.0, 1, 30.0), hdv("h", 180.0, 1, 0.0)]);
+    let planned = go(30.4, None);
+    assert!(!is_safe(&scene, 0, &planned, &b, &[]));
+    let m = replacement(&scene, 0, &planned, &b, &[]).unwrap();
+    let strongest = 30.0 - b.cav_decel * b.dt;
+    assert!(m.speed > strongest && m.speed < 30.4, "{m:?}");
+    assert!(is_safe(&scene, 0, &m, &b, &[]));
+    assert!(!is_safe(&scene, 0, &go(m.speed + 0.01, None), &b, &[]));
+    // 35 m: nothing is safe, so the CAV brakes as hard as it can.
+    let scene = Scene::on_paper_road(0.0, vec![cav(100.0, 1, 30.0), hdv("h", 140.0, 1, 0.0)]);
+    let m = replacement(&scene, 0, &planned, &b, &[]).unwrap();
+    assert!((m.speed - strongest).abs() < 1e-9, "{m:?}");
+}
+
+#[test]
+fn a_safe_cruise_is_left_alone() {
+    let b = worst_case();
+    // 60 m behind an HDV at the same speed: it stops in 35 m braking at 9 m/s², the CAV in
+    // 5 m + 52 m at 6 m/s².
+    let scene = Scene::on_paper_road(0.0, vec![cav(100.0, 1, 25.0), hdv("h", 165.0, 1, 25.0)]);
+    assert!(is_safe(&scene, 0, &go(25.0, None), &b, &[]));
+    assert_eq!(replacement(&scene, 0, &go(25.0, None), &b, &[]), None);
+    // Vehicles behind, and ahead in a lane the CAV does not occupy, are not its business.
+    let scene = Scene::on_paper_road(
+        0.0,
+        vec![
+            cav(100.0, 1, 25.0),
+            hdv("behind", 94.0, 1, 35.0),
+            hdv("beside", 110.0, 2, 0.0),
+        ],
+    );
+    assert_eq!(replacement(&scene, 0, &go(25.4, None), &b, &[]), None);
+}
+
+#[test]
+fn a_lane_change_start_into_a_gap_too_small_for_the_follower_is_cancelled() {
+    let b = worst_case();
+    // The lane-2 follower (30 m/s, 5 m behind) could not stop braking at 5 m/s² if the CAV
+    // (25 m/s) braked at 6 m/s² in front of it.
+    let scene = Scene::on_paper_road(0.0, vec![cav(100.0, 1, 25.0), hdv("f", 90.0, 2, 30.0)]);
+    let planned = go(25.0, Some(LaneChange::Left));
+    let c = Candidate {
+        scene: &scene,
+        i: 0,
+        m: &planned,
+        b: &b,
+        entering: &[],
+    };
+    assert!(clear_of_leaders(&c));
+    assert!(!clear_of_new_follower(&c));
+    assert_eq!(
+        replacement(&scene, 0, &planned, &b, &[]),
+        Some(go(25.0, None))
+    );
+    // 60 m behind, the same follower can stop: the change goes ahead.
+    let scene = Scene::on_paper_road(0.0, vec![cav(100.0, 1, 25.0), hdv("f", 40.0, 2, 30.0)]);
+    assert_eq!(replacement(&scene, 0, &planned, &b, &[]), None);
+}
+
+#[test]
+fn a_lane_change_under_way_is_never_cancelled_and_occupies_both_lanes() {
+    let b = worst_case();
+    // Past the middle of a change from lane 1 to lane 2: assigned to lane 2, 1.5 m to its
+    // right, so still in lane 1 too, where a car stands 30 m ahead.
+    let mut me = cav(100.0, 2, 25.0);
+    me.lateral = -1.5;
+    let scene = Scene::on_paper_road(0.0, vec![me.clone(), hdv("h", 130.0, 1, 0.0)]);
+    let planned = go(25.0, None);
+    let m = replacement(&scene, 0, &planned, &b, &[]).unwrap();
+    assert_eq!(m.lane_change, None);
+    assert!(m.speed < 25.0);
+    // Back on its lane centre, the car in lane 1 no longer matters.
+    me.lateral = 0.0;
+    let scene = Scene::on_paper_road(0.0, vec![me, hdv("h", 130.0, 1, 0.0)]);
+    assert_eq!(replacement(&scene, 0, &planned, &b, &[]), None);
+    // An HDV changing lanes into the CAV's lane occupies it as well.
+    let mut other = hdv("h", 130.0, 2, 0.0);
+    other.lateral = -1.0;
+    let scene = Scene::on_paper_road(0.0, vec![cav(100.0, 1, 25.0), other]);
+    assert!(replacement(&scene, 0, &planned, &b, &[]).is_some());
+}
+
+#[test]
+fn as_the_search_guard_it_refuses_the_starts_it_would_cancel() {
+    let b = worst_case();
+    // The lane-2 follower (30 m/s, 5 m behind) could not stop behind the CAV: refused, as
+    // the shield would cancel it; with that lane empty, admitted.
+    let crowded = Scene::on_paper_road(0.0, vec![cav(100.0, 1, 25.0), hdv("f", 90.0, 2, 30.0)]);
+    assert!(!b.admits(&crowded, 0, 1, 25.0));
+    assert!(replacement(&crowded, 0, &go(25.0, Some(LaneChange::Left)), &b, &[]).is_some());
+    let empty = Scene::on_paper_road(0.0, vec![cav(100.0, 1, 25.0)]);
+    assert!(b.admits(&empty, 0, 1, 25.0));
+    assert!(replacement(&empty, 0, &go(25.0, Some(LaneChange::Left)), &b, &[]).is_none());
+}
+
+#[test]
+fn two_cavs_may_not_change_into_the_same_lane_at_once() {
+    // A ramp CAV standing at the lane end slides into lane 1 while a CAV in lane 2, 55 m
+    // behind at 28 m/s, changes into lane 1 too (bk-mastar, α 0.8, λ 3000, seed 209): each
+    // start is safe alone; the second one sent must see the first.
+    let b = worst_case();
+    let ramp = VehicleState::on_lane("r", Kind::Cav, Origin::Ramp, 327.0, 0, 0.0);
+    let scene = Scene::on_paper_road(0.0, vec![cav(268.0, 2, 28.0), ramp]);
+    let (main_in, ramp_in) = (
+        go(28.0, Some(LaneChange::Right)),
+        go(0.0, Some(LaneChange::Left)),
+    );
+    assert!(is_safe(&scene, 0, &main_in, &b, &[]));
+    assert!(is_safe(&scene, 1, &ramp_in, &b, &[]));
+    let mut entering = vec![0u64; 2];
+    entering[1] = bit(1);
+    assert!(!is_safe(&scene, 0, &main_in, &b, &entering));
+    entering = vec![bit(1), 0];
+    assert!(!is_safe(&scene, 1, &ramp_in, &b, &entering));
+}
+
+#[test]
+fn a_cav_changing_into_lane_1_lets_a_ramp_hdv_ahead_merge_first() {
+    // bk-pbs, α 0.6, λ 3000, seed 17: a CAV in lane 2 at 35 m/s changed into lane 1 as a
+    // ramp HDV 16 m ahead (22.9 m/s) started its merge into it.
+    let b = worst_case();
+    let ramp = VehicleState::on_lane("r", Kind::Hdv, Origin::Ramp, 165.5, 0, 22.9);
+    let scene = Scene::on_paper_road(0.0, vec![cav(149.4, 2, 35.0), ramp.clone()]);
+    assert!(!is_safe(
+        &scene,
+        0,
+        &go(34.75, Some(LaneChange::Right)),
+        &b,
+        &[]
+    ));
+    // Driving on in lane 2, or already in lane 1, it is not asked to expect that merge.
+    assert!(is_safe(&scene, 0, &go(35.0, None), &b, &[]));
+    let in_lane_1 = Scene::on_paper_road(0.0, vec![cav(149.4, 1, 35.0), ramp]);
+    assert!(is_safe(&in_lane_1, 0, &go(35.0, None), &b, &[]));
+    // With the acceleration lane empty the change is safe.
+    let alone = Scene::on_paper_road(0.0, vec![cav(149.4, 2, 35.0)]);
+    assert!(is_safe(
+        &alone,
+        0,
+        &go(34.75, Some(LaneChange::Right)),
+        &b,
+        &[]
+    ));
+}
+
+#[test]
+fn farthest_stand_hand_computed() {
+    // From rest, 2 s, +3 then −9 m/s²: 1.5 s up to 4.5 m/s (3.375 m), 0.5 s down (1.125 m).
+    assert!((farthest_stand(0.0, 2.0, 3.0, 9.0).unwrap() - 4.5).abs() < 1e-12);
+    // 20 m/s cannot stop within a second at 9 m/s².
+    assert_eq!(farthest_stand(20.0, 1.0, 3.0, 9.0), None);
+}
+
+#[test]
+fn a_ramp_hdv_beside_on_the_acceleration_lane_may_merge() {
+    // Near the lane end, where the merge rule forces a stopped HDV in, it may merge at any
+    // moment; earlier on the lane it is not assumed to.
+    let b = worst_case();
+    let early = VehicleState::on_lane("r", Kind::Hdv, Origin::Ramp, 203.0, 0, 20.0);
+    let scene = Scene::on_paper_road(0.0, vec![cav(200.0, 1, 25.0), early.clone()]);
+    assert!(!may_merge(&scene, &early, 1.0, &b));
+    let ramp = VehicleState::on_lane("r", Kind::Hdv, Origin::Ramp, 318.0, 0, 5.0);
+    let planned = go(25.0, None);
+    let scene = Scene::on_paper_road(0.0, vec![cav(312.0, 1, 25.0), ramp.clone()]);
+    assert!(may_merge(&scene, &ramp, 1.0, &b));
+    // Creeping a metre short of the zone, it can be standing in it within a second; ten
+    // metres short, not.
+    let zone = scene.road.zone_ahead(0.0).end - FORCED_MERGE_ZONE;
+    let creeping = VehicleState::on_lane("r", Kind::Hdv, Origin::Ramp, zone - 3.5, 0, 0.1);
+    assert!(may_merge(&scene, &creeping, 1.0, &b));
+    let further = VehicleState::on_lane("r", Kind::Hdv, Origin::Ramp, zone - 12.5, 0, 0.1);
+    assert!(!may_merge(&scene, &further, 1.0, &b));
+    assert!(!is_safe(&scene, 0, &planned, &b, &[]));
+    let m = replacement(&scene, 0, &planned, &b, &[]).unwrap();
+    assert!(m.speed < 25.0);
+    // In lane 2 the CAV is out of its reach; a main-road HDV on lane 0 would not merge.
+    let scene = Scene::on_paper_road(0.0, vec![cav(312.0, 2, 25.0), ramp.clone()]);
+    assert!(is_safe(&scene, 0, &planned, &b, &[]));
+    let main = VehicleState::on_lane("m", Kind::Hdv, Origin::Main, 318.0, 0, 5.0);
+    let scene = Scene::on_paper_road(0.0, vec![cav(312.0, 1, 25.0), main]);
+    assert!(is_safe(&scene, 0, &planned, &b, &[]));
+    // Still far up the ramp edge, it cannot reach the acceleration lane within the horizon.
+    let mut far = ramp;
+    far.s = 20.0;
+    far.on_ramp = true;
+    let scene = Scene::on_paper_road(0.0, vec![cav(18.0, 1, 25.0), far]);
+    assert!(is_safe(&scene, 0, &planned, &b, &[]));
+}
+
+#[test]
+fn the_end_of_the_acceleration_lane_stops_everyone_on_it() {
+    let b = worst_case();
+    let ramp_cav = |s, speed| VehicleState::on_lane("c", Kind::Cav, Origin::Ramp, s, 0, speed);
+    // 47.5 m before the lane's end at 25 m/s: the CAV could not stop before it.
+    let scene = Scene::on_paper_road(0.0, vec![ramp_cav(280.0, 25.0)]);
+    assert!(!is_safe(&scene, 0, &go(25.0, None), &b, &[]));
+    // Starting its merge it no longer occupies the acceleration lane alone.
+    assert!(is_safe(
+        &scene,
+        0,
+        &go(25.0, Some(LaneChange::Left)),
+        &b,
+        &[]
+    ));
+    let scene = Scene::on_paper_road(0.0, vec![ramp_cav(200.0, 25.0)]);
+    assert!(is_safe(&scene, 0, &go(25.0, None), &b, &[]));
+    // A vehicle ahead 5 m before the end halts there, not after braking at 6 m/s².
+    let ahead = VehicleState::on_lane("a", Kind::Cav, Origin::Ramp, 322.5, 0, 25.0);
+    let scene = Scene::on_paper_road(0.0, vec![cav(280.0, 1, 25.0), ahead.clone()]);
+    let mut me = cav(280.0, 0, 25.0);
+    me.lateral = 1.0;
+    let changing = Scene::on_paper_road(0.0, vec![me, ahead]);
+    assert!(is_safe(&scene, 0, &go(25.0, None), &b, &[]));
+    assert!(!is_safe(&changing, 0, &go(25.0, None), &b, &[]));
+}
+
+/// Returns fixed commands and records the lane changes it is told were cancelled.
+struct Fixed {
+    commands: Vec<Command>,
+    cancelled: std::rc::Rc<std::cell::RefCell<Vec<String>>>,
+}
+
+impl Controller for Fixed {
+    fn name(&self) -> &'static str {
+        "bk-pbs"
+    }
+
+    fn handling(&self) -> CavHandling {
+        CavHandling::Commanded
+    }
+
+    fn plan(&mut self, _scene: &Scene, out: &mut Vec<Command>) {
+        out.extend(self.commands.iter().copied());
+    }
+
+    fn last_stats(&self) -> PlanStats {
+        PlanStats {
+            searches: 7,
+            ..PlanStats::default()
+        }
+    }
+
+    fn lane_change_cancelled(&mut self, id: &str) {
+        self.cancelled.borrow_mut().push(id.to_string());
+    }
+}
+
+#[test]
+fn the_wrapper_replaces_marks_and_counts() {
+    let mut fast = cav(100.0, 1, 30.0);
+    fast.id = "fast".into();
+    let mut merging = cav(300.0, 1, 25.0);
+    merging.id = "merging".into();
+    let mut free = cav(600.0, 1, 25.0);
+    free.id = "free".into();
+    let scene = Scene::on_paper_road(
+        0.0,
+        vec![
+            fast,
+            hdv("standing", 140.0, 1, 0.0),
+            merging,
+            hdv("f", 290.0, 2, 30.0),
+            free,
+        ],
+    );
+    let command = |vehicle, maneuver| Command {
+        vehicle,
+        maneuver,
+        source: Source::PbsSolution,
+    };
+    let cancelled = std::rc::Rc::default();
+    let inner = Fixed {
+        commands: vec![
+            command(0, go(30.4, None)),
+            command(2, go(25.0, Some(LaneChange::Left))),
+            command(4, go(25.4, None)),
+        ],
+        cancelled: std::rc::Rc::clone(&cancelled),
+    };
+    let mut shielded = Shielded::new(Box::new(inner), &Config::default());
+    assert_eq!(shielded.name(), "bk-pbs");
+    assert_eq!(shielded.handling(), CavHandling::Commanded);
+    let mut out = Vec::new();
+    shielded.plan(&scene, &mut out);
+    let sources: Vec<Source> = out.iter().map(|c| c.source).collect();
+    assert_eq!(
+        sources,
+        [Source::Shield, Source::Shield, Source::PbsSolution]
+    );
+    assert!(out[0].maneuver.speed < 30.0);
+    assert_eq!(out[1].maneuver, go(25.0, None));
+    assert_eq!(out[2].maneuver, go(25.4, None));
+    assert_eq!(*cancelled.borrow(), ["merging"]);
+    let stats = shielded.last_stats();
+    assert_eq!((stats.shield_overrides, stats.searches), (2, 7));
+    // Counts are per round, not cumulative.
+    let mut out = Vec::new();
+    shielded.plan(&scene, &mut out);
+    assert_eq!(shielded.last_stats().shield_overrides, 2);
+}
