@@ -9,6 +9,8 @@
 //! [`train`] (offline training of the predictor), [`campaign`] (grids of episodes), [`report`]
 //! (tables and figures). Start at [`episode::run`].
 
+#![warn(missing_docs)]
+
 pub mod io;
 
 pub mod config;
