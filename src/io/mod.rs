@@ -14,7 +14,9 @@ use std::path::{Path, PathBuf};
 #[derive(Debug, thiserror::Error)]
 #[error("cannot write {path}: {cause}")]
 pub struct WriteError {
+    /// The file or directory that could not be written.
     pub path: PathBuf,
+    /// The operating system's reason.
     pub cause: std::io::Error,
 }
 

@@ -6,8 +6,11 @@ use crate::model::math::{Point, Vector};
 /// A rectangle of half-extents `half` (along, across its heading) centred at `centre`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct OrientedBox {
+    /// Centre of the rectangle (road frame, m).
     pub centre: Point,
+    /// Direction of the rectangle's long axis (rad, 0 = along the road, positive to the left).
     pub heading: f64,
+    /// Half-length along the heading and half-width across it (m).
     pub half: Vector,
 }
 

@@ -9,15 +9,20 @@ use crate::model::math::Point;
 /// Position of the vehicle's centre (road frame), heading ψ (rad, 0 = along the road), speed v.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct BicycleState {
+    /// Position of the centre (road frame, m).
     pub pos: Point,
+    /// Heading ψ (rad, 0 = along the road, positive to the left).
     pub heading: f64,
+    /// Speed v (m/s).
     pub speed: f64,
 }
 
 /// Control inputs: acceleration a (m/s²) and front-wheel steering angle δ (rad).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct Input {
+    /// Acceleration a (m/s², negative to brake).
     pub accel: f64,
+    /// Front-wheel steering angle δ (rad, positive to the left).
     pub steer: f64,
 }
 
@@ -32,6 +37,7 @@ pub struct Bicycle {
     pub max_decel: f64,
     /// Largest steering angle magnitude (rad).
     pub max_steer: f64,
+    /// Largest speed (m/s); the speed is kept within [0, v_max].
     pub v_max: f64,
     /// RK4 sub-steps per call of [`Bicycle::step`].
     pub substeps: u32,

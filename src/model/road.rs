@@ -33,9 +33,13 @@ pub const EMBEDDED_NET: &str = include_str!("../../sumo_net/merge.net.xml");
 /// from the reference lane's).
 #[derive(Debug, Clone, PartialEq)]
 pub struct LaneFrame {
+    /// Frame lane the SUMO lane lies on.
     pub lane: i32,
+    /// Frame `s` of the lane's start, SUMO position 0 (m).
     pub s0: f64,
+    /// Frame metres per metre of SUMO lane position.
     pub scale: f64,
+    /// `(pos, s)` pairs (m) of a lane mapped piecewise linearly; `None`: linear by `s0`, `scale`.
     pub knots: Option<Arc<[(f64, f64)]>>,
 }
 
@@ -68,6 +72,7 @@ impl LaneFrame {
 /// One SUMO edge (a normal edge or a junction's internal edge) placed in the road frame.
 #[derive(Debug, Clone, PartialEq)]
 pub struct EdgeFrame {
+    /// SUMO's edge id.
     pub name: Arc<str>,
     /// By SUMO lane index; `None` for a lane that leaves the section (towards an off-ramp).
     pub lanes: Vec<Option<LaneFrame>>,
@@ -79,8 +84,11 @@ pub struct EdgeFrame {
 /// acceleration lane to `end`, by which its vehicles must have merged.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct MergeZone {
+    /// Frame `s` where the ramp begins (m): `start` less the ramp's length along it.
     pub ramp_start: f64,
+    /// Frame `s` where the acceleration lane begins: vehicles may merge from here (m).
     pub start: f64,
+    /// Frame `s` where the acceleration lane ends: vehicles must have merged (m).
     pub end: f64,
 }
 
@@ -88,6 +96,7 @@ pub struct MergeZone {
 /// in order along the road. Its name is the SUMO route's id and the prefix of its vehicles' ids.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Entry {
+    /// SUMO route id, also the prefix of its vehicles' ids (`main`, `ramp`, `ramp2`, …).
     pub name: String,
     /// The edges a vehicle entering here drives, to the end of the section.
     pub route: Vec<Arc<str>>,
@@ -102,6 +111,7 @@ pub struct Exit {
     pub name: String,
     /// The main edge it leaves from and the off-ramp's edges.
     pub leaves: Arc<str>,
+    /// The off-ramp's edges, in driving order.
     pub edges: Vec<Arc<str>>,
     /// The off-ramp's last edge and its lane length: where SUMO has leaving vehicles arrive.
     pub end: (Arc<str>, f64),
@@ -110,7 +120,9 @@ pub struct Exit {
 /// The merge section in the road frame.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Road {
+    /// The section's edges, junction-internal ones included; an edge's index is its code.
     pub edges: Vec<EdgeFrame>,
+    /// Width of every lane (m): lane k's centre lies at y = k · lane_width.
     pub lane_width: f64,
     /// Lanes of the main carriageway (frame lanes 1..=N).
     pub main_lanes: i32,
@@ -129,6 +141,8 @@ pub struct Road {
 }
 
 impl Entry {
+    /// An entry named `name` whose vehicles drive the edges `route`, entering at `speed_limit`
+    /// (m/s).
     pub fn new(name: &str, route: &[&str], speed_limit: f64) -> Entry {
         Entry {
             name: name.into(),

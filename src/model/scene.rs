@@ -36,11 +36,14 @@ impl Kind {
 /// Where a vehicle entered the section.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub enum Origin {
+    /// Entered at the main carriageway's source.
     Main,
+    /// Entered on an on-ramp.
     Ramp,
 }
 
 impl Origin {
+    /// The name used in CSV files: `main` or `ramp`.
     pub fn as_str(self) -> &'static str {
         match self {
             Origin::Main => "main",
@@ -52,8 +55,11 @@ impl Origin {
 /// One vehicle at one instant, in the road frame.
 #[derive(Debug, Clone, PartialEq)]
 pub struct VehicleState {
+    /// SUMO's vehicle id.
     pub id: Arc<str>,
+    /// Who drives it.
     pub kind: Kind,
+    /// Where it entered the section.
     pub origin: Origin,
     /// Longitudinal position of the vehicle's centre (m).
     pub s: f64,
@@ -69,7 +75,9 @@ pub struct VehicleState {
     pub heading: f64,
     /// The speed the vehicle wants to drive (m/s).
     pub desired_speed: f64,
+    /// Body length, bumper to bumper (m).
     pub length: f64,
+    /// Body width (m).
     pub width: f64,
     /// Still on the ramp edge (cannot change lanes yet).
     pub on_ramp: bool,
@@ -161,7 +169,9 @@ pub const ON_LANE_CENTRE: f64 = 1e-3;
 pub struct Scene {
     /// Simulation time (s).
     pub time: f64,
+    /// The road the vehicles are on, in whose frame their states are given.
     pub road: Road,
+    /// Every vehicle in the section at this step.
     pub vehicles: Vec<VehicleState>,
 }
 

@@ -12,14 +12,18 @@ pub struct Pose {
     pub y: f64,
     /// Heading relative to the road (rad).
     pub heading: f64,
+    /// Speed (m/s).
     pub speed: f64,
 }
 
 /// Poses at steps 0, 1, …, of one vehicle (step 0 = now), with its body size.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Trajectory {
+    /// The pose at each planning step, step 0 first.
     pub poses: Vec<Pose>,
+    /// Body length (m).
     pub length: f64,
+    /// Body width (m).
     pub width: f64,
     /// Hardest braking (m/s², positive) of the vehicle driving it, where it differs from a CAV's
     /// (an HDV may brake at SUMO's emergencyDecel): the gap a CAV keeps behind it must let the

@@ -122,6 +122,8 @@ pub struct SceneRequests<'a> {
 }
 
 impl<'a> SceneRequests<'a> {
+    /// The requests of `scene`'s agents, with the changes under way in `lane_changes`, planning
+    /// steps of `dt` (s) and lane-change starts checked by `guard` (none: unchecked).
     pub fn new(
         scene: &'a Scene,
         lane_changes: &'a LaneChanges,

@@ -22,11 +22,17 @@ use crate::model::math::{wrap_angle, Point};
 /// A maneuver of the library.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub enum Primitive {
+    /// Hold the library's `accel` for one step, keeping the lane.
     Accelerate,
+    /// Keep the speed and the lane for one step.
     Idle,
+    /// Brake at the library's `decel` for one step, keeping the lane.
     Decelerate,
+    /// Change one lane to the left, over `lane_change_steps` steps at constant forward speed.
     LaneChangeLeft,
+    /// Change one lane to the right, as [`Primitive::LaneChangeLeft`].
     LaneChangeRight,
+    /// Brake at the library's `emergency_decel` for one step, keeping the lane.
     EmergencyBrake,
 }
 
@@ -61,10 +67,12 @@ impl Primitive {
         }
     }
 
+    /// Whether it is one of the two lane changes.
     pub fn is_lane_change(self) -> bool {
         self.lane_offset() != 0
     }
 
+    /// Its name as policy model files spell their actions (`accelerate`, `lane-change-left`, …).
     pub fn name(self) -> &'static str {
         match self {
             Primitive::Accelerate => "accelerate",
@@ -81,9 +89,11 @@ impl Primitive {
 /// [`Library::rollout_settled`]).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Library {
+    /// The vehicle model the primitives are rolled out with.
     pub bicycle: Bicycle,
     /// Planning step (s).
     pub dt: f64,
+    /// Acceleration of `Accelerate` (m/s²).
     pub accel: f64,
     /// Deceleration of `Decelerate` (m/s², positive).
     pub decel: f64,
@@ -91,7 +101,9 @@ pub struct Library {
     pub emergency_decel: f64,
     /// Steps a lane change takes.
     pub lane_change_steps: usize,
+    /// Lane width (m): how far a lane change moves sideways.
     pub lane_width: f64,
+    /// Slowest speed (m/s) at which the bicycle steers a lane change (10 m/s by default).
     pub min_lane_change_speed: f64,
     /// Whether a lane change below `min_lane_change_speed` is a slide (else unavailable).
     pub slides_below_min_speed: bool,

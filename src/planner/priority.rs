@@ -33,6 +33,7 @@ impl PriorityGraph {
         self.lower.len()
     }
 
+    /// Whether there are no agents.
     pub fn is_empty(&self) -> bool {
         self.lower.is_empty()
     }

@@ -27,9 +27,13 @@ use crate::model::trajectory::{Pose, Trajectory};
 /// Parameters of the rule.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SafetyRule {
+    /// The CAV's box is inflated by this much along the road (m, each end).
     pub margin_long: f64,
+    /// The same across the road (m, each side); also widens the same-lane test.
     pub margin_lat: f64,
+    /// Smallest bumper gap kept on top of the reaction and braking terms (m).
     pub safe_gap: f64,
+    /// Reaction time of the vehicle behind in the gap rule (s).
     pub reaction_time: f64,
     /// Emergency deceleration b (m/s², positive).
     pub brake: f64,
@@ -37,14 +41,18 @@ pub struct SafetyRule {
     /// is taken to brake so from the start of the plan (it sees the change begin); the safety
     /// shield asks no more of it (`idm.decel`, set by [`crate::planner::mastar::Mastar::from_config`]).
     pub follower_brake: f64,
+    /// Lane width (m): moved more than half of it sideways since the start, the CAV cut in.
     pub lane_width: f64,
 }
 
 /// A vehicle at one step: where it is, how big it is and how hard it may brake.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Body {
+    /// Where it is at this step.
     pub pose: Pose,
+    /// Body length (m).
     pub length: f64,
+    /// Body width (m).
     pub width: f64,
     /// See [`Trajectory::brake`].
     pub brake: Option<f64>,
@@ -55,6 +63,8 @@ pub struct Body {
 }
 
 impl Body {
+    /// A body at `pose`, `length` × `width` (m), braking at most at `brake` (m/s², `None`: as
+    /// hard as a CAV).
     pub fn new(pose: Pose, length: f64, width: f64, brake: Option<f64>) -> Body {
         Body {
             pose,
@@ -80,6 +90,7 @@ impl Body {
 pub const REACH: f64 = 120.0;
 
 impl SafetyRule {
+    /// The rule of the planner `settings`, on lanes `lane_width` wide (m).
     pub fn new(settings: &PlannerSettings, lane_width: f64) -> Self {
         SafetyRule {
             margin_long: settings.margin_long,

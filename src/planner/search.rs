@@ -28,9 +28,11 @@ pub enum Stop {
 pub struct Search<N> {
     /// Start to goal, both included; empty unless `stop == Found`.
     pub path: Vec<N>,
+    /// Cost of `path` (g of the goal); infinite unless `stop == Found`.
     pub cost: f64,
     /// Nodes expanded.
     pub expanded: usize,
+    /// Why the search stopped.
     pub stop: Stop,
 }
 

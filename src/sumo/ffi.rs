@@ -8,14 +8,24 @@ use std::sync::atomic::{AtomicBool, Ordering};
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Default)]
 pub struct RawVehicleState {
+    /// x of the front bumper's centre in SUMO's plane (m).
     pub x: f64,
+    /// y of the front bumper's centre in SUMO's plane (m).
     pub y: f64,
+    /// Speed (m/s).
     pub speed: f64,
+    /// Acceleration in the last step (m/s²).
     pub acceleration: f64,
+    /// SUMO's heading (degrees, clockwise from north: 90 = along +x).
     pub angle: f64,
+    /// Position of the front bumper along the lane (m from its start).
     pub lane_position: f64,
+    /// Offset from the lane's centre (m, positive to the left).
     pub lateral_offset: f64,
+    /// SUMO lane index on the edge (0 = rightmost).
     pub lane_index: i32,
+    /// Index of the vehicle's edge in the names set by `Simulation::set_edge_codes`; −1 for
+    /// any other edge.
     pub edge_code: i32,
 }
 

@@ -14,11 +14,15 @@ use crate::model::road::{Road, EMBEDDED_NET};
 /// Why the episode's SUMO input could not be prepared.
 #[derive(Debug, thiserror::Error)]
 pub enum InputError {
+    /// The configured network file does not exist.
     #[error("net file {0} does not exist")]
     MissingNet(PathBuf),
+    /// A file or the temporary directory could not be written.
     #[error("cannot write SUMO input {path}: {cause}")]
     Write {
+        /// The file or directory.
         path: PathBuf,
+        /// The operating system's reason.
         cause: std::io::Error,
     },
 }
@@ -166,8 +170,11 @@ pub const INPUT_DIR_PREFIX: &str = "bkpbs-episode-";
 /// The files of one episode, kept in a directory that lives as long as this value.
 pub struct EpisodeInput {
     _dir: tempfile::TempDir,
+    /// The network file: the configured one, or the embedded network written out.
     pub net: PathBuf,
+    /// The vehicle types (`vtypes.add.xml`), see [`vehicle_types`].
     pub vehicle_types: PathBuf,
+    /// The routes and demand flows (`routes.rou.xml`).
     pub routes: PathBuf,
 }
 

@@ -19,11 +19,15 @@ use crate::sumo::RawVehicleState;
 /// Why a network cannot serve as a merge road.
 #[derive(Debug, thiserror::Error)]
 pub enum NetworkError {
+    /// The network file could not be read, or holds no merge layout.
     #[error(transparent)]
     File(#[from] NetworkFileError),
+    /// The layout was found but its lanes cannot be placed in a road frame.
     #[error("network {path} cannot be planned on: {what}")]
     Shape {
+        /// The network file.
         path: std::path::PathBuf,
+        /// What could not be placed.
         what: String,
     },
 }
@@ -118,7 +122,9 @@ pub fn commanded_speed(planned: f64, scenario: &Scenario) -> f64 {
 /// lane can be turned back into the SUMO lane index a command needs.
 #[derive(Debug, Clone)]
 pub struct SumoScene {
+    /// The vehicles in the road frame.
     pub scene: Scene,
+    /// Per vehicle of `scene`, the code of the SUMO edge it was read on.
     pub edge_codes: Vec<i32>,
 }
 
@@ -157,8 +163,11 @@ impl SumoScene {
 /// What SUMO's readings do not say about a vehicle: who it is and what it wants.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Identity {
+    /// SUMO's vehicle id.
     pub id: Arc<str>,
+    /// Who drives it.
     pub kind: Kind,
+    /// Where it entered the section.
     pub origin: Origin,
     /// The speed the vehicle wants to drive (m/s).
     pub desired_speed: f64,

@@ -3,7 +3,7 @@
 //! libsumo keeps one global simulation per process, so [`Simulation`] is a handle to that one
 //! slot: opening a second one from the same thread is an error, and a different thread waits until
 //! the first closes. The handle is neither `Send` nor `Sync`. Every call goes through the C++ shim
-//! (`shim.cpp`), which catches every C++ exception; [`decode`] turns the shim's status into a
+//! (`shim.cpp`), which catches every C++ exception; `decode` turns the shim's status into a
 //! [`SumoError`] carrying SUMO's own message and the call that failed.
 
 pub mod files;
@@ -28,7 +28,12 @@ pub use quiet::StderrCapture;
 pub enum SumoError {
     /// SUMO itself refused or failed; `message` is SUMO's text.
     #[error("SUMO error in {call}: {message}")]
-    Sumo { call: &'static str, message: String },
+    Sumo {
+        /// The libsumo call that failed.
+        call: &'static str,
+        /// SUMO's message, on one line.
+        message: String,
+    },
     /// This thread already holds the process's one libsumo simulation.
     #[error("a SUMO simulation is already open in this thread (libsumo allows one per process)")]
     AlreadyOpen,
@@ -105,13 +110,19 @@ impl Drop for SlotGuard {
 /// A collision SUMO detected in the last step; `collider` drove into `victim`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Collision {
+    /// Id of the vehicle that drove into the other.
     pub collider: String,
+    /// Id of the vehicle it drove into.
     pub victim: String,
+    /// SUMO type id of the collider (e.g. `cav`, `hdv`, `hdv.0`).
     pub collider_type: String,
+    /// SUMO type id of the victim.
     pub victim_type: String,
     /// SUMO's collision kind, e.g. "collision" or "frontal".
     pub kind: String,
+    /// SUMO id of the lane it happened on.
     pub lane: String,
+    /// Where along that lane (m from its start).
     pub position: f64,
 }
 
@@ -121,7 +132,9 @@ pub struct Collision {
 /// nothing.
 #[derive(Debug, Default)]
 pub struct VehicleReadings {
+    /// SUMO ids of the vehicles now in the network.
     pub ids: Vec<String>,
+    /// Their readings, in the order of `ids`.
     pub states: Vec<RawVehicleState>,
     /// Changes whenever `ids` changes, so callers can keep per-id lookups between steps.
     pub generation: u64,

@@ -17,55 +17,90 @@ use crate::model::reference_line::ReferenceLine;
 /// One lane of the network.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Lane {
+    /// SUMO's lane id.
     pub id: String,
+    /// Index on its edge (0 = rightmost).
     pub index: u32,
+    /// Length (m).
     pub length: f64,
+    /// Width (m; SUMO's default 3.2 m when the file gives none).
     pub width: f64,
     /// Speed limit (m/s).
     pub speed: f64,
+    /// Centre line in SUMO's plane (m), in driving direction.
     pub shape: Vec<Point>,
 }
 
 /// A normal (non-internal) edge and its lanes, rightmost first.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Edge {
+    /// SUMO's edge id.
     pub id: String,
+    /// Its lanes, rightmost first.
     pub lanes: Vec<Lane>,
 }
 
 /// A lane-to-lane connection between normal edges, through an internal lane (`via`) or not.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Connection {
+    /// Edge the connection leaves.
     pub from: String,
+    /// Lane index on `from`.
     pub from_lane: u32,
+    /// Edge it enters.
     pub to: String,
+    /// Lane index on `to`.
     pub to_lane: u32,
+    /// Id of the internal junction lane it runs through, if any.
     pub via: Option<String>,
 }
 
 /// What the network file holds.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Net {
+    /// The normal edges.
     pub edges: Vec<Edge>,
     /// Internal junction lanes by id.
     pub internal: BTreeMap<String, Lane>,
+    /// The connections between normal edges.
     pub connections: Vec<Connection>,
 }
 
 /// Why a network file cannot be used.
 #[derive(Debug, thiserror::Error)]
 pub enum NetworkFileError {
+    /// The file could not be read.
     #[error("cannot read network {path}: {cause}")]
     Read {
+        /// The network file.
         path: PathBuf,
+        /// The operating system's reason.
         cause: std::io::Error,
     },
     #[error("network {path} is not valid XML: {message}")]
-    Xml { path: PathBuf, message: String },
+    /// The file is not well-formed XML.
+    Xml {
+        /// The network file.
+        path: PathBuf,
+        /// The XML parser's message.
+        message: String,
+    },
     #[error("network {path}: {what}")]
-    Content { path: PathBuf, what: String },
+    /// An element lacks an attribute or holds an unreadable value.
+    Content {
+        /// The network file.
+        path: PathBuf,
+        /// What is wrong.
+        what: String,
+    },
     #[error("network {path} is not a one-way carriageway with merges: {what}")]
-    Layout { path: PathBuf, what: String },
+    /// The network is not a one-way carriageway with merges.
+    Layout {
+        /// The network file.
+        path: PathBuf,
+        /// What was found instead.
+        what: String,
+    },
 }
 
 impl Net {
@@ -227,38 +262,49 @@ fn lane(l: roxmltree::Node) -> Result<Lane, String> {
 /// An edge of the main carriageway and where it starts along it.
 #[derive(Debug, Clone, PartialEq)]
 pub struct MainEdge {
+    /// SUMO's edge id.
     pub id: String,
     /// Distance along the carriageway to the edge's start (m), internal lanes included.
     pub s_start: f64,
+    /// Its length along the carriageway (m), measured on its leftmost lane.
     pub length: f64,
+    /// Number of lanes.
     pub lanes: u32,
 }
 
 /// An on-ramp: its edges from the source, and the main-road lane it feeds.
 #[derive(Debug, Clone, PartialEq)]
 pub struct OnRamp {
+    /// Its edges from the source, up to the main carriageway (not included).
     pub edges: Vec<String>,
     /// The main edge it joins and the lane of it the ramp's lane continues into.
     pub joins: String,
+    /// Lane index on `joins`.
     pub lane: u32,
     /// Where that lane ends along the carriageway (m), if it ends on that edge: the
     /// acceleration lane's end, by which a ramp vehicle must have merged.
     pub merge_end: Option<f64>,
+    /// Where that lane starts along the carriageway (m): merging may begin here.
     pub merge_start: f64,
 }
 
 /// An off-ramp: the main edge it leaves and its edges to the sink.
 #[derive(Debug, Clone, PartialEq)]
 pub struct OffRamp {
+    /// The main edge it leaves from.
     pub leaves: String,
+    /// Its edges, up to the sink.
     pub edges: Vec<String>,
 }
 
 /// The merge layout of a network.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Layout {
+    /// The main carriageway's edges, from source to sink.
     pub main: Vec<MainEdge>,
+    /// The on-ramps.
     pub on_ramps: Vec<OnRamp>,
+    /// The off-ramps.
     pub off_ramps: Vec<OffRamp>,
     /// The curvilinear frame's reference line: s along it, d from it (positive left).
     pub line: ReferenceLine,

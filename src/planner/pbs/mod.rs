@@ -74,6 +74,8 @@ pub struct Budget {
 /// Builds the M-A* request of a CAV against given obstacles (supplied by the controller, which
 /// knows the lane changes under way).
 pub trait RequestFor: Sync {
+    /// Plans `agent` (a scene vehicle index) with `planner` around `obstacles`, the trajectories
+    /// of the agents it must yield to.
     fn plan(
         &self,
         planner: &Mastar,
@@ -87,18 +89,25 @@ pub trait RequestFor: Sync {
 
 /// One planning problem: a scene and how to plan and predict in it.
 pub struct Problem<'a> {
+    /// The scene planned in; agents are its vehicles, by index.
     pub scene: &'a Scene,
+    /// The M-A* planner of every CAV.
     pub planner: &'a Mastar,
+    /// Predicts the HDVs, at the root and again given the CAVs' plans.
     pub predictor: &'a dyn Predictor,
+    /// How each agent's M-A* request is built.
     pub requests: &'a dyn RequestFor,
     /// Priority edges `(hi, lo)` carried over from earlier rounds (commitments: `lo` yields to a
     /// cut-in of `hi` that relied on it). The root starts from them where they are still
     /// feasible.
     pub committed: &'a [(usize, usize)],
+    /// Decides which pairs of trajectories conflict.
     pub rule: &'a SafetyRule,
     /// Steps checked for conflicts (and predicted).
     pub horizon: usize,
+    /// Planning step (s).
     pub dt: f64,
+    /// The round's node and time budget.
     pub budget: Budget,
     /// Decompose the round into independent groups (see the module documentation).
     pub independent_groups: bool,
@@ -129,10 +138,13 @@ pub struct PbsStats {
 /// (`None` if even the root could not plan it: it must brake).
 #[derive(Debug, Clone)]
 pub struct Solution {
+    /// Per agent the trajectory of the chosen node: planned for a CAV, predicted for an HDV.
     pub trajectories: Vec<Arc<Trajectory>>,
+    /// Per agent the M-A* plan; `None` for an HDV or a CAV the root could not plan.
     pub plans: Vec<Option<Arc<Plan>>>,
     /// The priority edges `(hi, lo)` of the chosen node, the commitments included.
     pub edges: Vec<(usize, usize)>,
+    /// The round's effort and outcome.
     pub stats: PbsStats,
 }
 
