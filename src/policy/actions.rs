@@ -16,16 +16,26 @@ pub type Mask = [bool; ACTIONS];
 /// The rules, from the configuration.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Rules {
+    /// Step length (s): how long an action's acceleration is held.
     pub dt: f64,
+    /// Speed limit (m/s): no action takes the speed above it.
     pub v_max: f64,
+    /// Acceleration of the `accelerate` primitive (m/s²).
     pub accel: f64,
+    /// Deceleration of the `decelerate` primitive (m/s², positive).
     pub decel: f64,
+    /// Deceleration of the `emergency-brake` primitive (m/s², positive).
     pub emergency_decel: f64,
+    /// Slowest speed from which the bicycle model steers a lane change (m/s); below it a lane
+    /// change is allowed only where `low_speed` lets SUMO slide the vehicle across.
     pub min_lane_change_speed: f64,
+    /// Which lane changes a CAV slower than `min_lane_change_speed` may still make.
     pub low_speed: LowSpeedLaneChanges,
 }
 
 impl Rules {
+    /// The rules of `config`: its step length and speed limit, and the planners' primitive
+    /// accelerations and lane-change settings, so the policy acts under the planners' rules.
     pub fn from_config(config: &Config) -> Rules {
         let p = &config.planner;
         Rules {

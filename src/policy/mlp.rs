@@ -15,7 +15,10 @@ use crate::predict::gcn::Dense;
 /// The shape of a tanh MLP: input width, hidden widths, output width.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
 pub struct Mlp {
+    /// The layers, input side first; each knows where its weights and biases sit in the flat
+    /// parameter vector.
     pub layers: Vec<Dense>,
+    /// Length of the flat parameter vector all layers share.
     pub n_params: usize,
 }
 
@@ -49,6 +52,7 @@ impl Mlp {
         }
     }
 
+    /// Input width: the length of one sample (one column of an input matrix).
     pub fn inputs(&self) -> usize {
         self.layers[0].cols
     }

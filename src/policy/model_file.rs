@@ -12,8 +12,9 @@ use super::network::{ActorCritic, HIDDEN};
 use super::observation::OBS_DIM;
 use crate::planner::primitives::Primitive;
 
-/// Format tag and version of the policy file.
+/// Format tag of the policy file (its `format` field).
 pub const POLICY_FORMAT: &str = "bkpbs-rl-policy";
+/// Version of the policy file format this build reads and writes (its `version` field).
 pub const POLICY_VERSION: u32 = 1;
 
 /// The committed policy, embedded in the binary.
@@ -22,23 +23,50 @@ pub const EMBEDDED_POLICY: &str = include_str!("../../models/rl-ppo.json");
 /// Why a policy file cannot be used.
 #[derive(Debug, thiserror::Error)]
 pub enum PolicyError {
+    /// The file could not be read.
     #[error("cannot read policy file {path}: {cause}")]
     Read {
+        /// The file.
         path: PathBuf,
+        /// The I/O error.
         cause: std::io::Error,
     },
+    /// The text is not JSON, or not the policy file's fields.
     #[error("policy file {path} is not valid JSON (truncated or corrupt?): {message}")]
-    Json { path: PathBuf, message: String },
+    Json {
+        /// The file.
+        path: PathBuf,
+        /// The parser's message.
+        message: String,
+    },
+    /// The `format` tag is not [`POLICY_FORMAT`] (empty when missing).
     #[error("{path} is not a bkpbs RL policy (format '{found}')")]
-    Format { path: PathBuf, found: String },
+    Format {
+        /// The file.
+        path: PathBuf,
+        /// The tag it has.
+        found: String,
+    },
+    /// The file's format version is not the one this build reads.
     #[error("policy file {path} has format version {found}; this build reads version {expected}")]
     Version {
+        /// The file.
         path: PathBuf,
+        /// The version it has (0 when missing).
         found: u32,
+        /// [`POLICY_VERSION`].
         expected: u32,
     },
+    /// The networks do not fit this build: observation length, action names, hidden widths,
+    /// activation, weight counts, or non-finite weights.
     #[error("policy file {path} does not fit this build: {what}")]
-    Shape { path: PathBuf, what: String },
+    Shape {
+        /// The file.
+        path: PathBuf,
+        /// What does not fit, and what was expected.
+        what: String,
+    },
+    /// Writing the file failed.
     #[error(transparent)]
     Write(#[from] crate::io::WriteError),
 }
@@ -46,14 +74,21 @@ pub enum PolicyError {
 /// The file's contents.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct PolicyFile {
+    /// Format tag, [`POLICY_FORMAT`].
     pub format: String,
+    /// Format version, [`POLICY_VERSION`].
     pub version: u32,
+    /// Length of the observation vector the networks take ([`OBS_DIM`]).
     pub observation_dim: usize,
     /// Primitive names, in the order of the policy's outputs.
     pub actions: Vec<String>,
+    /// Hidden-layer widths of both networks ([`HIDDEN`]).
     pub hidden: Vec<usize>,
+    /// Activation of the hidden layers; only `tanh` is accepted.
     pub activation: String,
+    /// The policy network's flat parameters, in [`Mlp`]'s layout.
     pub actor: Vec<f32>,
+    /// The value network's flat parameters, in [`Mlp`]'s layout.
     pub critic: Vec<f32>,
     /// How it was trained (steps, seed, wall time, hyper-parameters), for the record.
     pub training: serde_json::Value,

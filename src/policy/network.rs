@@ -16,9 +16,13 @@ pub const HIDDEN: [usize; 2] = [256, 256];
 /// Both networks and their parameters.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ActorCritic {
+    /// Shape of the policy network: observation → one logit per action.
     pub actor: Mlp,
+    /// Shape of the value network: observation → one expected return.
     pub critic: Mlp,
+    /// The policy network's flat parameters (see [`Mlp`] for the layout).
     pub actor_params: Vec<f32>,
+    /// The value network's flat parameters.
     pub critic_params: Vec<f32>,
 }
 

@@ -14,11 +14,14 @@ pub struct Calibration {
     /// Added to the logit of a main-road sample: ln of the rate at which the training data kept
     /// main-road negatives.
     pub logit_offset_main: f64,
-    /// A sample is classified "lane change" when its calibrated probability reaches this.
+    /// A ramp sample is classified "lane change" when its calibrated probability reaches this
+    /// (tuned for the best F1 on the validation episodes).
     pub threshold_ramp: f64,
+    /// The same for a main-road sample.
     pub threshold_main: f64,
-    /// Share of lane changes among the training decision points (natural distribution).
+    /// Share of lane changes among the ramp training decision points (natural distribution).
     pub positive_rate_ramp: f64,
+    /// The same among the main-road training decision points.
     pub positive_rate_main: f64,
 }
 
@@ -28,6 +31,7 @@ impl Calibration {
         sigmoid(logit + self.offset(subset))
     }
 
+    /// Logit shift of `subset` (undoes the training data's down-sampling of negatives).
     pub fn offset(&self, subset: Subset) -> f64 {
         match subset {
             Subset::Ramp => self.logit_offset_ramp,
@@ -35,6 +39,7 @@ impl Calibration {
         }
     }
 
+    /// Decision threshold on the calibrated probability for `subset`.
     pub fn threshold(&self, subset: Subset) -> f64 {
         match subset {
             Subset::Ramp => self.threshold_ramp,

@@ -23,6 +23,8 @@ pub struct ConstantSpeed {
 }
 
 impl ConstantSpeed {
+    /// The predictor of `config`: its step length, lane-change duration, ramp merge rule and
+    /// HDV emergency braking; HDVs at constant speed (see [`ConstantSpeed::with_longitudinal`]).
     pub fn new(config: &Config) -> Self {
         let s = &config.scenario;
         ConstantSpeed {

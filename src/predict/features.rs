@@ -55,11 +55,17 @@ const HEADWAY_CAP: f64 = 5.0;
 /// Which neighbour a node of graph (a) stands for.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Slot {
+    /// Nearest vehicle ahead on the HDV's own lane.
     OwnLeader,
+    /// Nearest vehicle behind on the HDV's own lane.
     OwnFollower,
+    /// Nearest vehicle ahead on the lane to the left.
     LeftLeader,
+    /// Nearest vehicle behind on the lane to the left.
     LeftFollower,
+    /// Nearest vehicle ahead on the lane to the right.
     RightLeader,
+    /// Nearest vehicle behind on the lane to the right.
     RightFollower,
 }
 
@@ -88,7 +94,9 @@ pub struct Agent {
     pub y: f64,
     /// Lane the vehicle is assigned to.
     pub lane: i32,
+    /// Speed (m/s).
     pub speed: f64,
+    /// It is a CAV (else an HDV).
     pub is_cav: bool,
 }
 
@@ -108,33 +116,42 @@ impl Agent {
 /// One neighbour node of graph (a), relative to the HDV; absent: all zero.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct Neighbour {
+    /// A vehicle fills the slot (within [`SENSING_RANGE`]).
     pub present: bool,
     /// Centre distance along the road, neighbour minus HDV (m).
     pub ds: f32,
     /// Lateral distance, neighbour minus HDV (m).
     pub dy: f32,
+    /// The neighbour's speed (m/s).
     pub speed: f32,
+    /// The neighbour is a CAV.
     pub is_cav: bool,
 }
 
 /// One CAV node of one graph of sequence (b); absent: all zero.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct CavNode {
+    /// A CAV fills the node.
     pub present: bool,
     /// CAV position at step k minus the HDV's constant-speed position at step k (m).
     pub ds: f32,
     /// CAV lateral position at step k minus the HDV's now (m).
     pub dy: f32,
+    /// The CAV's speed at step k (m/s).
     pub speed: f32,
 }
 
 /// The HDV's own state and where it is.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct Ego {
+    /// Lane class, as [`lane_class`] gives it: 0 the merge lane, 1 a main lane other than the
+    /// leftmost, 2 the leftmost main lane.
     pub lane: u8,
     /// Offset from its lane's centre (m); zero at every decision point.
     pub lateral: f32,
+    /// Speed (m/s).
     pub speed: f32,
+    /// Acceleration (m/s²).
     pub accel: f32,
     /// Merge-zone end minus the front bumper (m): how much acceleration lane is left.
     pub to_merge_end: f32,
@@ -145,6 +162,7 @@ pub struct Ego {
 /// Everything b_θ sees of one HDV at one step, in physical units.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct Observation {
+    /// The HDV itself (graph (a)'s first node).
     pub ego: Ego,
     /// Graph (a)'s neighbours in [`SLOTS`] order.
     pub neighbours: [Neighbour; 6],
@@ -162,6 +180,8 @@ pub enum Subset {
 }
 
 impl Subset {
+    /// The subset of a sample on `lane`: the merge lane is [`Subset::Ramp`], every other lane
+    /// [`Subset::Main`].
     pub fn of_lane(lane: i32) -> Subset {
         if lane == MERGE_LANE {
             Subset::Ramp
@@ -170,6 +190,7 @@ impl Subset {
         }
     }
 
+    /// Name in evaluation output: `ramp` or `main`.
     pub fn as_str(self) -> &'static str {
         match self {
             Subset::Ramp => "ramp",
@@ -177,6 +198,8 @@ impl Subset {
         }
     }
 
+    /// Byte code in the binary training-data file (0 ramp, 1 main); also the index of the
+    /// subset in per-subset arrays.
     pub fn code(self) -> u8 {
         match self {
             Subset::Ramp => 0,
@@ -184,6 +207,7 @@ impl Subset {
         }
     }
 
+    /// The subset of a [`Subset::code`]; `None` for an unknown byte.
     pub fn from_code(c: u8) -> Option<Subset> {
         match c {
             0 => Some(Subset::Ramp),
@@ -343,12 +367,19 @@ pub fn cav_node(ego: &Agent, k: usize, dt: f64, s: f64, y: f64, speed: f64) -> C
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct FeatureLayout {
+    /// Nodes of graph (a) ([`NODES_A`]).
     pub nodes_a: usize,
+    /// Node features of graph (a) ([`FEATURES_A`]).
     pub features_a: usize,
+    /// CAV nodes of each graph of sequence (b) ([`CAV_NODES`]).
     pub cav_nodes: usize,
+    /// Preview horizon of sequence (b), steps ([`PREVIEW`]).
     pub preview: usize,
+    /// Node features of each graph of sequence (b) ([`FEATURES_B`]).
     pub features_b: usize,
+    /// Neighbour sensing range (m, [`SENSING_RANGE`]).
     pub sensing_range_m: f64,
+    /// Range within which CAVs join sequence (b) (m, [`CAV_RANGE`]).
     pub cav_range_m: f64,
     /// Node features of graph (a), in order.
     pub names_a: Vec<String>,
@@ -357,6 +388,7 @@ pub struct FeatureLayout {
 }
 
 impl FeatureLayout {
+    /// This build's layout: the constants and feature names of this module.
     pub fn current() -> FeatureLayout {
         let s = |v: &[&str]| v.iter().map(|x| x.to_string()).collect();
         FeatureLayout {

@@ -30,12 +30,17 @@ pub const HIDDEN: usize = 64;
 /// biases (rows).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 pub struct Dense {
+    /// Output width (rows of the weight matrix, number of biases).
     pub rows: usize,
+    /// Input width (columns of the weight matrix).
     pub cols: usize,
+    /// Index of the layer's first weight in the parameter vector.
     pub offset: usize,
 }
 
 impl Dense {
+    /// A `rows × cols` layer placed at `*offset`, which it advances past its weights and biases
+    /// (so consecutive calls lay the layers out one after another).
     pub fn new(rows: usize, cols: usize, offset: &mut usize) -> Dense {
         let d = Dense {
             rows,
@@ -73,19 +78,26 @@ impl Dense {
 pub struct Architecture {
     /// With block B (sequence (b) of higher-priority CAV states).
     pub conditioned: bool,
-    /// Block A: node embedding and graph convolution.
+    /// Block A's node embedding (graph (a)'s node features → [`HIDDEN`], ReLU).
     pub a_embed: Dense,
+    /// Block A's graph convolution ([`HIDDEN`] → [`HIDDEN`], ReLU).
     pub a_conv: Dense,
-    /// Block B (conditioned only), shared over the preview steps.
+    /// Block B's node embedding (conditioned only), shared over the preview steps.
     pub b_embed: Option<Dense>,
+    /// Block B's graph convolution (conditioned only), shared over the preview steps.
     pub b_conv: Option<Dense>,
+    /// First fully connected layer: the concatenated block outputs → [`HIDDEN`], ReLU.
     pub fc1: Dense,
+    /// Second fully connected layer ([`HIDDEN`] → [`HIDDEN`], ReLU).
     pub fc2: Dense,
+    /// The output unit: the raw lane-change logit.
     pub out: Dense,
+    /// Length of the flat parameter vector.
     pub n_params: usize,
 }
 
 impl Architecture {
+    /// The layout of the conditioned (with block B) or unconditioned network.
     pub fn new(conditioned: bool) -> Architecture {
         let mut o = 0;
         let a_embed = Dense::new(HIDDEN, FEATURES_A, &mut o);

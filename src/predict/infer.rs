@@ -51,6 +51,7 @@ impl Layer {
 /// The network's weights for prediction.
 #[derive(Debug, Clone)]
 pub struct Network {
+    /// With block B: the prediction reads sequence (b), the CAVs' planned states.
     pub conditioned: bool,
     a_embed: Layer,
     a_conv: Layer,

@@ -401,6 +401,7 @@ fn lane_change_zone_end(road: &Road, v: &VehicleState, dk: f64) -> Option<f64> {
 pub struct PredictorError {
     /// The setting that names the file.
     pub field: &'static str,
+    /// Why the file cannot be used.
     pub cause: ModelError,
 }
 

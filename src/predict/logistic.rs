@@ -1,6 +1,7 @@
 //! The logistic-regression baseline: one linear unit over the same encoded features as b_θ
 //! (graph (a)'s node features and, conditioned, sequence (b)'s, flattened), trained by the same
-//! loop (its [`crate::train::training_loop::Learner`] impl is in `train/logistic.rs`). It shows what the graph network adds over a linear model.
+//! loop (its [`crate::train::training_loop::Learner`] impl is in `train/logistic.rs`). It shows
+//! what the graph network adds over a linear model.
 
 use super::features::{encode_a, encode_b, COLUMNS_B, FEATURES_A, FEATURES_B, NODES_A};
 
@@ -10,6 +11,7 @@ const LEN_B: usize = FEATURES_B * COLUMNS_B;
 /// Logistic regression on the flattened features; parameters: weights, then the bias.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Logistic {
+    /// Also reads sequence (b) (the CAV preview), flattened after graph (a).
     pub conditioned: bool,
 }
 

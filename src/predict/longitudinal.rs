@@ -17,6 +17,8 @@ pub const DELTA: f64 = 4.0;
 /// IDM parameters; the desired speed is the vehicle's own times `v0_factor`.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct IdmParams {
+    /// Desired speed v0 as a multiple of the vehicle's own desired speed (dimensionless), so
+    /// one fit serves drivers of every desired speed.
     pub v0_factor: f64,
     /// Time headway T (s).
     pub time_headway: f64,
@@ -29,6 +31,8 @@ pub struct IdmParams {
 }
 
 impl IdmParams {
+    /// The parameters as one vector, in field order (v0_factor, T, s0, a, b): what the fit
+    /// optimises.
     pub fn to_array(self) -> [f64; 5] {
         [
             self.v0_factor,
@@ -39,6 +43,7 @@ impl IdmParams {
         ]
     }
 
+    /// The parameters of a vector in [`IdmParams::to_array`]'s order.
     pub fn from_array(x: [f64; 5]) -> IdmParams {
         IdmParams {
             v0_factor: x[0],
@@ -66,7 +71,10 @@ impl IdmParams {
 /// The longitudinal model of predicted HDVs.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Longitudinal {
+    /// The HDV keeps its present speed.
     ConstantSpeed,
+    /// The HDV follows this IDM behind its present leader on its lane, which is taken to keep
+    /// its speed.
     Idm(IdmParams),
 }
 
@@ -79,8 +87,9 @@ struct CalibrationView {
     idm: IdmParams,
 }
 
-/// Format tag and version of `calibration.json`.
+/// Format tag of `calibration.json` (its `format` field).
 pub const CALIBRATION_FORMAT: &str = "bkpbs-calibration";
+/// Version of the `calibration.json` format this build reads (its `version` field).
 pub const CALIBRATION_VERSION: u32 = 1;
 
 impl Longitudinal {

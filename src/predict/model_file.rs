@@ -31,7 +31,9 @@ pub const EMBEDDED_UNCONDITIONED: &str = include_str!("../../models/gcn-uncondit
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Baseline {
+    /// Its weights, then the bias ([`Logistic`]'s layout).
     pub params: Vec<f32>,
+    /// Its own prior shifts and thresholds.
     pub calibration: Calibration,
 }
 
@@ -41,12 +43,19 @@ pub struct Baseline {
 pub struct TrainingInfo {
     /// File name of the training data (no directory).
     pub data: String,
+    /// Decision points trained on.
     pub train_samples: usize,
+    /// Decision points held out for validation (whole episodes).
     pub validation_samples: usize,
+    /// The training settings.
     pub options: TrainOptions,
+    /// The epoch (from 1) of the lowest validation loss, whose parameters the file holds.
     pub best_epoch: usize,
+    /// Wall time of training the network (s).
     pub wall_s: f64,
+    /// Wall time of training the logistic-regression baseline (s).
     pub baseline_wall_s: f64,
+    /// The network's figures of every epoch run.
     pub log: Vec<EpochLog>,
 }
 
@@ -54,43 +63,85 @@ pub struct TrainingInfo {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ModelFile {
+    /// Format tag, [`MODEL_FORMAT`].
     pub format: String,
+    /// Format version, [`MODEL_VERSION`].
     pub version: u32,
+    /// The model reads sequence (b), the higher-priority CAVs' planned states.
     pub conditioned: bool,
+    /// The feature layout it was trained with (must equal this build's).
     pub layout: FeatureLayout,
+    /// The network's layers and where their parameters are.
     pub architecture: Architecture,
+    /// The network's flat parameter vector.
     pub params: Vec<f32>,
+    /// The network's prior shifts and thresholds.
     pub calibration: Calibration,
+    /// The logistic-regression baseline trained on the same data.
     pub baseline: Baseline,
+    /// How the model was trained.
     pub training: TrainingInfo,
 }
 
-/// Why a model file cannot be used.
 /// Largest parameter magnitude a model file may hold: the committed models stay below 20, and
 /// weights of 1e30 (accepted once) make every probability 0 or 1 and every sum overflow.
 pub const MAX_PARAMETER: f32 = 1e4;
 
+/// Why a model file (or a `calibration.json` of the IDM predictor) cannot be used.
 #[derive(Debug, thiserror::Error)]
 pub enum ModelError {
+    /// The file could not be read.
     #[error("cannot read model file {path}: {cause}")]
     Read {
+        /// The file.
         path: PathBuf,
+        /// The I/O error.
         cause: std::io::Error,
     },
+    /// The text is not JSON, or not the file's fields.
     #[error("model file {path} is not valid model JSON (truncated or corrupt?): {message}")]
-    Json { path: PathBuf, message: String },
+    Json {
+        /// The file.
+        path: PathBuf,
+        /// The parser's message.
+        message: String,
+    },
+    /// The `format` tag is not the expected one (empty when missing).
     #[error("{path} is not a bkpbs lane-change model (format '{found}')")]
-    Format { path: PathBuf, found: String },
+    Format {
+        /// The file.
+        path: PathBuf,
+        /// The tag it has.
+        found: String,
+    },
+    /// The file's format version is not the one this build reads.
     #[error("model file {path} has format version {found}; this build reads version {expected}")]
     Version {
+        /// The file.
         path: PathBuf,
+        /// The version it has (0 when missing).
         found: u32,
+        /// The version this build reads.
         expected: u32,
     },
+    /// The model was trained on another feature layout than this build's.
     #[error("model file {path} was trained on another feature layout: {what}")]
-    Layout { path: PathBuf, what: String },
+    Layout {
+        /// The file.
+        path: PathBuf,
+        /// The file's layout and this build's.
+        what: String,
+    },
+    /// The contents do not fit: layers, parameter counts, parameter or calibration values (for
+    /// a calibration file: its HDV profile or IDM parameters).
     #[error("model file {path} has the wrong shapes: {what}")]
-    Shape { path: PathBuf, what: String },
+    Shape {
+        /// The file.
+        path: PathBuf,
+        /// What does not fit.
+        what: String,
+    },
+    /// Writing the file failed.
     #[error(transparent)]
     Write(#[from] crate::io::WriteError),
 }
@@ -245,11 +296,14 @@ impl ModelFile {
 pub struct LaneChangeModel {
     /// Where it came from (a path, or `embedded:<name>`).
     pub source: String,
+    /// The model file, as read.
     pub file: ModelFile,
     network: Network,
 }
 
 impl LaneChangeModel {
+    /// The model of `file`, whose shapes must fit this build (as [`ModelFile::read`] checks),
+    /// named `source` in messages and results.
     pub fn new(source: String, file: ModelFile) -> LaneChangeModel {
         let network = Network::new(&file.architecture, &file.params);
         LaneChangeModel {
@@ -285,6 +339,7 @@ impl LaneChangeModel {
         .clone()
     }
 
+    /// The model reads sequence (b), the higher-priority CAVs' planned states.
     pub fn conditioned(&self) -> bool {
         self.file.conditioned
     }
