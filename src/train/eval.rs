@@ -27,7 +27,8 @@ use crate::predict::features::Subset;
 use crate::predict::infer::Workspace;
 use crate::predict::model_file::LaneChangeModel;
 
-/// The paper's lane-change share in its evaluation subsets (tables I and II).
+/// The paper's number of lane changes among the [`PER_SUBSET`] samples of each evaluation
+/// subset (tables I and II).
 pub const PAPER_POSITIVES: [(Subset, usize); 2] = [(Subset::Ramp, 1443), (Subset::Main, 706)];
 
 /// Samples per subset (the paper's 4000).
