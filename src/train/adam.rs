@@ -3,9 +3,13 @@
 /// Adam's moment estimates and settings.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Adam {
+    /// Step size (learning rate).
     pub lr: f32,
+    /// Decay rate of the first-moment (mean) estimate, β₁.
     pub beta1: f32,
+    /// Decay rate of the second-moment (uncentred variance) estimate, β₂.
     pub beta2: f32,
+    /// Added to the denominator's square root so near-zero variances do not blow the step up, ε.
     pub eps: f32,
     m: Vec<f32>,
     v: Vec<f32>,

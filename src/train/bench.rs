@@ -29,15 +29,22 @@ const REPEATS: usize = 200;
 /// Medians (and p99) of the timings.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct PredictorBench {
+    /// Steps timed (those after the warm-up with at least one HDV on the road).
     pub steps: usize,
+    /// Median number of HDVs on the road per timed step.
     pub hdvs_per_step_median: f64,
+    /// Median number of CAVs on the road per timed step.
     pub cavs_per_step_median: f64,
-    /// One model evaluation (µs).
+    /// One unconditioned model evaluation, median (µs).
     pub single_unconditioned_us: f64,
+    /// One model evaluation conditioned on the nearest CAVs' plans, median (µs).
     pub single_conditioned_us: f64,
-    /// All HDVs of a step (ms): median and 99th percentile.
+    /// Constant-speed trajectories of all HDVs of a step (ms): median and 99th percentile.
     pub constant_ms: (f64, f64),
+    /// b_θ unconditioned, trajectories of all HDVs of a step (ms): median and 99th percentile.
     pub unconditioned_ms: (f64, f64),
+    /// b_θ conditioned on every CAV's constant-speed trajectory, all HDVs of a step (ms): median
+    /// and 99th percentile.
     pub conditioned_ms: (f64, f64),
 }
 

@@ -34,13 +34,18 @@ pub const THINNING_STREAM: u64 = 7;
 /// Counts of what the recorder saw, for the collection log.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
 pub struct CollectStats {
+    /// Episodes run.
     pub episodes: u64,
     /// HDV-steps seen (all of them).
     pub hdv_steps: u64,
-    /// Samples kept, per subset and label.
+    /// Samples kept, per subset and label: HDVs on the merge lane (ramp) that keep their lane at
+    /// the next step.
     pub ramp_negative: u64,
+    /// HDVs on the merge lane that start a lane change (the merge) at the next step.
     pub ramp_positive: u64,
+    /// Main-road HDVs that keep their lane at the next step (kept after thinning).
     pub main_negative: u64,
+    /// Main-road HDVs that start a lane change at the next step.
     pub main_positive: u64,
     /// Main-road negatives dropped by thinning.
     pub main_negative_dropped: u64,
@@ -116,6 +121,7 @@ pub struct Recorder {
     chosen: Vec<usize>,
     /// Samples produced so far.
     pub samples: Vec<Sample>,
+    /// Counts of what this recorder saw.
     pub stats: CollectStats,
 }
 
@@ -286,11 +292,17 @@ impl Observer for Recorder {
 /// α `alphas[(e / P) mod A]` and λ `lambdas[(e / (P·A)) mod L]`, so every combination recurs.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct CollectPlan {
+    /// Number of episodes.
     pub episodes: usize,
+    /// Seed of episode 0; episode e uses `seed_base + e`.
     pub seed_base: u64,
+    /// Planners driving the CAVs (names as on the command line), cycled fastest.
     pub planners: Vec<String>,
+    /// CAV penetrations α (share of inserted vehicles that are CAVs) to cycle through.
     pub alphas: Vec<f64>,
+    /// Total arrival rates λ (veh/h) to cycle through, slowest.
     pub lambdas: Vec<f64>,
+    /// Episode length (steps).
     pub steps: u32,
     /// Probability of keeping a main-road sample without a lane change.
     pub main_negative_keep: f64,
@@ -318,9 +330,13 @@ impl Default for CollectPlan {
 /// One episode of a plan.
 #[derive(Debug, Clone, PartialEq)]
 pub struct EpisodeSpec {
+    /// Seed of the episode's demand and HDV behaviour.
     pub seed: u64,
+    /// Planner driving the CAVs.
     pub planner: String,
+    /// CAV penetration α.
     pub alpha: f64,
+    /// Total arrival rate λ (veh/h).
     pub lambda: f64,
 }
 
@@ -342,19 +358,28 @@ impl CollectPlan {
 /// Why collection stopped.
 #[derive(Debug, thiserror::Error)]
 pub enum CollectError {
+    /// The plan itself is unusable (empty lists, keep share outside (0, 1]).
     #[error("collection plan: {0}")]
     Plan(String),
+    /// A planner name the controller does not know.
     #[error(transparent)]
     Planner(#[from] controller::UnknownPlanner),
+    /// An episode of the plan failed to run.
     #[error(
         "episode {episode} ({planner}, α = {alpha}, λ = {lambda}, seed {seed}) failed: {cause}"
     )]
     Episode {
+        /// Episode number within the plan.
         episode: usize,
+        /// Its planner.
         planner: String,
+        /// Its CAV penetration α.
         alpha: f64,
+        /// Its arrival rate λ (veh/h).
         lambda: f64,
+        /// Its seed.
         seed: u64,
+        /// What went wrong.
         cause: Box<EpisodeError>,
     },
 }
@@ -362,11 +387,14 @@ pub enum CollectError {
 /// What the collector writes into a data file's header.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct CollectMeta {
+    /// The plan the data was collected with.
     pub plan: CollectPlan,
     /// The predictor of the bk-mastar rollouts (always the constant-speed one, so the data never
     /// depends on a learned model).
     pub rollout_predictor: String,
+    /// Totals over all episodes.
     pub stats: CollectStats,
+    /// Version of bkpbs that collected the data.
     pub bkpbs_version: String,
 }
 

@@ -21,14 +21,19 @@ use crate::predict::model_file::{LaneChangeModel, ModelError};
 /// Why a predictor command failed.
 #[derive(Debug, thiserror::Error)]
 pub enum CommandError {
+    /// The data file could not be read or written.
     #[error(transparent)]
     Data(#[from] DataError),
+    /// The model file could not be read, written or checked.
     #[error(transparent)]
     Model(#[from] ModelError),
+    /// Collecting the data failed.
     #[error(transparent)]
     Collect(#[from] CollectError),
+    /// Training failed.
     #[error(transparent)]
     Train(#[from] TrainError),
+    /// An evaluation or benchmark episode failed.
     #[error(transparent)]
     Episode(#[from] EpisodeError),
 }
@@ -138,6 +143,7 @@ pub fn run_train(
 /// Where `eval-predictor` gets its data.
 #[derive(Debug, Clone)]
 pub enum EvalData {
+    /// Samples read from this data file.
     File(PathBuf),
     /// Fresh episodes from this plan (seeds never used in training by default).
     Collect(CollectPlan),

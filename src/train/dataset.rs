@@ -39,13 +39,16 @@ pub const RECORD_BYTES: usize = 12 + 5 * 4 + 8 + SLOTS.len() * 12 + PREVIEW * CA
 pub struct Sample {
     /// Episode number within the collection run (also the split key: never split an episode).
     pub episode: u32,
+    /// Episode step of the decision point (the scene the observation was taken from).
     pub step: u32,
+    /// Whether the HDV was on the merge lane (ramp) or on the main road.
     pub subset: Subset,
     /// It started a lane change at the next step.
     pub label: bool,
     /// Inverse of the probability with which the collector kept the sample (≥ 1): main-road
     /// negatives are thinned out, since lane changes are rare there.
     pub weight: f32,
+    /// The model input: the HDV's graph (a) and the nearest CAVs' next states, sequence (b).
     pub obs: Observation,
 }
 
@@ -54,37 +57,68 @@ pub struct Sample {
 pub struct Dataset {
     /// How the data was collected (JSON text).
     pub meta: String,
+    /// The samples, in collection order.
     pub samples: Vec<Sample>,
 }
 
 /// Why a data file could not be read or written.
 #[derive(Debug, thiserror::Error)]
 pub enum DataError {
+    /// The file could not be read from disk.
     #[error("cannot read data file {path}: {cause}")]
     Read {
+        /// The file.
         path: PathBuf,
+        /// The operating system's error.
         cause: std::io::Error,
     },
+    /// The file could not be written.
     #[error(transparent)]
     Write(#[from] crate::io::WriteError),
+    /// The file does not start with [`MAGIC`].
     #[error("{path} is not a bkpbs lane-change data file (bad magic bytes)")]
-    Magic { path: PathBuf },
+    Magic {
+        /// The file.
+        path: PathBuf,
+    },
+    /// The file has another [`FORMAT_VERSION`] than this build.
     #[error("{path}: data format version {found}, this build reads version {expected}")]
     Version {
+        /// The file.
         path: PathBuf,
+        /// Its format version.
         found: u32,
+        /// This build's format version.
         expected: u32,
     },
+    /// The header's record layout (slots, CAV nodes, preview, record bytes) differs from this
+    /// build's: the file was written for another feature layout.
     #[error("{path}: record layout {found} differs from this build's {expected} (slots, CAV nodes, preview, record bytes)")]
     Layout {
+        /// The file.
         path: PathBuf,
+        /// The file's layout, as the list `[slots, cav_nodes, preview, record_bytes]`.
         found: String,
+        /// This build's layout, in the same form.
         expected: String,
     },
+    /// The file ends before its header or its `count` records do.
     #[error("{path} is truncated: {what}")]
-    Truncated { path: PathBuf, what: String },
+    Truncated {
+        /// The file.
+        path: PathBuf,
+        /// What is missing.
+        what: String,
+    },
+    /// The contents are invalid: bytes after the last record, metadata not UTF-8, an impossible
+    /// record count, or a record with an out-of-range code or a non-finite value.
     #[error("{path} is corrupt: {what}")]
-    Corrupt { path: PathBuf, what: String },
+    Corrupt {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong (naming the record).
+        what: String,
+    },
 }
 
 impl Dataset {

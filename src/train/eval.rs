@@ -27,7 +27,8 @@ use crate::predict::features::Subset;
 use crate::predict::infer::Workspace;
 use crate::predict::model_file::LaneChangeModel;
 
-/// The paper's lane-change share in its evaluation subsets (tables I and II).
+/// The paper's number of lane changes among the [`PER_SUBSET`] samples of each evaluation
+/// subset (tables I and II).
 pub const PAPER_POSITIVES: [(Subset, usize); 2] = [(Subset::Ramp, 1443), (Subset::Main, 706)];
 
 /// Samples per subset (the paper's 4000).
@@ -36,20 +37,30 @@ pub const PER_SUBSET: usize = 4000;
 /// One subset's confusion matrices.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SubsetEval {
+    /// The subset evaluated (ramp or main road).
     pub subset: Subset,
+    /// Samples classified.
     pub samples: usize,
+    /// Lane changes among them.
     pub positives: usize,
+    /// b_θ's decisions.
     pub model: Confusion,
+    /// The "never changes lane" baseline's decisions.
     pub never: Confusion,
+    /// The logistic-regression baseline's decisions.
     pub logistic: Confusion,
 }
 
 /// Both draws of both subsets.
 #[derive(Debug, Clone, PartialEq)]
 pub struct EvalReport {
+    /// Where the model came from (a path, or `embedded:<name>`).
     pub model: String,
+    /// Whether the model is conditioned on the CAVs' trajectories.
     pub conditioned: bool,
+    /// The natural draw: [`PER_SUBSET`] decision points per subset, drawn by weight.
     pub natural: Vec<SubsetEval>,
+    /// The paper mix: the paper's share of lane changes ([`PAPER_POSITIVES`]), per subset.
     pub paper_mix: Vec<SubsetEval>,
     /// Every decision point of the data, weighted (the natural distribution without the
     /// 4000-sample draw's noise: on the main road that draw holds only a handful of lane

@@ -14,11 +14,14 @@ use crate::predict::model_file::{Baseline, ModelFile, TrainingInfo, MODEL_FORMAT
 /// Which of the two fits a progress line belongs to.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Fitting {
+    /// The network b_θ.
     Network,
+    /// The logistic-regression baseline.
     Baseline,
 }
 
 impl Fitting {
+    /// The fit's name in progress lines: `b_θ` or `logistic`.
     pub fn as_str(self) -> &'static str {
         match self {
             Fitting::Network => "b_θ",

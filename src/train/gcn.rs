@@ -21,8 +21,12 @@ impl<T: RealField + Copy + From<f32>> Real for T {}
 /// conditioned, sequence (b) columns (`COLUMNS_B` per sample).
 #[derive(Debug, Clone)]
 pub struct Inputs<T: Scalar> {
+    /// Number of samples in the batch.
     pub n: usize,
+    /// Graph (a) node features: `FEATURES_A` rows, `NODES_A` columns per sample.
     pub xa: DMatrix<T>,
+    /// Sequence (b) node features: `FEATURES_B` rows, `COLUMNS_B` columns per sample (none if
+    /// unconditioned).
     pub xb: DMatrix<T>,
 }
 
@@ -290,6 +294,7 @@ pub fn backward<T: Real>(
 /// The network as a [`Learner`] (training runs in f32).
 #[derive(Debug, Clone)]
 pub struct GcnLearner {
+    /// The network's shape (conditioned or not) and parameter layout.
     pub arch: Architecture,
 }
 

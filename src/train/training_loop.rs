@@ -33,11 +33,13 @@ pub trait Learner: Sync {
     /// Per-worker buffers.
     type Scratch: Send;
 
+    /// Length of the flat parameter vector.
     fn n_params(&self) -> usize;
 
     /// Initial parameters for a seed.
     fn init(&self, rng: &mut ChaCha8Rng) -> Vec<f32>;
 
+    /// Fresh per-worker buffers.
     fn scratch(&self) -> Self::Scratch;
 
     /// Adds `scale · Σ_s ∇ℓ_s` over `batch` to `grad` and returns `Σ_s ℓ_s` (binary
@@ -143,22 +145,31 @@ pub fn best_f1_threshold(scored: &mut [(f64, bool, f64)]) -> (f64, f64) {
 /// What a training run produced.
 #[derive(Debug, Clone)]
 pub struct Trained {
+    /// The parameters of the epoch with the lowest validation loss.
     pub params: Vec<f32>,
+    /// Calibration on the validation split with those parameters, best-F1 thresholds per subset.
     pub calibration: Calibration,
+    /// One entry per epoch run.
     pub log: Vec<EpochLog>,
+    /// The epoch whose parameters were kept (1-based).
     pub best_epoch: usize,
+    /// Wall time of the whole run (s).
     pub wall_s: f64,
 }
 
 /// Why training could not run.
 #[derive(Debug, thiserror::Error)]
 pub enum TrainError {
+    /// No sample outside the validation split; the number of samples the data has.
     #[error("no training samples (the data has {0} samples, all in the validation split?)")]
     NoTrainingData(usize),
+    /// No sample in the validation split (episodes numbered 9, 19, …).
     #[error("no validation samples: the data needs episodes numbered 9, 19, … (collect at least 10 episodes)")]
     NoValidationData,
+    /// The thread pool could not be built: threads asked for, and the error.
     #[error("cannot start {0} training threads: {1}")]
     Threads(usize, String),
+    /// An option that cannot work (zero epochs, batch, chunk or threads).
     #[error("invalid training option: {0}")]
     Options(String),
 }

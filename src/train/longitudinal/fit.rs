@@ -18,6 +18,7 @@ const GAP_SCALE_S: f64 = 3.0;
 /// The result of a fit.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct IdmFit {
+    /// The fitted parameters.
     pub params: IdmParams,
     /// Root mean square of the residuals at the optimum (m/s).
     pub residual_rms: f64,

@@ -22,6 +22,7 @@ use samples::FollowRecorder;
 
 /// Format tag and version of `calibration.json`.
 pub const FORMAT: &str = "bkpbs-calibration";
+/// Version of the `calibration.json` layout this build writes.
 pub const VERSION: u32 = 1;
 /// Most samples the global fit uses (evenly thinned beyond): enough for five parameters.
 pub const MAX_FIT_SAMPLES: usize = 4000;
@@ -32,16 +33,22 @@ pub const MIN_VEHICLE_SAMPLES: usize = 10;
 /// `held_out` seeds for evaluation.
 #[derive(Debug, Clone)]
 pub struct CalibrateSpec {
+    /// Episodes to fit on (seeds `seed_base ..`).
     pub episodes: u64,
+    /// Held-out episodes to evaluate on (the seeds after the fitting ones).
     pub held_out: u64,
+    /// Seed of the first episode.
     pub seed_base: u64,
 }
 
 /// Prediction errors on held-out samples: speed after 1 s and 3 s (m/s), gap after 3 s (m).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Errors {
+    /// Root mean square error of the speed after 1 s (m/s).
     pub rmse_speed_1s: f64,
+    /// Root mean square error of the speed after 3 s (m/s).
     pub rmse_speed_3s: f64,
+    /// Root mean square error of the gap after 3 s (m; samples with a leader only).
     pub rmse_gap_3s: f64,
 }
 
@@ -69,17 +76,27 @@ pub struct Recovery {
 /// The result of a calibration, as written to `calibration.json`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Calibration {
+    /// Always [`FORMAT`].
     pub format: String,
+    /// Always [`VERSION`].
     pub version: u32,
+    /// The HDV driver profile calibrated on (`[hdv] profile`).
     pub profile: String,
+    /// Episodes fitted on.
     pub episodes: u64,
+    /// Held-out episodes evaluated on.
     pub held_out: u64,
+    /// Seed of the first episode.
     pub seed_base: u64,
+    /// Samples the global fit used (at most [`MAX_FIT_SAMPLES`]).
     pub fit_samples: usize,
+    /// Samples of the held-out episodes.
     pub held_out_samples: usize,
     /// The fitted IDM (desired speed: the vehicle's own times `v0_factor`).
     pub idm: IdmParams,
+    /// Constant speed's errors on the held-out samples.
     pub constant_speed: Errors,
+    /// The fitted IDM's errors on the held-out samples.
     pub idm_fitted: Errors,
     /// Heterogeneous profiles: recovery of the drawn parameters by per-vehicle fits.
     pub recovery: Vec<Recovery>,
@@ -243,6 +260,7 @@ pub fn calibrate(
 /// held-out samples, next to constant speed.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Matrix {
+    /// The driver profiles, in the order of the matrix's rows and columns.
     pub profiles: Vec<String>,
     /// `fitted[a][b]`: errors of the IDM fitted on profile a, on profile b's held-out samples.
     pub fitted: Vec<Vec<Errors>>,

@@ -5,6 +5,7 @@ pub use crate::predict::longitudinal::IdmParams;
 
 /// Steps of a sample's horizon and where its checkpoints lie (1 s and 3 s at 0.2 s steps).
 pub const HORIZON_STEPS: usize = 15;
+/// The step of the 1 s checkpoint.
 pub const STEPS_1S: usize = 5;
 
 /// One follower at one instant and what followed: its start and its actual speed and gap
@@ -15,14 +16,18 @@ pub struct FollowSample {
     pub vehicle: String,
     /// Its desired speed (known to the planner: the scene carries it).
     pub desired_speed: f64,
+    /// Its front bumper's position along the road at the start (m).
     pub front: f64,
+    /// Its speed at the start (m/s).
     pub speed: f64,
     /// The leader's rear and speed at steps 0..=HORIZON_STEPS; `None` on a free road.
     pub leader: Option<Vec<(f64, f64)>>,
     /// What happened: speed after 1 s and 3 s, gap after 3 s (bumper to bumper; free road:
     /// not used).
     pub speed_1s: f64,
+    /// Its actual speed after 3 s (m/s).
     pub speed_3s: f64,
+    /// Its actual gap to the leader after 3 s, bumper to bumper (m; unused on a free road).
     pub gap_3s: f64,
 }
 

@@ -38,12 +38,18 @@ pub enum Agents {
 /// One agent awaiting its action.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Agent {
+    /// The CAV's SUMO id.
     pub id: Arc<str>,
+    /// Its observation vector (`OBS_DIM` values, the policy's input).
     pub obs: Vec<f32>,
+    /// Which of the primitives it may choose now.
     pub mask: Mask,
     /// A lane change under way: its action is ignored (continued at constant speed).
     pub forced: bool,
+    /// Its speed (m/s), for the reward.
     pub speed: f64,
+    /// On the merge lane, the share of the merge zone its front has driven (the reward's
+    /// deadline term); elsewhere `None`.
     pub merge_progress: Option<f64>,
 }
 
@@ -63,14 +69,24 @@ pub struct StepResult {
 /// Why the environment cannot go on.
 #[derive(Debug, thiserror::Error)]
 pub enum EnvError {
+    /// The episode itself failed (SUMO, configuration, demand).
     #[error(transparent)]
     Episode(#[from] EpisodeError),
+    /// `step` got another number of actions than there are agents.
     #[error("expected {expected} actions, one per agent, got {got}")]
-    Actions { expected: usize, got: usize },
+    Actions {
+        /// Agents awaiting an action.
+        expected: usize,
+        /// Actions given.
+        got: usize,
+    },
+    /// An action index outside the primitives.
     #[error("action {0} is not one of the 6 primitives (0–5)")]
     UnknownAction(usize),
+    /// The episode thread stopped without reporting its end.
     #[error("the episode thread ended unexpectedly")]
     Lost,
+    /// `step` called after the environment was done.
     #[error("the environment is done: reset it")]
     Done,
 }

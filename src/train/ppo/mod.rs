@@ -21,9 +21,11 @@ use serde::{Deserialize, Serialize};
 /// One agent step of experience.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Step {
+    /// The observation the policy acted on.
     pub obs: Vec<f32>,
     /// Allowed actions.
     pub mask: Vec<bool>,
+    /// The primitive chosen (index into the action space).
     pub action: u8,
     /// Log-probability of `action` under the policy that acted.
     pub log_prob: f32,
@@ -38,6 +40,7 @@ pub struct Step {
 /// One agent's consecutive steps, up to the end of its episode or of the data.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Segment {
+    /// The steps, in order.
     pub steps: Vec<Step>,
     /// It ended for good (a collision): nothing follows the last step.
     pub terminal: bool,
@@ -50,6 +53,7 @@ pub struct Segment {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct PpoSettings {
+    /// Adam's step size, for both networks.
     pub learning_rate: f32,
     /// Discount γ.
     pub gamma: f32,

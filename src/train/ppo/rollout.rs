@@ -24,6 +24,7 @@ use crate::policy::network::ActorCritic;
 /// Totals of one or more episodes, for the learning curve and evaluations.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
 pub struct RolloutStats {
+    /// Episodes run.
     pub episodes: u64,
     /// CAVs that made at least one decision.
     pub agents: u64,
@@ -40,6 +41,7 @@ pub struct RolloutStats {
 }
 
 impl RolloutStats {
+    /// Adds `o`'s totals to these.
     pub fn add(&mut self, o: &RolloutStats) {
         self.episodes += o.episodes;
         self.agents += o.agents;
@@ -69,7 +71,9 @@ impl RolloutStats {
 /// One episode's experience.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 pub struct Rollout {
+    /// Each CAV's decisions (empty unless the policy was sampled).
     pub segments: Vec<Segment>,
+    /// The episode's totals.
     pub stats: RolloutStats,
 }
 

@@ -28,15 +28,19 @@ use crate::policy::network::ActorCritic;
 pub struct TrainSettings {
     /// Environment steps (CAV decisions) to train for.
     pub steps: u64,
+    /// Seed of the initial weights, the action sampling and the minibatch shuffling.
     pub seed: u64,
     /// SUMO episodes per update.
     pub episodes_per_update: usize,
     /// α and λ of the training episodes, cycled (the paper's grid).
     pub alphas: Vec<f64>,
+    /// Arrival rates λ (veh/h) of the training episodes, cycled more slowly than α.
     pub lambdas: Vec<f64>,
     /// First episode seed (far from the evaluation seeds 0…).
     pub seed_base: u64,
+    /// PPO's hyper-parameters.
     pub ppo: PpoSettings,
+    /// The reward's terms and weights.
     pub reward: RewardSettings,
     /// Train with one CAV among HDVs per episode (the paper's set-up) instead of every CAV.
     #[serde(skip_serializing_if = "std::ops::Not::not")]
@@ -62,33 +66,52 @@ impl Default for TrainSettings {
 /// One row of `learning_curve.csv`: the sampled episodes of one update and the update itself.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct CurveRow {
+    /// Updates done, counting this one.
     pub update: u64,
     /// Environment steps after this update's episodes.
     pub env_steps: u64,
+    /// Episodes sampled for this update.
     pub episodes: u64,
+    /// Mean undiscounted return per CAV of those episodes.
     pub mean_return: f64,
+    /// Share of their CAVs removed in a collision.
     pub collision_rate: f64,
+    /// Mean CAV speed over their decisions (m/s).
     pub mean_speed: f64,
+    /// Mean clipped-surrogate policy loss over the update's minibatches.
     pub policy_loss: f64,
+    /// Mean squared error of the value network to the GAE returns.
     pub value_loss: f64,
+    /// Mean entropy of the policy (nats).
     pub entropy: f64,
+    /// Mean estimate of KL(old ‖ new) over the minibatches.
     pub approx_kl: f64,
+    /// Share of policy samples whose probability ratio was clipped.
     pub clip_fraction: f64,
 }
 
 /// Everything needed to continue a run.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct Checkpoint {
+    /// Always `bkpbs-rl-checkpoint-1`: what the file is.
     pub format: String,
+    /// What the run is (the budget `steps` may grow on resumption).
     pub settings: TrainSettings,
     /// The base scenario configuration of the episodes.
     pub config: Config,
+    /// Updates done.
     pub updates: u64,
+    /// Environment steps (CAV decisions) done.
     pub env_steps: u64,
+    /// Wall time of the rollouts and updates so far (s).
     pub wall_s: f64,
+    /// The policy network's weights.
     pub actor: Vec<f32>,
+    /// The value network's weights.
     pub critic: Vec<f32>,
+    /// Adam's state for both networks.
     pub optimiser: Optimiser,
+    /// The learning curve so far, one row per update.
     pub curve: Vec<CurveRow>,
 }
 
@@ -116,16 +139,28 @@ const CHECKPOINT_FORMAT: &str = "bkpbs-rl-checkpoint-1";
 /// Why training stopped.
 #[derive(Debug, thiserror::Error)]
 pub enum TrainError {
+    /// The rollout workers failed.
     #[error(transparent)]
     Pool(#[from] PoolError),
+    /// A policy file could not be written.
     #[error(transparent)]
     Policy(#[from] PolicyError),
+    /// The checkpoint or the learning curve could not be written.
     #[error(transparent)]
     Write(#[from] crate::io::WriteError),
+    /// The checkpoint exists but cannot be used: unreadable, not JSON, another format, or
+    /// networks of other shapes than this build's.
     #[error("cannot read checkpoint {path}: {message}")]
-    Checkpoint { path: PathBuf, message: String },
+    Checkpoint {
+        /// The checkpoint file.
+        path: PathBuf,
+        /// What is wrong.
+        message: String,
+    },
+    /// The scenario configuration is invalid.
     #[error("{0}")]
     Config(#[from] crate::config::ConfigError),
+    /// The checkpoint's settings or configuration differ from those given (the budget aside).
     #[error(
         "checkpoint {0} was made with other settings (seed, episodes per update or scenario \
          configuration): resume with the same ones, or train into another directory"
@@ -135,19 +170,24 @@ pub enum TrainError {
 
 /// The files of a run directory.
 pub struct RunFiles {
+    /// The run directory.
     pub dir: PathBuf,
 }
 
 impl RunFiles {
+    /// `checkpoint.json`: the [`Checkpoint`] after the last update.
     pub fn checkpoint(&self) -> PathBuf {
         self.dir.join("checkpoint.json")
     }
+    /// `learning_curve.csv`: one [`CurveRow`] per update.
     pub fn curve(&self) -> PathBuf {
         self.dir.join("learning_curve.csv")
     }
+    /// `timings.csv`: wall times of each update's rollouts and PPO step.
     pub fn timings(&self) -> PathBuf {
         self.dir.join("timings.csv")
     }
+    /// `policy.json`: the trained policy.
     pub fn policy(&self) -> PathBuf {
         self.dir.join("policy.json")
     }
@@ -233,8 +273,11 @@ pub fn mix(a: u64, b: u64) -> u64 {
 
 /// How one update went, for progress lines and timings.
 pub struct UpdateReport {
+    /// The update's learning-curve row.
     pub row: CurveRow,
+    /// Wall time of the update's rollouts (s).
     pub rollout_s: f64,
+    /// Wall time of the PPO step on them (s).
     pub update_s: f64,
 }
 

@@ -23,11 +23,14 @@ const CHUNKS: usize = 8;
 /// Adam's state for both networks.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Optimiser {
+    /// Adam for the policy (actor) network.
     pub actor: Adam,
+    /// Adam for the value (critic) network.
     pub critic: Adam,
 }
 
 impl Optimiser {
+    /// Fresh moment estimates for `net`'s two networks, both with learning rate `lr`.
     pub fn new(net: &ActorCritic, lr: f32) -> Optimiser {
         Optimiser {
             actor: Adam::new(net.actor.n_params, lr),
@@ -39,8 +42,11 @@ impl Optimiser {
 /// What an update measured (means over its minibatches).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
 pub struct UpdateStats {
+    /// Clipped-surrogate loss −min(ρA, clip(ρ)A), mean over the policy samples.
     pub policy_loss: f64,
+    /// Squared error of the value estimate to the GAE return, mean over all samples.
     pub value_loss: f64,
+    /// Entropy of the masked action distribution (nats), mean over the policy samples.
     pub entropy: f64,
     /// Mean of (ratio − 1) − log ratio: an estimate of KL(old ‖ new).
     pub approx_kl: f64,

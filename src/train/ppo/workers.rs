@@ -26,11 +26,15 @@ use crate::policy::model_file::PolicyFile;
 /// One episode to roll out.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct RolloutRequest {
+    /// Position of the request in its batch; the reply carries it back.
     pub index: usize,
     /// The episode (α, λ, seed and steps set).
     pub config: Config,
+    /// The policy file to act with.
     pub policy: PathBuf,
+    /// How the CAVs choose their primitives.
     pub acting: Acting,
+    /// The reward's terms and weights.
     pub reward: RewardSettings,
     /// One CAV among HDVs (the paper's training set-up) instead of every CAV.
     #[serde(default)]
@@ -52,6 +56,7 @@ pub enum Acting {
 }
 
 impl Acting {
+    /// The controller's way of choosing, seeded as given.
     pub fn choice(self) -> Choice {
         match self {
             Acting::Sample(seed) => Choice::Sample(ChaCha8Rng::seed_from_u64(seed)),
@@ -65,21 +70,33 @@ impl Acting {
 /// The answer to one request.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct RolloutReply {
+    /// The request's [`RolloutRequest::index`].
     pub index: usize,
+    /// The episode's experience, or its error as text.
     pub result: Result<Rollout, String>,
 }
 
 /// Why rollouts could not be gathered.
 #[derive(Debug, thiserror::Error)]
 pub enum PoolError {
+    /// A worker process could not be started.
     #[error("cannot start RL worker: {0}")]
     Spawn(std::io::Error),
+    /// A worker (by number) exited or closed its pipes before replying.
     #[error("RL worker {0} ended unexpectedly")]
     Died(usize),
+    /// A reply was not valid JSON or named an unknown request.
     #[error("RL worker sent a malformed reply: {0}")]
     Reply(String),
+    /// The worker could not run a requested episode.
     #[error("rollout episode {index} failed: {error}")]
-    Episode { index: usize, error: String },
+    Episode {
+        /// The request's index in its batch.
+        index: usize,
+        /// The episode's error, as text.
+        error: String,
+    },
+    /// The trainer was asked to stop by this signal (SIGINT, SIGTERM).
     #[error("stopped by signal {0}")]
     Interrupted(i32),
 }
