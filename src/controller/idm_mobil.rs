@@ -23,6 +23,8 @@ pub struct IdmMobil {
 }
 
 impl IdmMobil {
+    /// The controller with `config`'s IDM and MOBIL parameters, step length and desired speed
+    /// (`scenario.v_max`).
     pub fn new(config: &Config) -> Self {
         IdmMobil {
             idm: config.idm.clone(),

@@ -27,7 +27,9 @@ pub use planner_kind::{PlannerKind, UnknownPlanner, PLANNERS};
 /// A lateral move to the neighbouring lane.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum LaneChange {
+    /// To the lane on the left (lane index + 1).
     Left,
+    /// To the lane on the right (lane index − 1).
     Right,
 }
 
@@ -53,7 +55,9 @@ pub struct Maneuver {
 /// A maneuver for the vehicle at `vehicle` in the scene's vehicle list.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Command {
+    /// Index of the CAV in the scene's vehicle list ([`Scene::vehicles`]).
     pub vehicle: usize,
+    /// What the CAV does during the next step.
     pub maneuver: Maneuver,
     /// Where the maneuver came from (traces and collision forensics).
     pub source: Source,
@@ -108,6 +112,7 @@ impl Source {
 pub struct CavBelief {
     /// Scene index of the CAV.
     pub vehicle: usize,
+    /// The trajectory planned for the CAV; `None` when it had no plan (it braked).
     pub planned: Option<Trajectory>,
     /// (scene index, trajectory) of the other vehicles.
     pub others: Vec<(usize, Trajectory)>,
@@ -206,10 +211,13 @@ pub trait Controller {
 /// the configuration names that cannot be used.
 #[derive(Debug, thiserror::Error)]
 pub enum BuildError {
+    /// The planner name is not one of [`PLANNERS`].
     #[error(transparent)]
     Unknown(#[from] UnknownPlanner),
+    /// The predictor model the configuration names cannot be loaded or used.
     #[error(transparent)]
     Predictor(#[from] PredictorError),
+    /// The RL policy file (`rl.policy`) cannot be loaded or used.
     #[error("rl.policy: {0}")]
     Policy(#[from] crate::policy::model_file::PolicyError),
 }

@@ -41,9 +41,13 @@ pub enum Choice {
 /// One CAV's decision at one step, for PPO.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Decision {
+    /// Simulation time of the decision (s).
     pub time: f64,
+    /// The observation the policy saw ([`OBS_DIM`] features).
     pub obs: Vec<f32>,
+    /// The primitives allowed at the decision.
     pub mask: Mask,
+    /// Index of the chosen primitive in [`Primitive::ALL`] ([`IDLE`] when forced).
     pub action: u8,
     /// Log-probability of `action` under the policy that chose it (0 when forced).
     pub log_prob: f32,
@@ -60,6 +64,7 @@ pub struct Decision {
 /// Every CAV's decisions in order, CAVs in order of their first decision.
 #[derive(Debug, Clone, Default)]
 pub struct Record {
+    /// (vehicle id, its decisions in time order), CAVs in order of their first decision.
     pub vehicles: Vec<(Arc<str>, Vec<Decision>)>,
     index: HashMap<Arc<str>, usize>,
 }
@@ -88,12 +93,15 @@ pub fn merge_progress(scene: &Scene, i: usize) -> Option<f64> {
 /// controller and the stepped environment ([`crate::controller`]'s callers in `train::ppo`).
 #[derive(Debug, Clone)]
 pub struct Executor {
+    /// The motion rules: allowed primitives and the speeds they lead to.
     pub rules: Rules,
+    /// The lane changes under way, continued until they end.
     pub lane_changes: LaneChanges,
     lane_change_s: f64,
 }
 
 impl Executor {
+    /// The executor for `config`'s rules, with no lane change under way.
     pub fn new(config: &Config) -> Executor {
         Executor {
             rules: Rules::from_config(config),

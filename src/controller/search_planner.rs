@@ -24,6 +24,8 @@ pub trait RoundPlanner {
     /// The controller's name on the command line and in CSV files.
     const NAME: &'static str;
 
+    /// Plans one round for `scene`: one command per CAV into `out` (which arrives empty), each
+    /// made by [`Round::command`]; the round's effort and lane-change starts go into `round`.
     fn plan_round(
         &mut self,
         core: &SearchCore,
@@ -36,9 +38,13 @@ pub trait RoundPlanner {
 /// What every round reads: the configuration, the predictor, the planner, the lane changes
 /// under way and the shield's check of starts.
 pub struct SearchCore {
+    /// The configuration the controller was built with.
     pub config: Config,
+    /// The HDV predictor: the trajectories the CAVs are planned against.
     pub predictor: Box<dyn Predictor>,
+    /// The single-CAV M-A* planner.
     pub planner: Mastar,
+    /// The lane changes under way (continued, not re-planned, until they end).
     pub lane_changes: LaneChanges,
     /// The shield's check of lane-change starts, when the shield is on.
     guard: Option<WorstCase>,
@@ -72,9 +78,11 @@ pub type Start = (usize, Arc<str>, i32);
 /// What one round produces besides its commands: its effort, the beliefs (while tracing) and
 /// the lane changes it starts (recorded after the round, as the round reads those under way).
 pub struct Round {
+    /// The round's search effort, counted as it plans.
     pub stats: PlanStats,
     tracing: bool,
     beliefs: Vec<CavBelief>,
+    /// The lane changes the round starts, recorded into [`SearchCore::lane_changes`] after it.
     pub starts: Vec<Start>,
 }
 

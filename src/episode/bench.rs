@@ -15,20 +15,26 @@ use crate::sumo::Simulation;
 /// One row of the benchmark table; each figure is the median over the repeats.
 #[derive(Debug, Clone, Default)]
 pub struct BenchRow {
+    /// What ran: `sumo-alone`, or the planner's name (with ` ×N` for N threads when several
+    /// thread counts are compared).
     pub what: String,
     /// Wall time of the stepping loop per step (ms).
     pub ms_per_step: f64,
-    /// Planning time per step: median, 99th percentile and maximum over the episode's steps (ms).
+    /// Planning time per step, median over the episode's steps (ms).
     pub plan_ms_median: f64,
+    /// Planning time per step, 99th percentile over the episode's steps (ms).
     pub plan_ms_p99: f64,
+    /// Planning time per step, maximum over the episode's steps (ms).
     pub plan_ms_max: f64,
     /// Nodes expanded per step, all CAVs together.
     pub nodes_per_step: f64,
-    /// The safety shield's part of the planning time per step: median and maximum (ms).
+    /// The safety shield's part of the planning time per step, median over the steps (ms).
     pub shield_ms_median: f64,
+    /// The safety shield's part of the planning time per step, maximum over the steps (ms).
     pub shield_ms_max: f64,
-    /// Vehicles and CAVs on the section per step, on average.
+    /// Vehicles on the section per step, on average.
     pub vehicles_per_step: f64,
+    /// CAVs on the section per step, on average.
     pub cavs_per_step: f64,
 }
 

@@ -15,13 +15,19 @@ use serde::ser::{self, Impossible, Serialize, Serializer};
 /// One cell's value, as the struct holds it.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Value {
+    /// A string or char (also a unit enum variant, by its serde name).
     Text(String),
+    /// A signed integer.
     Int(i64),
+    /// An unsigned integer.
     UInt(u64),
+    /// A boolean (`true` / `false`).
     Bool(bool),
     /// `decimals`: the fixed decimals of the CSV text, `None` for the shortest form.
     Float {
+        /// The number.
         value: f64,
+        /// Fixed decimals of its CSV text; `None`: Rust's shortest form.
         decimals: Option<usize>,
     },
     /// An absent optional value (an empty CSV field).
@@ -52,7 +58,9 @@ impl Value {
 /// One named cell of a record.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Cell {
+    /// The column name: the field's serde name.
     pub column: &'static str,
+    /// The field's value.
     pub value: Value,
 }
 

@@ -28,8 +28,11 @@ pub const DEMAND_STREAM: u64 = 1;
 /// One vehicle the episode will try to insert.
 #[derive(Debug, Clone, PartialEq)]
 pub struct PlannedVehicle {
+    /// SUMO vehicle id: `<entry name>.<n>`, n its place in the episode's arrival order.
     pub id: String,
+    /// CAV or HDV.
     pub kind: Kind,
+    /// Main road or on-ramp.
     pub origin: Origin,
     /// Where it enters: an index into the road's entries (0 the main road, then the ramps), whose
     /// name is also its SUMO route.
@@ -40,7 +43,9 @@ pub struct PlannedVehicle {
     pub depart: f64,
     /// SUMO lane index on the first edge of the route.
     pub depart_lane: u32,
+    /// Insertion speed (m/s, rounded to 0.01).
     pub depart_speed: f64,
+    /// Desired speed (m/s, rounded to 0.01): v_max for a CAV, drawn for an HDV.
     pub desired_speed: f64,
 }
 

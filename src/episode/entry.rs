@@ -23,6 +23,7 @@ use crate::model::scene::{Origin, Scene};
 /// A vehicle cleared to enter now.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Admission {
+    /// The vehicle as the demand scheduled it.
     pub vehicle: PlannedVehicle,
     /// Insertion speed (m/s).
     pub speed: f64,

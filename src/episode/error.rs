@@ -13,23 +13,34 @@ use crate::sumo::SumoError;
 /// Why an episode could not complete.
 #[derive(Debug, thiserror::Error)]
 pub enum EpisodeError {
+    /// The configuration is invalid.
     #[error(transparent)]
     Config(#[from] ConfigError),
+    /// SUMO's input (net, vehicle types, routes) could not be prepared.
     #[error(transparent)]
     Input(#[from] InputError),
+    /// The controller could not be built.
     #[error(transparent)]
     Controller(#[from] BuildError),
+    /// SUMO did not start.
     #[error("cannot start SUMO on net {net}: {cause}")]
     Start {
+        /// The network file SUMO was started on.
         net: std::path::PathBuf,
+        /// SUMO's error.
         cause: SumoError,
     },
+    /// The network cannot be read or is not a merge road to plan on.
     #[error(transparent)]
     Road(#[from] NetworkError),
+    /// A simulation step failed.
     #[error("SUMO failed at step {step} (t = {time:.1} s): {cause}")]
     Step {
+        /// Index of the failed step (0 the first).
         step: u32,
+        /// Simulation time of that step: step × `scenario.dt` (s).
         time: f64,
+        /// SUMO's error.
         cause: SumoError,
     },
     /// `sumo.gui` asked for sumo-gui where it cannot run.
@@ -38,12 +49,19 @@ pub enum EpisodeError {
     /// A stop signal (Ctrl-C, `kill`) arrived: the episode ended early, SUMO was closed and
     /// its input removed; nothing was written.
     #[error("interrupted by {} at step {step}; nothing written", crate::io::interrupt::name(*.signal))]
-    Interrupted { step: u32, signal: i32 },
+    Interrupted {
+        /// Steps completed when the signal was seen (the index of the step not run).
+        step: u32,
+        /// The signal's number (2 for `SIGINT`, 15 for `SIGTERM`).
+        signal: i32,
+    },
     /// A failure with SUMO's own reason: libsumo reports only "Process Error", the reason goes
     /// to SUMO's (captured) console.
     #[error("{cause}; SUMO said: {said}")]
     Sumo {
+        /// The failure as libsumo reported it.
         cause: Box<EpisodeError>,
+        /// SUMO's `Error:` messages, on one line ([`sumo_errors`]).
         said: String,
         /// All SUMO printed, for `sumo.log`.
         log: String,

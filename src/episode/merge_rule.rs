@@ -55,6 +55,8 @@ pub struct RampMergeRule {
 }
 
 impl RampMergeRule {
+    /// The rule for one episode: `config`'s merge exponent and HDV profile, random stream seeded
+    /// from `scenario.seed`, no driver decided yet.
     pub fn new(config: &Config) -> Self {
         let mut rng = ChaCha8Rng::seed_from_u64(config.scenario.seed);
         rng.set_stream(MERGE_STREAM);

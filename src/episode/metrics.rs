@@ -14,11 +14,14 @@ use crate::model::scene::{Kind, Origin};
 pub enum Outcome {
     /// Still in the network when the episode ended.
     Present,
+    /// Left the section (at its end, or by an off-ramp) without a collision.
     Arrived,
+    /// Removed in a collision.
     Crashed,
 }
 
 impl Outcome {
+    /// The outcome's name in `vehicles.csv`.
     pub fn as_str(self) -> &'static str {
         match self {
             Outcome::Present => "present",
@@ -31,10 +34,13 @@ impl Outcome {
 /// One inserted vehicle, from insertion to arrival or crash.
 #[derive(Debug, Clone, PartialEq)]
 pub struct VehicleRecord {
+    /// SUMO vehicle id.
     pub id: String,
+    /// CAV or HDV.
     pub kind: Kind,
     /// SUMO's vehicle type (a heterogeneous profile's driver type, `hdv.7`); not in the CSV.
     pub sumo_type: String,
+    /// Main road or on-ramp.
     pub origin: Origin,
     /// Departure time the demand scheduled (s).
     pub scheduled_depart: f64,
@@ -46,14 +52,17 @@ pub struct VehicleRecord {
     pub insert_time: f64,
     /// Speed SUMO inserted it with: the drawn one, or less when traffic ahead forbade it.
     pub insert_speed: f64,
+    /// Desired speed the demand drew (m/s; v_max for a CAV).
     pub desired_speed: f64,
     /// Route distance from the insertion position to the end of the section (m).
     pub distance: f64,
     /// Free-flow travel time t* (s).
     pub t_star: f64,
+    /// How its episode ended.
     pub outcome: Outcome,
     /// Time the front bumper crossed the section end (s), interpolated within the last step.
     pub arrival_time: Option<f64>,
+    /// Time of its first collision (s), if it crashed.
     pub crash_time: Option<f64>,
     /// The other vehicles of the collision(s) it was removed in.
     pub crashed_with: Vec<String>,
@@ -89,12 +98,19 @@ impl VehicleRecord {
 /// One collision as SUMO reported it.
 #[derive(Debug, Clone, PartialEq)]
 pub struct CollisionEvent {
+    /// Simulation time SUMO reported it at (s).
     pub time: f64,
+    /// SUMO id of the vehicle that collided (the follower, in a rear-end collision).
     pub collider: String,
+    /// SUMO id of the vehicle it collided with.
     pub victim: String,
+    /// Kind of the collider; `None` if it cannot be told.
     pub collider_kind: Option<Kind>,
+    /// Kind of the victim; `None` if it cannot be told.
     pub victim_kind: Option<Kind>,
+    /// SUMO lane id where it happened.
     pub lane: String,
+    /// Position along that lane (m).
     pub position: f64,
 }
 
@@ -108,39 +124,55 @@ impl CollisionEvent {
 /// The episode's one-row summary (reproducible: no wall-clock figure in it): the one definition
 /// of the `episode.csv` row. Its serde names, in field order, are the columns (the planner's
 /// [`PlanStats`] inline, under theirs); a float's `serialize_with` gives its CSV decimals
-/// ([`record`]). Adding a metric is adding a field here and computing it in
+/// ([`cells::decimals`]). Adding a metric is adding a field here and computing it in
 /// [`Summary::compute`].
 #[derive(Debug, Clone, Default, PartialEq, Serialize)]
 pub struct Summary {
+    /// The controller's name (`bk-pbs`, `idm-mobil`...).
     pub planner: String,
+    /// CAV penetration α (`scenario.alpha`).
     pub alpha: f64,
+    /// Total arrival rate λ (veh/h, `scenario.lambda`).
     pub lambda: f64,
+    /// The episode's random seed (`scenario.seed`).
     pub seed: u64,
     /// The HDV driver profile SUMO ran (`[hdv] profile`).
     pub hdv_profile: String,
+    /// Simulated steps.
     pub steps: u32,
     /// Vehicles the demand scheduled within the horizon.
     pub scheduled: usize,
+    /// Vehicles SUMO inserted.
     pub inserted: usize,
     /// Scheduled but never inserted (SUMO found no room in time).
     pub undeparted: usize,
+    /// CAVs among the inserted vehicles.
     pub inserted_cav: usize,
+    /// Vehicles that left the section without a collision.
     pub arrived: usize,
+    /// Vehicles removed in collisions (any).
     pub crashed: usize,
+    /// Vehicles still in the network at the end.
     pub present: usize,
     /// Vehicles removed in collisions involving a CAV.
     pub controllable_crashed: usize,
+    /// Share of the inserted vehicles removed in collisions involving a CAV (0 for none).
     #[serde(serialize_with = "cells::decimals::<6, _>")]
     pub controllable_collision_rate: f64,
     /// Collisions between two HDVs (events), out of any controller's reach.
     pub hdv_collisions: usize,
+    /// Vehicles removed in collisions between two HDVs.
     pub hdv_crashed: usize,
+    /// Mean travel delay t_f − t* of the vehicles that arrived (s; `None` if none did).
     #[serde(serialize_with = "cells::opt_decimals::<4, _>")]
     pub mean_delay_s: Option<f64>,
+    /// Mean travel delay of the CAVs that arrived (s).
     #[serde(serialize_with = "cells::opt_decimals::<4, _>")]
     pub mean_delay_cav_s: Option<f64>,
+    /// Mean travel delay of the HDVs that arrived (s).
     #[serde(serialize_with = "cells::opt_decimals::<4, _>")]
     pub mean_delay_hdv_s: Option<f64>,
+    /// Vehicles that arrived per hour of simulated time (veh/h).
     #[serde(serialize_with = "cells::decimals::<2, _>")]
     pub throughput_veh_h: f64,
     /// Mean speed over all vehicle-steps (m/s).
@@ -182,19 +214,33 @@ pub fn mean(xs: impl IntoIterator<Item = f64>) -> Option<f64> {
 
 /// Everything the summary is computed from.
 pub struct SummaryInput<'a> {
+    /// The controller's name.
     pub planner: &'a str,
+    /// CAV penetration α.
     pub alpha: f64,
+    /// Total arrival rate λ (veh/h).
     pub lambda: f64,
+    /// The episode's random seed.
     pub seed: u64,
+    /// The HDV driver profile SUMO ran.
     pub hdv_profile: &'a str,
+    /// Simulated steps.
     pub steps: u32,
+    /// Step length (s).
     pub dt: f64,
+    /// Vehicles the demand scheduled within the horizon.
     pub scheduled: usize,
+    /// Every inserted vehicle's record.
     pub vehicles: &'a [VehicleRecord],
+    /// Every collision SUMO reported.
     pub collisions: &'a [CollisionEvent],
+    /// Sum of the speeds of every vehicle reading on the section (m/s).
     pub speed_sum: f64,
+    /// Number of readings summed in `speed_sum`.
     pub speed_samples: u64,
+    /// Vehicles standing on the acceleration lane at the end.
     pub ramp_queue_end: usize,
+    /// Planner effort over the episode.
     pub plan_stats: PlanStats,
 }
 
@@ -256,8 +302,11 @@ impl Summary {
 /// Wall-clock figures of one episode: they differ from run to run, so they live apart.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Timing {
+    /// Planning time per step, median over the steps (ms).
     pub plan_ms_median: f64,
+    /// Planning time per step, 99th percentile over the steps (ms).
     pub plan_ms_p99: f64,
+    /// Planning time per step, maximum over the steps (ms).
     pub plan_ms_max: f64,
     /// Time inside the planner over the whole episode (ms).
     pub plan_ms_total: f64,
@@ -267,9 +316,12 @@ pub struct Timing {
     pub episode_ms_per_step: f64,
     /// Whole episode including SUMO start and close (s).
     pub wall_s: f64,
-    /// Time inside the safety shield per step, part of the planning time (ms; 0 unshielded).
+    /// Time inside the safety shield per step, median (ms; part of the planning time, 0
+    /// unshielded).
     pub shield_ms_median: f64,
+    /// Time inside the safety shield per step, 99th percentile (ms).
     pub shield_ms_p99: f64,
+    /// Time inside the safety shield per step, maximum (ms).
     pub shield_ms_max: f64,
 }
 

@@ -11,6 +11,7 @@ use crate::model::scene::Scene;
 /// Sees the scene of every step, before the controller plans: for recording data (e.g. the
 /// predictor's training set) without touching the runner.
 pub trait Observer {
+    /// Sees the scene of one step, as the controller is about to plan on it.
     fn observe(&mut self, scene: &Scene);
 
     /// Sees what the controller decided in the step whose scene was just observed, and what it

@@ -42,9 +42,13 @@ const LC_MODE_RAMP_HDV_FORCED: i32 = 0b01_0000_0000;
 /// What an episode produced.
 #[derive(Debug, Clone)]
 pub struct EpisodeResult {
+    /// The one-row summary (the `episode.csv` row).
     pub summary: Summary,
+    /// One record per inserted vehicle, in order of departure (the `vehicles.csv` rows).
     pub vehicles: Vec<VehicleRecord>,
+    /// Every collision SUMO reported.
     pub collisions: Vec<CollisionEvent>,
+    /// Wall-clock figures (differ from run to run; not in the summary).
     pub timing: Timing,
     /// One row per vehicle and step, when `output.trajectories` asks for them.
     pub trajectories: Option<TrajectoryFile>,
@@ -55,7 +59,9 @@ pub struct EpisodeResult {
 /// Who drives the CAVs: a planner by name, built by [`controller::by_name`] once SUMO has given
 /// the road, or a controller the caller built (staged scenes, probes in tests).
 pub enum Driver<'a> {
+    /// The planner of this name (one of [`controller::PLANNERS`]).
     Named(&'a str),
+    /// This controller, which the caller keeps.
     Given(&'a mut dyn Controller),
 }
 

@@ -38,6 +38,7 @@ pub struct TraceState {
 /// Another vehicle as the planner saw it: its predicted (HDV) or planned (CAV) trajectory.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct TraceOther {
+    /// SUMO vehicle id.
     pub id: String,
     /// `cav` or `hdv`.
     pub kind: String,
@@ -50,15 +51,19 @@ pub struct TraceOther {
 pub struct TraceLine {
     /// Time of the state (SUMO's clock, as in the CSV files).
     pub time: f64,
+    /// SUMO id of the CAV.
     pub id: String,
     /// The speed sent to SUMO for the end of the next step (m/s).
     pub speed_sent: f64,
     /// `left`, `right` or null.
     pub lane_change: Option<String>,
+    /// Where the maneuver came from.
     pub source: Source,
+    /// The CAV's state as SUMO reported it at `time`.
     pub state: TraceState,
     /// `[s, y]` per step of the CAV's planned trajectory; null without a plan.
     pub planned: Option<Vec<[f64; 2]>>,
+    /// The vehicles it was checked against (within the belief range); empty without beliefs.
     pub others: Vec<TraceOther>,
 }
 
@@ -121,6 +126,8 @@ pub struct Tracer {
 }
 
 impl Tracer {
+    /// An empty trace for an episode of `config` (whose `scenario.v_max` bounds the speeds
+    /// sent, as the runner bounds them).
     pub fn new(config: &Config) -> Self {
         Tracer {
             scenario: config.scenario.clone(),
@@ -163,15 +170,22 @@ impl Observer for Tracer {
 /// Why a trace could not be read.
 #[derive(Debug, thiserror::Error)]
 pub enum TraceError {
+    /// The file could not be read.
     #[error("cannot read {path}: {cause}")]
     Read {
+        /// The trace file.
         path: PathBuf,
+        /// The I/O error.
         cause: std::io::Error,
     },
+    /// A line is not a trace line.
     #[error("malformed {path}, line {line}: {cause}")]
     Parse {
+        /// The trace file.
         path: PathBuf,
+        /// Line number in the file (1 the first).
         line: usize,
+        /// The JSON error.
         cause: serde_json::Error,
     },
 }

@@ -52,21 +52,29 @@ pub const CSV_COLUMNS: [&str; 19] = [
 /// One vehicle at one step, as SUMO reported it and as the road frame sees it.
 #[derive(Debug, Clone)]
 pub struct TrajectoryRow {
+    /// SUMO vehicle id.
     pub id: std::sync::Arc<str>,
+    /// CAV or HDV (the `type` column).
     pub kind: Kind,
+    /// Main road or on-ramp.
     pub origin: Origin,
     /// SUMO's edge id; `None` off the known edges.
     pub edge: Option<Arc<str>>,
+    /// SUMO's lane index on `edge` (0 the rightmost).
     pub sumo_lane: i32,
     /// Position of the front bumper along SUMO's lane (m).
     pub pos: f64,
-    /// Front-bumper position and angle (degrees, 0 = north, clockwise), SUMO's.
+    /// Front-bumper x position in SUMO's network coordinates (m).
     pub x: f64,
+    /// Front-bumper y position in SUMO's network coordinates (m).
     pub y: f64,
+    /// SUMO's heading angle (degrees, 0 = north, clockwise).
     pub angle: f64,
     /// Road-frame state of the centre; `None` off the merge section.
     pub frame: Option<FrameState>,
+    /// Speed (m/s), SUMO's.
     pub speed: f64,
+    /// Acceleration over the last step (m/s²), SUMO's.
     pub accel: f64,
     /// The maneuver sent to SUMO after this step (commanded CAVs only).
     pub sent: Option<Sent>,
@@ -75,17 +83,24 @@ pub struct TrajectoryRow {
 /// The road-frame part of a row.
 #[derive(Debug, Clone, Copy)]
 pub struct FrameState {
+    /// Longitudinal position of the centre along the road (m).
     pub s: f64,
+    /// Road-frame lane (0 = ramp / acceleration lane).
     pub lane: i32,
+    /// Offset from the lane centre (m, positive to the left): non-zero mid lane change.
     pub lateral: f64,
+    /// Heading relative to the road direction (rad, positive to the left).
     pub heading: f64,
 }
 
 /// What was sent to a CAV for the next step, and where it came from.
 #[derive(Debug, Clone, Copy)]
 pub struct Sent {
+    /// Speed commanded for the end of the next step (m/s, bounded to [0, v_max]).
     pub speed: f64,
+    /// The lane change started, if any.
     pub lane_change: Option<LaneChange>,
+    /// Where the maneuver came from.
     pub source: Source,
 }
 
@@ -132,7 +147,9 @@ pub struct TrajectoryLog {
 /// A finished trajectory file: its name in the episode directory and its bytes.
 #[derive(Debug, Clone)]
 pub struct TrajectoryFile {
+    /// File name in the episode directory (one of [`FILE_NAMES`]).
     pub name: &'static str,
+    /// The file's content (gzip-compressed when the name ends in `.gz`).
     pub bytes: Vec<u8>,
 }
 

@@ -225,10 +225,15 @@ fn clear_of_lane_end(scene: &Scene, v: &VehicleState, m: &Maneuver, b: &WorstCas
 /// [`clear_of_new_follower`]) answer.
 #[derive(Debug, Clone, Copy)]
 pub struct Candidate<'a> {
+    /// The scene the maneuver is checked in.
     pub scene: &'a Scene,
+    /// Scene index of the CAV under check.
     pub i: usize,
+    /// The maneuver under check.
     pub m: &'a Maneuver,
+    /// The worst cases checked against.
     pub b: &'a WorstCase,
+    /// Per scene vehicle, the lanes it enters by a lane change sent this step (bit sets, [`bit`]).
     pub entering: &'a [u64],
 }
 
