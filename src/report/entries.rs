@@ -8,9 +8,13 @@ use crate::campaign::table::Row;
 /// One (planner, entry) of the table.
 #[derive(Debug, Clone, PartialEq)]
 pub struct EntryRow {
+    /// The planner, with its HDV profile in brackets when the results hold several profiles.
     pub planner: String,
+    /// Where the vehicles entered: the prefix of their ids (`main`, `ramp`, `ramp1`, …).
     pub entry: String,
+    /// Vehicles that entered the network (every outcome but `undeparted`).
     pub inserted: usize,
+    /// Vehicles that reached the end of their route.
     pub arrived: usize,
     /// Mean travel delay of the vehicles that arrived (s).
     pub mean_delay: Option<f64>,

@@ -11,21 +11,30 @@ use super::timespace::{LaneFigure, View};
 use crate::episode::trace::TRACE_FILE;
 use crate::io::{write_atomic, WriteError};
 
-/// File stems of the two lane figures (`.png` and `.svg` each).
+/// File stem of the time–space diagram (`.png` and `.svg` each) in the episode directory.
 pub const TIME_SPACE: &str = "time_space";
+/// File stem of the speed field (`.png` and `.svg` each) in the episode directory.
 pub const SPEED_FIELD: &str = "speed_field";
 
 /// Why an episode's figures could not be made.
 #[derive(Debug, thiserror::Error)]
 pub enum EpisodePlotError {
+    /// The path given is not a directory.
     #[error("{dir} is not a directory")]
-    NotADirectory { dir: PathBuf },
+    NotADirectory {
+        /// The path given.
+        dir: PathBuf,
+    },
+    /// The trajectories (or collisions) could not be read, e.g. none were recorded.
     #[error(transparent)]
     Tracks(#[from] TracksError),
+    /// A figure could not be drawn.
     #[error(transparent)]
     Plot(#[from] PlotError),
+    /// A figure file could not be written.
     #[error(transparent)]
     Write(#[from] WriteError),
+    /// The collision close-ups could not be made from `trace.jsonl`.
     #[error(transparent)]
     Explain(#[from] ExplainError),
 }
@@ -33,6 +42,7 @@ pub enum EpisodePlotError {
 /// What `plot` made.
 #[derive(Debug, Default)]
 pub struct EpisodePlots {
+    /// Every file written (PNG and SVG of each figure), in order.
     pub files: Vec<PathBuf>,
     /// Collisions seen in the trajectories.
     pub collisions: usize,

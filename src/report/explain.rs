@@ -25,16 +25,33 @@ const SAME_TIME: f64 = 1e-6;
 /// Why a directory could not be explained.
 #[derive(Debug, thiserror::Error)]
 pub enum ExplainError {
+    /// The directory has no `collisions.csv`: it is not an episode directory.
     #[error("{dir} has no collisions.csv (not an episode directory; run `bkpbs episode --trace --out {dir}` first)")]
-    NoCollisions { dir: PathBuf },
+    NoCollisions {
+        /// The directory given.
+        dir: PathBuf,
+    },
+    /// The episode was run without `--trace`, so the CAVs' plans are unknown.
     #[error("{dir} has no trace.jsonl: re-run the episode with `bkpbs episode --trace --out {dir}` (same settings)")]
-    NoTrace { dir: PathBuf },
+    NoTrace {
+        /// The episode directory.
+        dir: PathBuf,
+    },
+    /// `collisions.csv` could not be read or parsed.
     #[error("malformed {path}: {message}")]
-    Csv { path: PathBuf, message: String },
+    Csv {
+        /// The file.
+        path: PathBuf,
+        /// What the CSV reader reported.
+        message: String,
+    },
+    /// `trace.jsonl` could not be read or parsed.
     #[error(transparent)]
     Trace(#[from] TraceError),
+    /// A close-up figure could not be drawn.
     #[error(transparent)]
     Plot(#[from] super::plot::PlotError),
+    /// An output file could not be written.
     #[error(transparent)]
     Write(#[from] WriteError),
 }
@@ -42,13 +59,20 @@ pub enum ExplainError {
 /// One row of `collisions.csv`.
 #[derive(Debug, Clone, PartialEq, serde::Deserialize)]
 pub struct CollisionRow {
+    /// Simulation time of the step SUMO detected the collision in (s; column `time_s`).
     #[serde(rename = "time_s")]
     pub time: f64,
+    /// Id of the vehicle that drove into the other.
     pub collider: String,
+    /// The collider's kind: `cav`, `hdv` or `unknown`.
     pub collider_type: String,
+    /// Id of the vehicle that was hit.
     pub victim: String,
+    /// The victim's kind: `cav`, `hdv` or `unknown`.
     pub victim_type: String,
+    /// SUMO lane id where the collision happened.
     pub lane: String,
+    /// Position along that SUMO lane (m from its start; column `position_m`).
     #[serde(rename = "position_m")]
     pub position: f64,
 }
@@ -56,6 +80,7 @@ pub struct CollisionRow {
 /// One vehicle at one step before a collision.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Row {
+    /// Simulation time of the step (s).
     pub time: f64,
     /// A CAV's own trace line at this step (none for HDVs).
     pub cav: Option<TraceLine>,
@@ -85,9 +110,12 @@ impl Row {
 /// The last seconds of one vehicle of a collision.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Story {
+    /// The vehicle's id.
     pub id: String,
     /// `cav`, `hdv` or `unknown` (as in `collisions.csv`).
     pub kind: String,
+    /// One row per traced step of the [`WINDOW_S`] before the collision (its own step
+    /// excluded), in time order; a step where no trace line shows the vehicle has none.
     pub rows: Vec<Row>,
 }
 
@@ -96,7 +124,9 @@ pub struct Story {
 pub struct Explanation {
     /// 1-based, in the order of `collisions.csv`.
     pub number: usize,
+    /// The collision's row of `collisions.csv`.
     pub collision: CollisionRow,
+    /// The collider's story, then the victim's.
     pub stories: [Story; 2],
     /// Step length (s), from the trace's times.
     pub dt: f64,

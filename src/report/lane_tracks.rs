@@ -10,22 +10,34 @@ use std::path::{Path, PathBuf};
 /// Why an episode's trajectories could not be read.
 #[derive(Debug, thiserror::Error)]
 pub enum TracksError {
+    /// The episode was run without `--trajectories`.
     #[error(
         "{dir} has no trajectories.csv: run the episode with `bkpbs episode --trajectories` \
          (the FCD format has no road frame to plot)"
     )]
-    Missing { dir: PathBuf },
+    Missing {
+        /// The episode directory.
+        dir: PathBuf,
+    },
+    /// The trajectory file could not be read (or decompressed, or is not UTF-8).
     #[error("cannot read {path}: {cause}")]
     Read {
+        /// The file.
         path: PathBuf,
+        /// The underlying I/O error.
         cause: std::io::Error,
     },
+    /// A line of the trajectory file lacks a column or holds a non-number.
     #[error("malformed {path}, line {line}: {message}")]
     Malformed {
+        /// The file.
         path: PathBuf,
+        /// 1-based line number (1 is the header).
         line: u64,
+        /// What is wrong with it.
         message: String,
     },
+    /// `collisions.csv` could not be read.
     #[error(transparent)]
     Collisions(#[from] super::explain::ExplainError),
 }
@@ -33,16 +45,22 @@ pub enum TracksError {
 /// One vehicle's stay on one lane: consecutive (t, s, speed) samples.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Stretch {
+    /// The vehicle's id.
     pub id: String,
+    /// Whether the vehicle is a CAV (drawn thick) rather than an HDV.
     pub cav: bool,
+    /// (t in s, road-frame s in m, speed in m/s) of each sample, in time order.
     pub points: Vec<(f64, f64, f64)>,
 }
 
 /// Where something happened in the time–space plane of a lane.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Mark {
+    /// Road-frame lane (0 the ramp / auxiliary lane, 1.. the main lanes from the right).
     pub lane: i32,
+    /// Simulation time (s).
     pub t: f64,
+    /// Road-frame longitudinal position (m).
     pub s: f64,
 }
 

@@ -40,27 +40,47 @@ pub const REPORT_DIR: &str = "report";
 /// Why a report could not be made.
 #[derive(Debug, thiserror::Error)]
 pub enum ReportError {
+    /// The list of campaign directories was empty.
     #[error("report: no campaign directory given")]
     NoDirs,
+    /// A directory has no `episodes.csv`.
     #[error("{dir} is not a campaign directory (no episodes.csv; run `bkpbs campaign --out {dir}` first)")]
-    NotACampaign { dir: PathBuf },
+    NotACampaign {
+        /// The directory given.
+        dir: PathBuf,
+    },
+    /// A directory's `campaign.toml` could not be read as campaign settings.
     #[error("malformed {path}: {message}")]
-    Settings { path: PathBuf, message: String },
+    Settings {
+        /// The settings file.
+        path: PathBuf,
+        /// What the parser reported.
+        message: String,
+    },
+    /// Two directories were run with different settings, so their episodes are not samples of
+    /// the same experiment (`--allow-mixed` merges them anyway).
     #[error(
         "{other} was run with other settings than {first} ({key} differs): its episodes would \
          mix into the same tables; pass --allow-mixed to merge them anyway"
     )]
     MixedSettings {
+        /// The first directory with a `campaign.toml`, the one the others are compared with.
         first: PathBuf,
+        /// The directory whose settings differ from it.
         other: PathBuf,
+        /// The first scenario setting (dotted key) found to differ.
         key: String,
     },
+    /// The results (CSV files) could not be read or merged.
     #[error(transparent)]
     Results(#[from] ResultsError),
+    /// `episodes.csv` lacks a column the tables need, or holds a non-number.
     #[error(transparent)]
     Summary(#[from] SummaryError),
+    /// A table, figure or merged result file could not be written.
     #[error(transparent)]
     Write(#[from] WriteError),
+    /// A figure could not be drawn.
     #[error(transparent)]
     Plot(#[from] PlotError),
 }

@@ -49,6 +49,7 @@ pub fn sample_std(xs: &[f64]) -> Option<f64> {
 pub struct Estimate {
     /// Number of values averaged.
     pub n: usize,
+    /// The sample mean (in the unit of the values).
     pub mean: f64,
     /// t(0.975, n − 1) · s / √n; `None` for a single value.
     pub ci95: Option<f64>,

@@ -10,13 +10,24 @@ use crate::campaign::table::Table;
 /// A column missing from, or a value unreadable in, `episodes.csv`.
 #[derive(Debug, thiserror::Error)]
 pub enum SummaryError {
+    /// A column the summary averages is missing.
     #[error("{path}: no column '{column}'")]
-    Column { path: PathBuf, column: &'static str },
+    Column {
+        /// The file (`episodes.csv`).
+        path: PathBuf,
+        /// The missing column.
+        column: &'static str,
+    },
+    /// A field of an averaged column is neither empty nor a number.
     #[error("{path}: cell {cell}: '{value}' in column {column} is not a number")]
     Value {
+        /// The file (`episodes.csv`).
         path: PathBuf,
+        /// The grid cell (episode) of the row.
         cell: String,
+        /// The column.
         column: &'static str,
+        /// The field's text.
         value: String,
     },
 }
@@ -27,7 +38,9 @@ pub struct Group {
     /// The planner, with its HDV profile in brackets when the results hold several profiles
     /// (`bk-pbs (paper)`).
     pub planner: String,
+    /// CAV penetration α (probability that an inserted vehicle is a CAV).
     pub alpha: f64,
+    /// Total arrival rate λ (veh/h).
     pub lambda: f64,
     /// Episodes (seeds) found.
     pub episodes: usize,
@@ -44,9 +57,13 @@ pub struct Group {
 /// All groups of a campaign, in grid order, with the axes they span.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Summary {
+    /// The planner labels (as in [`Group::planner`]) in grid order, those with a group only.
     pub planners: Vec<String>,
+    /// The CAV penetrations α found, ascending.
     pub alphas: Vec<f64>,
+    /// The arrival rates λ found (veh/h), ascending.
     pub lambdas: Vec<f64>,
+    /// One group per (planner, α, λ) with at least one episode, in grid order.
     pub groups: Vec<Group>,
     /// The largest number of seeds of any group: what a complete group has.
     pub seeds: usize,

@@ -7,7 +7,9 @@ use super::summary::{Group, Summary};
 
 /// A CSV file of the report: its file name and content.
 pub struct CsvFile {
+    /// File name inside the report directory (e.g. `summary.csv`).
     pub name: String,
+    /// The file's content.
     pub bytes: Vec<u8>,
 }
 

@@ -22,13 +22,17 @@ const FIELD_DS_M: f64 = 25.0;
 /// Which of the two figures.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum View {
+    /// s against t per lane, one line per vehicle coloured by its speed.
     TimeSpace,
+    /// Mean speed per 4 s × 25 m bin of t and s, per lane.
     SpeedField,
 }
 
 /// A figure of an episode's lanes, top panel the leftmost lane.
 pub struct LaneFigure<'a> {
+    /// The episode's trajectories.
     pub tracks: &'a LaneTracks,
+    /// Which figure to draw of them.
     pub view: View,
     /// Title line above the panels' own (e.g. planner, α, λ, seed).
     pub title: String,

@@ -11,17 +11,23 @@ use super::{drawing_failed, render, Figure, Painter, PlotError, FONT};
 
 /// One panel of a heat map: `values[row][column]`, `None` for a cell without data.
 pub struct HeatPanel {
+    /// Caption above the panel (e.g. the planner).
     pub title: String,
+    /// Cell values by row (top to bottom) then column (left to right).
     pub values: Vec<Vec<Option<f64>>>,
 }
 
 /// Heat maps sharing axes and one colour scale from 0 to the largest value.
 pub struct Heatmap {
+    /// The panels, in rows of three.
     pub panels: Vec<HeatPanel>,
     /// Labels of the rows, top to bottom.
     pub row_labels: Vec<String>,
+    /// Labels of the columns, left to right.
     pub col_labels: Vec<String>,
+    /// Title of the vertical (row) axis.
     pub row_axis: String,
+    /// Title of the horizontal (column) axis.
     pub col_axis: String,
     /// Label of the colour bar.
     pub scale_label: String,

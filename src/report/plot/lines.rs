@@ -14,23 +14,32 @@ use super::{draw_grey_grid, drawing_failed, render, Chart, Figure, Painter, Plot
 /// One curve of a [`LinePanel`]: points joined in order, in the colour of series `colour`;
 /// thin curves are drawn lighter (e.g. one per planning step).
 pub struct Curve {
+    /// (x, y) points, joined in this order.
     pub points: Vec<(f64, f64)>,
+    /// Index into the series palette ([`series_colour`]).
     pub colour: usize,
+    /// Drawn full and wide; otherwise thin and light.
     pub thick: bool,
 }
 
 /// A shaded band of a [`LinePanel`] (e.g. a confidence interval): (x, low, high) in order of
 /// x, in the light colour of series `colour`.
 pub struct Band {
+    /// (x, low, high), in order of x.
     pub points: Vec<(f64, f64, f64)>,
+    /// Index into the series palette, drawn light.
     pub colour: usize,
 }
 
 /// One panel of line charts.
 pub struct LinePanel {
+    /// Caption above the panel.
     pub title: String,
+    /// Title of the x axis (with its unit).
     pub x_label: String,
+    /// Title of the y axis (with its unit).
     pub y_label: String,
+    /// The curves, drawn in order over the bands.
     pub curves: Vec<Curve>,
     /// Drawn under the curves.
     pub bands: Vec<Band>,
@@ -42,6 +51,7 @@ pub struct LinePanel {
 
 /// Line-chart panels in rows of two, with a legend of curve colours on the right.
 pub struct LinePanels {
+    /// The panels, left to right, then top to bottom.
     pub panels: Vec<LinePanel>,
     /// Legend: (series colour index, name, thick).
     pub legend: Vec<(usize, String, bool)>,

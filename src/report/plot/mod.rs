@@ -1,9 +1,9 @@
 //! Figures of the report, as PNG and SVG, and the small painter framework they share.
 //!
 //! Each figure is plain data ([`Heatmap`], [`Scatter`], [`LinePanels`], and the episode
-//! figures of [`crate::report::timespace`]) that implements [`Painter`]: a main area and a
+//! figures of [`crate::report::timespace`]) that implements `Painter`: a main area and a
 //! strip on its right for the colour bar or legend, so nothing explaining a plot is drawn over
-//! it. [`render`] paints a painter twice, into an in-memory bitmap encoded here as PNG and into
+//! it. `render` paints a painter twice, into an in-memory bitmap encoded here as PNG and into
 //! an SVG string, so the caller writes both files atomically and they always show the same.
 //!
 //! - [`fonts`]: the TrueType font every text is set in.
@@ -33,18 +33,24 @@ pub use scatter::{Scatter, ScatterSeries};
 /// Why a figure could not be made.
 #[derive(Debug, thiserror::Error)]
 pub enum PlotError {
+    /// No TrueType font was found to set the figure's text in.
     #[error("no font for figures: {0} (install Debian's fonts-dejavu-core or set {FONT_ENV} to a .ttf file)")]
     Font(String),
+    /// plotters failed while drawing or encoding the figure.
     #[error("drawing {figure}: {message}")]
     Draw {
+        /// Which figure (e.g. "heat map").
         figure: &'static str,
+        /// plotters' (or the PNG encoder's) error, as text.
         message: String,
     },
 }
 
 /// A rendered figure.
 pub struct Figure {
+    /// The figure as an 8-bit RGB PNG file's bytes.
     pub png: Vec<u8>,
+    /// The same figure as an SVG document.
     pub svg: String,
 }
 

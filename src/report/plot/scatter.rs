@@ -12,15 +12,21 @@ use super::{draw_grey_grid, drawing_failed, render, Figure, Painter, PlotError, 
 /// One series of a scatter: points (x, y, marker), drawn in one colour. The marker indexes
 /// [`Scatter::markers`].
 pub struct ScatterSeries {
+    /// Legend name of the series (e.g. the planner).
     pub name: String,
+    /// (x, y, marker index) of each point.
     pub points: Vec<(f64, f64, usize)>,
 }
 
 /// A scatter plot with a legend of series (colours) and markers (shapes).
 pub struct Scatter {
+    /// Caption above the plot.
     pub title: String,
+    /// Title of the x axis (with its unit).
     pub x_label: String,
+    /// Title of the y axis (with its unit).
     pub y_label: String,
+    /// The series, each in the next colour of the series palette.
     pub series: Vec<ScatterSeries>,
     /// Legend names of the marker shapes (circle, triangle, square, cross, in this order).
     pub markers: Vec<String>,
