@@ -10,8 +10,9 @@ use crate::config::Config;
 use crate::model::road::Road;
 use crate::model::scene::{Kind, Scene};
 use crate::model::trajectory::Trajectory;
+use crate::planner::guard::StartGuard;
 use crate::planner::lane_changes::LaneChanges;
-use crate::planner::mastar::{Mastar, StartGuard};
+use crate::planner::mastar::Mastar;
 use crate::predict::{ConstantSpeed, Predictor};
 
 /// Decentralised M-A* planner.

@@ -14,8 +14,9 @@ use crate::config::Config;
 use crate::model::road::Road;
 use crate::model::scene::{Kind, Scene};
 use crate::model::trajectory::Trajectory;
+use crate::planner::guard::StartGuard;
 use crate::planner::lane_changes::{LaneChanges, SceneRequests};
-use crate::planner::mastar::{Mastar, NoPlan, Plan, StartGuard};
+use crate::planner::mastar::{Mastar, NoPlan, Plan};
 use crate::planner::pbs::{Budget, PbsStats, Problem, RequestFor, Solution};
 use crate::predict::Predictor;
 

@@ -20,7 +20,7 @@ use super::{CavBelief, CavHandling, Command, Controller, LaneChange, Maneuver, P
 use crate::config::Config;
 use crate::model::road::{FIRST_MAIN_LANE, FORCED_MERGE_ZONE, MERGE_LANE};
 use crate::model::scene::{Kind, Origin, Scene, VehicleState};
-use crate::planner::mastar::StartGuard;
+use crate::planner::guard::StartGuard;
 
 /// Lateral offset (m) from the lane centre beyond which a vehicle counts as changing lanes.
 pub const CHANGING_LATERAL: f64 = 0.1;
