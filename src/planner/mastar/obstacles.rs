@@ -61,6 +61,7 @@ const OBSTACLE_RANGE: f64 = 200.0;
 /// The road and the other vehicles, as a search checks them.
 impl Mastar {
     /// Whether the (un-inflated) body stays on drivable road.
+    #[inline]
     pub(super) fn on_road(&self, st: &BicycleState, req: &Request) -> bool {
         let w = self.road.lane_width;
         let (sin, cos) = st.heading.sin_cos();

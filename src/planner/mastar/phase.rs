@@ -37,6 +37,7 @@ pub(super) struct Node {
 
 impl Node {
     /// Whether the plan ends here: at its goal, or at the horizon short of it.
+    #[inline]
     pub(super) fn ends_plan(&self) -> bool {
         self.terminal || self.goal
     }
@@ -233,6 +234,7 @@ impl<'p> PhaseSearch<'p> {
     }
 
     /// The closed-set key: nodes alike in step, lane, s bin, v bin and terminality are one.
+    #[inline]
     pub(super) fn key(&self, n: &Node) -> (usize, i32, i64, i64, bool) {
         let (s_bin, v_bin) = (self.planner.settings.s_bin, self.planner.settings.v_bin);
         (
