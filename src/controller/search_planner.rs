@@ -15,7 +15,8 @@ use crate::model::road::Road;
 use crate::model::scene::Scene;
 use crate::model::trajectory::Trajectory;
 use crate::planner::lane_changes::LaneChanges;
-use crate::planner::mastar::{Mastar, NoPlan, Plan, StartGuard};
+use crate::planner::guard::StartGuard;
+use crate::planner::mastar::{Mastar, NoPlan, Plan};
 use crate::predict::Predictor;
 
 /// How a search-based controller plans one round: a command per CAV of `scene` into `out`,

@@ -21,9 +21,8 @@ use crate::model::math::Point;
 use crate::model::road::{FIRST_MAIN_LANE, MERGE_LANE};
 use crate::model::scene::{Origin, Scene};
 use crate::model::trajectory::Trajectory;
-use crate::planner::mastar::{
-    FirstMoves, Guard, Mastar, NoPlan, OngoingLaneChange, Plan, Request, StartGuard,
-};
+use crate::planner::guard::{Guard, StartGuard};
+use crate::planner::mastar::{FirstMoves, Mastar, NoPlan, OngoingLaneChange, Plan, Request};
 use crate::planner::memo::SearchMemo;
 use crate::planner::pbs::RequestFor;
 

@@ -3,6 +3,7 @@
 //! jointly. It knows nothing of SUMO or of the episode; it predicts HDVs through
 //! [`crate::predict::Predictor`].
 
+pub mod guard;
 pub mod lane_changes;
 pub mod mastar;
 pub mod memo;

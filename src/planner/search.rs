@@ -36,6 +36,7 @@ pub struct Search<N> {
     pub stop: Stop,
 }
 
+/// An open-list entry: generated node `seq`, its cost `g` from the start and `f = g + h`.
 struct Entry {
     f: OrderedFloat<f64>,
     g: OrderedFloat<f64>,
@@ -93,69 +94,130 @@ where
     K: Eq + Hash,
     I: IntoIterator<Item = (N, f64)>,
 {
-    // Arena of generated nodes: (node, parent, g).
-    let mut arena: Vec<(N, usize, f64)> = Vec::new();
-    let mut open = BinaryHeap::new();
+    let mut tree = Tree::default();
+    let h0 = heuristic(&start);
+    tree.push(start, NO_PARENT, 0.0, h0);
     // Keys are small tuples of integers: a fast hash, not a DoS-resistant one.
     let mut closed: FxHashSet<K> = FxHashSet::default();
-    let h0 = heuristic(&start);
-    arena.push((start, usize::MAX, 0.0));
-    open.push(Entry {
-        f: OrderedFloat(h0),
-        g: OrderedFloat(0.0),
-        seq: 0,
-    });
     let mut expanded = 0;
-    while let Some(Entry { seq, g, .. }) = open.pop() {
-        if !closed.insert(key(&arena[seq].0)) {
+    while let Some(Entry { seq, g, .. }) = tree.open.pop() {
+        if !closed.insert(key(tree.node(seq))) {
             continue;
         }
-        if success(&arena[seq].0) {
-            let mut path = Vec::new();
-            let mut at = seq;
-            while at != usize::MAX {
-                path.push(arena[at].0.clone());
-                at = arena[at].1;
-            }
-            path.reverse();
-            return Search {
-                path,
-                cost: g.0,
-                expanded,
-                stop: Stop::Found,
-            };
+        if success(tree.node(seq)) {
+            return Search::found(tree.path_to(seq), g.0, expanded);
         }
         if expanded >= budget {
-            return Search {
-                path: Vec::new(),
-                cost: f64::INFINITY,
-                expanded,
-                stop: Stop::Budget,
-            };
+            return Search::failed(Stop::Budget, expanded);
         }
         expanded += 1;
-        // Gathered before any is stored: the arena may move as it grows.
-        let generated: Vec<(N, f64)> = successors(&arena[seq].0).into_iter().collect();
-        for (next, cost) in generated {
-            if closed.contains(&key(&next)) {
-                continue;
-            }
-            let g2 = g.0 + cost;
-            let f2 = g2 + heuristic(&next);
-            let id = arena.len();
-            arena.push((next, seq, g2));
-            open.push(Entry {
-                f: OrderedFloat(f2),
-                g: OrderedFloat(g2),
-                seq: id,
-            });
+        let is_closed = |n: &N| closed.contains(&key(n));
+        tree.expand(seq, g.0, &mut successors, &mut heuristic, is_closed);
+    }
+    Search::failed(Stop::Exhausted, expanded)
+}
+
+impl<N> Search<N> {
+    /// The search that reached a goal along `path` at `cost`.
+    fn found(path: Vec<N>, cost: f64, expanded: usize) -> Self {
+        Search {
+            path,
+            cost,
+            expanded,
+            stop: Stop::Found,
         }
     }
-    Search {
-        path: Vec::new(),
-        cost: f64::INFINITY,
-        expanded,
-        stop: Stop::Exhausted,
+
+    /// The search that stopped for `stop` without reaching a goal.
+    fn failed(stop: Stop, expanded: usize) -> Self {
+        Search {
+            path: Vec::new(),
+            cost: f64::INFINITY,
+            expanded,
+            stop,
+        }
+    }
+}
+
+/// The parent of the start node.
+const NO_PARENT: usize = usize::MAX;
+
+/// A generated node and the node it was generated from.
+struct Generated<N> {
+    node: N,
+    parent: usize,
+}
+
+/// The search tree: every node generated so far, in order of generation (its index is the
+/// `seq` its open-list entry carries, so ties go to the earlier one), and the open list.
+struct Tree<N> {
+    arena: Vec<Generated<N>>,
+    open: BinaryHeap<Entry>,
+}
+
+impl<N> Default for Tree<N> {
+    fn default() -> Self {
+        Tree {
+            arena: Vec::new(),
+            open: BinaryHeap::new(),
+        }
+    }
+}
+
+impl<N: Clone> Tree<N> {
+    #[inline]
+    fn node(&self, seq: usize) -> &N {
+        &self.arena[seq].node
+    }
+
+    /// Stores `node`, generated from `parent` at cost `g` from the start with heuristic `h`,
+    /// and opens it.
+    #[inline]
+    fn push(&mut self, node: N, parent: usize, g: f64, h: f64) {
+        let seq = self.arena.len();
+        self.arena.push(Generated { node, parent });
+        self.open.push(Entry {
+            f: OrderedFloat(g + h),
+            g: OrderedFloat(g),
+            seq,
+        });
+    }
+
+    /// Generates the successors of node `seq` (at cost `g` from the start) and opens those
+    /// whose key is not closed yet, in the order `successors` yields them.
+    #[inline]
+    fn expand<I>(
+        &mut self,
+        seq: usize,
+        g: f64,
+        successors: &mut impl FnMut(&N) -> I,
+        heuristic: &mut impl FnMut(&N) -> f64,
+        is_closed: impl Fn(&N) -> bool,
+    ) where
+        I: IntoIterator<Item = (N, f64)>,
+    {
+        // Gathered before any is stored: the arena may move as it grows.
+        let generated: Vec<(N, f64)> = successors(self.node(seq)).into_iter().collect();
+        for (next, cost) in generated {
+            if is_closed(&next) {
+                continue;
+            }
+            let g2 = g + cost;
+            let h = heuristic(&next);
+            self.push(next, seq, g2, h);
+        }
+    }
+
+    /// The nodes from the start to node `seq`, both included.
+    fn path_to(&self, seq: usize) -> Vec<N> {
+        let mut path = Vec::new();
+        let mut at = seq;
+        while at != NO_PARENT {
+            path.push(self.arena[at].node.clone());
+            at = self.arena[at].parent;
+        }
+        path.reverse();
+        path
     }
 }
 

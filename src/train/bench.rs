@@ -12,6 +12,7 @@ use std::time::Instant;
 use crate::config::Config;
 use crate::episode::metrics::percentile;
 use crate::episode::{self, Driver, EpisodeError, Observer};
+use crate::model::road::Road;
 use crate::model::scene::{Kind, Scene};
 use crate::model::trajectory::Trajectory;
 use crate::predict::features::{
@@ -19,6 +20,7 @@ use crate::predict::features::{
 };
 use crate::predict::infer::Workspace;
 use crate::predict::learned::Learned;
+use crate::planner::mastar::Mastar;
 use crate::predict::{ConstantSpeed, Predictor};
 
 /// Steps skipped at the start while the road fills.
@@ -184,10 +186,8 @@ pub fn run(config: &Config, learned: &Learned) -> Result<PredictorBench, Episode
     let mut c = config.clone();
     c.predictor.kind = crate::config::PredictorKind::Constant;
     c.validate()?;
-    let horizon = c.planner.horizon
-        + (c.scenario.lane_change_duration / c.scenario.dt)
-            .round()
-            .max(1.0) as usize;
+    // The horizon the planners predict over (the road does not enter it).
+    let horizon = Mastar::from_config(&c, Road::paper_default()).check_horizon();
     let mut timer = Timer {
         learned,
         constant: ConstantSpeed::new(&c),

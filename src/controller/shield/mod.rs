@@ -15,7 +15,7 @@ use self::check::{bit, is_safe, replacement};
 use super::{CavBelief, CavHandling, Command, Controller, LaneChange, Maneuver, PlanStats, Source};
 use crate::config::Config;
 use crate::model::scene::Scene;
-use crate::planner::mastar::StartGuard;
+use crate::planner::guard::StartGuard;
 
 /// The shield as the search's [`StartGuard`]: a lane change may be planned only if the shield
 /// would let it start, so no plan (which other CAVs are planned against) counts on a start the
