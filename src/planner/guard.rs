@@ -20,8 +20,11 @@ pub trait StartGuard: Sync {
 /// A [`StartGuard`] bound to one CAV of one scene.
 #[derive(Clone, Copy)]
 pub struct Guard<'a> {
+    /// The check (the controllers' safety shield).
     pub check: &'a dyn StartGuard,
+    /// The scene the start is judged in.
     pub scene: &'a Scene,
+    /// Scene index of the CAV.
     pub agent: usize,
 }
 

@@ -46,7 +46,9 @@ pub use crate::planner::mastar::first_moves::FirstMoves;
 /// Which phase produced a plan.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Phase {
+    /// Phase 1: the goal d ahead, every primitive, biased to forward motion.
     Forward,
+    /// Phase 2, when phase 1 failed: the shorter goal d', braking and lane changes only.
     Fallback,
 }
 
@@ -62,7 +64,9 @@ pub enum FirstMove {
 /// A lane change the CAV is executing: it reaches `target_lane` after `steps_left` more steps.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct OngoingLaneChange {
+    /// The road-frame lane the change ends in.
     pub target_lane: i32,
+    /// Planning steps until it ends there.
     pub steps_left: usize,
 }
 
@@ -73,10 +77,13 @@ pub struct Request<'a> {
     pub start: BicycleState,
     /// The lane the CAV is in (its target lane when a change is under way).
     pub lane: i32,
+    /// The lane change under way, which the plan must continue.
     pub ongoing: Option<OngoingLaneChange>,
     /// A ramp CAV that has not merged yet: its goal is the main road.
     pub must_merge: bool,
+    /// The CAV's length (m).
     pub length: f64,
+    /// The CAV's width (m).
     pub width: f64,
     /// Other vehicles' trajectories, step 0 = now.
     pub obstacles: &'a [&'a Trajectory],
@@ -90,11 +97,13 @@ pub struct Request<'a> {
 /// A plan found by M-A*.
 #[derive(Debug, Clone)]
 pub struct Plan {
+    /// What the CAV does in the next step.
     pub first: FirstMove,
     /// The primitives after the first move.
     pub primitives: Vec<Primitive>,
     /// The CAV's planned poses, step 0 = now.
     pub trajectory: Trajectory,
+    /// The phase that found it.
     pub phase: Phase,
     /// Nodes expanded over both phases.
     pub expanded: usize,
@@ -117,16 +126,22 @@ impl Plan {
 /// No plan in either phase.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct NoPlan {
+    /// Nodes expanded over both phases before giving up.
     pub expanded: usize,
 }
 
 /// The single-CAV planner: primitives, settings and the road.
 #[derive(Debug, Clone)]
 pub struct Mastar {
+    /// The motion primitives, rolled out on the kinematic bicycle model.
     pub library: Library,
+    /// Horizon, goal distances, node budgets and bins (`[planner]`).
     pub settings: PlannerSettings,
+    /// The road the CAVs plan on.
     pub road: Road,
+    /// Speed limit of the plans (m/s).
     pub v_max: f64,
+    /// The safety rule a plan keeps to other vehicles' trajectories.
     pub rule: SafetyRule,
 }
 
