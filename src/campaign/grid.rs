@@ -14,9 +14,13 @@ use crate::config::hdv::DEFAULT_PROFILE;
 /// One episode of the grid.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Cell {
+    /// The controller's name as the CLI spells it (`bk-pbs`, `idm-mobil`, …).
     pub planner: String,
+    /// CAV penetration α (share of CAVs, 0 to 1).
     pub alpha: f64,
+    /// Total arrival rate λ (veh/h).
     pub lambda: f64,
+    /// The episode's seed (`scenario.seed`).
     pub seed: u64,
     /// The HDV driver profile SUMO runs.
     pub hdv_profile: String,
@@ -51,15 +55,20 @@ impl fmt::Display for Cell {
     }
 }
 
-/// The four axes of a campaign, normalised: planners keep their order (duplicates dropped),
-/// α and λ are sorted ascending without duplicates, seeds are `seed_base .. seed_base + seeds`.
+/// The five axes of a campaign, normalised: planners and HDV profiles keep their order
+/// (duplicates dropped), α and λ are sorted ascending without duplicates, seeds are
+/// `seed_base .. seed_base + seeds`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Grid {
+    /// Controller names, in the order given.
     pub planners: Vec<String>,
     /// HDV driver profiles, in the order given.
     pub profiles: Vec<String>,
+    /// CAV penetrations α (0 to 1), ascending.
     pub alphas: Vec<f64>,
+    /// Total arrival rates λ (veh/h), ascending.
     pub lambdas: Vec<f64>,
+    /// Episode seeds, ascending and consecutive.
     pub seeds: Vec<u64>,
 }
 
@@ -148,7 +157,9 @@ impl Grid {
 /// so slices take about the same time.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Shard {
+    /// Which slice, k (1-based, at most `count`).
     pub index: usize,
+    /// How many slices the grid is cut into, n.
     pub count: usize,
 }
 
@@ -156,7 +167,9 @@ pub struct Shard {
 #[derive(Debug, thiserror::Error)]
 #[error("invalid shard '{spec}': {reason} (expected k/n with 1 <= k <= n, e.g. 2/4)")]
 pub struct ShardError {
+    /// The `--shard` value as given.
     pub spec: String,
+    /// What is wrong with it.
     pub reason: &'static str,
 }
 

@@ -44,24 +44,39 @@ pub const SETTINGS_FILE: &str = "campaign.toml";
 /// Why a campaign could not run (failed episodes are not errors: see [`RunSummary`]).
 #[derive(Debug, thiserror::Error)]
 pub enum CampaignError {
+    /// The campaign settings (file or flags) are unusable.
     #[error(transparent)]
     Settings(#[from] SettingsError),
+    /// The output directory already holds a campaign whose scenario settings differ, so its
+    /// finished episodes could not be resumed into this one.
     #[error(
         "{dir} holds a campaign with other settings ({key} differs); use another --out or remove it"
     )]
-    OtherSettings { dir: PathBuf, key: String },
+    OtherSettings {
+        /// The campaign directory (`--out`).
+        dir: PathBuf,
+        /// The first differing setting, dotted (`scenario.dt`, `campaign.steps`, …).
+        key: String,
+    },
+    /// The directory's collected `episodes.csv` has episodes outside this grid; collecting this
+    /// run would silently lose them.
     #[error(
         "{dir}/episodes.csv records {count} episodes outside this grid, which this run would \
          drop (first: {first}): an earlier, larger grid or results merged in by `bkpbs report`; \
          run a grid that includes them, or use another --out"
     )]
     WouldDrop {
+        /// The campaign directory (`--out`).
         dir: PathBuf,
+        /// How many recorded episodes lie outside the grid.
         count: usize,
+        /// The first of them, as a cell is displayed (`planner α=… λ=… seed=…`).
         first: String,
     },
+    /// A campaign file (`campaign.toml`, a collected CSV) could not be written.
     #[error(transparent)]
     Write(#[from] WriteError),
+    /// The finished episodes could not be gathered into the collected files.
     #[error(transparent)]
     Collect(#[from] ResultsError),
 }
@@ -81,6 +96,7 @@ pub struct RunSummary {
     pub failed: usize,
     /// Rows of the collected `episodes.csv`.
     pub collected: usize,
+    /// Wall-clock time of the run (s).
     pub wall_s: f64,
     /// The stop signal that ended the run early, if one did (the finished episodes are still
     /// collected; re-running resumes).

@@ -7,9 +7,9 @@
 //! Children stay in the campaign's process group and end when their stdin closes.
 //!
 //! With a wall-clock limit per episode, a worker that has not replied in time is stopped (and
-//! killed if it does not stop) and the episode recorded as failed ("exceeded the episode timeout"), so one runaway episode
-//! cannot hold a campaign forever. Replies are read on a thread of their own per worker, so
-//! that the wait can end.
+//! killed if it does not stop) and the episode recorded as failed ("exceeded the episode
+//! timeout"), so one runaway episode cannot hold a campaign forever. Replies are read on a
+//! thread of their own per worker, so that the wait can end.
 //!
 //! A stop signal to the campaign ([`crate::io::interrupt`]) stops the queue: each worker is
 //! passed the signal, ends its episode early (removing its input) and exits; its cell stays
@@ -186,7 +186,10 @@ impl Worker {
 /// How the pool runs: how many workers, and how long one episode may take.
 #[derive(Debug, Clone, Copy)]
 pub struct PoolOptions {
+    /// Most worker processes running at once.
     pub workers: usize,
+    /// Longest one episode may take before its worker is stopped and the episode recorded as
+    /// failed; `None`: no limit.
     pub episode_timeout: Option<Duration>,
 }
 

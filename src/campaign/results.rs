@@ -21,24 +21,46 @@ pub const FILES: [&str; 4] = [
 /// Why collected results cannot be read or merged.
 #[derive(Debug, thiserror::Error)]
 pub enum ResultsError {
+    /// A file could not be opened or is not valid CSV.
     #[error("cannot read {path}: {message}")]
-    Read { path: PathBuf, message: String },
+    Read {
+        /// The CSV file.
+        path: PathBuf,
+        /// The CSV reader's message.
+        message: String,
+    },
+    /// A file's header is not the one this version writes.
     #[error("{path}: unexpected columns (written by another version of bkpbs?): {header}")]
-    Columns { path: PathBuf, header: String },
+    Columns {
+        /// The CSV file.
+        path: PathBuf,
+        /// The header found, comma-separated.
+        header: String,
+    },
+    /// A row's cell columns (planner, alpha, lambda, seed, hdv_profile) do not parse.
     #[error("{path}, line {line}: bad cell value '{value}'")]
     Cell {
+        /// The CSV file.
         path: PathBuf,
+        /// Line of the row in the file (1 is the header).
         line: u64,
+        /// The value that does not parse.
         value: String,
     },
+    /// Two merged directories hold the same cell with different rows.
     #[error("cell {cell} has different results in {first} and {second}")]
     Conflict {
+        /// The cell, as it is displayed (`planner α=… λ=… seed=…`).
         cell: String,
+        /// The file of the first directory holding it.
         first: PathBuf,
+        /// The file of the later directory that disagrees.
         second: PathBuf,
     },
+    /// A collected file could not be written.
     #[error(transparent)]
     Write(#[from] WriteError),
+    /// A row of a collected `episodes.csv` fails its checks (duplicate, value out of range).
     #[error(transparent)]
     Row(#[from] super::validate::RowError),
 }
@@ -75,9 +97,13 @@ pub struct Results {
     pub planners: Vec<String>,
     /// HDV profile order of the grid.
     pub profiles: Vec<String>,
+    /// `episodes.csv`: one summary row per finished episode.
     pub episodes: Table,
+    /// `vehicles.csv`: one row per vehicle of every finished episode.
     pub vehicles: Table,
+    /// `timings.csv`: one row of computation times (planning, SUMO, wall) per finished episode.
     pub timings: Table,
+    /// `failures.csv`: one row per unfinished episode, with its error message.
     pub failures: Table,
 }
 

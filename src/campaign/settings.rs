@@ -36,37 +36,70 @@ const PER_CELL_KEYS: [&str; 4] = ["alpha", "lambda", "seed", "steps"];
 /// Why campaign settings cannot be used.
 #[derive(Debug, thiserror::Error)]
 pub enum SettingsError {
+    /// The campaign file could not be read.
     #[error("cannot read campaign file {path}: {error}")]
     Read {
+        /// The file asked for.
         path: PathBuf,
+        /// What the file system said.
         error: std::io::Error,
     },
+    /// The campaign file is not TOML of the expected shape (syntax, wrong type, unknown key).
     #[error("malformed campaign file {path}: {message}")]
-    Parse { path: PathBuf, message: String },
+    Parse {
+        /// The file read.
+        path: PathBuf,
+        /// The TOML parser's message (with the table or byte offset where known).
+        message: String,
+    },
+    /// The file sets a scenario key that the campaign sets per cell.
     #[error("scenario.{key} in {path} is set by the campaign (use campaign.{replacement})")]
     PerCellKey {
+        /// The campaign file.
         path: PathBuf,
+        /// The `[scenario]` key set (`alpha`, `lambda`, `seed` or `steps`).
         key: String,
+        /// The `[campaign]` key to use instead.
         replacement: &'static str,
     },
+    /// The scenario settings fail validation for some cell of the grid.
     #[error(transparent)]
     Config(#[from] ConfigError),
+    /// A planner name is not a known controller.
     #[error("{origin}: {planner}")]
     Planner {
+        /// Where the list came from: the flag, or the key and its file.
         origin: String,
+        /// The unknown name, with the known ones.
         planner: UnknownPlanner,
     },
+    /// An entry of a numeric list flag does not parse.
     #[error("{origin}: '{value}' is not a number")]
-    NotANumber { origin: String, value: String },
+    NotANumber {
+        /// The flag (`--alphas`, …).
+        origin: String,
+        /// The entry as given.
+        value: String,
+    },
+    /// A value lies outside what a campaign accepts.
     #[error("{origin}: {what} {value} {reason}")]
     OutOfRange {
+        /// Where the value came from: the flag, or the key and its file.
         origin: String,
+        /// What the value is (`alpha`, `workers`, `episode timeout`, …).
         what: &'static str,
+        /// The value, as text.
         value: String,
+        /// The rule it breaks.
         reason: &'static str,
     },
+    /// A list setting (planners, α, λ) has no entry.
     #[error("{origin}: the list is empty")]
-    Empty { origin: String },
+    Empty {
+        /// Where the list came from: the flag, or the key and its file.
+        origin: String,
+    },
+    /// The `--shard` value is not `k/n`.
     #[error(transparent)]
     Shard(#[from] ShardError),
 }
@@ -119,13 +152,21 @@ impl Default for CampaignTable {
 /// comma-separated text of the flag so that a bad entry gets a clear error naming the flag.
 #[derive(Debug, Clone, Default)]
 pub struct Overrides {
+    /// `--planners`, comma-separated controller names.
     pub planners: Option<String>,
+    /// `--alphas`, comma-separated CAV penetrations α.
     pub alphas: Option<String>,
+    /// `--lambdas`, comma-separated arrival rates λ (veh/h).
     pub lambdas: Option<String>,
+    /// `--seeds`: seeds per grid point.
     pub seeds: Option<u64>,
+    /// `--seed-base`: the first seed.
     pub seed_base: Option<u64>,
+    /// `--steps`: episode length in steps.
     pub steps: Option<u32>,
+    /// `--workers`: worker processes.
     pub workers: Option<usize>,
+    /// `--shard k/n`: run only the k-th of n interleaved slices of the grid.
     pub shard: Option<String>,
     /// `--episode-timeout` in seconds.
     pub episode_timeout: Option<f64>,
@@ -140,8 +181,11 @@ pub struct Overrides {
 pub struct Settings {
     /// The `[campaign]` table as resolved (file, then flags).
     pub table: CampaignTable,
+    /// Every episode of the campaign, normalised.
     pub grid: Grid,
+    /// The slice of the grid this run runs ([`Shard::ALL`] without `--shard`).
     pub shard: Shard,
+    /// Worker processes, at least 1 (the table's, else one per core).
     pub workers: usize,
     /// Wall-clock limit of one episode, if any.
     pub episode_timeout: Option<Duration>,

@@ -11,6 +11,7 @@ pub const CELL_COLUMNS: [&str; 5] = ["planner", "alpha", "lambda", "seed", "hdv_
 /// One CSV row and the cell it belongs to.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Row {
+    /// The cell the row's leading columns name.
     pub cell: Cell,
     /// The whole row, cell columns included.
     pub fields: csv::StringRecord,
@@ -19,7 +20,9 @@ pub struct Row {
 /// One collected file: its header and rows.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Table {
+    /// Column names, cell columns first.
     pub header: Vec<String>,
+    /// The rows, in file (for collected files: grid) order.
     pub rows: Vec<Row>,
 }
 

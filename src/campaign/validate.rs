@@ -11,18 +11,28 @@ use crate::episode::metrics::Summary;
 /// The first thing wrong with a collected `episodes.csv`.
 #[derive(Debug, thiserror::Error)]
 pub enum RowError {
+    /// A cell has a second row (it would be counted twice).
     #[error("{path}, line {line}: cell {cell} appears twice")]
     Duplicate {
+        /// The `episodes.csv` checked.
         path: PathBuf,
+        /// Line of the second row in the file (1 is the header).
         line: u64,
+        /// The cell, as it is displayed (`planner α=… λ=… seed=…`).
         cell: String,
     },
+    /// A value is empty, not a finite number, or out of its column's range.
     #[error("{path}, line {line}: {column} = '{value}' {reason}")]
     Value {
+        /// The `episodes.csv` checked.
         path: PathBuf,
+        /// Line of the row in the file (1 is the header).
         line: u64,
+        /// The column of the value.
         column: &'static str,
+        /// The value as written.
         value: String,
+        /// The rule it breaks (`is negative`, `is a rate above 1`, …).
         reason: &'static str,
     },
 }

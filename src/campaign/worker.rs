@@ -29,8 +29,8 @@ pub const DONE_FILE: &str = "episode.csv";
 
 /// Test hook: `BKPBS_WORKER_FAULT=panic:<seed>` makes the planner "panic" in every episode
 /// with that seed, `exit:<seed>` makes the worker process die there, `hang:<seed>` makes the
-/// episode wait for a stop signal (for the episode timeout and stop tests). Used by the test suite to exercise failure
-/// handling; unset in normal use.
+/// episode wait for a stop signal (for the episode timeout and stop tests). Used by the test
+/// suite to exercise failure handling; unset in normal use.
 pub const FAULT_ENV: &str = "BKPBS_WORKER_FAULT";
 
 /// One episode to run.
@@ -38,6 +38,7 @@ pub const FAULT_ENV: &str = "BKPBS_WORKER_FAULT";
 pub struct Request {
     /// The cell's position in the grid, echoed in the reply.
     pub position: usize,
+    /// The controller to run, as the CLI names it (`bk-pbs`, `idm-mobil`, …).
     pub planner: String,
     /// The cell directory to write the results into.
     pub dir: PathBuf,
@@ -48,26 +49,38 @@ pub struct Request {
 /// How the episode went.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub enum Outcome {
+    /// The episode finished and its files are written (`episode.csv` last).
     Done,
-    Failed { error: String },
+    /// The episode failed (SUMO error, planner panic, a worker that died or ran over the
+    /// timeout); the cell's `error.txt` records the text.
+    Failed {
+        /// What went wrong, as recorded in `error.txt`.
+        error: String,
+    },
 }
 
 /// The answer to one [`Request`].
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct Reply {
+    /// The grid position of the request answered.
     pub position: usize,
+    /// How its episode went.
     pub outcome: Outcome,
 }
 
 /// Why the worker loop itself stopped (not an episode failure: those are replies).
 #[derive(Debug, thiserror::Error)]
 pub enum WorkerError {
+    /// Reading the next request line from stdin failed.
     #[error("worker: cannot read requests: {0}")]
     Read(std::io::Error),
+    /// A request line is not a JSON [`Request`].
     #[error("worker: malformed request: {0}")]
     Request(serde_json::Error),
+    /// Writing a reply to the protocol channel failed (the campaign went away).
     #[error("worker: cannot send reply: {0}")]
     Reply(std::io::Error),
+    /// The original stdout could not be kept for replies while stdout goes to stderr.
     #[error("worker: cannot set up the protocol channel: {0}")]
     Channel(std::io::Error),
 }

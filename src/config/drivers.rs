@@ -76,6 +76,8 @@ impl Default for Mobil {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct RampMerge {
+    /// The exponent of ξ in the per-step merge probability; above 0 (1: linear in ξ, larger:
+    /// later merges).
     pub exponent: f64,
 }
 

@@ -83,6 +83,7 @@ pub enum RampMergeStyle {
 pub struct HdvProfile {
     /// What the profile models, for `bkpbs config` and the guide.
     pub description: String,
+    /// SUMO's car-following model of the profile's HDVs.
     pub car_following: CarFollowing,
     /// Further SUMO vType attributes as SUMO spells them (`sigma`, `lcAssertive`,
     /// `treaction`, …); they override the ones bkpbs derives from `[idm]`.
@@ -92,6 +93,7 @@ pub struct HdvProfile {
     pub draws: BTreeMap<String, [f64; 2]>,
     /// How many driver types are drawn (with `draws`); SUMO assigns each HDV one of them.
     pub driver_types: usize,
+    /// How a ramp HDV that decided to merge moves over to the main road.
     pub ramp_merge: RampMergeStyle,
 }
 

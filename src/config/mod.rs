@@ -43,30 +43,59 @@ pub use simulator::{OutputSettings, SumoSettings, TrajectoryFormat};
 /// Why a configuration could not be used.
 #[derive(Debug, thiserror::Error)]
 pub enum ConfigError {
+    /// The config file could not be read.
     #[error("cannot read config file {path}: {cause}")]
     Read {
+        /// The file asked for.
         path: PathBuf,
+        /// What the file system said.
         cause: std::io::Error,
     },
+    /// The file is not TOML of the [`Config`] shape (syntax, wrong type, unknown key).
     #[error("malformed config file {path}: {message}")]
-    Parse { path: PathBuf, message: String },
+    Parse {
+        /// The file read.
+        path: PathBuf,
+        /// The TOML parser's message, with the byte offset where known.
+        message: String,
+    },
+    /// A setting holds a value no episode can run with.
     #[error("invalid setting {field} = {value}: {reason}")]
     Invalid {
+        /// The setting as written in TOML (`section.key`).
         field: &'static str,
+        /// The offending value, as text.
         value: String,
+        /// The rule it breaks.
         reason: &'static str,
     },
+    /// `hdv.profile` names neither a built-in nor a user-defined profile.
     #[error("unknown HDV profile '{name}' (hdv.profile); known: {known}")]
-    UnknownProfile { name: String, known: String },
+    UnknownProfile {
+        /// The name asked for.
+        name: String,
+        /// Every known profile name, comma-separated.
+        known: String,
+    },
+    /// A per-driver draw range of the HDV profile is not a positive `[low, high]`.
     #[error("invalid setting hdv draw {key} = [{low}, {high}]: must be positive and low ≤ high")]
-    InvalidDraw { key: String, low: f64, high: f64 },
+    InvalidDraw {
+        /// The SUMO vType attribute drawn (e.g. `tau`).
+        key: String,
+        /// Lower end of the range, in the attribute's unit.
+        low: f64,
+        /// Upper end of the range, in the attribute's unit.
+        high: f64,
+    },
 }
 
 /// Everything an episode needs besides the controller.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct Config {
+    /// The episode's world: α, λ, seed, length, step, road and vehicle size.
     pub scenario: Scenario,
+    /// How vehicles are generated: λ's split over the roads, speed ranges, how α picks CAVs.
     pub demand: Demand,
     /// Longitudinal model of HDVs (SUMO's IDM) and of idm-mobil CAVs (the Rust IDM).
     pub idm: Idm,
@@ -82,6 +111,7 @@ pub struct Config {
     pub pbs: PbsSettings,
     /// How the planners predict HDVs (BK-M-A*, BK-PBS).
     pub predictor: PredictorSettings,
+    /// How SUMO runs (verbosity, extra files and options, sumo-gui).
     pub sumo: SumoSettings,
     /// Choices in how the episode metrics are computed.
     pub metrics: MetricsSettings,

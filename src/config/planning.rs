@@ -8,7 +8,8 @@ use std::path::PathBuf;
 
 use serde::{Deserialize, Serialize};
 
-/// Motion primitives and the multi-phase A* (the paper's section IV; the guide's planners chapter, docs/src/planners.md, gives the defaults it leaves open).
+/// Motion primitives and the multi-phase A* (the paper's section IV; the guide's planners
+/// chapter, docs/src/planners.md, gives the defaults it leaves open).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct PlannerSettings {
@@ -30,7 +31,8 @@ pub struct PlannerSettings {
     /// Extra cost (in steps) per step a lane change is put off within a plan. Without it a
     /// change possible now and one a second later cost the same, the search may pick the later
     /// one, and the next round puts it off again: a ramp CAV ran the acceleration lane's length
-    /// beside a gap it kept planning to take (docs/src/planners.md tells the deadlock and its rules).
+    /// beside a gap it kept planning to take (docs/src/planners.md tells the deadlock and its
+    /// rules).
     pub lane_change_deferral_penalty: f64,
     /// Acceleration of the `accelerate` primitive (m/s²).
     pub accel: f64,
@@ -248,7 +250,9 @@ impl Default for PredictorSettings {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
 #[serde(rename_all = "lowercase")]
 pub enum PredictorKind {
+    /// The GCN lane-change model b_θ (the paper's predictor).
     Learned,
+    /// Constant speed in lane; ramp HDVs merge at their median decision step.
     Constant,
 }
 

@@ -27,7 +27,9 @@ pub struct Scenario {
     pub v_max: f64,
     /// Acceleration used for the free-flow reference t* (m/s²): the IDM maximum acceleration.
     pub free_flow_accel: f64,
+    /// Length of every vehicle, CAV and HDV (m; SUMO's vType `length`).
     pub vehicle_length: f64,
+    /// Width of every vehicle, CAV and HDV (m; SUMO's vType `width`).
     pub vehicle_width: f64,
     /// Time SUMO takes to move a vehicle across one lane (s, `--lanechange.duration`).
     pub lane_change_duration: f64,
