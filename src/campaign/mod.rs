@@ -19,12 +19,14 @@
 
 pub mod collect;
 pub mod grid;
+#[doc(hidden)] // worker-process plumbing: the campaign runs it, a library user never does
 pub mod pool;
 pub mod results;
 pub mod settings;
 pub mod table;
 pub mod tasks;
 pub mod validate;
+#[doc(hidden)] // the worker processes' protocol (`bkpbs campaign --worker`, the Ray runner)
 pub mod worker;
 
 use std::io::IsTerminal;

@@ -14,8 +14,8 @@ use crate::controller::{execute, CavBelief, CavHandling, Command, Controller, Pl
 use crate::model::road::Road;
 use crate::model::scene::Scene;
 use crate::model::trajectory::Trajectory;
-use crate::planner::lane_changes::LaneChanges;
 use crate::planner::guard::StartGuard;
+use crate::planner::lane_changes::LaneChanges;
 use crate::planner::mastar::{Mastar, NoPlan, Plan};
 use crate::predict::Predictor;
 

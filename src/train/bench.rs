@@ -15,12 +15,12 @@ use crate::episode::{self, Driver, EpisodeError, Observer};
 use crate::model::road::Road;
 use crate::model::scene::{Kind, Scene};
 use crate::model::trajectory::Trajectory;
+use crate::planner::mastar::Mastar;
 use crate::predict::features::{
     cav_node, ego_of, is_decision_point, neighbours, select_cavs, Agent, Observation, PREVIEW,
 };
 use crate::predict::infer::Workspace;
 use crate::predict::learned::Learned;
-use crate::planner::mastar::Mastar;
 use crate::predict::{ConstantSpeed, Predictor};
 
 /// Steps skipped at the start while the road fills.

@@ -11,6 +11,7 @@ pub mod reward;
 pub mod rollout;
 pub mod trainer;
 pub mod update;
+#[doc(hidden)] // the rollout worker processes of `train-rl`
 pub mod workers;
 
 #[cfg(test)]
