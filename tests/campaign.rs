@@ -14,6 +14,8 @@ use bkpbs::report::stats::{sample_std, t_975, Estimate};
 
 mod common;
 
+use common::{bkpbs, one_error_line};
+
 // ---------------------------------------------------------------- statistics, grid, shards
 
 #[test]
@@ -171,6 +173,14 @@ fn campaign(out: &Path, extra: &[&str]) -> Output {
         .expect("the binary runs")
 }
 
+/// `bkpbs report` of the campaign directories `dirs`, then `extra` (`--out` and the like).
+fn report(dirs: &[&Path], extra: &[&str]) -> Output {
+    let mut args = vec!["report"];
+    args.extend(dirs.iter().map(|d| d.to_str().unwrap()));
+    args.extend(extra);
+    bkpbs(&args)
+}
+
 fn text(b: &[u8]) -> String {
     String::from_utf8_lossy(b).into_owned()
 }
@@ -295,11 +305,7 @@ fn shards_merged_by_report_equal_the_unsharded_run() {
     }
     let shard_rows = |p: &Path| read(&p.join("episodes.csv")).lines().count() - 1;
     assert_eq!((shard_rows(&a), shard_rows(&b)), (4, 4));
-    let o = Command::new(BIN)
-        .args(["report", a.to_str().unwrap(), b.to_str().unwrap(), "--out"])
-        .arg(&merged)
-        .output()
-        .unwrap();
+    let o = report(&[&a, &b], &["--out", merged.to_str().unwrap()]);
     assert_ok(&o);
     for f in ["episodes.csv", "vehicles.csv"] {
         assert_eq!(read(&whole.join(f)), read(&merged.join(f)), "{f}");
@@ -309,13 +315,7 @@ fn shards_merged_by_report_equal_the_unsharded_run() {
         read(&merged.join("report/tables.md"))
     );
     // The same shard twice is deduplicated; the merge still equals the whole.
-    let o = Command::new(BIN)
-        .args(["report", a.to_str().unwrap(), a.to_str().unwrap()])
-        .arg(b.to_str().unwrap())
-        .arg("--out")
-        .arg(&merged)
-        .output()
-        .unwrap();
+    let o = report(&[&a, &a, &b], &["--out", merged.to_str().unwrap()]);
     assert_ok(&o);
     assert_eq!(
         read(&whole.join("episodes.csv")),
@@ -330,18 +330,14 @@ fn shards_merged_by_report_equal_the_unsharded_run() {
     let last = lines.last_mut().unwrap();
     *last = format!("{},9", last.rsplit_once(',').unwrap().0);
     std::fs::write(copy.join("vehicles.csv"), lines.join("\n") + "\n").unwrap();
-    let o = Command::new(BIN)
-        .args(["report", a.to_str().unwrap(), copy.to_str().unwrap()])
-        .arg("--out")
-        .arg(d.path().join("m2"))
-        .output()
-        .unwrap();
-    assert!(!o.status.success());
-    let err = text(&o.stderr);
-    assert_eq!(err.lines().count(), 1, "{err}");
+    let o = report(
+        &[&a, &copy],
+        &["--out", d.path().join("m2").to_str().unwrap()],
+    );
+    let line = one_error_line(&o);
     assert!(
-        err.contains("different results") && err.contains("a-copy/vehicles.csv"),
-        "{err}"
+        line.contains("different results") && line.contains("a-copy/vehicles.csv"),
+        "{line}"
     );
 }
 
@@ -425,10 +421,8 @@ fn a_smaller_grid_is_refused_where_a_larger_one_was_recorded() {
     ]
     .concat();
     let o = campaign(d.path(), &small);
-    assert!(!o.status.success());
-    let err = text(&o.stderr);
-    assert_eq!(err.lines().count(), 1, "{err}");
-    assert!(err.contains("8 episodes outside this grid"), "{err}");
+    let line = one_error_line(&o);
+    assert!(line.contains("8 episodes outside this grid"), "{line}");
     assert_eq!(read(&d.path().join("episodes.csv")), before);
     // The grid may grow.
     let more = [&grid("3", "30")[..], &["--workers", "1"]].concat();
@@ -439,11 +433,7 @@ fn a_smaller_grid_is_refused_where_a_larger_one_was_recorded() {
     // the directory's own campaign once dropped them without a word.
     let other = tempfile::tempdir().unwrap();
     assert_ok(&campaign(other.path(), &small));
-    let o = Command::new(BIN)
-        .arg("report")
-        .args([d.path(), other.path()])
-        .output()
-        .unwrap();
+    let o = report(&[d.path(), other.path()], &[]);
     assert_ok(&o);
     assert_eq!(
         read(&d.path().join("episodes.csv")).lines().count(),
@@ -481,16 +471,10 @@ fn report_refuses_damaged_episode_rows_naming_file_and_line() {
         let d = tempfile::tempdir().unwrap();
         std::fs::write(d.path().join("episodes.csv"), &damaged).unwrap();
         std::fs::copy(whole.join("vehicles.csv"), d.path().join("vehicles.csv")).unwrap();
-        let o = Command::new(BIN)
-            .args(["report", d.path().to_str().unwrap()])
-            .output()
-            .unwrap();
-        assert!(!o.status.success());
-        let err = text(&o.stderr);
-        assert_eq!(err.lines().count(), 1, "{err}");
+        let line = one_error_line(&report(&[d.path()], &[]));
         assert!(
-            err.contains("episodes.csv") && err.contains(expected),
-            "{err}"
+            line.contains("episodes.csv") && line.contains(expected),
+            "{line}"
         );
     }
 }
@@ -516,26 +500,19 @@ fn report_refuses_to_merge_campaigns_of_other_settings_unless_told() {
     };
     assert_ok(&campaign(&a, &tiny("0", "30")));
     assert_ok(&campaign(&b, &tiny("5", "40")));
-    let report = |extra: &[&str]| {
-        Command::new(BIN)
-            .arg("report")
-            .args([&a, &b])
-            .arg("--out")
-            .arg(&m)
-            .args(extra)
-            .output()
-            .unwrap()
+    let into_m = |extra: &[&str]| {
+        report(
+            &[&a, &b],
+            &[&["--out", m.to_str().unwrap()][..], extra].concat(),
+        )
     };
-    let o = report(&[]);
-    assert!(!o.status.success());
-    let err = text(&o.stderr);
-    assert_eq!(err.lines().count(), 1, "{err}");
+    let line = one_error_line(&into_m(&[]));
     assert!(
-        err.contains("campaign.steps") && err.contains("--allow-mixed"),
-        "{err}"
+        line.contains("campaign.steps") && line.contains("--allow-mixed"),
+        "{line}"
     );
     assert!(!m.join("episodes.csv").exists());
-    assert_ok(&report(&["--allow-mixed"]));
+    assert_ok(&into_m(&["--allow-mixed"]));
     // Two λ per campaign by default: four episodes and the header.
     assert_eq!(read(&m.join("episodes.csv")).lines().count(), 5);
 }
@@ -868,15 +845,10 @@ fn idm_mobil_cells(seeds: &'static str, workers: &'static str) -> Vec<&'static s
 
 /// Runs the binary and checks for one `error:` line naming `culprit` and a non-zero exit.
 fn assert_clear_failure(args: &[&str], culprit: &str) {
-    let o = Command::new(BIN).args(args).output().unwrap();
-    let err = text(&o.stderr);
-    assert!(!o.status.success(), "{args:?} should fail");
-    let lines: Vec<&str> = err.lines().collect();
-    assert_eq!(lines.len(), 1, "{args:?}: one line expected, got:\n{err}");
-    assert!(lines[0].starts_with("error: "), "{err}");
+    let line = one_error_line(&bkpbs(args));
     assert!(
-        lines[0].contains(culprit),
-        "{args:?}: '{culprit}' not in: {err}"
+        line.contains(culprit),
+        "{args:?}: '{culprit}' not in: {line}"
     );
 }
 
