@@ -162,11 +162,15 @@ fn grid<'a>(seeds: &'a str, steps: &'a str) -> [&'a str; 10] {
     ]
 }
 
+/// `bkpbs campaign --out out`, for the caller to add the grid, environment and pipes.
+fn campaign_into(out: &Path) -> Command {
+    let mut command = Command::new(BIN);
+    command.arg("campaign").arg("--out").arg(out);
+    command
+}
+
 fn campaign(out: &Path, extra: &[&str]) -> Output {
-    Command::new(BIN)
-        .arg("campaign")
-        .arg("--out")
-        .arg(out)
+    campaign_into(out)
         .args(extra)
         .env_remove(bkpbs::campaign::worker::FAULT_ENV)
         .output()
@@ -361,10 +365,7 @@ fn two_shards_running_at_once_into_one_directory_finish_every_cell() {
     for trial in 0..10 {
         let d = tempfile::tempdir().unwrap();
         let spawn = |k: &str| {
-            Command::new(BIN)
-                .arg("campaign")
-                .arg("--out")
-                .arg(d.path())
+            campaign_into(d.path())
                 .args(grid("2", "30"))
                 .args(["--workers", "1", "--shard", k])
                 .env_remove(bkpbs::campaign::worker::FAULT_ENV)
@@ -539,10 +540,7 @@ fn workers_die_with_a_campaign_killed_at_any_moment() {
     for delay_ms in [0u64, 5, 10, 20, 50, 100] {
         let d = tempfile::tempdir().unwrap();
         let marker = format!("{}-{delay_ms}", std::process::id());
-        let mut child = Command::new(BIN)
-            .arg("campaign")
-            .arg("--out")
-            .arg(d.path())
+        let mut child = campaign_into(d.path())
             // Episodes long enough that an orphan would still run at the deadline.
             .args(grid("2", "100000"))
             .args(["--workers", "2"])
@@ -576,10 +574,7 @@ fn a_campaign_stopped_by_ctrl_c_keeps_what_finished_and_resumes() {
     let out = d.path();
     let marker = format!("{}-ctrl-c", std::process::id());
     let args = idm_mobil_cells("3", "1");
-    let child = Command::new(BIN)
-        .arg("campaign")
-        .arg("--out")
-        .arg(out)
+    let child = campaign_into(out)
         .args(&args)
         .env(bkpbs::campaign::worker::FAULT_ENV, "hang:2")
         .env("BKPBS_TEST_MARK", &marker)
@@ -619,10 +614,7 @@ fn sigterm_to_the_campaign_alone_stops_its_workers_and_removes_their_input() {
     // end their episodes and remove their input directories.
     let (d, tmpdir) = (tempfile::tempdir().unwrap(), tempfile::tempdir().unwrap());
     let marker = format!("{}-sigterm", std::process::id());
-    let child = Command::new(BIN)
-        .arg("campaign")
-        .arg("--out")
-        .arg(d.path())
+    let child = campaign_into(d.path())
         .args(["--planners", "sumo", "--alphas", "0.5", "--lambdas", "3000"])
         .args(["--seeds", "2", "--steps", "100000", "--workers", "2"])
         .env_remove(bkpbs::campaign::worker::FAULT_ENV)
@@ -667,10 +659,7 @@ fn killed_campaign_resumes_without_losing_or_duplicating_episodes() {
     let args = grid("6", "150");
     let total = 2 * 2 * 6;
     // The campaign and its workers in a process group of their own, killed together.
-    let mut child = Command::new(BIN)
-        .arg("campaign")
-        .arg("--out")
-        .arg(&out)
+    let mut child = campaign_into(&out)
         .args(args)
         .args(["--workers", "1"])
         .stdout(Stdio::null())
@@ -739,10 +728,7 @@ fn failed_episodes_are_recorded_others_go_on_and_a_rerun_repairs_them() {
     let out = d.path();
     let args = idm_mobil_cells("4", "1");
     let with_fault = |fault: &str| {
-        Command::new(BIN)
-            .arg("campaign")
-            .arg("--out")
-            .arg(out)
+        campaign_into(out)
             .args(&args)
             .env(bkpbs::campaign::worker::FAULT_ENV, fault)
             .output()
@@ -798,10 +784,7 @@ fn an_episode_over_the_timeout_is_stopped_and_recorded_as_failed() {
     let out = d.path();
     let args = [&idm_mobil_cells("3", "2")[..], &["--episode-timeout", "4"]].concat();
     let started = std::time::Instant::now();
-    let o = Command::new(BIN)
-        .arg("campaign")
-        .arg("--out")
-        .arg(out)
+    let o = campaign_into(out)
         .args(&args)
         .env(bkpbs::campaign::worker::FAULT_ENV, "hang:1")
         .output()
