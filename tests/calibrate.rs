@@ -4,7 +4,15 @@
 
 mod common;
 
-use common::{bkpbs, stderr};
+use common::{bkpbs, refused_naming, stderr};
+
+/// Runs `args` again and asserts it rewrites `file` to the same `text`: calibration is
+/// reproducible.
+fn rerun_rewrites_the_same(args: &[&str], file: &std::path::Path, text: &str) {
+    let o = bkpbs(args);
+    assert!(o.status.success());
+    assert_eq!(std::fs::read_to_string(file).unwrap(), text);
+}
 
 /// `(rmse_speed_1s, rmse_speed_3s, rmse_gap_3s)` of the report line of `model`.
 fn errors(report: &str, model: &str) -> [f64; 3] {
@@ -65,12 +73,7 @@ fn the_fitted_idm_beats_constant_speed_and_recovers_heterogeneous_drivers() {
     assert_eq!(v["format"], "bkpbs-calibration");
     assert_eq!(v["profile"], "heterogeneous");
     // The same command gives the same file.
-    let o = bkpbs(&args);
-    assert!(o.status.success());
-    assert_eq!(
-        std::fs::read_to_string(out.join("calibration.json")).unwrap(),
-        json
-    );
+    rerun_rewrites_the_same(&args, &out.join("calibration.json"), &json);
 }
 
 #[test]
@@ -84,11 +87,7 @@ fn bad_calibration_input_is_one_error_line() {
     ] {
         let mut args = vec!["calibrate", "--out", out.to_str().unwrap()];
         args.extend(extra);
-        let o = bkpbs(&args);
-        let err = stderr(&o);
-        assert_eq!(o.status.code(), Some(1), "{args:?}: {err}");
-        assert_eq!(err.lines().count(), 1, "{err}");
-        assert!(err.starts_with("error: ") && err.contains(culprit), "{err}");
+        refused_naming(&bkpbs(&args), &[culprit]);
     }
 }
 
@@ -128,11 +127,7 @@ fn a_shipped_calibration_drives_the_planner_only_for_its_own_profile() {
             "predictor.calibration",
         ),
     ] {
-        let o = run(&cfg);
-        let err = stderr(&o);
-        assert_eq!(o.status.code(), Some(1), "{err}");
-        assert_eq!(err.lines().count(), 1, "{err}");
-        assert!(err.contains(culprit), "{err}");
+        refused_naming(&run(&cfg), &[culprit]);
     }
 }
 
@@ -180,12 +175,7 @@ fn the_generalisation_matrix_holds_every_pair_and_constant_speed_is_worst() {
     assert!(std::fs::read(out.join("longitudinal_matrix.png"))
         .unwrap()
         .starts_with(b"\x89PNG"));
-    let o = bkpbs(&args);
-    assert!(o.status.success());
-    assert_eq!(
-        std::fs::read_to_string(out.join("longitudinal_matrix.csv")).unwrap(),
-        table
-    );
+    rerun_rewrites_the_same(&args, &out.join("longitudinal_matrix.csv"), &table);
 }
 
 #[test]

@@ -14,6 +14,8 @@ use bkpbs::report::stats::{sample_std, t_975, Estimate};
 
 mod common;
 
+use common::{bkpbs, one_error_line};
+
 // ---------------------------------------------------------------- statistics, grid, shards
 
 #[test]
@@ -160,15 +162,27 @@ fn grid<'a>(seeds: &'a str, steps: &'a str) -> [&'a str; 10] {
     ]
 }
 
+/// `bkpbs campaign --out out`, for the caller to add the grid, environment and pipes.
+fn campaign_into(out: &Path) -> Command {
+    let mut command = Command::new(BIN);
+    command.arg("campaign").arg("--out").arg(out);
+    command
+}
+
 fn campaign(out: &Path, extra: &[&str]) -> Output {
-    Command::new(BIN)
-        .arg("campaign")
-        .arg("--out")
-        .arg(out)
+    campaign_into(out)
         .args(extra)
         .env_remove(bkpbs::campaign::worker::FAULT_ENV)
         .output()
         .expect("the binary runs")
+}
+
+/// `bkpbs report` of the campaign directories `dirs`, then `extra` (`--out` and the like).
+fn report(dirs: &[&Path], extra: &[&str]) -> Output {
+    let mut args = vec!["report"];
+    args.extend(dirs.iter().map(|d| d.to_str().unwrap()));
+    args.extend(extra);
+    bkpbs(&args)
 }
 
 fn text(b: &[u8]) -> String {
@@ -295,11 +309,7 @@ fn shards_merged_by_report_equal_the_unsharded_run() {
     }
     let shard_rows = |p: &Path| read(&p.join("episodes.csv")).lines().count() - 1;
     assert_eq!((shard_rows(&a), shard_rows(&b)), (4, 4));
-    let o = Command::new(BIN)
-        .args(["report", a.to_str().unwrap(), b.to_str().unwrap(), "--out"])
-        .arg(&merged)
-        .output()
-        .unwrap();
+    let o = report(&[&a, &b], &["--out", merged.to_str().unwrap()]);
     assert_ok(&o);
     for f in ["episodes.csv", "vehicles.csv"] {
         assert_eq!(read(&whole.join(f)), read(&merged.join(f)), "{f}");
@@ -309,13 +319,7 @@ fn shards_merged_by_report_equal_the_unsharded_run() {
         read(&merged.join("report/tables.md"))
     );
     // The same shard twice is deduplicated; the merge still equals the whole.
-    let o = Command::new(BIN)
-        .args(["report", a.to_str().unwrap(), a.to_str().unwrap()])
-        .arg(b.to_str().unwrap())
-        .arg("--out")
-        .arg(&merged)
-        .output()
-        .unwrap();
+    let o = report(&[&a, &a, &b], &["--out", merged.to_str().unwrap()]);
     assert_ok(&o);
     assert_eq!(
         read(&whole.join("episodes.csv")),
@@ -330,18 +334,14 @@ fn shards_merged_by_report_equal_the_unsharded_run() {
     let last = lines.last_mut().unwrap();
     *last = format!("{},9", last.rsplit_once(',').unwrap().0);
     std::fs::write(copy.join("vehicles.csv"), lines.join("\n") + "\n").unwrap();
-    let o = Command::new(BIN)
-        .args(["report", a.to_str().unwrap(), copy.to_str().unwrap()])
-        .arg("--out")
-        .arg(d.path().join("m2"))
-        .output()
-        .unwrap();
-    assert!(!o.status.success());
-    let err = text(&o.stderr);
-    assert_eq!(err.lines().count(), 1, "{err}");
+    let o = report(
+        &[&a, &copy],
+        &["--out", d.path().join("m2").to_str().unwrap()],
+    );
+    let line = one_error_line(&o);
     assert!(
-        err.contains("different results") && err.contains("a-copy/vehicles.csv"),
-        "{err}"
+        line.contains("different results") && line.contains("a-copy/vehicles.csv"),
+        "{line}"
     );
 }
 
@@ -365,10 +365,7 @@ fn two_shards_running_at_once_into_one_directory_finish_every_cell() {
     for trial in 0..10 {
         let d = tempfile::tempdir().unwrap();
         let spawn = |k: &str| {
-            Command::new(BIN)
-                .arg("campaign")
-                .arg("--out")
-                .arg(d.path())
+            campaign_into(d.path())
                 .args(grid("2", "30"))
                 .args(["--workers", "1", "--shard", k])
                 .env_remove(bkpbs::campaign::worker::FAULT_ENV)
@@ -425,10 +422,8 @@ fn a_smaller_grid_is_refused_where_a_larger_one_was_recorded() {
     ]
     .concat();
     let o = campaign(d.path(), &small);
-    assert!(!o.status.success());
-    let err = text(&o.stderr);
-    assert_eq!(err.lines().count(), 1, "{err}");
-    assert!(err.contains("8 episodes outside this grid"), "{err}");
+    let line = one_error_line(&o);
+    assert!(line.contains("8 episodes outside this grid"), "{line}");
     assert_eq!(read(&d.path().join("episodes.csv")), before);
     // The grid may grow.
     let more = [&grid("3", "30")[..], &["--workers", "1"]].concat();
@@ -439,11 +434,7 @@ fn a_smaller_grid_is_refused_where_a_larger_one_was_recorded() {
     // the directory's own campaign once dropped them without a word.
     let other = tempfile::tempdir().unwrap();
     assert_ok(&campaign(other.path(), &small));
-    let o = Command::new(BIN)
-        .arg("report")
-        .args([d.path(), other.path()])
-        .output()
-        .unwrap();
+    let o = report(&[d.path(), other.path()], &[]);
     assert_ok(&o);
     assert_eq!(
         read(&d.path().join("episodes.csv")).lines().count(),
@@ -481,16 +472,10 @@ fn report_refuses_damaged_episode_rows_naming_file_and_line() {
         let d = tempfile::tempdir().unwrap();
         std::fs::write(d.path().join("episodes.csv"), &damaged).unwrap();
         std::fs::copy(whole.join("vehicles.csv"), d.path().join("vehicles.csv")).unwrap();
-        let o = Command::new(BIN)
-            .args(["report", d.path().to_str().unwrap()])
-            .output()
-            .unwrap();
-        assert!(!o.status.success());
-        let err = text(&o.stderr);
-        assert_eq!(err.lines().count(), 1, "{err}");
+        let line = one_error_line(&report(&[d.path()], &[]));
         assert!(
-            err.contains("episodes.csv") && err.contains(expected),
-            "{err}"
+            line.contains("episodes.csv") && line.contains(expected),
+            "{line}"
         );
     }
 }
@@ -516,26 +501,19 @@ fn report_refuses_to_merge_campaigns_of_other_settings_unless_told() {
     };
     assert_ok(&campaign(&a, &tiny("0", "30")));
     assert_ok(&campaign(&b, &tiny("5", "40")));
-    let report = |extra: &[&str]| {
-        Command::new(BIN)
-            .arg("report")
-            .args([&a, &b])
-            .arg("--out")
-            .arg(&m)
-            .args(extra)
-            .output()
-            .unwrap()
+    let into_m = |extra: &[&str]| {
+        report(
+            &[&a, &b],
+            &[&["--out", m.to_str().unwrap()][..], extra].concat(),
+        )
     };
-    let o = report(&[]);
-    assert!(!o.status.success());
-    let err = text(&o.stderr);
-    assert_eq!(err.lines().count(), 1, "{err}");
+    let line = one_error_line(&into_m(&[]));
     assert!(
-        err.contains("campaign.steps") && err.contains("--allow-mixed"),
-        "{err}"
+        line.contains("campaign.steps") && line.contains("--allow-mixed"),
+        "{line}"
     );
     assert!(!m.join("episodes.csv").exists());
-    assert_ok(&report(&["--allow-mixed"]));
+    assert_ok(&into_m(&["--allow-mixed"]));
     // Two λ per campaign by default: four episodes and the header.
     assert_eq!(read(&m.join("episodes.csv")).lines().count(), 5);
 }
@@ -562,10 +540,7 @@ fn workers_die_with_a_campaign_killed_at_any_moment() {
     for delay_ms in [0u64, 5, 10, 20, 50, 100] {
         let d = tempfile::tempdir().unwrap();
         let marker = format!("{}-{delay_ms}", std::process::id());
-        let mut child = Command::new(BIN)
-            .arg("campaign")
-            .arg("--out")
-            .arg(d.path())
+        let mut child = campaign_into(d.path())
             // Episodes long enough that an orphan would still run at the deadline.
             .args(grid("2", "100000"))
             .args(["--workers", "2"])
@@ -599,10 +574,7 @@ fn a_campaign_stopped_by_ctrl_c_keeps_what_finished_and_resumes() {
     let out = d.path();
     let marker = format!("{}-ctrl-c", std::process::id());
     let args = idm_mobil_cells("3", "1");
-    let child = Command::new(BIN)
-        .arg("campaign")
-        .arg("--out")
-        .arg(out)
+    let child = campaign_into(out)
         .args(&args)
         .env(bkpbs::campaign::worker::FAULT_ENV, "hang:2")
         .env("BKPBS_TEST_MARK", &marker)
@@ -642,10 +614,7 @@ fn sigterm_to_the_campaign_alone_stops_its_workers_and_removes_their_input() {
     // end their episodes and remove their input directories.
     let (d, tmpdir) = (tempfile::tempdir().unwrap(), tempfile::tempdir().unwrap());
     let marker = format!("{}-sigterm", std::process::id());
-    let child = Command::new(BIN)
-        .arg("campaign")
-        .arg("--out")
-        .arg(d.path())
+    let child = campaign_into(d.path())
         .args(["--planners", "sumo", "--alphas", "0.5", "--lambdas", "3000"])
         .args(["--seeds", "2", "--steps", "100000", "--workers", "2"])
         .env_remove(bkpbs::campaign::worker::FAULT_ENV)
@@ -690,10 +659,7 @@ fn killed_campaign_resumes_without_losing_or_duplicating_episodes() {
     let args = grid("6", "150");
     let total = 2 * 2 * 6;
     // The campaign and its workers in a process group of their own, killed together.
-    let mut child = Command::new(BIN)
-        .arg("campaign")
-        .arg("--out")
-        .arg(&out)
+    let mut child = campaign_into(&out)
         .args(args)
         .args(["--workers", "1"])
         .stdout(Stdio::null())
@@ -762,10 +728,7 @@ fn failed_episodes_are_recorded_others_go_on_and_a_rerun_repairs_them() {
     let out = d.path();
     let args = idm_mobil_cells("4", "1");
     let with_fault = |fault: &str| {
-        Command::new(BIN)
-            .arg("campaign")
-            .arg("--out")
-            .arg(out)
+        campaign_into(out)
             .args(&args)
             .env(bkpbs::campaign::worker::FAULT_ENV, fault)
             .output()
@@ -821,10 +784,7 @@ fn an_episode_over_the_timeout_is_stopped_and_recorded_as_failed() {
     let out = d.path();
     let args = [&idm_mobil_cells("3", "2")[..], &["--episode-timeout", "4"]].concat();
     let started = std::time::Instant::now();
-    let o = Command::new(BIN)
-        .arg("campaign")
-        .arg("--out")
-        .arg(out)
+    let o = campaign_into(out)
         .args(&args)
         .env(bkpbs::campaign::worker::FAULT_ENV, "hang:1")
         .output()
@@ -868,15 +828,10 @@ fn idm_mobil_cells(seeds: &'static str, workers: &'static str) -> Vec<&'static s
 
 /// Runs the binary and checks for one `error:` line naming `culprit` and a non-zero exit.
 fn assert_clear_failure(args: &[&str], culprit: &str) {
-    let o = Command::new(BIN).args(args).output().unwrap();
-    let err = text(&o.stderr);
-    assert!(!o.status.success(), "{args:?} should fail");
-    let lines: Vec<&str> = err.lines().collect();
-    assert_eq!(lines.len(), 1, "{args:?}: one line expected, got:\n{err}");
-    assert!(lines[0].starts_with("error: "), "{err}");
+    let line = one_error_line(&bkpbs(args));
     assert!(
-        lines[0].contains(culprit),
-        "{args:?}: '{culprit}' not in: {err}"
+        line.contains(culprit),
+        "{args:?}: '{culprit}' not in: {line}"
     );
 }
 

@@ -5,21 +5,26 @@ use std::process::Output;
 
 mod common;
 
-use common::{bkpbs, stderr};
+use common::{bkpbs, one_error_line, stderr};
 
 /// Asserts failure with exactly one `error:` line naming `culprit`, and no CSV in `out`.
 fn assert_clear_failure(o: &Output, culprit: &str, out: &Path) {
-    let err = stderr(o);
-    assert!(!o.status.success(), "should fail: {err}");
-    let lines: Vec<&str> = err.lines().collect();
-    assert_eq!(lines.len(), 1, "one line expected, got: {err}");
-    assert!(lines[0].starts_with("error: "), "{err}");
-    assert!(
-        lines[0].contains(culprit),
-        "'{culprit}' not named in: {err}"
-    );
-    assert!(!err.contains("panicked"), "{err}");
+    let line = one_error_line(o);
+    assert!(line.contains(culprit), "'{culprit}' not named in: {line}");
     assert!(!out.join("episode.csv").exists() && !out.join("vehicles.csv").exists());
+}
+
+/// `bkpbs episode` with `flags` into `out`, refused as [`assert_clear_failure`] says and
+/// within 10 s: the check comes before the episode runs (a hang or a full run would not).
+fn assert_refused_at_once(out: &Path, flags: &[&str], culprit: &str) {
+    let start = std::time::Instant::now();
+    let o = episode_into(out, flags);
+    assert_clear_failure(&o, culprit, out);
+    assert!(
+        start.elapsed().as_secs() < 10,
+        "{culprit}: took {:?}",
+        start.elapsed()
+    );
 }
 
 fn tmp() -> tempfile::TempDir {
@@ -166,14 +171,7 @@ fn absurd_sizes_are_refused_before_anything_runs() {
         (&["--steps", "4294967295"], "scenario.steps"),
     ];
     for (flags, key) in flag_cases {
-        let start = std::time::Instant::now();
-        let o = episode_into(d.path(), flags);
-        assert_clear_failure(&o, key, d.path());
-        assert!(
-            start.elapsed().as_secs() < 10,
-            "{key}: took {:?}",
-            start.elapsed()
-        );
+        assert_refused_at_once(d.path(), flags, key);
     }
     for (text, key) in [
         ("[scenario]\nv_max = 1e300\n", "scenario.v_max"),
@@ -181,14 +179,7 @@ fn absurd_sizes_are_refused_before_anything_runs() {
         ("[idm]\ntime_headway = 0\n", "idm.time_headway"),
     ] {
         let (cfg, out) = config_file(d.path(), "absurd.toml", text);
-        let start = std::time::Instant::now();
-        let o = episode_into(&out, &["--config", &cfg]);
-        assert_clear_failure(&o, key, &out);
-        assert!(
-            start.elapsed().as_secs() < 10,
-            "{key}: took {:?}",
-            start.elapsed()
-        );
+        assert_refused_at_once(&out, &["--config", &cfg], key);
     }
 }
 
@@ -198,14 +189,7 @@ fn an_output_place_that_cannot_be_written_is_refused_before_the_episode_runs() {
     let d = tmp();
     std::fs::write(d.path().join("file"), "x").unwrap();
     let out = d.path().join("file").join("run");
-    let start = std::time::Instant::now();
-    let o = episode_into(&out, &["--steps", "400"]);
-    assert_clear_failure(&o, out.to_str().unwrap(), &out);
-    assert!(
-        start.elapsed().as_secs() < 10,
-        "refused only after {:?}",
-        start.elapsed()
-    );
+    assert_refused_at_once(&out, &["--steps", "400"], out.to_str().unwrap());
 }
 
 #[test]
@@ -314,13 +298,10 @@ fn sumo_error_mid_episode_is_reported_and_keeps_earlier_results() {
     .unwrap();
     let files = format!("[sumo]\nadditional_files = [\"{}\"]\n", bad.display());
     let (cfg, _) = config_file(d.path(), "cfg.toml", &files);
-    let o = episode_into(&out, &["--config", &cfg]);
-    let err = stderr(&o);
-    assert!(!o.status.success());
-    assert_eq!(err.lines().count(), 1, "{err}");
+    let line = one_error_line(&episode_into(&out, &["--config", &cfg]));
     assert!(
-        err.contains("SUMO failed at step") && err.contains("'bad'"),
-        "{err}"
+        line.contains("SUMO failed at step") && line.contains("'bad'"),
+        "{line}"
     );
     assert_eq!(std::fs::read(out.join("vehicles.csv")).unwrap(), before);
     let leftovers: Vec<_> = std::fs::read_dir(&out)
@@ -368,9 +349,8 @@ fn an_interrupted_episode_removes_its_input_and_writes_nothing() {
         common::send_signal(child.id() as i32, signal);
         let o = child.wait_with_output().unwrap();
         assert_eq!(o.status.code(), Some(code), "{}", stderr(&o));
-        let err = stderr(&o);
-        assert_eq!(err.lines().count(), 1, "{err}");
-        assert!(err.starts_with("error: interrupted by SIG"), "{err}");
+        let line = one_error_line(&o);
+        assert!(line.starts_with("error: interrupted by SIG"), "{line}");
         assert_eq!(
             common::input_dirs(tmpdir.path()),
             Vec::<std::path::PathBuf>::new()
@@ -393,13 +373,10 @@ fn an_episode_that_cannot_replace_every_file_leaves_the_earlier_set_whole() {
         .collect();
     std::fs::remove_file(out.join("episode.csv")).unwrap();
     std::fs::create_dir(out.join("episode.csv")).unwrap();
-    let o = episode_into(&out, &["--planner", "sumo", "--steps", "40"]);
-    let err = stderr(&o);
-    assert!(!o.status.success());
-    assert_eq!(err.lines().count(), 1, "{err}");
+    let line = one_error_line(&episode_into(&out, &["--planner", "sumo", "--steps", "40"]));
     assert!(
-        err.contains("episode.csv") && err.contains("directory"),
-        "{err}"
+        line.contains("episode.csv") && line.contains("directory"),
+        "{line}"
     );
     for (f, old) in ["vehicles.csv", "collisions.csv", "timing.csv"]
         .iter()

@@ -2,13 +2,12 @@
 //! `bkpbs explain` tells its story; and the clear errors of `explain` on incomplete directories.
 
 use std::path::Path;
-use std::process::Output;
 
 use bkpbs::episode::trace::{self, TRACE_FILE};
 
 mod common;
 
-use common::{bkpbs, stderr};
+use common::{bkpbs, refused_naming, stderr};
 
 /// A CAV inserted at t = 15 s, which the planner drives for 3 s, and an HDV inserted at t = 18 s
 /// 4.6 m behind it at 30 m/s without SUMO's insertion checks: it cannot stop in time.
@@ -114,27 +113,15 @@ fn a_staged_crash_is_traced_and_explained() {
     }
 }
 
-/// Asserts failure with exactly one `error:` line containing every one of `words`.
-fn assert_one_error_line(o: &Output, words: &[&str]) {
-    let err = stderr(o);
-    assert_eq!(o.status.code(), Some(1), "{err}");
-    let lines: Vec<&str> = err.lines().collect();
-    assert_eq!(lines.len(), 1, "{err}");
-    assert!(lines[0].starts_with("error: "), "{err}");
-    for w in words {
-        assert!(lines[0].contains(w), "'{w}' not in: {err}");
-    }
-}
-
 #[test]
 fn explain_names_what_a_directory_lacks() {
     let d = tempfile::tempdir().unwrap();
     let dir = d.path().to_str().unwrap();
-    assert_one_error_line(&bkpbs(&["explain", dir]), &["collisions.csv", "--trace"]);
+    refused_naming(&bkpbs(&["explain", dir]), &["collisions.csv", "--trace"]);
     // An episode run without --trace: collisions.csv but no trace.
     let header = "time_s,collider,collider_type,victim,victim_type,lane,position_m,controllable\n";
     std::fs::write(d.path().join("collisions.csv"), header).unwrap();
-    assert_one_error_line(&bkpbs(&["explain", dir]), &["trace.jsonl", "--trace"]);
+    refused_naming(&bkpbs(&["explain", dir]), &["trace.jsonl", "--trace"]);
     std::fs::write(d.path().join(TRACE_FILE), "").unwrap();
     let o = bkpbs(&["explain", dir]);
     assert!(o.status.success(), "{}", stderr(&o));
@@ -163,7 +150,7 @@ fn a_traced_episode_that_fails_writes_no_trace() {
         "--out",
         out.to_str().unwrap(),
     ]);
-    assert_one_error_line(&o, &["SUMO failed at step"]);
+    refused_naming(&o, &["SUMO failed at step"]);
     assert!(!out.join(TRACE_FILE).exists() && !out.join("collisions.csv").exists());
 }
 

@@ -145,12 +145,8 @@ fn layouts_of_nets_written_by_the_test() {
 /// `bkpbs network` prints what it found, and refuses a net that is no merge in one line.
 #[test]
 fn network_command() {
-    let exe = env!("CARGO_BIN_EXE_bkpbs");
     let repo = env!("CARGO_MANIFEST_DIR");
-    let o = std::process::Command::new(exe)
-        .args(["network", &format!("{repo}/sumo_net/corridor.net.xml")])
-        .output()
-        .unwrap();
+    let o = common::bkpbs(&["network", &format!("{repo}/sumo_net/corridor.net.xml")]);
     let text = String::from_utf8_lossy(&o.stdout);
     assert!(o.status.success());
     assert_eq!(text.matches("on-ramp").count(), 3, "{text}");
@@ -158,15 +154,6 @@ fn network_command() {
     let dir = tempfile::tempdir().unwrap();
     let two_way = dir.path().join("two-way.net.xml");
     std::fs::write(&two_way, common::TWO_WAY_NET).unwrap();
-    let o = std::process::Command::new(exe)
-        .args(["network", two_way.to_str().unwrap()])
-        .output()
-        .unwrap();
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert_eq!(o.status.code(), Some(1));
-    assert_eq!(err.lines().count(), 1, "{err}");
-    assert!(
-        err.contains("not a one-way carriageway with merges"),
-        "{err}"
-    );
+    let o = common::bkpbs(&["network", two_way.to_str().unwrap()]);
+    common::refused_naming(&o, &["not a one-way carriageway with merges"]);
 }

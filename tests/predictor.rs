@@ -516,50 +516,35 @@ fn bk_mastar_with_the_learned_predictor_runs_a_sumo_episode() {
 
 #[test]
 fn episode_cli_takes_the_predictor_flag_and_reports_bad_models_in_one_line() {
-    let exe = env!("CARGO_BIN_EXE_bkpbs");
     let dir = tempfile::tempdir().unwrap();
-    let out = std::process::Command::new(exe)
-        .args([
-            "episode",
-            "--planner",
-            "bk-mastar",
-            "--predictor",
-            "learned",
-        ])
-        .args(["--steps", "40", "--out"])
-        .arg(dir.path().join("run"))
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let out = common::bkpbs(&[
+        "episode",
+        "--planner",
+        "bk-mastar",
+        "--predictor",
+        "learned",
+        "--steps",
+        "40",
+        "--out",
+        dir.path().join("run").to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", common::stderr(&out));
     let cfg = dir.path().join("c.toml");
     std::fs::write(
         &cfg,
         "[predictor]\nkind = \"learned\"\nunconditioned_model = \"no/such/model.json\"\n",
     )
     .unwrap();
-    let out = std::process::Command::new(exe)
-        .args([
-            "episode",
-            "--planner",
-            "bk-mastar",
-            "--steps",
-            "5",
-            "--config",
-        ])
-        .arg(&cfg)
-        .output()
-        .unwrap();
-    assert_eq!(out.status.code(), Some(1));
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(err.lines().count(), 1, "{err}");
-    assert!(
-        err.starts_with("error:") && err.contains("no/such/model.json"),
-        "{err}"
-    );
+    let out = common::bkpbs(&[
+        "episode",
+        "--planner",
+        "bk-mastar",
+        "--steps",
+        "5",
+        "--config",
+        cfg.to_str().unwrap(),
+    ]);
+    common::refused_naming(&out, &["no/such/model.json"]);
 }
 
 /// The allocation-free single-sample pass used for prediction gives the logits of the batched

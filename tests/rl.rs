@@ -12,7 +12,7 @@ use bkpbs::policy::model_file;
 use bkpbs::train::ppo::env::Agents;
 use bkpbs::train::ppo::reward::RewardSettings;
 use bkpbs::train::ppo::rollout::{self, RolloutStats};
-use common::{bkpbs, stderr};
+use common::{bkpbs, one_error_line, stderr};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
@@ -60,51 +60,34 @@ fn trained_policy_beats_random_and_idle_on_held_out_seeds() {
     assert!(trained.agents > 30, "{trained:?}");
 }
 
+/// `bkpbs episode --planner rl-ppo` with `flags`.
+fn rl_ppo_episode(flags: &[&str]) -> std::process::Output {
+    bkpbs(&[&["episode", "--planner", "rl-ppo"][..], flags].concat())
+}
+
 #[test]
 fn rl_ppo_runs_as_a_planner_and_a_bad_policy_file_is_one_error_line() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("ep");
-    let o = bkpbs(&[
-        "episode",
-        "--planner",
-        "rl-ppo",
-        "--steps",
-        "150",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let o = rl_ppo_episode(&["--steps", "150", "--out", out.to_str().unwrap()]);
     assert!(o.status.success(), "{}", stderr(&o));
     let csv = std::fs::read_to_string(out.join("episode.csv")).unwrap();
     assert!(csv.lines().nth(1).unwrap().starts_with("rl-ppo,"), "{csv}");
 
     let cfg = dir.path().join("bad.toml");
     std::fs::write(&cfg, "[rl]\npolicy = \"no-such-policy.json\"\n").unwrap();
-    let o = bkpbs(&[
-        "episode",
-        "--planner",
-        "rl-ppo",
+    let o = rl_ppo_episode(&[
         "--config",
         cfg.to_str().unwrap(),
         "--out",
         dir.path().join("bad").to_str().unwrap(),
     ]);
-    let err = stderr(&o);
-    assert!(!o.status.success());
-    assert_eq!(err.lines().count(), 1, "{err}");
-    assert!(
-        err.starts_with("error: ") && err.contains("no-such-policy.json"),
-        "{err}"
-    );
+    let line = one_error_line(&o);
+    assert!(line.contains("no-such-policy.json"), "{line}");
     let not_policy = dir.path().join("not-policy.json");
     std::fs::write(&not_policy, "{\"format\": \"bkpbs-lane-change-model\"}").unwrap();
     std::fs::write(&cfg, format!("[rl]\npolicy = {:?}\n", not_policy)).unwrap();
-    let o = bkpbs(&[
-        "episode",
-        "--planner",
-        "rl-ppo",
-        "--config",
-        cfg.to_str().unwrap(),
-    ]);
+    let o = rl_ppo_episode(&["--config", cfg.to_str().unwrap()]);
     let err = stderr(&o);
     assert!(err.contains("is not a bkpbs RL policy"), "{err}");
 }

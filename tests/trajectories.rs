@@ -211,13 +211,7 @@ fn plot_draws_the_lane_figures_the_same_way_every_time() {
 fn plot_without_trajectories_says_how_to_get_them() {
     let d = tempfile::tempdir().unwrap();
     let o = common::bkpbs(&["plot", d.path().to_str().unwrap()]);
-    let err = common::stderr(&o);
-    assert_eq!(o.status.code(), Some(1));
-    assert_eq!(err.lines().count(), 1, "{err}");
-    assert!(
-        err.starts_with("error: ") && err.contains("--trajectories"),
-        "{err}"
-    );
+    common::refused_naming(&o, &["--trajectories"]);
     let o = common::bkpbs(&["plot", "no/such/dir"]);
     assert!(common::stderr(&o).contains("no/such/dir is not a directory"));
 }

@@ -62,6 +62,29 @@ pub fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
 }
 
+/// Asserts that the run `o` failed with exactly one line on stderr, an `error: ` line, and no
+/// panic; returns that line for the caller to check what it names. Every refusal of the binary
+/// promises this shape, so each test states only what its own line must say.
+pub fn one_error_line(o: &Output) -> String {
+    let err = stderr(o);
+    assert!(!o.status.success(), "should fail: {err}");
+    let lines: Vec<&str> = err.lines().collect();
+    assert_eq!(lines.len(), 1, "one line expected, got: {err}");
+    assert!(lines[0].starts_with("error: "), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+    lines[0].to_string()
+}
+
+/// Asserts [`one_error_line`] with exit code 1 (a refusal, not a signal), the line naming every
+/// one of `words`.
+pub fn refused_naming(o: &Output, words: &[&str]) {
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(o));
+    let line = one_error_line(o);
+    for w in words {
+        assert!(line.contains(w), "'{w}' not in: {line}");
+    }
+}
+
 /// The episode input directories (`bkpbs-episode-…`) in the temporary directory `tmp`.
 pub fn input_dirs(tmp: &std::path::Path) -> Vec<std::path::PathBuf> {
     std::fs::read_dir(tmp)
