@@ -35,6 +35,16 @@ compare() {
     return $bad
 }
 
+# same_files NAME COMMITTED_DIR NEW_DIR FILE...: the named files of the two directories agree.
+same_files() {
+    local name=$1 committed=$2 new=$3 bad=0
+    shift 3
+    for f in "$@"; do
+        cmp -s "$committed/$f" "$new/$f" || { echo "  differs: $committed/$f"; bad=1; }
+    done
+    if [ $bad = 0 ]; then echo "$name: identical ($((SECONDS - start)) s)"; else echo "$name: DIFFERS"; failed=1; fi
+}
+
 # result NAME COMMITTED_DIR: runs the rest of the line (with $OUT as its --out), then compares.
 result() {
     local name=$1 committed=$2
@@ -86,11 +96,8 @@ fi
 mkdir -p "$scratch/calibration"
 start=$SECONDS
 if "$BIN" calibrate --matrix --out "$scratch/calibration" >"$scratch/calibration.log" 2>&1; then
-    bad=0
-    for f in longitudinal_matrix.csv longitudinal_matrix.md longitudinal_matrix.png longitudinal_matrix.svg; do
-        cmp -s "results/calibration/$f" "$scratch/calibration/$f" || { echo "  differs: results/calibration/$f"; bad=1; }
-    done
-    if [ $bad = 0 ]; then echo "calibration-matrix: identical ($((SECONDS - start)) s)"; else echo "calibration-matrix: DIFFERS"; failed=1; fi
+    same_files calibration-matrix results/calibration "$scratch/calibration" \
+        longitudinal_matrix.csv longitudinal_matrix.md longitudinal_matrix.png longitudinal_matrix.svg
 else
     echo "calibration-matrix: FAILED to run"; tail -5 "$scratch/calibration.log"; failed=1
 fi
@@ -114,11 +121,8 @@ if [ $bad = 0 ]; then echo "calibration-lateral: identical ($((SECONDS - start))
 if [ $with_training = 1 ]; then
     start=$SECONDS
     "$BIN" train-rl --out "$scratch/rl-train" --steps 10000000 >"$scratch/rl-train.log" 2>&1
-    bad=0
-    for f in learning_curve.csv learning_curve.png learning_curve.svg evaluation.csv; do
-        cmp -s "results/rl-ppo/$f" "$scratch/rl-train/$f" || { echo "  differs: results/rl-ppo/$f"; bad=1; }
-    done
-    if [ $bad = 0 ]; then echo "rl-training: identical ($((SECONDS - start)) s)"; else echo "rl-training: DIFFERS"; failed=1; fi
+    same_files rl-training results/rl-ppo "$scratch/rl-train" \
+        learning_curve.csv learning_curve.png learning_curve.svg evaluation.csv
 else
     echo "rl-training: skipped (--with-training re-runs it, ~45 min)"
 fi
