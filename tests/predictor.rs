@@ -437,6 +437,7 @@ fn conditioning_on_a_cav_plan_uses_the_conditioned_model() {
         length: 5.0,
         width: 2.0,
         brake: None,
+        committed: true,
     };
     let u = p.rollout(&s, 0, &[], 20);
     let c = p.rollout(&s, 0, &[&plan], 20);

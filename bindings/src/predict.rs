@@ -84,6 +84,7 @@ fn plans_of(config: &Config, plans: Option<Vec<Vec<PoseTuple>>>) -> Vec<Trajecto
             length: sc.vehicle_length,
             width: sc.vehicle_width,
             brake: None,
+            committed: true,
         })
         .collect()
 }

@@ -6,7 +6,8 @@
 //! [`crate::controller::search_planner`].
 
 use crate::config::Config;
-use crate::controller::search_planner::{all_but, Round, RoundPlanner, SearchCore, SearchPlanner};
+use crate::controller::search_planner::{Round, RoundPlanner, SearchCore, SearchPlanner};
+use crate::planner::lane_end::{held_up_at_lane_end, merge_order, standing_in_lane_1};
 use crate::controller::{Command, Source};
 use crate::model::road::Road;
 use crate::model::scene::{Kind, Scene};
@@ -59,11 +60,28 @@ impl RoundPlanner for EachAlone {
         out: &mut Vec<Command>,
     ) {
         let predictions = self.predictions(core, scene);
+        let idm = &core.config.idm;
+        let lane_end = merge_order(scene, idm.min_gap, idm.decel);
+        let waiting = |r: usize| standing_in_lane_1(scene, r, core.horizon(), core.dt());
+        let yielded_to: Vec<(usize, Trajectory)> = lane_end
+            .iter()
+            .map(|&(hi, lo)| (lo, hi))
+            .filter(|&(_, hi)| held_up_at_lane_end(scene, &scene.vehicles[hi]))
+            .map(|(lo, r)| (lo, waiting(r)))
+            .collect();
         for (i, v) in scene.vehicles.iter().enumerate() {
             if v.kind != Kind::Cav {
                 continue;
             }
-            let obstacles = all_but(&predictions, i);
+            // At a lane end (see `merge_order`): the ones that wait for this CAV are no
+            // obstacle to it, and the merger it yields to stands in lane 1 already.
+            let mut obstacles: Vec<&Trajectory> = predictions
+                .iter()
+                .enumerate()
+                .filter(|&(j, _)| j != i && !lane_end.contains(&(i, j)))
+                .map(|(_, t)| t)
+                .collect();
+            obstacles.extend(yielded_to.iter().filter(|(lo, _)| *lo == i).map(|(_, t)| t));
             let req = core
                 .lane_changes
                 .request(scene, i, core.dt(), &obstacles, core.guard());

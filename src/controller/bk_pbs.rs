@@ -10,11 +10,13 @@ use std::sync::Arc;
 use rayon::prelude::*;
 
 use crate::config::Config;
-use crate::controller::search_planner::{all_but, Round, RoundPlanner, SearchCore, SearchPlanner};
+use crate::controller::search_planner::{Round, RoundPlanner, SearchCore, SearchPlanner};
 use crate::controller::{Command, PlanStats, Source};
 use crate::model::road::Road;
 use crate::model::scene::{Kind, Scene};
+use crate::model::trajectory::Trajectory;
 use crate::planner::lane_changes::SceneRequests;
+use crate::planner::lane_end::merge_order;
 use crate::planner::mastar::{NoPlan, Plan};
 use crate::planner::pbs::{Budget, PbsStats, Problem, RequestFor, Solution};
 use crate::predict::Predictor;
@@ -48,11 +50,14 @@ impl RoundPlanner for Joint {
         out: &mut Vec<Command>,
     ) {
         let requests = SceneRequests::new(scene, &core.lane_changes, core.dt(), core.guard());
-        let committed = self.commitments.in_scene(scene, scene.time);
+        let mut committed = self.commitments.in_scene(scene, scene.time);
+        let idm = &core.config.idm;
+        let lane_end = merge_order(scene, idm.min_gap, idm.decel);
+        committed.extend(&lane_end);
         let problem = problem(core, scene, &requests, &committed);
         let solution = problem.solve();
         round.stats += search_stats(&solution.stats);
-        let executed = executed_plans(&problem, &solution, &requests);
+        let executed = executed_plans(&problem, &solution, &requests, &lane_end);
         for (i, executed) in executed.into_iter().enumerate() {
             let Some(executed) = executed else { continue };
             let (plan, planned_by) = match executed {
@@ -120,11 +125,13 @@ enum Executed {
 
 /// What each agent executes (`None` for HDVs). After a fallback, the CAVs still in conflict
 /// are repaired; repairs are independent of each other (each against the node's trajectories):
-/// made in parallel, then used in order.
+/// made in parallel, then used in order. `lane_end` is the round's merge order at the lane
+/// ends ([`merge_order`]), which repairs keep too.
 fn executed_plans(
     problem: &Problem<'_>,
     solution: &Solution,
     requests: &SceneRequests<'_>,
+    lane_end: &[(usize, usize)],
 ) -> Vec<Option<Executed>> {
     let scene = problem.scene;
     let conflicted = solution
@@ -136,19 +143,28 @@ fn executed_plans(
         .map(|i| {
             let in_conflict = conflicted.as_ref().is_some_and(|c| c[i]);
             (scene.vehicles[i].kind == Kind::Cav)
-                .then(|| executed_plan(problem, solution, requests, i, in_conflict))
+                .then(|| {
+                    let below: Vec<usize> = lane_end
+                        .iter()
+                        .filter(|&&(hi, _)| hi == i)
+                        .map(|&(_, lo)| lo)
+                        .collect();
+                    executed_plan(problem, solution, requests, (i, &below), in_conflict)
+                })
         })
         .collect()
 }
 
 /// What CAV `i` executes: the chosen node's plan, or a repair when the node left it without
 /// one or, after a fallback, `in_conflict`: planned alone against every other trajectory of
-/// the node.
+/// the node but those of the agents it goes before at a lane end (`below`), which wait for it:
+/// repaired against a waiting merger's plan to merge, a lane-1 CAV braked to a stand beside it
+/// and held it there.
 fn executed_plan(
     problem: &Problem<'_>,
     solution: &Solution,
     requests: &SceneRequests<'_>,
-    i: usize,
+    (i, below): (usize, &[usize]),
     in_conflict: bool,
 ) -> Executed {
     if let (false, Some(plan)) = (in_conflict, &solution.plans[i]) {
@@ -159,7 +175,13 @@ fn executed_plan(
         };
         return Executed::Node(plan.clone(), source);
     }
-    let others = all_but(solution.trajectories.iter().map(|t| &**t), i);
+    let others: Vec<&Trajectory> = solution
+        .trajectories
+        .iter()
+        .enumerate()
+        .filter(|(j, _)| *j != i && !below.contains(j))
+        .map(|(_, t)| &**t)
+        .collect();
     Executed::Repair(requests.plan(problem.planner, i, &others).map(Arc::new))
 }
 

@@ -29,6 +29,12 @@ pub struct Trajectory {
     /// (an HDV may brake at SUMO's emergencyDecel): the gap a CAV keeps behind it must let the
     /// CAV stop if it does. `None`: as hard as the planner's CAVs.
     pub brake: Option<f64>,
+    /// A CAV's plan of this round, which it keeps to: a vehicle that cuts in front of it is
+    /// checked against the plan as it is, not against the braking the safety rule assumes of a
+    /// predicted follower (see [`crate::planner::safety`]). PBS plans a CAV around the plans of
+    /// those with priority over it, which never yield; assuming they brake gave plans PBS then
+    /// had to refuse.
+    pub committed: bool,
 }
 
 impl Trajectory {
@@ -48,6 +54,7 @@ impl Trajectory {
             length: 5.0,
             width: 2.0,
             brake: None,
+            committed: false,
         }
     }
 

@@ -5,6 +5,7 @@
 
 pub mod guard;
 pub mod lane_changes;
+pub mod lane_end;
 pub mod mastar;
 pub mod memo;
 pub mod pbs;

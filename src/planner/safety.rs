@@ -56,6 +56,8 @@ pub struct Body {
     pub width: f64,
     /// See [`Trajectory::brake`].
     pub brake: Option<f64>,
+    /// See [`Trajectory::committed`].
+    pub committed: bool,
     /// Speed along the road (m/s): `pose.speed · cos(pose.heading)`, computed once with the
     /// body, since the rule asks for it at almost every check and a cosine is most of a check's
     /// cost.
@@ -71,13 +73,17 @@ impl Body {
             length,
             width,
             brake,
+            committed: false,
             forward: pose.speed * pose.heading.cos(),
         }
     }
 
     /// The body of `t` at `step`.
     pub fn of(t: &Trajectory, step: usize, dt: f64) -> Body {
-        Body::new(t.at(step, dt), t.length, t.width, t.brake)
+        Body {
+            committed: t.committed,
+            ..Body::new(t.at(step, dt), t.length, t.width, t.brake)
+        }
     }
 
     /// Speed along the road (m/s).
@@ -132,9 +138,11 @@ impl SafetyRule {
         // start of the plan, not driven on at its predicted speed into (or through) the CAV,
         // which would forbid every slow merge in front of traffic however far back it is. One
         // predicted clear ahead by then was merged in behind, and is a leader like any other.
+        // A committed plan does not brake for the CAV: it is checked as planned.
         let passed = o.s - p.s > 0.5 * (me.length + other.length) + self.margin_long;
+        let yields = same_lane && cut_in && !other.committed;
         let braked;
-        let (other, o) = if same_lane && cut_in && other_now.pose.s <= me_now.pose.s && !passed {
+        let (other, o) = if yields && other_now.pose.s <= me_now.pose.s && !passed {
             braked = self.braking(other_now, other, t);
             (&braked, &braked.pose)
         } else {

@@ -98,6 +98,7 @@ impl Predictor for ConstantSpeed {
             length: v.length,
             width: v.width,
             brake: (v.kind == Kind::Hdv).then_some(self.hdv_brake),
+            committed: false,
         }
     }
 }

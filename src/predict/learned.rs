@@ -287,6 +287,7 @@ impl Learned {
             length: v.length,
             width: v.width,
             brake: (v.kind == Kind::Hdv).then_some(self.hdv_brake),
+            committed: false,
         }
     }
 

@@ -224,6 +224,8 @@ fn a_ramp_hdv_beside_on_the_acceleration_lane_may_merge() {
     assert!(may_merge(&scene, &creeping, 1.0, &b));
     let further = VehicleState::on_lane("r", Kind::Hdv, Origin::Ramp, zone - 12.5, 0, 0.1);
     assert!(!may_merge(&scene, &further, 1.0, &b));
+    // 13 m behind it, closing at 20 m/s, the CAV must leave it room to merge.
+    let scene = Scene::on_paper_road(0.0, vec![cav(300.0, 1, 25.0), ramp.clone()]);
     assert!(!is_safe(&scene, 0, &planned, &b, &[]));
     let m = replacement(&scene, 0, &planned, &b, &[]).unwrap();
     assert!(m.speed < 25.0);
@@ -351,4 +353,27 @@ fn the_wrapper_replaces_marks_and_counts() {
     let mut out = Vec::new();
     shielded.plan(&scene, &mut out);
     assert_eq!(shielded.last_stats().shield_overrides, 2);
+}
+
+/// SUMO lets a ramp HDV merge only with the new follower's minGap free behind it: a CAV in
+/// lane 1 keeps that much behind a ramp HDV standing at the lane end, so that it can merge; one
+/// already closer, or alongside, cannot be merged in front of and may drive on past it.
+#[test]
+fn a_cav_leaves_a_standing_merger_its_min_gap_or_passes_it() {
+    let b = worst_case();
+    let end = Road::paper_default().zones[0].end;
+    let ramp = VehicleState::on_lane("r", Kind::Hdv, Origin::Ramp, end - 2.5, 0, 0.0);
+    let stand = go(0.0, None);
+    let creep = go(0.4, None);
+    let behind = |gap: f64| {
+        let s = ramp.rear() - gap - 2.5;
+        Scene::on_paper_road(0.0, vec![cav(s, 1, 0.0), ramp.clone()])
+    };
+    // 7 m behind: creeping on would leave less than minGap + margin; standing keeps it.
+    assert!(is_safe(&behind(7.0), 0, &stand, &b, &[]));
+    assert!(!is_safe(&behind(5.9), 0, &creep, &b, &[]));
+    // 4.6 m behind (the deadlock seen): SUMO will not let it in, so the CAV may go on.
+    assert!(is_safe(&behind(4.6), 0, &creep, &b, &[]));
+    assert!(is_safe(&behind(-2.0), 0, &go(3.0, None), &b, &[]));
+    assert_eq!(b.yield_gap, Config::default().idm.min_gap);
 }

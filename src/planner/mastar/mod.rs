@@ -264,6 +264,7 @@ impl Mastar {
             length: req.length,
             width: req.width,
             brake: None,
+            committed: true,
         }
     }
 }

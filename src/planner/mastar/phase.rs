@@ -434,6 +434,7 @@ pub(super) fn assemble(req: &Request, phase: Phase, result: &Search<Node>) -> Pl
             length: req.length,
             width: req.width,
             brake: None,
+            committed: true,
         },
         phase,
         expanded: result.expanded,
