@@ -371,7 +371,7 @@ fn a_cav_leaves_a_standing_merger_its_min_gap_or_passes_it() {
     };
     // 7 m behind: creeping on would leave less than minGap + margin; standing keeps it.
     assert!(is_safe(&behind(7.0), 0, &stand, &b, &[]));
-    assert!(!is_safe(&behind(5.9), 0, &creep, &b, &[]));
+    assert!(!is_safe(&behind(5.55), 0, &creep, &b, &[]));
     // 4.6 m behind (the deadlock seen): SUMO will not let it in, so the CAV may go on.
     assert!(is_safe(&behind(4.6), 0, &creep, &b, &[]));
     assert!(is_safe(&behind(-2.0), 0, &go(3.0, None), &b, &[]));
