@@ -451,7 +451,7 @@ fn report_refuses_damaged_episode_rows_naming_file_and_line() {
     let whole = reference();
     let original = read(&whole.join("episodes.csv"));
     let lines: Vec<&str> = original.lines().collect();
-    // Column 14 (0-based) is controllable_collision_rate, 17 mean_delay_s.
+    // Column 17 (0-based) is controllable_collision_rate, 20 mean_delay_s.
     let with_field = |line: usize, col: usize, value: &str| {
         let mut out: Vec<String> = lines.iter().map(|l| l.to_string()).collect();
         let mut f: Vec<&str> = lines[line].split(',').collect();
@@ -462,10 +462,10 @@ fn report_refuses_damaged_episode_rows_naming_file_and_line() {
     let duplicated = format!("{original}{}\n", lines[3]);
     for (damaged, expected) in [
         (duplicated, "line 10: cell"),
-        (with_field(2, 17, "NaN"), "line 3: mean_delay_s = 'NaN'"),
-        (with_field(2, 17, "-999"), "line 3: mean_delay_s = '-999'"),
+        (with_field(2, 20, "NaN"), "line 3: mean_delay_s = 'NaN'"),
+        (with_field(2, 20, "-999"), "line 3: mean_delay_s = '-999'"),
         (
-            with_field(4, 14, "7.5"),
+            with_field(4, 17, "7.5"),
             "line 5: controllable_collision_rate = '7.5'",
         ),
     ] {
@@ -707,13 +707,22 @@ fn killed_campaign_resumes_without_losing_or_duplicating_episodes() {
     assert_eq!(keys.iter().collect::<HashSet<_>>().len(), total);
     assert_eq!(keys[0], "sumo,0.4,3000,0");
     assert_eq!(keys[total - 1], "idm-mobil,0.8,3000,5");
-    let inserted: usize = rows
+    // vehicles.csv has a row per scheduled vehicle, inserted or not.
+    let header: Vec<&str> = episodes.lines().next().unwrap().split(',').collect();
+    let scheduled_at = header.iter().position(|h| *h == "scheduled").unwrap();
+    let scheduled: usize = rows
         .iter()
-        .map(|r| r.split(',').nth(7).unwrap().parse::<usize>().unwrap())
+        .map(|r| {
+            r.split(',')
+                .nth(scheduled_at)
+                .unwrap()
+                .parse::<usize>()
+                .unwrap()
+        })
         .sum();
     assert_eq!(
         read(&out.join("vehicles.csv")).lines().count() - 1,
-        inserted
+        scheduled
     );
     // A third run finds everything done and runs nothing.
     let o = campaign(&out, &[&args[..], &["--workers", "2"]].concat());

@@ -15,7 +15,12 @@ fn check_accounting(r: &EpisodeResult) {
     assert_eq!(s.steps, 400);
     assert!(s.inserted > 30, "{s:?}");
     assert_eq!(s.inserted, s.arrived + s.crashed + s.present, "{s:?}");
-    assert_eq!(s.inserted + s.undeparted, s.scheduled);
+    assert_eq!(s.inserted + s.never_inserted, s.scheduled);
+    assert_eq!(
+        r.vehicles.len(),
+        s.scheduled,
+        "a row for every vehicle planned"
+    );
     for v in &r.vehicles {
         match v.outcome {
             Outcome::Arrived => {
@@ -26,6 +31,10 @@ fn check_accounting(r: &EpisodeResult) {
             }
             Outcome::Crashed => assert!(v.crash_time.is_some() && v.arrival_time.is_none()),
             Outcome::Present => assert!(v.arrival_time.is_none() && v.crash_time.is_none()),
+            Outcome::NeverInserted => {
+                assert!(v.insert_time.is_nan() && v.covered == 0.0, "{v:?}");
+                continue;
+            }
         }
         assert!(v.insert_lane >= 0 && v.insert_speed.is_finite(), "{v:?}");
     }
@@ -176,7 +185,14 @@ fn t_star_from_the_inserted_speed_when_asked() {
     let inserted = episode::run(&c, "idm-mobil").unwrap();
     let (accel, v_max) = (c.scenario.free_flow_accel, c.scenario.v_max);
     let mut slower = 0;
-    for (d, i) in drawn.vehicles.iter().zip(&inserted.vehicles) {
+    let inserted_only = |r: &EpisodeResult| -> Vec<bkpbs::episode::metrics::VehicleRecord> {
+        r.vehicles
+            .iter()
+            .filter(|v| v.inserted())
+            .cloned()
+            .collect()
+    };
+    for (d, i) in inserted_only(&drawn).iter().zip(&inserted_only(&inserted)) {
         assert_eq!((&d.id, d.insert_speed), (&i.id, i.insert_speed));
         let t = bkpbs::model::kinematics::free_flow_time;
         assert_eq!(d.t_star, t(d.distance, d.scheduled_speed, accel, v_max));

@@ -53,7 +53,7 @@ fn trajectory_rows_account_for_every_vehicle_step() {
                 .or_default()
                 .push(r["time"].parse().unwrap());
         }
-        for v in &vehicles {
+        for v in vehicles.iter().filter(|v| v["outcome"] != "never_inserted") {
             let insert: f64 = v["insert_time_s"].parse().unwrap();
             // Labels insert, insert + dt, …: up to the end, the crash (its reading counts),
             // or the last step before the arrival.

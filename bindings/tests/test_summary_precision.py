@@ -35,7 +35,9 @@ def test_dict_is_the_csv_row_at_full_precision(tmp_path):
 
     # The exact f64 the core computed, bit for bit.
     assert summary["arrived"] > 0 and summary["inserted"] > 0
-    assert summary["throughput_veh_h"] == summary["arrived"] / (summary["steps"] * DT / 3600.0)
+    # Throughput is per hour of the window in which arrivals were possible.
+    assert 0 < summary["throughput_window_s"] <= (summary["steps"] - 1) * DT
+    assert summary["throughput_veh_h"] == summary["arrived"] / (summary["throughput_window_s"] / 3600.0)
     assert summary["controllable_collision_rate"] == summary["controllable_crashed"] / summary["inserted"]
     assert summary["alpha"] == 0.6 and summary["lambda"] == 3000.0
 
@@ -44,3 +46,7 @@ def test_dict_is_the_csv_row_at_full_precision(tmp_path):
     with open(tmp_path / "vehicles.csv", newline="") as f:
         delays = [float(r["delay_s"]) for r in csv.DictReader(f) if r["delay_s"] != ""]
     assert abs(sum(delays) / len(delays) - summary["mean_delay_s"]) <= 5e-5 + 1e-12
+    # So is the system delay, over every vehicle with one (arrived, present, never inserted).
+    with open(tmp_path / "vehicles.csv", newline="") as f:
+        system = [float(r["system_delay_s"]) for r in csv.DictReader(f) if r["system_delay_s"] != ""]
+    assert abs(sum(system) / len(system) - summary["system_delay_s"]) <= 5e-5 + 1e-12

@@ -40,9 +40,17 @@ pub enum RowError {
 /// The rules below name columns of [`Summary`] (a test checks they exist); every other
 /// column must hold a non-negative number.
 ///
-/// Mean delays may be empty (an episode without arrivals) and slightly negative (a vehicle
-/// inserted faster than its drawn speed beats t* by rounding), never by a second.
-const DELAYS: [&str; 3] = ["mean_delay_s", "mean_delay_cav_s", "mean_delay_hdv_s"];
+/// Delays may be empty (an episode without arrivals, or without a vehicle to count) and
+/// slightly negative (a vehicle inserted faster than its drawn speed beats t* by rounding),
+/// never by a second (nor, as a total, by a vehicle-hour).
+const DELAYS: [&str; 6] = [
+    "system_delay_s",
+    "system_delay_veh_h",
+    "own_speed_delay_s",
+    "mean_delay_s",
+    "mean_delay_cav_s",
+    "mean_delay_hdv_s",
+];
 const LOWEST_DELAY: f64 = -1.0;
 /// A fraction of the inserted vehicles: at most 1.
 const RATE: &str = "controllable_collision_rate";
@@ -118,6 +126,9 @@ mod tests {
         assert_eq!(problem("mean_delay_s", ""), None);
         assert_eq!(problem("mean_delay_s", "-0.002"), None);
         assert!(problem("mean_delay_s", "-999").is_some());
+        assert_eq!(problem("system_delay_s", "-0.01"), None);
+        assert!(problem("system_delay_s", "-5").is_some());
+        assert!(problem("never_inserted", "-1").is_some());
         assert!(problem("mean_delay_s", "NaN").is_some());
         assert!(problem("arrived", "").is_some());
         assert!(problem("arrived", "-1").is_some());

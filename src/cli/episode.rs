@@ -129,7 +129,7 @@ pub fn run(e: Episode) -> Result<()> {
     };
     let m = &result.summary;
     println!(
-        "{} α={} λ={} seed={}: inserted {}, arrived {}, crashed {} (controllable rate {:.4}), mean delay {} s",
+        "{} α={} λ={} seed={}: inserted {}, arrived {}, crashed {} (controllable rate {:.4}), system delay {} s, mean delay (arrived) {} s",
         m.planner,
         m.alpha,
         m.lambda,
@@ -138,6 +138,7 @@ pub fn run(e: Episode) -> Result<()> {
         m.arrived,
         m.crashed,
         m.controllable_collision_rate,
+        m.system_delay_s.map_or("n/a".into(), |d| format!("{d:.2}")),
         m.mean_delay_s.map_or("n/a".into(), |d| format!("{d:.2}"))
     );
     println!("results: {}", e.out.join("episode.csv").display());

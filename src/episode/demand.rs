@@ -326,7 +326,7 @@ mod tests {
     #[test]
     fn departures_end_at_the_last_simulated_step() {
         // Regression: departures drawn in (79.8, 80) were rounded up to 80.0, a step the episode
-        // never simulates, and counted as undeparted.
+        // never simulates, and counted as never inserted.
         let mut latest: f64 = 0.0;
         for seed in 0..200 {
             for v in gen(&config(0.5, 3000.0, seed)) {

@@ -11,7 +11,7 @@
 //! at its drawn speed, or at the highest speed the rule allows if that is lower but still at
 //! least the leader's; otherwise it waits. The leader's speed is taken after one step of its
 //! current deceleration, since SUMO inserts at the end of the coming step. A vehicle still queued
-//! at the end counts as undeparted; the time it waited is its entry delay.
+//! at the end counts as never inserted (`never_inserted`); the time it waited is its entry delay.
 
 use std::collections::VecDeque;
 

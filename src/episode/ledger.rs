@@ -11,22 +11,26 @@ use std::sync::Arc;
 
 use crate::config::{Config, Scenario, TStarSpeed};
 use crate::episode::demand::PlannedVehicle;
-use crate::episode::metrics::{CollisionEvent, Outcome, VehicleRecord};
+use crate::episode::metrics::{CollisionEvent, FreeFlow, Outcome, VehicleRecord};
 use crate::model::kinematics::free_flow_time;
 use crate::model::road::Road;
 use crate::model::scene::{Kind, Origin};
 use crate::sumo::{frame, Collision, VehicleReadings};
 
 /// A vehicle's line in the ledger: its record, and where it was last seen on the section
-/// (for interpolating its arrival).
+/// (for interpolating its arrival and for the distance it covered).
 pub struct Tracked {
     pub id: Arc<str>,
     pub record: VehicleRecord,
     last_time: f64,
     last_front: f64,
     last_speed: f64,
-    /// It leaves by an off-ramp, outside the frame: it arrives when SUMO says so.
-    leaves: bool,
+    /// Frame position of its front at insertion.
+    insert_front: f64,
+    /// The off-ramp it leaves by, outside the frame: it arrives when SUMO says so.
+    exit: Option<usize>,
+    /// Route distance still ahead of it at the episode's end, as SUMO measured it.
+    remaining_at_end: Option<f64>,
 }
 
 impl Tracked {
@@ -78,7 +82,11 @@ pub struct Ledger<'a> {
     scenario: &'a Scenario,
     t_star_speed: TStarSpeed,
     section_end: f64,
+    plan: &'a [PlannedVehicle],
     planned: HashMap<&'a str, &'a PlannedVehicle>,
+    /// Route distance (m) from the insertion position per planned (entry, exit), as SUMO
+    /// measured it for the first vehicle inserted there: every later one starts there too.
+    route_distance: HashMap<(usize, Option<usize>), f64>,
     scheduled: usize,
     tracked: Vec<Tracked>,
     index: HashMap<Arc<str>, usize>,
@@ -96,7 +104,9 @@ impl<'a> Ledger<'a> {
             scenario: &config.scenario,
             t_star_speed: config.metrics.t_star_speed,
             section_end: road.section_end,
+            plan: planned,
             planned: planned.iter().map(|p| (p.id.as_str(), p)).collect(),
+            route_distance: HashMap::new(),
             scheduled: planned.len(),
             tracked: Vec::new(),
             index: HashMap::new(),
@@ -139,21 +149,32 @@ impl<'a> Ledger<'a> {
             desired_speed: e.desired_speed,
             distance: d.distance,
             t_star: free_flow_time(d.distance, e.speed, sc.free_flow_accel, sc.v_max),
+            covered: 0.0,
+            system_delay: None,
+            own_speed_delay: None,
             outcome: Outcome::Present,
             arrival_time: None,
             crash_time: None,
             crashed_with: Vec::new(),
             controllable_crash: false,
         };
+        if let Some(p) = self.planned.get(d.id.as_str()) {
+            self.route_distance
+                .entry((p.entry, p.exit))
+                .or_insert(d.distance);
+        }
         let key: Arc<str> = Arc::from(d.id.as_str());
         self.index.insert(key.clone(), self.tracked.len());
+        let front = self.section_end - d.distance;
         self.tracked.push(Tracked {
             id: key,
             record,
             last_time: now,
-            last_front: self.section_end - d.distance,
+            last_front: front,
             last_speed: e.speed,
-            leaves: e.exit.is_some(),
+            insert_front: front,
+            exit: e.exit,
+            remaining_at_end: None,
         });
     }
 
@@ -205,7 +226,7 @@ impl<'a> Ledger<'a> {
             }
             // The front crossed the end within the last step: interpolate at the last speed.
             let remaining = (end - t.last_front).max(0.0);
-            let crossing = if t.leaves {
+            let crossing = if t.exit.is_some() {
                 now
             } else if t.last_speed > 0.1 {
                 (t.last_time + remaining / t.last_speed).min(now)
@@ -269,14 +290,100 @@ impl<'a> Ledger<'a> {
         t
     }
 
-    /// The ledger closed: its records in order of departure, and the collisions.
-    pub fn close(self) -> Books {
+    /// The lines still in the network, with the off-ramp each leaves by (if any): the
+    /// runner asks SUMO how far each still has to go.
+    pub fn present(&self) -> impl Iterator<Item = (usize, &str, Option<usize>)> {
+        self.tracked
+            .iter()
+            .enumerate()
+            .filter(|(_, t)| t.record.outcome == Outcome::Present)
+            .map(|(k, t)| (k, &*t.id, t.exit))
+    }
+
+    /// Notes the route distance line `k` still had ahead at the episode's end (m, SUMO's
+    /// measure): what it covered is its distance at insertion less this.
+    pub fn note_remaining(&mut self, k: usize, remaining: f64) {
+        self.tracked[k].remaining_at_end = Some(remaining);
+    }
+
+    /// The ledger closed at `end`, the time of the episode's last state: its records in order
+    /// of departure, each settled, then one per planned vehicle never inserted (in the plan's
+    /// order); and the collisions.
+    pub fn close(self, end: f64) -> Books {
+        let sc = self.scenario;
+        let ff = FreeFlow {
+            accel: sc.free_flow_accel,
+            v_max: sc.v_max,
+        };
+        let t_star_speed = self.t_star_speed;
+        let mut vehicles: Vec<VehicleRecord> = Vec::with_capacity(self.plan.len());
+        for t in self.tracked {
+            let covered = t.covered();
+            let mut r = t.record;
+            let v0 = match t_star_speed {
+                TStarSpeed::Inserted if r.insert_speed.is_finite() => r.insert_speed,
+                _ => r.scheduled_speed,
+            };
+            r.settle(end, covered, v0, ff);
+            vehicles.push(r);
+        }
+        for p in self.plan {
+            if !self.index.contains_key(p.id.as_str()) {
+                let distance = self.route_distance.get(&(p.entry, p.exit)).copied();
+                let mut r = never_inserted(p, distance.unwrap_or(f64::NAN), ff);
+                r.settle(end, 0.0, p.depart_speed, ff);
+                vehicles.push(r);
+            }
+        }
         Books {
             scheduled: self.scheduled,
-            vehicles: self.tracked.into_iter().map(|t| t.record).collect(),
+            vehicles,
             collisions: self.collisions,
             speed_sum: self.speed_sum,
             speed_samples: self.speed_samples,
         }
+    }
+}
+
+impl Tracked {
+    /// The route distance it covered from insertion (m): all of it once arrived; for a vehicle
+    /// still in the network what SUMO measured at the end (its route distance, exact on a
+    /// curved ramp where the frame's `s` is scaled), else its last front less its first.
+    fn covered(&self) -> f64 {
+        let r = &self.record;
+        match (r.outcome, self.remaining_at_end) {
+            (Outcome::Arrived, _) => r.distance,
+            (Outcome::Present, Some(left)) if (0.0..=r.distance + 1.0).contains(&left) => {
+                (r.distance - left).max(0.0)
+            }
+            _ => (self.last_front - self.insert_front).clamp(0.0, r.distance),
+        }
+    }
+}
+
+/// The record of planned vehicle `p`, never inserted: as the demand planned it, its route
+/// `distance` that of the vehicles inserted at its entry.
+fn never_inserted(p: &PlannedVehicle, distance: f64, ff: FreeFlow) -> VehicleRecord {
+    VehicleRecord {
+        id: p.id.clone(),
+        kind: p.kind,
+        sumo_type: p.kind.as_str().into(),
+        origin: p.origin,
+        scheduled_depart: p.depart,
+        scheduled_speed: p.depart_speed,
+        insert_lane: -1,
+        insert_time: f64::NAN,
+        insert_speed: f64::NAN,
+        desired_speed: p.desired_speed,
+        distance,
+        t_star: ff.time(distance, p.depart_speed),
+        covered: 0.0,
+        system_delay: None,
+        own_speed_delay: None,
+        outcome: Outcome::NeverInserted,
+        arrival_time: None,
+        crash_time: None,
+        crashed_with: Vec::new(),
+        controllable_crash: false,
     }
 }

@@ -13,6 +13,11 @@ fn opt(x: Option<f64>, decimals: usize) -> String {
     x.map(|v| format!("{v:.decimals$}")).unwrap_or_default()
 }
 
+/// A figure of an insertion: empty for a vehicle never inserted (and for a NaN).
+fn at_insertion(r: &VehicleRecord, x: f64, decimals: usize) -> String {
+    opt(Some(x).filter(|x| r.inserted() && x.is_finite()), decimals)
+}
+
 fn csv_bytes(header: &[&str], rows: impl Iterator<Item = Vec<String>>) -> Vec<u8> {
     let mut w = csv::Writer::from_writer(Vec::new());
     w.write_record(header).expect("writing to memory");
@@ -58,7 +63,7 @@ fn timing_row(t: &Timing) -> Vec<String> {
 }
 
 /// Columns of `vehicles.csv`.
-pub const VEHICLE_COLUMNS: [&str; 20] = [
+pub const VEHICLE_COLUMNS: [&str; 22] = [
     "id",
     "type",
     "origin",
@@ -76,6 +81,8 @@ pub const VEHICLE_COLUMNS: [&str; 20] = [
     "travel_time_s",
     "time_in_network_s",
     "delay_s",
+    "distance_covered_m",
+    "system_delay_s",
     "crash_time_s",
     "crashed_with",
     "controllable_crash",
@@ -88,18 +95,23 @@ fn vehicle_row(r: &VehicleRecord) -> Vec<String> {
         r.origin.as_str().into(),
         format!("{:.2}", r.scheduled_depart),
         format!("{:.2}", r.scheduled_speed),
-        r.insert_lane.to_string(),
-        format!("{:.2}", r.insert_time),
-        format!("{:.2}", r.entry_delay()),
-        format!("{:.2}", r.insert_speed),
+        match r.inserted() {
+            true => r.insert_lane.to_string(),
+            false => String::new(),
+        },
+        at_insertion(r, r.insert_time, 2),
+        at_insertion(r, r.entry_delay(), 2),
+        at_insertion(r, r.insert_speed, 2),
         format!("{:.2}", r.desired_speed),
-        format!("{:.3}", r.distance),
-        format!("{:.4}", r.t_star),
+        opt(Some(r.distance).filter(|d| d.is_finite()), 3),
+        opt(Some(r.t_star).filter(|t| t.is_finite()), 4),
         r.outcome.as_str().into(),
         opt(r.arrival_time, 4),
         opt(r.travel_time(), 4),
         opt(r.time_in_network(), 4),
         opt(r.delay(), 4),
+        opt(r.system_delay.map(|_| r.covered), 3),
+        opt(r.system_delay, 4),
         opt(r.crash_time, 2),
         r.crashed_with.join(" "),
         r.controllable_crash.to_string(),
@@ -222,9 +234,12 @@ mod tests {
             seed: 7,
             hdv_profile: "sumo-safe".into(),
             steps: 400,
+            system_delay_s: Some(2.0 / 3.0),
+            system_delay_veh_h: 0.0012345678,
+            own_speed_delay_s: Some(0.25),
             scheduled: 9,
             inserted: 8,
-            undeparted: 1,
+            never_inserted: 1,
             inserted_cav: 5,
             arrived: 6,
             crashed: 1,
@@ -237,8 +252,9 @@ mod tests {
             mean_delay_cav_s: None,
             mean_delay_hdv_s: Some(-0.00004),
             throughput_veh_h: 270.0 + 1.0 / 7.0,
+            throughput_window_s: 66.8,
             mean_speed_mps: 29.123456,
-            ramp_queue_end: 2,
+            stranded: 2,
             plan_stats: crate::controller::PlanStats {
                 searches: 1,
                 nodes_expanded: 2,
@@ -259,14 +275,16 @@ mod tests {
         .unwrap();
         assert_eq!(
             text,
-            "planner,alpha,lambda,seed,hdv_profile,steps,scheduled,inserted,undeparted,\
+            "planner,alpha,lambda,seed,hdv_profile,steps,system_delay_s,system_delay_veh_h,\
+             own_speed_delay_s,scheduled,inserted,never_inserted,\
              inserted_cav,arrived,crashed,present,controllable_crashed,\
              controllable_collision_rate,hdv_collisions,hdv_crashed,mean_delay_s,\
-             mean_delay_cav_s,mean_delay_hdv_s,throughput_veh_h,mean_speed_mps,ramp_queue_end,\
+             mean_delay_cav_s,mean_delay_hdv_s,throughput_veh_h,throughput_window_s,\
+             mean_speed_mps,stranded,\
              plan_searches,plan_nodes_expanded,plan_phase2,plan_fallbacks,pbs_nodes,\
              pbs_depth_sum,predictions,pbs_fallbacks,time_budget_hits,shield_overrides\n\
-             bk-pbs,0.6,3000,7,sumo-safe,400,9,8,1,5,6,1,1,1,0.125000,0,0,0.3333,,-0.0000,\
-             270.14,29.1235,2,1,2,3,4,5,6,7,8,9,10\n"
+             bk-pbs,0.6,3000,7,sumo-safe,400,0.6667,0.001235,0.2500,9,8,1,5,6,1,1,1,0.125000,\
+             0,0,0.3333,,-0.0000,270.14,66.8000,29.1235,2,1,2,3,4,5,6,7,8,9,10\n"
         );
     }
 }

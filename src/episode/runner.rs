@@ -39,12 +39,19 @@ const LC_MODE_RAMP_HDV: i32 = 0b10_0000_0000;
 /// collisions (see `merge_rule`).
 const LC_MODE_RAMP_HDV_FORCED: i32 = 0b01_0000_0000;
 
+/// The end of a route: the section's end, or the end of off-ramp `exit`.
+fn route_end(road: &Road, exit: Option<usize>) -> (&str, f64) {
+    let (edge, pos) = exit.map_or(&road.end_edge, |x| &road.exits[x].end);
+    (edge, *pos)
+}
+
 /// What an episode produced.
 #[derive(Debug, Clone)]
 pub struct EpisodeResult {
     /// The one-row summary (the `episode.csv` row).
     pub summary: Summary,
-    /// One record per inserted vehicle, in order of departure (the `vehicles.csv` rows).
+    /// One record per inserted vehicle, in order of departure, then one per vehicle never
+    /// inserted, in the demand's order (the `vehicles.csv` rows).
     pub vehicles: Vec<VehicleRecord>,
     /// Every collision SUMO reported.
     pub collisions: Vec<CollisionEvent>,
@@ -205,13 +212,30 @@ impl<'a> Episode<'a> {
             self.step(&mut sim, step + 1 < steps).map_err(at(step))?;
         }
         let loop_s = loop_start.elapsed().as_secs_f64();
-        let ramp_queue_end = self.ramp_queue();
+        let stranded = self.standing_on_acceleration_lane();
+        self.measure_remaining(&sim).map_err(at(steps))?;
         sim.close().map_err(at(steps))?;
-        Ok(self.finish(loop_s, ramp_queue_end))
+        Ok(self.finish(loop_s, stranded))
     }
 
-    /// Vehicles standing on the acceleration lane: at the end, a jam indicator.
-    fn ramp_queue(&self) -> usize {
+    /// Asks SUMO, for every vehicle still in the network, how far it still has to go along
+    /// its route: what it covered counts in its system delay.
+    fn measure_remaining(&mut self, sim: &Simulation) -> Result<(), SumoError> {
+        let present: Vec<(usize, String, Option<usize>)> = self
+            .ledger
+            .present()
+            .map(|(k, id, exit)| (k, id.to_string(), exit))
+            .collect();
+        for (k, id, exit) in present {
+            let (edge, pos) = route_end(&self.road, exit);
+            let remaining = sim.driving_distance(&id, edge, pos)?;
+            self.ledger.note_remaining(k, remaining);
+        }
+        Ok(())
+    }
+
+    /// Vehicles standing on the acceleration lane: at the end, the stranded (a jam indicator).
+    fn standing_on_acceleration_lane(&self) -> usize {
         self.sumo_scene
             .scene
             .vehicles
@@ -293,11 +317,8 @@ impl<'a> Episode<'a> {
             let kind = Kind::from_type_id(&sumo_type).unwrap_or(Kind::Hdv);
             let expected = self.ledger.expected(&id, now);
             self.take_control(sim, &id, kind, &expected)?;
-            // To the end of its route: the section's end, or the end of its off-ramp.
-            let (end_edge, end_pos) = expected
-                .exit
-                .map_or(&self.road.end_edge, |x| &self.road.exits[x].end);
-            let distance = sim.driving_distance(&id, end_edge, *end_pos)?;
+            let (end_edge, end_pos) = route_end(&self.road, expected.exit);
+            let distance = sim.driving_distance(&id, end_edge, end_pos)?;
             let departure = Departure {
                 id,
                 sumo_type,
@@ -406,9 +427,11 @@ impl<'a> Episode<'a> {
         Ok(())
     }
 
-    fn finish(self, loop_s: f64, ramp_queue_end: usize) -> EpisodeResult {
+    fn finish(self, loop_s: f64, stranded: usize) -> EpisodeResult {
         let sc = &self.config.scenario;
-        let books = self.ledger.close();
+        // The time of the last state: a vehicle still in the network was last seen then.
+        let end = self.sumo_scene.scene.time;
+        let books = self.ledger.close(end);
         let summary = Summary::compute(&SummaryInput {
             planner: self.controller.name(),
             hdv_profile: &self.config.hdv.profile,
@@ -416,13 +439,13 @@ impl<'a> Episode<'a> {
             lambda: sc.lambda,
             seed: sc.seed,
             steps: sc.steps,
-            dt: sc.dt,
+            end,
             scheduled: books.scheduled,
             vehicles: &books.vehicles,
             collisions: &books.collisions,
             speed_sum: books.speed_sum,
             speed_samples: books.speed_samples,
-            ramp_queue_end,
+            stranded,
             plan_stats: self.plan_stats,
         });
         EpisodeResult {

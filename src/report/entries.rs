@@ -12,7 +12,7 @@ pub struct EntryRow {
     pub planner: String,
     /// Where the vehicles entered: the prefix of their ids (`main`, `ramp`, `ramp1`, …).
     pub entry: String,
-    /// Vehicles that entered the network (every outcome but `undeparted`).
+    /// Vehicles that entered the network (every outcome but `never_inserted`).
     pub inserted: usize,
     /// Vehicles that reached the end of their route.
     pub arrived: usize,
@@ -90,7 +90,7 @@ impl Tally {
 
     /// Counts one vehicle by its `outcome` and `delay_s` fields.
     fn count(&mut self, outcome: &str, delay: &str) {
-        self.row.inserted += usize::from(outcome != "undeparted");
+        self.row.inserted += usize::from(outcome != "never_inserted");
         self.row.crashed += usize::from(outcome == "crashed");
         if let (true, Ok(d)) = (outcome == "arrived", delay.parse::<f64>()) {
             self.row.arrived += 1;

@@ -44,7 +44,12 @@ pub struct Group {
     pub lambda: f64,
     /// Episodes (seeds) found.
     pub episodes: usize,
-    /// Mean travel delay (s) over the episodes that had arrivals.
+    /// System delay (s): per episode the mean over every vehicle not crashed, arrived or not.
+    pub system_delay: Option<Estimate>,
+    /// The part of the system delay no controller can remove (s): own desired speeds.
+    pub own_speed_delay: Option<Estimate>,
+    /// The paper's mean travel delay (s) of the vehicles that arrived, over the episodes that
+    /// had arrivals.
     pub delay: Option<Estimate>,
     /// Controllable collision rate (a fraction of inserted vehicles).
     pub collision_rate: Option<Estimate>,
@@ -52,6 +57,10 @@ pub struct Group {
     pub throughput: Option<Estimate>,
     /// Mean speed of the vehicles in the network (m/s).
     pub mean_speed: Option<Estimate>,
+    /// Vehicles standing on the acceleration lane at the end.
+    pub stranded: Option<Estimate>,
+    /// Vehicles scheduled but never inserted.
+    pub never_inserted: Option<Estimate>,
 }
 
 /// All groups of a campaign, in grid order, with the axes they span.
@@ -78,20 +87,26 @@ fn column(t: &Table, path: &Path, name: &'static str) -> Result<usize, SummaryEr
 
 /// The `episodes.csv` columns (of [`crate::episode::metrics::Summary::columns`]) averaged per
 /// group, in the order of [`Group`]'s estimates.
-const SAMPLED: [&str; 4] = [
+const SAMPLED: [&str; N] = [
+    "system_delay_s",
+    "own_speed_delay_s",
     "mean_delay_s",
     "controllable_collision_rate",
     "throughput_veh_h",
     "mean_speed_mps",
+    "stranded",
+    "never_inserted",
 ];
+/// How many columns are averaged.
+const N: usize = 8;
 
 /// A row's values in the [`SAMPLED`] columns (at `columns`); empty fields are `None`.
 fn sampled_values(
     row: &crate::campaign::table::Row,
-    columns: &[usize; 4],
+    columns: &[usize; N],
     path: &Path,
-) -> Result<[Option<f64>; 4], SummaryError> {
-    let mut out = [None; 4];
+) -> Result<[Option<f64>; N], SummaryError> {
+    let mut out = [None; N];
     for ((slot, &i), name) in out.iter_mut().zip(columns).zip(SAMPLED) {
         let text = row.fields.get(i).unwrap_or("");
         if text.is_empty() {
@@ -130,11 +145,11 @@ impl Labels {
 }
 
 /// A group being filled: its episodes so far and their [`SAMPLED`] values.
-type Filling = (Group, [Vec<f64>; 4]);
+type Filling = (Group, [Vec<f64>; N]);
 
 /// Adds one row's values to the last group, or starts a group when the row's (planner, α, λ)
 /// differs from the last one's (the rows are sorted, so a group's rows are adjacent).
-fn add_row(groups: &mut Vec<Filling>, name: String, c: &Cell, vals: [Option<f64>; 4]) {
+fn add_row(groups: &mut Vec<Filling>, name: String, c: &Cell, vals: [Option<f64>; N]) {
     let same = |g: &Group| g.planner == name && g.alpha == c.alpha && g.lambda == c.lambda;
     if !groups.last().is_some_and(|(g, _)| same(g)) {
         let group = Group {
@@ -142,10 +157,14 @@ fn add_row(groups: &mut Vec<Filling>, name: String, c: &Cell, vals: [Option<f64>
             alpha: c.alpha,
             lambda: c.lambda,
             episodes: 0,
+            system_delay: None,
+            own_speed_delay: None,
             delay: None,
             collision_rate: None,
             throughput: None,
             mean_speed: None,
+            stranded: None,
+            never_inserted: None,
         };
         groups.push((group, Default::default()));
     }
@@ -157,7 +176,11 @@ fn add_row(groups: &mut Vec<Filling>, name: String, c: &Cell, vals: [Option<f64>
 }
 
 /// A filled group with its estimates.
-fn estimated((mut g, [d, r, tp, v]): Filling) -> Group {
+fn estimated((mut g, [sd, own, d, r, tp, v, st, ni]): Filling) -> Group {
+    g.system_delay = Estimate::of(&sd);
+    g.own_speed_delay = Estimate::of(&own);
+    g.stranded = Estimate::of(&st);
+    g.never_inserted = Estimate::of(&ni);
     g.delay = Estimate::of(&d);
     g.collision_rate = Estimate::of(&r);
     g.throughput = Estimate::of(&tp);
@@ -196,7 +219,7 @@ impl Summary {
     /// Groups the (sorted) episode rows; `path` names the file in errors.
     pub fn from_results(res: &Results, path: &Path) -> Result<Summary, SummaryError> {
         let t = &res.episodes;
-        let mut columns = [0; 4];
+        let mut columns = [0; N];
         for (slot, name) in columns.iter_mut().zip(SAMPLED) {
             *slot = column(t, path, name)?;
         }
