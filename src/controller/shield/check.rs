@@ -363,7 +363,13 @@ pub fn clear_of_new_follower(c: &Candidate) -> bool {
             decel: b.follower_decel,
             reach: f64::INFINITY,
         };
-        stays_clear(back, cav_motion(me, c.m, b), me.rear() - f.front(), b.margin, b)
+        stays_clear(
+            back,
+            cav_motion(me, c.m, b),
+            me.rear() - f.front(),
+            b.margin,
+            b,
+        )
     })
 }
 

@@ -23,15 +23,18 @@ use crate::planner::guard::StartGuard;
 impl StartGuard for WorstCase {
     fn admits(&self, scene: &Scene, agent: usize, lane_offset: i32, first_speed: f64) -> bool {
         let lane_change = match lane_offset {
-            1 => LaneChange::Left,
-            -1 => LaneChange::Right,
-            _ => return true,
+            1 => Some(LaneChange::Left),
+            -1 => Some(LaneChange::Right),
+            _ => None,
         };
         let m = Maneuver {
             speed: first_speed,
-            lane_change: Some(lane_change),
+            lane_change,
         };
-        is_safe(scene, agent, &m, self, &[])
+        // The hardest braking is what the shield would send instead: always admitted.
+        let strongest = (scene.vehicles[agent].speed - self.cav_decel * self.dt).max(0.0);
+        let hardest = lane_change.is_none() && first_speed <= strongest + 1e-9;
+        hardest || is_safe(scene, agent, &m, self, &[])
     }
 }
 

@@ -324,9 +324,7 @@ impl<'p> PhaseSearch<'p> {
     /// Whether the request's guard lets primitive `p`, rolled out as `seg` from the root, start.
     fn guard_admits(&self, p: Primitive, seg: &[BicycleState]) -> bool {
         match (self.req.guard, seg.first()) {
-            (Some(g), Some(first)) if p.is_lane_change() => {
-                g.admits(p.lane_offset(), first.speed * first.heading.cos())
-            }
+            (Some(g), Some(first)) => g.admits(p.lane_offset(), first.speed * first.heading.cos()),
             _ => true,
         }
     }

@@ -168,9 +168,37 @@ fn a_slow_main_road_cav_slides_only_when_all_slides_are_allowed() {
 struct Closed;
 
 impl StartGuard for Closed {
-    fn admits(&self, _: &Scene, _: usize, _: i32, _: f64) -> bool {
-        false
+    fn admits(&self, _: &Scene, _: usize, lane_offset: i32, _: f64) -> bool {
+        lane_offset == 0
     }
+}
+
+/// A guard that admits no first step faster than 25 m/s.
+struct SpeedCap;
+
+impl StartGuard for SpeedCap {
+    fn admits(&self, _: &Scene, _: usize, _: i32, first_speed: f64) -> bool {
+        first_speed <= 25.0
+    }
+}
+
+#[test]
+fn the_first_move_is_one_the_guard_admits() {
+    // Free road at 26 m/s: the plan would hold or gain speed; capped, its first step slows.
+    let m = planner();
+    let free = request(&m, 20.0, 1, 26.0, false, &[]);
+    let first = |p: &crate::planner::mastar::Plan| p.trajectory.poses[1].speed;
+    assert!(first(&m.plan(&free).unwrap()) > 25.0);
+    let scene = Scene::on_paper_road(0.0, Vec::new());
+    let capped = Request {
+        guard: Some(Guard {
+            check: &SpeedCap,
+            scene: &scene,
+            agent: 0,
+        }),
+        ..free
+    };
+    assert!(first(&m.plan(&capped).unwrap()) <= 25.0);
 }
 
 #[test]
