@@ -302,7 +302,8 @@ pub fn clear_of_leaders(c: &Candidate) -> bool {
                     decel: b.emergency_decel(o.kind),
                     reach: reach(scene, o),
                 };
-                let margin = b.margin + if yields_to(me, o) { b.yield_gap } else { 0.0 };
+                let yields = yields_to(me, target, o);
+                let margin = b.margin + if yields { b.yield_gap } else { 0.0 };
                 stays_clear(motion, worst, o.rear() - me.front(), margin, b)
             })
 }
@@ -311,9 +312,12 @@ pub fn clear_of_leaders(c: &Candidate) -> bool {
 /// yet moving over) room to merge in front of it: SUMO lets a merger in, even forced at the
 /// lane end, only with the new follower's minGap free behind it. A CAV that stopped
 /// `margin` behind a ramp HDV standing at the lane end held both for good (the right lane stood
-/// for the last 120 s of a 300 s run: `paper` drivers, α 0.4, λ 3000).
-fn yields_to(me: &VehicleState, o: &VehicleState) -> bool {
-    me.lane == FIRST_MAIN_LANE && on_acceleration_lane(o) && o.other_lane().is_none()
+/// for the last 120 s of a 300 s run: `paper` drivers, α 0.4, λ 3000). A CAV changing into lane
+/// 1 (`target`) behind it owes it the same: ramp CAVs queued behind a standing ramp HDV that
+/// took the room beside it one after another kept it standing for 17 s.
+fn yields_to(me: &VehicleState, target: Option<i32>, o: &VehicleState) -> bool {
+    let in_lane_1 = me.lane == FIRST_MAIN_LANE || target == Some(FIRST_MAIN_LANE);
+    in_lane_1 && on_acceleration_lane(o) && o.other_lane().is_none()
 }
 
 /// Whether ramp HDV `o`, on the acceleration lane and not yet moving over, cannot merge in
@@ -323,7 +327,7 @@ fn yields_to(me: &VehicleState, o: &VehicleState) -> bool {
 /// behind a ramp HDV standing at the lane end could never move again, and neither could the
 /// HDV (`paper` drivers, α 0.4, λ 3000).
 fn cannot_cut_in(me: &VehicleState, o: &VehicleState, b: &WorstCase) -> bool {
-    yields_to(me, o) && o.rear() - me.front() < b.yield_gap
+    me.lane == FIRST_MAIN_LANE && yields_to(me, None, o) && o.rear() - me.front() < b.yield_gap
 }
 
 /// Whether HDV `o` drives on the main-road lane beyond `target`, seen from CAV `me`'s lane, on a
