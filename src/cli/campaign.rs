@@ -107,7 +107,7 @@ pub fn run(c: Campaign) -> Result<()> {
     let exe = std::env::current_exe().context("cannot locate the bkpbs binary")?;
     let done = campaign::run(&c.settings, &c.out, &exe)?;
     if done.collected > 0 {
-        print_report(std::slice::from_ref(&c.out), None, false)?;
+        print_report(std::slice::from_ref(&c.out), None, false, &[])?;
     }
     if c.plots && done.interrupted.is_none() {
         let drawn = episode_plots::plot_cells(&c.out, &c.settings)?;

@@ -19,16 +19,25 @@ pub struct ReportArgs {
     /// Merge directories whose campaigns ran with different settings (refused otherwise).
     #[arg(long)]
     allow_mixed: bool,
+    /// Compare every planner with these reference planners, seed by seed (paired differences,
+    /// Wilcoxon and Fisher tests): report/paired.csv, report/paired_collisions.csv.
+    #[arg(long, value_delimiter = ',', value_name = "PLANNERS")]
+    versus: Vec<String>,
 }
 
 /// Writes the report of the directories.
 pub fn run(a: ReportArgs) -> Result<()> {
-    print_report(&a.dirs, a.out.as_deref(), a.allow_mixed)
+    print_report(&a.dirs, a.out.as_deref(), a.allow_mixed, &a.versus)
 }
 
 /// Writes a report and prints its tables and where the files are; `campaign` ends with it too.
-pub fn print_report(dirs: &[PathBuf], out: Option<&Path>, allow_mixed: bool) -> Result<()> {
-    let r = report::run(dirs, out, allow_mixed)?;
+pub fn print_report(
+    dirs: &[PathBuf],
+    out: Option<&Path>,
+    allow_mixed: bool,
+    versus: &[String],
+) -> Result<()> {
+    let r = report::run_versus(dirs, out, allow_mixed, versus)?;
     print!("{}", r.markdown);
     println!(
         "results in {}: episodes.csv, vehicles.csv, timings.csv, failures.csv",

@@ -485,6 +485,7 @@ pub fn figure(e: &Explanation) -> LinePanels {
                 y_label: unit.into(),
                 curves,
                 bands: Vec::new(),
+                dots: Vec::new(),
                 marks: vec![e.collision.time],
                 x_range: Some(e.collision.time - WINDOW_S - e.dt..e.collision.time + e.dt),
             });

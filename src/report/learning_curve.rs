@@ -104,6 +104,7 @@ impl Quantity {
             y_label: self.y_label.into(),
             curves: updates.into_iter().chain(flat).collect(),
             bands: Vec::new(),
+            dots: Vec::new(),
             marks: Vec::new(),
             x_range: None,
         }

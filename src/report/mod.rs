@@ -15,8 +15,11 @@ pub mod episode_plots;
 pub mod explain;
 pub mod lane_tracks;
 pub mod learning_curve;
+pub mod paired;
+pub mod paired_tables;
 pub mod plot;
 pub mod raster;
+pub mod signif;
 pub mod stats;
 pub mod summary;
 pub mod tables;
@@ -27,8 +30,9 @@ use std::path::{Path, PathBuf};
 use crate::campaign::results::{Results, ResultsError};
 use crate::campaign::{Settings, SETTINGS_FILE};
 use crate::episode::output::{self, WriteError};
+use crate::report::paired::{Paired, PairedError};
 use crate::report::plot::{
-    Band, Curve, HeatPanel, Heatmap, LinePanel, LinePanels, PlotError, Scatter, ScatterSeries,
+    Band, Curve, Dots, HeatPanel, Heatmap, LinePanel, LinePanels, PlotError, Scatter, ScatterSeries,
 };
 use crate::report::stats::Estimate;
 use crate::report::summary::Group;
@@ -83,6 +87,9 @@ pub enum ReportError {
     /// A figure could not be drawn.
     #[error(transparent)]
     Plot(#[from] PlotError),
+    /// The paired comparisons could not be made (an unknown reference, a damaged column).
+    #[error(transparent)]
+    Paired(#[from] PairedError),
 }
 
 /// What a report produced.
@@ -158,11 +165,58 @@ fn grid_order(dir: &Path) -> Result<(Vec<String>, Vec<String>), ReportError> {
 /// Reads (and merges) the campaign directories, writes tables and figures into
 /// `out` (default: the first directory), and returns the Markdown tables.
 pub fn run(dirs: &[PathBuf], out: Option<&Path>, allow_mixed: bool) -> Result<Report, ReportError> {
+    run_versus(dirs, out, allow_mixed, &[])
+}
+
+/// [`run`], and with references in `versus` (`bkpbs report --versus`) the paired comparisons
+/// of every planner against each of them ([`paired`]): `paired.csv`, `paired_collisions.csv`
+/// and a section of the Markdown.
+pub fn run_versus(
+    dirs: &[PathBuf],
+    out: Option<&Path>,
+    allow_mixed: bool,
+    versus: &[String],
+) -> Result<Report, ReportError> {
     let first = dirs.first().ok_or(ReportError::NoDirs)?;
     if !allow_mixed {
         same_settings(dirs)?;
     }
     let out = out.unwrap_or(first).to_path_buf();
+    let (results, mut files) = gather(dirs, &out)?;
+    let episodes = out.join("episodes.csv");
+    let summary = Summary::from_results(&results, &episodes)?;
+    let by_entry = entries::rows(&results);
+    let mut markdown = tables::markdown(&summary) + &entries::markdown(&by_entry);
+    let mut csvs = tables::csv_files(&summary);
+    csvs.push(tables::CsvFile {
+        name: "delay_by_entry.csv".into(),
+        bytes: entries::csv(&by_entry),
+    });
+    if !versus.is_empty() {
+        let p = Paired::of(&results, versus, &episodes)?;
+        markdown += &paired_tables::markdown(&p);
+        csvs.extend(paired_tables::csv_files(&p));
+    }
+    let dir = out.join(REPORT_DIR);
+    for f in csvs {
+        let p = dir.join(&f.name);
+        output::write_atomic(&p, &f.bytes)?;
+        files.push(p);
+    }
+    let p = dir.join("tables.md");
+    output::write_atomic(&p, markdown.as_bytes())?;
+    files.push(p);
+    files.extend(write_figures(&summary, &dir)?);
+    Ok(Report {
+        markdown,
+        files,
+        out,
+    })
+}
+
+/// Reads the directories and, when they are several or `out` is another directory, writes the
+/// merged (sorted) results there; returns them and the files written.
+fn gather(dirs: &[PathBuf], out: &Path) -> Result<(Results, Vec<PathBuf>), ReportError> {
     let mut parts = Vec::new();
     for dir in dirs {
         if !dir.join("episodes.csv").is_file() {
@@ -173,36 +227,27 @@ pub fn run(dirs: &[PathBuf], out: Option<&Path>, allow_mixed: bool) -> Result<Re
     }
     let mut files = Vec::new();
     let results = if parts.len() == 1 {
-        let (_, mut r) = parts.pop().expect("one part");
+        let (first, mut r) = parts.pop().expect("one part");
         r.sort();
-        if !same_dir(&out, first) {
-            files.extend(r.write(&out)?);
+        if !same_dir(out, &first) {
+            files.extend(r.write(out)?);
         }
         r
     } else {
         let merged = Results::merge(&parts)?;
-        files.extend(merged.write(&out)?);
+        files.extend(merged.write(out)?);
         merged
     };
-    let summary = Summary::from_results(&results, &out.join("episodes.csv"))?;
-    let dir = out.join(REPORT_DIR);
-    let by_entry = entries::rows(&results);
-    let markdown = tables::markdown(&summary) + &entries::markdown(&by_entry);
-    for f in tables::csv_files(&summary) {
-        let p = dir.join(&f.name);
-        output::write_atomic(&p, &f.bytes)?;
-        files.push(p);
-    }
-    let p = dir.join("delay_by_entry.csv");
-    output::write_atomic(&p, &entries::csv(&by_entry))?;
-    files.push(p);
-    let p = dir.join("tables.md");
-    output::write_atomic(&p, markdown.as_bytes())?;
-    files.push(p);
+    Ok((results, files))
+}
+
+/// The report's figures, as PNG and SVG in `dir`.
+fn write_figures(summary: &Summary, dir: &Path) -> Result<Vec<PathBuf>, ReportError> {
+    let mut files = Vec::new();
     for (name, fig) in [
-        ("collision_heatmap", heatmap(&summary).render()?),
-        ("delay_vs_collision", scatter(&summary).render()?),
-        ("metrics_vs_alpha", metrics_vs_alpha(&summary).render()?),
+        ("collision_heatmap", heatmap(summary).render()?),
+        ("delay_vs_collision", scatter(summary).render()?),
+        ("metrics_vs_alpha", metrics_vs_alpha(summary).render()?),
     ] {
         for (ext, bytes) in [("png", fig.png.as_slice()), ("svg", fig.svg.as_bytes())] {
             let p = dir.join(format!("{name}.{ext}"));
@@ -210,11 +255,7 @@ pub fn run(dirs: &[PathBuf], out: Option<&Path>, allow_mixed: bool) -> Result<Re
             files.push(p);
         }
     }
-    Ok(Report {
-        markdown,
-        files,
-        out,
-    })
+    Ok(files)
 }
 
 fn same_dir(a: &Path, b: &Path) -> bool {
@@ -292,18 +333,59 @@ pub fn scatter(s: &Summary) -> Scatter {
     }
 }
 
-/// The quantities drawn against α: name, unit, and how to read one from a group.
-type Metric = (&'static str, &'static str, fn(&Group) -> Option<Estimate>);
+/// A quantity drawn against α.
+struct Metric {
+    /// Panel title.
+    name: &'static str,
+    /// y-axis title with the unit.
+    unit: &'static str,
+    /// The group's estimate.
+    estimate: fn(&Group) -> Option<Estimate>,
+    /// The group's per-seed values.
+    samples: fn(&Group) -> &[f64],
+    /// What the quantity can physically be: a band is clipped to it (t(0.975, 1) = 12.7 would
+    /// otherwise draw negative speeds).
+    bounds: (f64, f64),
+}
 
 const METRICS: [Metric; 4] = [
-    ("system delay", "delay (s)", |g| g.system_delay),
-    ("arrived-only delay (paper)", "delay (s)", |g| g.delay),
-    ("throughput", "throughput (veh/h)", |g| g.throughput),
-    ("mean speed", "speed (m/s)", |g| g.mean_speed),
+    Metric {
+        name: "system delay",
+        unit: "delay (s)",
+        estimate: |g| g.system_delay,
+        samples: |g| &g.samples.system_delay,
+        bounds: (0.0, f64::INFINITY),
+    },
+    Metric {
+        name: "arrived-only delay (paper)",
+        unit: "delay (s)",
+        estimate: |g| g.delay,
+        samples: |g| &g.samples.delay,
+        bounds: (0.0, f64::INFINITY),
+    },
+    Metric {
+        name: "throughput",
+        unit: "throughput (veh/h)",
+        estimate: |g| g.throughput,
+        samples: |g| &g.samples.throughput,
+        bounds: (0.0, f64::INFINITY),
+    },
+    Metric {
+        name: "mean speed",
+        unit: "speed (m/s)",
+        estimate: |g| g.mean_speed,
+        samples: |g| &g.samples.mean_speed,
+        bounds: (0.0, f64::INFINITY),
+    },
 ];
 
+/// Below this many seeds a figure draws each seed's value instead of a 95 % band: with t(0.975,
+/// n − 1) at 12.7, 4.3, 3.2 for 2, 3, 4 seeds the band says more about n than about the data.
+pub const BAND_MIN_SEEDS: usize = 5;
+
 /// The paper's tables as a figure: per metric (rows) and λ (columns), each planner's mean over
-/// seeds against α, with its 95 % confidence interval as a band (none for a single seed).
+/// seeds against α, with its 95 % confidence interval as a band (clipped to what the metric can
+/// be) from [`BAND_MIN_SEEDS`] seeds on, and each seed's value as a dot below that.
 pub fn metrics_vs_alpha(s: &Summary) -> LinePanels {
     let (lo, hi) = (
         s.alphas.first().copied().unwrap_or(0.0),
@@ -312,41 +394,26 @@ pub fn metrics_vs_alpha(s: &Summary) -> LinePanels {
     let pad = ((hi - lo) * 0.05).max(0.02);
     let alpha_range = lo - pad..hi + pad;
     let mut panels = Vec::new();
-    for (name, unit, read) in METRICS {
+    for metric in &METRICS {
         for &lambda in &s.lambdas {
-            let mut curves = Vec::new();
-            let mut bands = Vec::new();
-            for (colour, planner) in s.planners.iter().enumerate() {
-                let estimates: Vec<(f64, Estimate)> = s
-                    .alphas
-                    .iter()
-                    .filter_map(|&a| Some((a, read(s.get(planner, a, lambda)?)?)))
-                    .collect();
-                curves.push(Curve {
-                    points: estimates.iter().map(|(a, e)| (*a, e.mean)).collect(),
-                    colour,
-                    thick: true,
-                });
-                bands.push(Band {
-                    points: estimates
-                        .iter()
-                        .map(|(a, e)| {
-                            let half = e.ci95.unwrap_or(0.0);
-                            (*a, e.mean - half, e.mean + half)
-                        })
-                        .collect(),
-                    colour,
-                });
-            }
-            panels.push(LinePanel {
-                title: format!("{name}, λ = {} veh/h", tables::lambda_label(lambda)),
+            let mut panel = LinePanel {
+                title: format!(
+                    "{}, λ = {} veh/h",
+                    metric.name,
+                    tables::lambda_label(lambda)
+                ),
                 x_label: "CAV penetration α".into(),
-                y_label: unit.into(),
-                curves,
-                bands,
+                y_label: metric.unit.into(),
+                curves: Vec::new(),
+                bands: Vec::new(),
+                dots: Vec::new(),
                 marks: Vec::new(),
                 x_range: Some(alpha_range.clone()),
-            });
+            };
+            for colour in 0..s.planners.len() {
+                add_planner(&mut panel, s, metric, lambda, colour);
+            }
+            panels.push(panel);
         }
     }
     LinePanels {
@@ -360,6 +427,47 @@ pub fn metrics_vs_alpha(s: &Summary) -> LinePanels {
     }
 }
 
+/// One planner's (the `colour`-th) mean curve in a panel of [`metrics_vs_alpha`], with its band
+/// when every α has [`BAND_MIN_SEEDS`] seeds, else its seeds as dots (shifted a little per
+/// planner so that planners' equal values stay apart).
+fn add_planner(panel: &mut LinePanel, s: &Summary, metric: &Metric, lambda: f64, colour: usize) {
+    let groups: Vec<(f64, &Group, Estimate)> = s
+        .alphas
+        .iter()
+        .filter_map(|&a| {
+            let g = s.get(&s.planners[colour], a, lambda)?;
+            Some((a, g, (metric.estimate)(g)?))
+        })
+        .collect();
+    panel.curves.push(Curve {
+        points: groups.iter().map(|(a, _, e)| (*a, e.mean)).collect(),
+        colour,
+        thick: true,
+    });
+    let (floor, ceiling) = metric.bounds;
+    if groups.iter().all(|(_, _, e)| e.n >= BAND_MIN_SEEDS) {
+        let points = groups.iter().map(|(a, _, e)| {
+            let half = e.ci95.unwrap_or(0.0);
+            let (low, high) = (e.mean - half, e.mean + half);
+            (*a, low.clamp(floor, ceiling), high.clamp(floor, ceiling))
+        });
+        panel.bands.push(Band {
+            points: points.collect(),
+            colour,
+        });
+        return;
+    }
+    let width = panel.x_range.as_ref().map_or(1.0, |r| r.end - r.start);
+    let shift = (colour as f64 - (s.planners.len() as f64 - 1.0) / 2.0) * 0.008 * width;
+    panel.dots.push(Dots {
+        points: groups
+            .iter()
+            .flat_map(|(a, g, _)| (metric.samples)(g).iter().map(move |v| (a + shift, *v)))
+            .collect(),
+        colour,
+    });
+}
+
 /// The files of a report worth pointing a reader to (tables and figures).
 pub fn highlights(r: &Report) -> Vec<&Path> {
     r.files
@@ -370,4 +478,61 @@ pub fn highlights(r: &Report) -> Vec<&Path> {
         })
         .map(|p| p.as_path())
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::summary::Samples;
+    use super::*;
+
+    /// A summary of one planner at α 0.4 and 0.8 whose speeds per seed are `speeds`.
+    fn summary(speeds: &[f64]) -> Summary {
+        let group = |alpha| Group {
+            planner: "p".into(),
+            alpha,
+            lambda: 3000.0,
+            episodes: speeds.len(),
+            delay: None,
+            collision_rate: None,
+            throughput: None,
+            mean_speed: Estimate::of(speeds),
+            samples: Samples {
+                mean_speed: speeds.to_vec(),
+                ..Samples::default()
+            },
+        };
+        Summary {
+            planners: vec!["p".into()],
+            alphas: vec![0.4, 0.8],
+            lambdas: vec![3000.0],
+            groups: vec![group(0.4), group(0.8)],
+            seeds: speeds.len(),
+        }
+    }
+
+    fn speed_panel(f: &LinePanels) -> &LinePanel {
+        f.panels
+            .iter()
+            .find(|p| p.title.starts_with("mean speed"))
+            .unwrap()
+    }
+
+    #[test]
+    fn few_seeds_are_drawn_as_dots_and_many_as_a_band_within_bounds() {
+        // Two seeds: t(0.975, 1) = 12.7 would span ±184 m/s; each seed is drawn instead.
+        let f = metrics_vs_alpha(&summary(&[1.0, 30.0]));
+        let p = speed_panel(&f);
+        assert!(p.bands.is_empty());
+        assert_eq!(p.dots.len(), 1);
+        let ys: Vec<f64> = p.dots[0].points.iter().map(|d| d.1).collect();
+        assert_eq!(ys, [1.0, 30.0, 1.0, 30.0]);
+        assert_eq!(p.curves[0].points, [(0.4, 15.5), (0.8, 15.5)]);
+        // Five seeds: a band, clipped at zero speed (mean 2, half-width 2.776·√20/√5 = 5.55).
+        let f = metrics_vs_alpha(&summary(&[0.0, 0.0, 0.0, 0.0, 10.0]));
+        let p = speed_panel(&f);
+        assert!(p.dots.is_empty());
+        let (_, low, high) = p.bands[0].points[0];
+        assert_eq!(low, 0.0);
+        assert!((high - (2.0 + 2.776_445 * 2.0)).abs() < 1e-5, "{high}");
+    }
 }

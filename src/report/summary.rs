@@ -61,6 +61,24 @@ pub struct Group {
     pub stranded: Option<Estimate>,
     /// Vehicles scheduled but never inserted.
     pub never_inserted: Option<Estimate>,
+    /// The episodes' values behind the estimates, in seed order: what a figure draws instead of
+    /// an interval when the seeds are too few for one to mean much.
+    pub samples: Samples,
+}
+
+/// Each episode's value of the averaged columns, in seed order (empty fields left out).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Samples {
+    /// System delay (s) of each episode.
+    pub system_delay: Vec<f64>,
+    /// Mean travel delay (s) of each episode with arrivals.
+    pub delay: Vec<f64>,
+    /// Controllable collision rate of each episode.
+    pub collision_rate: Vec<f64>,
+    /// Throughput (veh/h) of each episode.
+    pub throughput: Vec<f64>,
+    /// Mean speed (m/s) of each episode.
+    pub mean_speed: Vec<f64>,
 }
 
 /// All groups of a campaign, in grid order, with the axes they span.
@@ -165,6 +183,7 @@ fn add_row(groups: &mut Vec<Filling>, name: String, c: &Cell, vals: [Option<f64>
             mean_speed: None,
             stranded: None,
             never_inserted: None,
+            samples: Samples::default(),
         };
         groups.push((group, Default::default()));
     }
@@ -185,6 +204,13 @@ fn estimated((mut g, [sd, own, d, r, tp, v, st, ni]): Filling) -> Group {
     g.collision_rate = Estimate::of(&r);
     g.throughput = Estimate::of(&tp);
     g.mean_speed = Estimate::of(&v);
+    g.samples = Samples {
+        system_delay: sd,
+        delay: d,
+        collision_rate: r,
+        throughput: tp,
+        mean_speed: v,
+    };
     g
 }
 

@@ -14,7 +14,8 @@ pub struct CsvFile {
     pub bytes: Vec<u8>,
 }
 
-fn csv_bytes(header: &[String], rows: &[Vec<String>]) -> Vec<u8> {
+/// CSV bytes of `header` and `rows`.
+pub(super) fn csv_bytes(header: &[String], rows: &[Vec<String>]) -> Vec<u8> {
     let mut w = csv::Writer::from_writer(Vec::new());
     w.write_record(header).expect("writing to memory");
     for r in rows {

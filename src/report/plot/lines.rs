@@ -1,6 +1,6 @@
 //! The line-panel figure (metrics against α with confidence bands, the learning curve, a
-//! collision's close-up): panels of curves in rows of two, optional shaded bands under them and
-//! red vertical marks, with one legend of curve colours beside the panels.
+//! collision's close-up): panels of curves in rows of two, optional shaded bands under them,
+//! dots over them and red vertical marks, with one legend of curve colours beside the panels.
 
 use std::ops::Range;
 
@@ -31,6 +31,15 @@ pub struct Band {
     pub colour: usize,
 }
 
+/// Single points of a [`LinePanel`] (e.g. each seed's value where seeds are too few for a
+/// band), drawn as small discs over the curves in the colour of series `colour`.
+pub struct Dots {
+    /// (x, y) of each point.
+    pub points: Vec<(f64, f64)>,
+    /// Index into the series palette.
+    pub colour: usize,
+}
+
 /// One panel of line charts.
 pub struct LinePanel {
     /// Caption above the panel.
@@ -43,6 +52,8 @@ pub struct LinePanel {
     pub curves: Vec<Curve>,
     /// Drawn under the curves.
     pub bands: Vec<Band>,
+    /// Drawn over the curves.
+    pub dots: Vec<Dots>,
     /// x positions of vertical red marks (e.g. a collision).
     pub marks: Vec<f64>,
     /// The x axis (default: the curves' and marks' range).
@@ -116,12 +127,13 @@ impl LinePanels {
         draw_grey_grid(&mut chart, (&panel.x_label, &panel.y_label), (14, 15))?;
         panel.draw_bands(&mut chart)?;
         panel.draw_curves(&mut chart)?;
+        panel.draw_dots(&mut chart)?;
         panel.draw_marks(&mut chart, ys)
     }
 }
 
 impl LinePanel {
-    /// The axes: x as given or spanning the curves and marks, y spanning curves and bands.
+    /// The axes: x as given or spanning the curves and marks, y spanning curves, bands and dots.
     fn ranges(&self) -> (Range<f64>, Range<f64>) {
         let all = || self.curves.iter().flat_map(|c| c.points.iter());
         let band_ys = self
@@ -132,7 +144,8 @@ impl LinePanel {
             .x_range
             .clone()
             .unwrap_or_else(|| padded_range(all().map(|p| p.0).chain(self.marks.iter().copied())));
-        let ys = padded_range(all().map(|p| p.1).chain(band_ys));
+        let dot_ys = self.dots.iter().flat_map(|d| d.points.iter().map(|p| p.1));
+        let ys = padded_range(all().map(|p| p.1).chain(band_ys).chain(dot_ys));
         (xs, ys)
     }
 
@@ -163,6 +176,23 @@ impl LinePanel {
             let curves = self.curves.iter().filter(|c| c.thick == thick);
             chart
                 .draw_series(curves.map(|c| PathElement::new(c.points.clone(), curve_style(c))))
+                .map_err(drawing_failed)?;
+        }
+        Ok(())
+    }
+
+    /// The dots as discs with a white rim, so that overlapping ones stay countable.
+    fn draw_dots<DB: DrawingBackend>(&self, chart: &mut Chart<'_, DB>) -> Result<(), String>
+    where
+        DB::ErrorType: 'static,
+    {
+        for d in &self.dots {
+            let fill = series_colour(d.colour).mix(0.85).filled();
+            chart
+                .draw_series(d.points.iter().map(|&p| Circle::new(p, 5, WHITE.filled())))
+                .map_err(drawing_failed)?;
+            chart
+                .draw_series(d.points.iter().map(|&p| Circle::new(p, 4, fill)))
                 .map_err(drawing_failed)?;
         }
         Ok(())
@@ -228,6 +258,15 @@ impl Painter for LinePanels {
             area.draw(&PathElement::new(vec![(8, y), (36, y)], curve_style(&c)))
                 .map_err(drawing_failed)?;
             area.draw(&Text::new(name.clone(), (44, y), text.clone()))
+                .map_err(drawing_failed)?;
+            y += 24;
+        }
+        if self.panels.iter().any(|p| !p.dots.is_empty()) {
+            let grey =
+                TextStyle::from((FONT, 15).into_font()).pos(Pos::new(HPos::Left, VPos::Center));
+            area.draw(&Circle::new((22, y + 10), 4, BLACK.mix(0.6).filled()))
+                .map_err(drawing_failed)?;
+            area.draw(&Text::new("one seed's value", (44, y + 10), grey))
                 .map_err(drawing_failed)?;
             y += 24;
         }

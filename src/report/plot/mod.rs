@@ -27,7 +27,7 @@ pub use colour::{series_colour, viridis};
 pub(in crate::report) use fonts::FONT;
 pub use fonts::FONT_ENV;
 pub use heatmap::{HeatPanel, Heatmap};
-pub use lines::{Band, Curve, LinePanel, LinePanels};
+pub use lines::{Band, Curve, Dots, LinePanel, LinePanels};
 pub use scatter::{Scatter, ScatterSeries};
 
 /// Why a figure could not be made.

@@ -109,6 +109,10 @@ fn line_panels_render_valid_and_deterministic() {
             points: vec![(0.0, 0.5, 1.5), (0.5, 1.5, 2.5), (1.0, 1.0, 2.0)],
             colour: 0,
         }],
+        dots: vec![Dots {
+            points: vec![(0.0, 0.4), (1.0, 2.6)],
+            colour: 1,
+        }],
         marks,
         x_range,
     };
