@@ -3,15 +3,21 @@
 # directory, and compares each committed file byte for byte (wall-clock files excepted:
 # timings.csv). Prints one line per result and exits 1 if any file differs.
 #
-#   scripts/reproduce-results.sh [--with-training] [BIN]
+#   scripts/reproduce-results.sh [--update] [--with-training] [BIN]
 #
-# BIN defaults to target/release/bkpbs. The PPO training run (results/rl-ppo's learning curve
+# --update writes what it re-ran over the committed files instead of comparing (the commit that
+# changes behaviour re-runs its results so), READMEs and .gitignore files kept. BIN defaults to target/release/bkpbs. The PPO training run (results/rl-ppo's learning curve
 # and policy, ~45 min on 2 cores) is re-run only with --with-training; its evaluation campaigns
 # always are.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
 with_training=0
+update=0
+if [ "${1:-}" = "--update" ]; then
+    update=1
+    shift
+fi
 if [ "${1:-}" = "--with-training" ]; then
     with_training=1
     shift
@@ -23,8 +29,14 @@ trap 'rm -rf "$scratch"' EXIT
 failed=0
 
 # compare DIR_COMMITTED DIR_NEW: every committed file but timings.csv and README.md must match.
+# With --update, DIR_NEW's files replace DIR_COMMITTED's (its README.md and .gitignore kept).
 compare() {
     local committed=$1 new=$2 bad=0
+    if [ $update = 1 ]; then
+        find "$committed" -mindepth 1 -maxdepth 1 ! -name README.md ! -name .gitignore -exec rm -rf {} +
+        cp -a "$new/." "$committed/"
+        return 0
+    fi
     while IFS= read -r f; do
         case "$f" in */timings.csv | */README.md | */.gitignore | ./plots/*) continue ;; esac
         if ! cmp -s "$committed/$f" "$new/$f"; then
@@ -40,6 +52,7 @@ same_files() {
     local name=$1 committed=$2 new=$3 bad=0
     shift 3
     for f in "$@"; do
+        if [ $update = 1 ]; then cp "$new/$f" "$committed/$f"; continue; fi
         cmp -s "$committed/$f" "$new/$f" || { echo "  differs: $committed/$f"; bad=1; }
     done
     if [ $bad = 0 ]; then echo "$name: identical ($((SECONDS - start)) s)"; else echo "$name: DIFFERS"; failed=1; fi
