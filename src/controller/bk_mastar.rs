@@ -7,11 +7,11 @@
 
 use crate::config::Config;
 use crate::controller::search_planner::{Round, RoundPlanner, SearchCore, SearchPlanner};
-use crate::planner::lane_end::{held_up_at_lane_end, merge_order, standing_in_lane_1};
 use crate::controller::{Command, Source};
 use crate::model::road::Road;
 use crate::model::scene::{Kind, Scene};
 use crate::model::trajectory::Trajectory;
+use crate::planner::lane_end::{held_up_at_lane_end, merge_order, standing_in_lane_1};
 use crate::predict::{ConstantSpeed, Predictor};
 
 /// Decentralised M-A* planner.

@@ -142,15 +142,14 @@ fn executed_plans(
         .into_par_iter()
         .map(|i| {
             let in_conflict = conflicted.as_ref().is_some_and(|c| c[i]);
-            (scene.vehicles[i].kind == Kind::Cav)
-                .then(|| {
-                    let below: Vec<usize> = lane_end
-                        .iter()
-                        .filter(|&&(hi, _)| hi == i)
-                        .map(|&(_, lo)| lo)
-                        .collect();
-                    executed_plan(problem, solution, requests, (i, &below), in_conflict)
-                })
+            (scene.vehicles[i].kind == Kind::Cav).then(|| {
+                let below: Vec<usize> = lane_end
+                    .iter()
+                    .filter(|&&(hi, _)| hi == i)
+                    .map(|&(_, lo)| lo)
+                    .collect();
+                executed_plan(problem, solution, requests, (i, &below), in_conflict)
+            })
         })
         .collect()
 }

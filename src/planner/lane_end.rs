@@ -125,7 +125,10 @@ mod tests {
         ]);
         // 15 m/s needs 15²/4 = 56 m at 2 m/s²: too close; 20 m/s needs 100 m of 80 − 5 − 5: too
         // close as well; 120 m back it can stop: it yields, and the walk ends there.
-        assert_eq!(merge_order(&sc, 5.0, 2.0), vec![(1, 0), (2, 0), (3, 0), (0, 4)]);
+        assert_eq!(
+            merge_order(&sc, 5.0, 2.0),
+            vec![(1, 0), (2, 0), (3, 0), (0, 4)]
+        );
     }
 
     #[test]
