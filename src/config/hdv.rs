@@ -110,6 +110,20 @@ impl Default for HdvProfile {
     }
 }
 
+impl HdvProfile {
+    /// The largest value any of the profile's driver types gives SUMO vType attribute `key`:
+    /// the top of its draw range, else its fixed value, else `default` (what bkpbs or SUMO
+    /// sets when the profile leaves it alone). The shield bounds the HDVs by it (e.g. the most
+    /// assertive lane changer), since it cannot tell which driver type an HDV drew.
+    pub fn max_attribute(&self, key: &str, default: f64) -> f64 {
+        match (self.draws.get(key), self.attributes.get(key)) {
+            (Some([_, high]), _) => *high,
+            (None, Some(v)) => v.trim().parse().unwrap_or(default),
+            (None, None) => default,
+        }
+    }
+}
+
 fn attributes(pairs: &[(&str, &str)]) -> BTreeMap<String, String> {
     pairs
         .iter()
@@ -324,5 +338,15 @@ mod tests {
         let bad = text.replace("median_s = 0.6", "median_s = -1");
         let s: HdvSettings = toml::from_str(&bad).unwrap();
         assert!(s.validate().unwrap_err().to_string().contains("median_s"));
+    }
+
+    #[test]
+    fn the_largest_value_of_an_attribute_is_a_draws_top_or_the_fixed_value() {
+        let paper = built_in("paper").unwrap();
+        assert_eq!(paper.max_attribute("lcAssertive", 1.0), 3.0);
+        assert_eq!(paper.max_attribute("decel", 5.0), 5.0);
+        let mixed = built_in("heterogeneous").unwrap();
+        assert_eq!(mixed.max_attribute("decel", 5.0), 3.0);
+        assert_eq!(mixed.max_attribute("lcAssertive", 1.0), 1.0);
     }
 }

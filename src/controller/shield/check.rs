@@ -17,7 +17,11 @@
 //! Worst cases: every other vehicle may brake at its emergency deceleration (HDVs
 //! `idm.max_decel`, SUMO's emergencyDecel; CAVs `planner.emergency_decel`) and keeps its lane; a
 //! lane change under way completes, so a vehicle off its lane centre occupies both lanes; a ramp
-//! HDV on the acceleration lane may merge into main lane 1 at any time. A CAV's maneuver is safe
+//! vehicle that changed into lane 1 with its rear still on the ramp occupies the ramp's lane too
+//! (`tail_on_ramp`); a ramp HDV on the acceleration lane may merge into main lane 1 at any
+//! time; a main-road HDV beside the CAV may change into its lane in front of it wherever SUMO's
+//! lane-change model would let it, and then brake as hard as SUMO expects of it (`may_cut_in`,
+//! [`super::cut_in`]). A CAV's maneuver is safe
 //! when, executed for one step and followed by braking at `planner.emergency_decel`, the CAV never
 //! comes closer than the margin to any vehicle ahead of it (by centre) in any lane it occupies,
 //! and, if it starts a lane change, the follower in the target lane stays clear of it braking at
@@ -28,9 +32,10 @@
 //! start is cancelled; one under way is left to finish), at the highest safe speed between the
 //! strongest braking and the planned speed, else the strongest braking.
 
+use super::cut_in::CutIn;
 use crate::config::Config;
 use crate::controller::Maneuver;
-use crate::model::road::{FIRST_MAIN_LANE, FORCED_MERGE_ZONE, MERGE_LANE};
+use crate::model::road::{Road, FIRST_MAIN_LANE, FORCED_MERGE_ZONE, MERGE_LANE};
 use crate::model::scene::{Kind, Origin, Scene, VehicleState};
 
 /// The shield's worst-case braking model: how hard every vehicle may brake (and an HDV
@@ -53,12 +58,16 @@ pub struct WorstCase {
     /// Extra gap kept behind a ramp HDV that may merge into the CAV's lane (m): SUMO's minGap
     /// of the CAV type, which SUMO wants free behind a merger even when it forces its way in.
     pub yield_gap: f64,
+    /// When SUMO lets a main-road HDV change lanes in front of a CAV (see `may_cut_in`).
+    pub cut_in: CutIn,
 }
 
 impl WorstCase {
     /// The worst cases of `config`; the margin is the planner's longitudinal box inflation
     /// (`planner.margin_long`), which absorbs the difference between modelled and executed motion.
     pub fn from_config(config: &Config) -> Self {
+        let profile = config.hdv.resolved().unwrap_or_default();
+        let assertive = profile.max_attribute("lcAssertive", 1.0);
         WorstCase {
             dt: config.scenario.dt,
             cav_decel: config.planner.emergency_decel,
@@ -67,6 +76,19 @@ impl WorstCase {
             follower_decel: config.idm.decel,
             margin: config.planner.margin_long,
             yield_gap: config.idm.min_gap,
+            cut_in: CutIn {
+                min_gap: config.idm.min_gap,
+                // SUMO wants lcAssertive > 0; anything else is taken as "accepts any gap".
+                factor: if assertive > 0.0 {
+                    1.0 / assertive
+                } else {
+                    0.0
+                },
+                secure_decel: config.idm.decel,
+                brake_decel: profile
+                    .max_attribute("decel", config.idm.decel)
+                    .max(config.idm.decel),
+            },
         }
     }
 
@@ -87,10 +109,38 @@ pub fn bit(lane: i32) -> u64 {
     }
 }
 
-/// Lanes vehicle `v` occupies: its own, and the other one of a lane change under way
-/// ([`VehicleState::other_lane`]: moving to it or from it, either way it occupies both).
-fn lanes_now(v: &VehicleState) -> u64 {
+/// Lanes vehicle `v` occupies: its own, the other one of a lane change under way
+/// ([`VehicleState::other_lane`]: moving to it or from it, either way it occupies both), and the
+/// ramp's lane while its rear is still on the ramp (`tail_on_ramp`).
+fn lanes_now(road: &Road, v: &VehicleState) -> u64 {
+    let tail = if tail_on_ramp(road, v) {
+        bit(MERGE_LANE)
+    } else {
+        0
+    };
+    lanes_beside(v) | tail
+}
+
+/// The lanes `v` occupies side by side: its own and the other one of a change under way. (A
+/// CAV's own rear on the ramp is its followers' business, not a lane its check must keep clear
+/// ahead.)
+fn lanes_beside(v: &VehicleState) -> u64 {
     bit(v.lane) | v.other_lane().map_or(0, bit)
+}
+
+/// Whether ramp vehicle `v` changed into main lane 1 so early that its rear still lies behind
+/// the start of the acceleration lane, on the ramp: SUMO keeps that rear on the ramp's lane
+/// (the ramp has no lane beside it to move it to) until it has driven off it, and a vehicle
+/// following on the ramp runs into it there, although the change has ended. (Default drivers,
+/// α 0.4, λ 3000, seed 7002: a ramp HDV standing at the acceleration lane's very start, its
+/// front 1.25 m into it, changed into lane 1 at 143.4–144.2 s; a CAV stopped 2 m behind it on
+/// the ramp then saw its lane free and accelerated, and at 145.2 s hit the rear, 3.6 m back
+/// on the ramp.) The zone's start is taken for where the vehicle's ramp joins; a ramp vehicle
+/// passing a later ramp's junction in lane 1 counts too, for the moment it takes.
+fn tail_on_ramp(road: &Road, v: &VehicleState) -> bool {
+    v.origin == Origin::Ramp
+        && v.lane == FIRST_MAIN_LANE
+        && v.rear() < road.zone_ahead(v.front()).start
 }
 
 /// A ramp HDV on the acceleration lane: it may start its merge at any moment (SUMO's lane-change
@@ -135,12 +185,12 @@ fn lanes_of_other(scene: &Scene, v: &VehicleState, horizon: f64, b: &WorstCase) 
     } else {
         0
     };
-    lanes_now(v) | merge
+    lanes_now(&scene.road, v) | merge
 }
 
 /// Lanes the CAV occupies while executing `m`: its lanes now and the target of a change it starts.
 fn lanes_of_cav(v: &VehicleState, m: &Maneuver) -> u64 {
-    lanes_now(v) | m.lane_change.map_or(0, |lc| bit(v.lane + lc.offset()))
+    lanes_beside(v) | m.lane_change.map_or(0, |lc| bit(v.lane + lc.offset()))
 }
 
 /// One vehicle's worst-case longitudinal motion: `first` as the speed at the end of the first
@@ -293,19 +343,46 @@ pub fn clear_of_leaders(c: &Candidate) -> bool {
         }
     };
     clear_of_lane_end(scene, me, m, b)
-        && c.others()
-            .filter(|&(j, o)| o.s > me.s && lanes_of(j, o) & lanes != 0)
-            .all(|(_, o)| {
-                let worst = Motion {
-                    speed: o.speed,
-                    first: None,
-                    decel: b.emergency_decel(o.kind),
-                    reach: reach(scene, o),
-                };
-                let yields = yields_to(me, target, o);
-                let margin = b.margin + if yields { b.yield_gap } else { 0.0 };
-                stays_clear(motion, worst, o.rear() - me.front(), margin, b)
-            })
+        && c.others().filter(|&(_, o)| o.s > me.s).all(|(j, o)| {
+            // In a lane of the CAV's, braking as hard as it can; cutting in, as SUMO expects.
+            let decel = if lanes_of(j, o) & lanes != 0 {
+                b.emergency_decel(o.kind)
+            } else if may_cut_in(me, m.speed, lanes, o, b) {
+                b.cut_in.brake_decel
+            } else {
+                return true;
+            };
+            let worst = Motion {
+                speed: o.speed,
+                first: None,
+                decel,
+                reach: reach(scene, o),
+            };
+            let yields = yields_to(me, target, o);
+            let margin = b.margin + if yields { b.yield_gap } else { 0.0 };
+            stays_clear(motion, worst, o.rear() - me.front(), margin, b)
+        })
+}
+
+/// Whether HDV `o`, ahead on a main lane beside one of the CAV's `lanes` (`me` about to drive its
+/// next step at `speed`), may change into that lane in front of it: at the step's end, when
+/// SUMO decides lane changes, the gap is one SUMO's lane-change model may accept (see
+/// [`CutIn`]; the HDV's speed as high as a step's acceleration takes it, which widens the gap
+/// and shrinks the secure gap). HDVs on the acceleration lane are [`may_merge`]'s; one changing
+/// lanes already occupies both (`lanes_now`). With `lcAssertive = 1` (every built-in profile
+/// but `paper`) no cut-in SUMO allows is one a CAV cannot stop for, so this costs nothing there.
+/// With `paper`'s 3 it is a third of that: at 75.8 s (seed 7192, α 0.4, λ 3000) main.44 pulled
+/// out of the standing lane-1 queue 49.9 m in front of a CAV at 26.3 m/s in lane 2, which needs
+/// 55 m to stop at 6 m/s², and was hit at 79.0 s; the shield, assuming HDVs keep their lane, had
+/// let the CAV close in at 27 m/s. It now slows such a CAV, to 10 m/s past a standing car.
+fn may_cut_in(me: &VehicleState, speed: f64, lanes: u64, o: &VehicleState, b: &WorstCase) -> bool {
+    let beside = |d: i32| o.lane + d >= FIRST_MAIN_LANE && lanes & bit(o.lane + d) != 0;
+    if o.kind != Kind::Hdv || o.on_ramp || o.lane < FIRST_MAIN_LANE || o.changing_lanes() {
+        return false;
+    }
+    let changer_speed = o.speed + b.hdv_accel * b.dt;
+    let gap = o.rear() + changer_speed * b.dt - (me.front() + speed * b.dt);
+    (beside(1) || beside(-1)) && b.cut_in.allows(gap, speed, changer_speed, b.dt)
 }
 
 /// Whether CAV `me`, in main lane 1, must leave ramp HDV `o` (on the acceleration lane, not
@@ -356,7 +433,8 @@ pub fn clear_of_new_follower(c: &Candidate) -> bool {
         .others()
         .filter(|&(j, o)| {
             let beyond = may_enter_from_beyond(me, target, o);
-            o.s <= me.s && ((lanes_now(o) | c.entered(j)) & bit(target) != 0 || beyond)
+            let lanes = lanes_now(&c.scene.road, o) | c.entered(j);
+            o.s <= me.s && (lanes & bit(target) != 0 || beyond)
         })
         .map(|(_, o)| o)
         .max_by(|a, c| a.s.total_cmp(&c.s));

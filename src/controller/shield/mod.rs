@@ -8,6 +8,7 @@
 //! on a lane-change start the shield would withdraw.
 
 pub mod check;
+pub mod cut_in;
 
 pub use check::WorstCase;
 

@@ -377,3 +377,100 @@ fn a_cav_leaves_a_standing_merger_its_min_gap_or_passes_it() {
     assert!(is_safe(&behind(-2.0), 0, &go(3.0, None), &b, &[]));
     assert_eq!(b.yield_gap, Config::default().idm.min_gap);
 }
+
+fn paper_worst_case() -> WorstCase {
+    let mut config = Config::default();
+    config.hdv.profile = "paper".into();
+    WorstCase::from_config(&config)
+}
+
+/// The seed-7192 scene at 75.4 s (`paper` drivers, α 0.4, λ 3000), from the trace: CAV main.60
+/// at 27.1 m/s in lane 2, 60 m behind main.44, which stands in the lane-1 queue and is about
+/// to pull out behind main.58 (lane 2, 18.5 m/s). SUMO (lcAssertive 3) let it in at 75.8 s, 49.9
+/// m ahead of the CAV, which then could not stop. The 26.73 m/s sent then is refused under
+/// the `paper` worst case, and the replacement stops the CAV clear of the cut-in; with
+/// lcAssertive 1 SUMO would not allow that cut-in, and the maneuver stands.
+#[test]
+fn a_standing_hdv_beside_may_pull_out_as_close_as_sumo_lets_it() {
+    let scene = Scene::on_paper_road(
+        75.4,
+        vec![
+            cav(194.05, 2, 27.13),
+            hdv("main.44", 259.58, 1, 0.01),
+            hdv("main.41", 269.58, 1, 0.0),
+            hdv("main.58", 262.38, 2, 18.51),
+        ],
+    );
+    let sent = go(26.73, None);
+    let b = paper_worst_case();
+    assert!(!is_safe(&scene, 0, &sent, &b, &[]));
+    let m = replacement(&scene, 0, &sent, &b, &[]).unwrap();
+    assert!(m.speed < 26.3 && is_safe(&scene, 0, &m, &b, &[]), "{m:?}");
+    // The standing car as a leader in the CAV's lane: the replacement can stop for it.
+    let mut pulled_out = scene.clone();
+    pulled_out.vehicles[1].lane = 2;
+    assert!(is_safe(&pulled_out, 0, &m, &b, &[]));
+    assert!(is_safe(&scene, 0, &sent, &worst_case(), &[]));
+    // Alongside (inside the CAV's minGap) SUMO never lets it in: the CAV may pass it fast.
+    let mut alongside = scene.clone();
+    alongside.vehicles[1].s = 200.0;
+    alongside.vehicles.truncate(2);
+    assert!(is_safe(&alongside, 0, &go(27.13, None), &b, &[]));
+}
+
+/// With SUMO's default lcAssertive 1 no cut-in SUMO allows is one a CAV cannot stop for: the
+/// cut-in bound never binds for the default drivers (a grid of speeds and gaps, cruising,
+/// accelerating and braking).
+#[test]
+fn with_default_drivers_no_allowed_cut_in_is_too_close() {
+    let b = worst_case();
+    for v in (0..=35).map(f64::from) {
+        for hdv_v in (0..=35).map(f64::from).filter(|&h| h <= v) {
+            for gap in (0..300).map(|g| f64::from(g) * 0.5) {
+                let me = cav(100.0, 2, v);
+                let o = hdv("h", me.front() + gap + 2.5, 1, hdv_v);
+                let scene = Scene::on_paper_road(0.0, vec![me, o]);
+                for dv in [-1.2, 0.0, 0.4] {
+                    let m = go((v + dv).clamp(0.0, 35.0), None);
+                    assert!(
+                        is_safe(&scene, 0, &m, &b, &[]),
+                        "v {v} hdv {hdv_v} gap {gap} {m:?}"
+                    );
+                }
+            }
+        }
+    }
+}
+
+/// The seed-7002 scene at 144.8 s (default drivers, α 0.4, λ 3000), from the trace: ramp HDV
+/// ramp.56 stood at the acceleration lane's very start and changed into lane 1 at 143.4–144.2 s;
+/// its rear is still 3.7 m back on the ramp, where SUMO keeps it. CAV ramp.63, on the ramp
+/// behind it, saw lane 0 free and accelerated; the 2.39 m/s it was sent then is refused (at
+/// 145.2 s it hit that rear). Once the rear is off the ramp, the CAV may go.
+#[test]
+fn a_rear_still_on_the_ramp_blocks_the_ramp_behind_it() {
+    let ramp = |id: &str, kind, s, lane, speed| {
+        let mut v = VehicleState::on_lane(id, kind, Origin::Ramp, s, lane, speed);
+        v.on_ramp = s + 2.5 < Road::paper_default().zones[0].start;
+        v
+    };
+    let mut changing = ramp("ramp.49", Kind::Hdv, 159.47, 1, 1.04);
+    changing.lateral = -0.64;
+    let scene = Scene::on_paper_road(
+        144.8,
+        vec![
+            ramp("ramp.63", Kind::Cav, 142.92, 0, 1.98),
+            ramp("ramp.56", Kind::Hdv, 148.82, 1, 0.18),
+            changing,
+            ramp("ramp.64", Kind::Cav, 134.97, 0, 0.78),
+        ],
+    );
+    let sent = go(2.39, None);
+    let b = worst_case();
+    assert!(!is_safe(&scene, 0, &sent, &b, &[]));
+    let m = replacement(&scene, 0, &sent, &b, &[]).unwrap();
+    assert!(m.speed < 1.98 && is_safe(&scene, 0, &m, &b, &[]), "{m:?}");
+    let mut off = scene.clone();
+    off.vehicles[1].s = 152.6;
+    assert!(is_safe(&off, 0, &sent, &b, &[]));
+}
