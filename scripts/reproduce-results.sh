@@ -76,10 +76,27 @@ result() {
     fi
 }
 
+# result_versus NAME COMMITTED_DIR REFERENCES: as result, then `report --versus REFERENCES` on it.
+result_versus() {
+    local name=$1 committed=$2 versus=$3
+    shift 3
+    local out="$scratch/$name" start=$SECONDS
+    if ! "$@" --out "$out" >"$scratch/$name.log" 2>&1 \
+        || ! "$BIN" report "$out" --versus "$versus" >>"$scratch/$name.log" 2>&1; then
+        echo "$name: FAILED to run (log below)"; tail -5 "$scratch/$name.log"; failed=1; return
+    fi
+    rm -rf "$out/episodes"
+    if compare "$committed" "$out"; then
+        echo "$name: identical ($((SECONDS - start)) s)"
+    else
+        echo "$name: DIFFERS"; failed=1
+    fi
+}
+
 result paper-grid results/paper-grid "$BIN" campaign
-result safety-on results/safety/shield-on "$BIN" campaign --planners bk-mastar,bk-pbs \
+result_versus safety-on results/safety/shield-on bk-mastar "$BIN" campaign --planners bk-mastar,bk-pbs \
     --alphas 0.4,0.6,0.8 --lambdas 2500,3000 --seeds 25
-result safety-off results/safety/shield-off "$BIN" campaign --planners bk-mastar,bk-pbs \
+result_versus safety-off results/safety/shield-off bk-mastar "$BIN" campaign --planners bk-mastar,bk-pbs \
     --alphas 0.4,0.6,0.8 --lambdas 2500,3000 --seeds 25 --config results/safety/shield-off.toml
 result three-lane results/networks/three-lane "$BIN" campaign --config results/networks/three-lane.toml \
     --planners sumo,idm-mobil,bk-mastar,bk-pbs --alphas 0.4,0.8 --lambdas 2500,3000 --seeds 5
@@ -94,6 +111,18 @@ result profiles-paper-grid results/profiles/paper-grid "$BIN" campaign --config 
 result rl-shield-off results/rl-ppo/shield-off "$BIN" campaign --planners rl-ppo --seeds 10
 result rl-shield-on results/rl-ppo/shield-on "$BIN" campaign --planners rl-ppo --seeds 10 \
     --config results/rl-ppo/shield-on.toml
+
+# The long runs (~35 min on 2 cores): each campaign, then its paired report.
+long="--hdv-profiles sumo-safe,paper --alphas 0.4,0.6,0.8 --steps 1500"
+# shellcheck disable=SC2086
+result_versus long-run-learned results/long-run/learned idm-mobil,bk-mastar "$BIN" campaign --config results/long-run/long-run.toml \
+    $long --lambdas 2500,3000,3500 --seeds 10 --seed-base 20000
+# shellcheck disable=SC2086
+result long-run-constant results/long-run/constant "$BIN" campaign --config results/long-run/constant.toml \
+    --planners bk-pbs $long --lambdas 3000 --seeds 10 --seed-base 20000
+# shellcheck disable=SC2086
+result_versus long-run-fresh results/long-run/fresh idm-mobil,bk-mastar "$BIN" campaign --config results/long-run/long-run.toml \
+    --planners idm-mobil,bk-mastar,bk-pbs $long --lambdas 3000 --seeds 30 --seed-base 40000
 
 # The paper grid's traced episode and its figures.
 start=$SECONDS
@@ -120,10 +149,12 @@ bad=0
 for p in sumo-safe paper heterogeneous krauss eidm; do
     "$BIN" collect --hdv-profile $p --episodes 100 --seed-base 90000 --out "$scratch/eval-$p.bin" >/dev/null 2>&1
     "$BIN" eval-predictor --data "$scratch/eval-$p.bin" >"$scratch/lateral-$p.txt" 2>/dev/null
+    [ $update = 1 ] && cp "$scratch/lateral-$p.txt" "results/calibration/lateral/$p.txt"
     cmp -s "results/calibration/lateral/$p.txt" "$scratch/lateral-$p.txt" || { echo "  differs: lateral/$p.txt"; bad=1; }
     for q in paper heterogeneous krauss eidm; do
         "$BIN" eval-predictor --model models/profiles/$q/gcn-conditioned.json --data "$scratch/eval-$p.bin" \
             >"$scratch/lateral-$q-$p.txt" 2>/dev/null
+        [ $update = 1 ] && cp "$scratch/lateral-$q-$p.txt" "results/calibration/lateral/trained-on-$q/$p.txt"
         cmp -s "results/calibration/lateral/trained-on-$q/$p.txt" "$scratch/lateral-$q-$p.txt" \
             || { echo "  differs: lateral/trained-on-$q/$p.txt"; bad=1; }
     done
