@@ -65,7 +65,9 @@ result() {
     local out="$scratch/$name"
     mkdir -p "$(dirname "$out")"
     local start=$SECONDS
-    if ! "$@" --out "$out" >"$scratch/$name.log" 2>&1; then
+    # $versus: set by result_versus (dynamic scope), empty otherwise.
+    if ! "$@" --out "$out" >"$scratch/$name.log" 2>&1 \
+        || { [ -n "${versus:-}" ] && ! "$BIN" report "$out" --versus "$versus" >>"$scratch/$name.log" 2>&1; }; then
         echo "$name: FAILED to run (log below)"; tail -5 "$scratch/$name.log"; failed=1; return
     fi
     rm -rf "$out/episodes"
@@ -80,17 +82,7 @@ result() {
 result_versus() {
     local name=$1 committed=$2 versus=$3
     shift 3
-    local out="$scratch/$name" start=$SECONDS
-    if ! "$@" --out "$out" >"$scratch/$name.log" 2>&1 \
-        || ! "$BIN" report "$out" --versus "$versus" >>"$scratch/$name.log" 2>&1; then
-        echo "$name: FAILED to run (log below)"; tail -5 "$scratch/$name.log"; failed=1; return
-    fi
-    rm -rf "$out/episodes"
-    if compare "$committed" "$out"; then
-        echo "$name: identical ($((SECONDS - start)) s)"
-    else
-        echo "$name: DIFFERS"; failed=1
-    fi
+    result "$name" "$committed" "$@"
 }
 
 result paper-grid results/paper-grid "$BIN" campaign
