@@ -21,7 +21,8 @@
 //! (`tail_on_ramp`); a ramp HDV on the acceleration lane may merge into main lane 1 at any
 //! time; a main-road HDV beside the CAV may change into its lane in front of it wherever SUMO's
 //! lane-change model would let it, and then brake as hard as SUMO expects of it (`may_cut_in`,
-//! [`super::cut_in`]). A CAV's maneuver is safe
+//! [`super::cut_in`]); under a gap-acceptance profile a ramp HDV may move over in front of a
+//! lane-1 CAV anywhere on the acceleration lane (`may_take_gap`). A CAV's maneuver is safe
 //! when, executed for one step and followed by braking at `planner.emergency_decel`, the CAV never
 //! comes closer than the margin to any vehicle ahead of it (by centre) in any lane it occupies,
 //! and, if it starts a lane change, the follower in the target lane stays clear of it braking at
@@ -33,6 +34,7 @@
 //! strongest braking and the planned speed, else the strongest braking.
 
 use super::cut_in::CutIn;
+use crate::config::hdv::RampMergeStyle;
 use crate::config::Config;
 use crate::controller::Maneuver;
 use crate::model::road::{Road, FIRST_MAIN_LANE, FORCED_MERGE_ZONE, MERGE_LANE};
@@ -60,6 +62,9 @@ pub struct WorstCase {
     pub yield_gap: f64,
     /// When SUMO lets a main-road HDV change lanes in front of a CAV (see `may_cut_in`).
     pub cut_in: CutIn,
+    /// Whether ramp HDVs merge by gap acceptance, without SUMO's safety check (profiles such as
+    /// `paper`): then one may move over anywhere on the acceleration lane (see `may_take_gap`).
+    pub gap_accepting_mergers: bool,
 }
 
 impl WorstCase {
@@ -89,6 +94,10 @@ impl WorstCase {
                     .max_attribute("decel", config.idm.decel)
                     .max(config.idm.decel),
             },
+            gap_accepting_mergers: matches!(
+                profile.ramp_merge,
+                RampMergeStyle::GapAcceptance { .. }
+            ),
         }
     }
 
@@ -347,7 +356,8 @@ pub fn clear_of_leaders(c: &Candidate) -> bool {
             // In a lane of the CAV's, braking as hard as it can; cutting in, as SUMO expects.
             let decel = if lanes_of(j, o) & lanes != 0 {
                 b.emergency_decel(o.kind)
-            } else if may_cut_in(me, m.speed, lanes, o, b) {
+            } else if may_cut_in(me, m.speed, lanes, o, b) || may_take_gap(me, m.speed, lanes, o, b)
+            {
                 b.cut_in.brake_decel
             } else {
                 return true;
@@ -368,7 +378,8 @@ pub fn clear_of_leaders(c: &Candidate) -> bool {
 /// next step at `speed`), may change into that lane in front of it: at the step's end, when
 /// SUMO decides lane changes, the gap is one SUMO's lane-change model may accept (see
 /// [`CutIn`]; the HDV's speed as high as a step's acceleration takes it, which widens the gap
-/// and shrinks the secure gap). HDVs on the acceleration lane are [`may_merge`]'s; one changing
+/// and shrinks the secure gap). HDVs on the acceleration lane are [`may_merge`]'s and
+/// [`may_take_gap`]'s; one changing
 /// lanes already occupies both (`lanes_now`). With `lcAssertive = 1` (every built-in profile
 /// but `paper`) no cut-in SUMO allows is one a CAV cannot stop for, so this costs nothing there.
 /// With `paper`'s 3 it is a third of that: at 75.8 s (seed 7192, α 0.4, λ 3000) main.44 pulled
@@ -383,6 +394,33 @@ fn may_cut_in(me: &VehicleState, speed: f64, lanes: u64, o: &VehicleState, b: &W
     let changer_speed = o.speed + b.hdv_accel * b.dt;
     let gap = o.rear() + changer_speed * b.dt - (me.front() + speed * b.dt);
     (beside(1) || beside(-1)) && b.cut_in.allows(gap, speed, changer_speed, b.dt)
+}
+
+/// Whether ramp HDV `o`, on the acceleration lane ahead of a CAV that occupies main lane 1
+/// (`me`, about to drive its next step at `speed`), may move over in front of it under a
+/// gap-acceptance profile: such a driver merges, without SUMO's safety check, wherever its new
+/// follower is a critical time gap behind it (`episode::merge_rule::accepts`), and that gap is
+/// drawn per driver from a log-normal with no lower bound, so any gap is one some driver takes
+/// (the gap ahead of the CAV now, or at the step's end with the HDV as fast as a step's
+/// acceleration takes it). Nothing alongside is accepted. Once over it brakes as hard as SUMO
+/// expects (`cut_in.brake_decel`): the rule only accepts a gap with room to brake comfortably
+/// behind its new leader. (`paper`, α 0.4, λ 3000, seed 40017: ramp.28, slowing to 1.7 m/s
+/// 27 m before the lane end, moved over 6.1 m in front of a CAV at 12.6 m/s, a time gap of
+/// 0.48 s, which no braking could then stop.) Under SUMO's own merging the safety check keeps
+/// such gaps shut, and [`may_merge`] covers the merges it forces.
+fn may_take_gap(
+    me: &VehicleState,
+    speed: f64,
+    lanes: u64,
+    o: &VehicleState,
+    b: &WorstCase,
+) -> bool {
+    if !b.gap_accepting_mergers || !on_acceleration_lane(o) || lanes & bit(FIRST_MAIN_LANE) == 0 {
+        return false;
+    }
+    let gap_now = o.rear() - me.front();
+    let gap_next = gap_now + (o.speed + b.hdv_accel * b.dt) * b.dt - speed * b.dt;
+    gap_now >= 0.0 || gap_next >= 0.0
 }
 
 /// Whether CAV `me`, in main lane 1, must leave ramp HDV `o` (on the acceleration lane, not

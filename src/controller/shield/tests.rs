@@ -474,3 +474,33 @@ fn a_rear_still_on_the_ramp_blocks_the_ramp_behind_it() {
     off.vehicles[1].s = 152.6;
     assert!(is_safe(&off, 0, &sent, &b, &[]));
 }
+
+/// The seed-40017 scene (`paper` drivers, α 0.4, λ 3000, bk-pbs), from the trace: CAV main.35
+/// in lane 1, braking, behind ramp HDV ramp.28, which slows on the acceleration lane 27 m
+/// before its end. At 55.8 s the HDV, a gap-accepting driver, moved over 6.1 m in front of
+/// the CAV at 12.6 m/s and was hit at 56.6 s. At 53.6 s (32 m behind, 17.8 m/s) the CAV can
+/// still stop behind a merge, and a safe maneuver is found; at 55.6 s (8.3 m behind, 13.8 m/s)
+/// the 12.62 m/s sent is refused under the `paper` worst case. SUMO's own merging (the default
+/// drivers) takes no such gap, and the maneuver stands.
+#[test]
+fn a_gap_accepting_merger_may_move_over_anywhere_on_the_acceleration_lane() {
+    let ramp_hdv =
+        |s, speed| VehicleState::on_lane("ramp.28", Kind::Hdv, Origin::Ramp, s, 0, speed);
+    let scene = |t, cav_s, cav_v, hdv_s, hdv_v| {
+        let mut me = cav(cav_s, 1, cav_v);
+        me.id = "main.35".into();
+        Scene::on_paper_road(t, vec![me, ramp_hdv(hdv_s, hdv_v)])
+    };
+    let paper = paper_worst_case();
+    assert!(paper.gap_accepting_mergers && !worst_case().gap_accepting_mergers);
+    let early = scene(53.6, 259.50, 17.82, 296.79, 4.65);
+    let sent = go(17.42, None);
+    let m = replacement(&early, 0, &sent, &paper, &[]).unwrap_or(sent);
+    assert!(is_safe(&early, 0, &m, &paper, &[]), "{m:?}");
+    let late = scene(55.6, 290.11, 13.82, 303.40, 1.85);
+    assert!(!is_safe(&late, 0, &go(12.62, None), &paper, &[]));
+    assert!(is_safe(&late, 0, &go(12.62, None), &worst_case(), &[]));
+    // Alongside the HDV nothing is accepted: a CAV overlapping it may pass.
+    let alongside = scene(55.6, 301.0, 13.82, 303.40, 1.85);
+    assert!(is_safe(&alongside, 0, &go(13.82, None), &paper, &[]));
+}
