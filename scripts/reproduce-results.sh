@@ -3,12 +3,13 @@
 # directory, and compares each committed file byte for byte (wall-clock files excepted:
 # timings.csv). Prints one line per result and exits 1 if any file differs.
 #
-#   scripts/reproduce-results.sh [--update] [--with-training] [BIN]
+#   scripts/reproduce-results.sh [--update] [--only NAME,...] [--with-training] [BIN]
 #
 # --update writes what it re-ran over the committed files instead of comparing (the commit that
 # changes behaviour re-runs its results so), READMEs and .gitignore files kept. BIN defaults to target/release/bkpbs. The PPO training run (results/rl-ppo's learning curve
 # and policy, ~45 min on 2 cores) is re-run only with --with-training; its evaluation campaigns
-# always are.
+# always are. --only re-runs just the named results (the names it prints, e.g.
+# long-run-learned,calibration-lateral): for a change whose reach is known, as a profile-only one.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -17,6 +18,11 @@ update=0
 if [ "${1:-}" = "--update" ]; then
     update=1
     shift
+fi
+only=""
+if [ "${1:-}" = "--only" ]; then
+    only=",${2:?--only needs a list of result names},"
+    shift 2
 fi
 if [ "${1:-}" = "--with-training" ]; then
     with_training=1
@@ -28,11 +34,17 @@ scratch=$(mktemp -d)
 trap 'rm -rf "$scratch"' EXIT
 failed=0
 
+# wanted NAME: whether this run re-runs result NAME (every result without --only).
+wanted() {
+    [ -z "$only" ] || [[ "$only" == *",$1,"* ]]
+}
+
 # compare DIR_COMMITTED DIR_NEW: every committed file but timings.csv and README.md must match.
 # With --update, DIR_NEW's files replace DIR_COMMITTED's (its README.md and .gitignore kept).
 compare() {
     local committed=$1 new=$2 bad=0
     if [ $update = 1 ]; then
+        mkdir -p "$committed"
         find "$committed" -mindepth 1 -maxdepth 1 ! -name README.md ! -name .gitignore -exec rm -rf {} +
         cp -a "$new/." "$committed/"
         return 0
@@ -62,6 +74,7 @@ same_files() {
 result() {
     local name=$1 committed=$2
     shift 2
+    wanted "$name" || return 0
     local out="$scratch/$name"
     mkdir -p "$(dirname "$out")"
     local start=$SECONDS
@@ -115,46 +128,55 @@ result long-run-constant results/long-run/constant "$BIN" campaign --config resu
 # shellcheck disable=SC2086
 result_versus long-run-fresh results/long-run/fresh idm-mobil,bk-mastar "$BIN" campaign --config results/long-run/long-run.toml \
     --planners idm-mobil,bk-mastar,bk-pbs $long --lambdas 3000 --seeds 30 --seed-base 40000
+# shellcheck disable=SC2086
+result_versus long-run-unseen results/long-run/unseen idm-mobil,bk-mastar "$BIN" campaign --config results/long-run/long-run.toml \
+    --planners idm-mobil,bk-mastar,bk-pbs $long --lambdas 3000 --seeds 30 --seed-base 50000
 
 # The paper grid's traced episode and its figures.
-start=$SECONDS
-plots="$scratch/plots/bk-pbs_a0.5_l3000_s0"
-if "$BIN" episode --planner bk-pbs --alpha 0.5 --lambda 3000 --seed 0 --trajectories --out "$plots" >/dev/null 2>&1 \
-    && "$BIN" plot "$plots" >/dev/null 2>&1 && compare results/paper-grid/plots "$scratch/plots"; then
-    echo "paper-grid-plots: identical ($((SECONDS - start)) s)"
-else
-    echo "paper-grid-plots: DIFFERS"; failed=1
+if wanted paper-grid-plots; then
+    start=$SECONDS
+    plots="$scratch/plots/bk-pbs_a0.5_l3000_s0"
+    if "$BIN" episode --planner bk-pbs --alpha 0.5 --lambda 3000 --seed 0 --trajectories --out "$plots" >/dev/null 2>&1 \
+        && "$BIN" plot "$plots" >/dev/null 2>&1 && compare results/paper-grid/plots "$scratch/plots"; then
+        echo "paper-grid-plots: identical ($((SECONDS - start)) s)"
+    else
+        echo "paper-grid-plots: DIFFERS"; failed=1
+    fi
 fi
 
 # The calibration matrix writes into its own directory beside the lateral evaluations.
-mkdir -p "$scratch/calibration"
-start=$SECONDS
-if "$BIN" calibrate --matrix --out "$scratch/calibration" >"$scratch/calibration.log" 2>&1; then
-    same_files calibration-matrix results/calibration "$scratch/calibration" \
-        longitudinal_matrix.csv longitudinal_matrix.md longitudinal_matrix.png longitudinal_matrix.svg
-else
-    echo "calibration-matrix: FAILED to run"; tail -5 "$scratch/calibration.log"; failed=1
+if wanted calibration-matrix; then
+    mkdir -p "$scratch/calibration"
+    start=$SECONDS
+    if "$BIN" calibrate --matrix --out "$scratch/calibration" >"$scratch/calibration.log" 2>&1; then
+        same_files calibration-matrix results/calibration "$scratch/calibration" \
+            longitudinal_matrix.csv longitudinal_matrix.md longitudinal_matrix.png longitudinal_matrix.svg
+    else
+        echo "calibration-matrix: FAILED to run"; tail -5 "$scratch/calibration.log"; failed=1
+    fi
 fi
 
-start=$SECONDS
-bad=0
-for p in sumo-safe paper heterogeneous krauss eidm; do
-    "$BIN" collect --hdv-profile $p --episodes 100 --seed-base 90000 --out "$scratch/eval-$p.bin" >/dev/null 2>&1
-    "$BIN" eval-predictor --data "$scratch/eval-$p.bin" >"$scratch/lateral-$p.txt" 2>/dev/null
-    [ $update = 1 ] && cp "$scratch/lateral-$p.txt" "results/calibration/lateral/$p.txt"
-    cmp -s "results/calibration/lateral/$p.txt" "$scratch/lateral-$p.txt" || { echo "  differs: lateral/$p.txt"; bad=1; }
-    for q in paper heterogeneous krauss eidm; do
-        "$BIN" eval-predictor --model models/profiles/$q/gcn-conditioned.json --data "$scratch/eval-$p.bin" \
-            >"$scratch/lateral-$q-$p.txt" 2>/dev/null
-        [ $update = 1 ] && cp "$scratch/lateral-$q-$p.txt" "results/calibration/lateral/trained-on-$q/$p.txt"
-        cmp -s "results/calibration/lateral/trained-on-$q/$p.txt" "$scratch/lateral-$q-$p.txt" \
-            || { echo "  differs: lateral/trained-on-$q/$p.txt"; bad=1; }
+if wanted calibration-lateral; then
+    start=$SECONDS
+    bad=0
+    for p in sumo-safe paper heterogeneous krauss eidm; do
+        "$BIN" collect --hdv-profile $p --episodes 100 --seed-base 90000 --out "$scratch/eval-$p.bin" >/dev/null 2>&1
+        "$BIN" eval-predictor --data "$scratch/eval-$p.bin" >"$scratch/lateral-$p.txt" 2>/dev/null
+        [ $update = 1 ] && cp "$scratch/lateral-$p.txt" "results/calibration/lateral/$p.txt"
+        cmp -s "results/calibration/lateral/$p.txt" "$scratch/lateral-$p.txt" || { echo "  differs: lateral/$p.txt"; bad=1; }
+        for q in paper heterogeneous krauss eidm; do
+            "$BIN" eval-predictor --model models/profiles/$q/gcn-conditioned.json --data "$scratch/eval-$p.bin" \
+                >"$scratch/lateral-$q-$p.txt" 2>/dev/null
+            [ $update = 1 ] && cp "$scratch/lateral-$q-$p.txt" "results/calibration/lateral/trained-on-$q/$p.txt"
+            cmp -s "results/calibration/lateral/trained-on-$q/$p.txt" "$scratch/lateral-$q-$p.txt" \
+                || { echo "  differs: lateral/trained-on-$q/$p.txt"; bad=1; }
+        done
+        rm -f "$scratch/eval-$p.bin"
     done
-    rm -f "$scratch/eval-$p.bin"
-done
-if [ $bad = 0 ]; then echo "calibration-lateral: identical ($((SECONDS - start)) s)"; else echo "calibration-lateral: DIFFERS"; failed=1; fi
+    if [ $bad = 0 ]; then echo "calibration-lateral: identical ($((SECONDS - start)) s)"; else echo "calibration-lateral: DIFFERS"; failed=1; fi
+fi
 
-if [ $with_training = 1 ]; then
+if [ $with_training = 1 ] && wanted rl-training; then
     start=$SECONDS
     "$BIN" train-rl --out "$scratch/rl-train" --steps 10000000 >"$scratch/rl-train.log" 2>&1
     same_files rl-training results/rl-ppo "$scratch/rl-train" \
