@@ -10,22 +10,12 @@ use bkpbs::report::stats::Estimate;
 
 mod common;
 
-use common::{bkpbs, refused_naming};
+use common::{bkpbs, csv_rows, refused_naming};
 
-/// A CSV file as a header and rows of (column → text).
+/// A CSV file as rows of (column → text).
 fn rows(path: &Path) -> Vec<BTreeMap<String, String>> {
-    let mut r = csv::Reader::from_path(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    let header: Vec<String> = r.headers().unwrap().iter().map(String::from).collect();
-    r.records()
-        .map(|rec| {
-            let rec = rec.unwrap();
-            header
-                .iter()
-                .cloned()
-                .zip(rec.iter().map(String::from))
-                .collect()
-        })
-        .collect()
+    let bytes = std::fs::read(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    csv_rows(&bytes)
 }
 
 fn assert_ok(o: &std::process::Output) {

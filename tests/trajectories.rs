@@ -8,6 +8,8 @@ use bkpbs::episode::{self, EpisodeResult};
 
 mod common;
 
+use common::csv_rows;
+
 fn run(planner: &str, format: TrajectoryFormat, extra: impl FnOnce(&mut Config)) -> EpisodeResult {
     let mut c = Config::default();
     c.scenario.alpha = 0.6;
@@ -17,22 +19,6 @@ fn run(planner: &str, format: TrajectoryFormat, extra: impl FnOnce(&mut Config))
     c.output.trajectories = format;
     extra(&mut c);
     episode::run(&c, planner).unwrap()
-}
-
-/// The rows of a CSV text as maps from column to field.
-fn csv_rows(bytes: &[u8]) -> Vec<HashMap<String, String>> {
-    let mut r = csv::Reader::from_reader(bytes);
-    let header: Vec<String> = r.headers().unwrap().iter().map(String::from).collect();
-    r.records()
-        .map(|rec| {
-            let rec = rec.unwrap();
-            header
-                .iter()
-                .cloned()
-                .zip(rec.iter().map(String::from))
-                .collect()
-        })
-        .collect()
 }
 
 #[test]

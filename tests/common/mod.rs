@@ -2,6 +2,7 @@
 //! part of it, hence the `dead_code` allowance.
 #![allow(dead_code)]
 
+use std::collections::BTreeMap;
 use std::process::{Command, Output};
 
 use rand::Rng;
@@ -233,4 +234,20 @@ pub fn netconvert_net(
         .unwrap();
     assert!(status.success(), "netconvert failed on {}", dir.display());
     out
+}
+
+/// The rows of a CSV text as maps from column to field.
+pub fn csv_rows(bytes: &[u8]) -> Vec<BTreeMap<String, String>> {
+    let mut r = csv::Reader::from_reader(bytes);
+    let header: Vec<String> = r.headers().unwrap().iter().map(String::from).collect();
+    r.records()
+        .map(|rec| {
+            let rec = rec.unwrap();
+            header
+                .iter()
+                .cloned()
+                .zip(rec.iter().map(String::from))
+                .collect()
+        })
+        .collect()
 }
