@@ -34,6 +34,12 @@ scratch=$(mktemp -d)
 trap 'rm -rf "$scratch"' EXIT
 failed=0
 
+# agreed: what a result that passed is: identical to the committed files, or (--update) written
+# over them.
+agreed() {
+    if [ $update = 1 ]; then echo updated; else echo identical; fi
+}
+
 # wanted NAME: whether this run re-runs result NAME (every result without --only).
 wanted() {
     [ -z "$only" ] || [[ "$only" == *",$1,"* ]]
@@ -67,7 +73,7 @@ same_files() {
         if [ $update = 1 ]; then cp "$new/$f" "$committed/$f"; continue; fi
         cmp -s "$committed/$f" "$new/$f" || { echo "  differs: $committed/$f"; bad=1; }
     done
-    if [ $bad = 0 ]; then echo "$name: identical ($((SECONDS - start)) s)"; else echo "$name: DIFFERS"; failed=1; fi
+    if [ $bad = 0 ]; then echo "$name: $(agreed) ($((SECONDS - start)) s)"; else echo "$name: DIFFERS"; failed=1; fi
 }
 
 # result NAME COMMITTED_DIR: runs the rest of the line (with $OUT as its --out), then compares.
@@ -85,7 +91,7 @@ result() {
     fi
     rm -rf "$out/episodes"
     if compare "$committed" "$out"; then
-        echo "$name: identical ($((SECONDS - start)) s)"
+        echo "$name: $(agreed) ($((SECONDS - start)) s)"
     else
         echo "$name: DIFFERS"; failed=1
     fi
@@ -138,7 +144,7 @@ if wanted paper-grid-plots; then
     plots="$scratch/plots/bk-pbs_a0.5_l3000_s0"
     if "$BIN" episode --planner bk-pbs --alpha 0.5 --lambda 3000 --seed 0 --trajectories --out "$plots" >/dev/null 2>&1 \
         && "$BIN" plot "$plots" >/dev/null 2>&1 && compare results/paper-grid/plots "$scratch/plots"; then
-        echo "paper-grid-plots: identical ($((SECONDS - start)) s)"
+        echo "paper-grid-plots: $(agreed) ($((SECONDS - start)) s)"
     else
         echo "paper-grid-plots: DIFFERS"; failed=1
     fi
@@ -173,7 +179,7 @@ if wanted calibration-lateral; then
         done
         rm -f "$scratch/eval-$p.bin"
     done
-    if [ $bad = 0 ]; then echo "calibration-lateral: identical ($((SECONDS - start)) s)"; else echo "calibration-lateral: DIFFERS"; failed=1; fi
+    if [ $bad = 0 ]; then echo "calibration-lateral: $(agreed) ($((SECONDS - start)) s)"; else echo "calibration-lateral: DIFFERS"; failed=1; fi
 fi
 
 if [ $with_training = 1 ] && wanted rl-training; then
