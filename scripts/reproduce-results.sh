@@ -15,19 +15,16 @@ cd "$(dirname "$0")/.."
 
 with_training=0
 update=0
-if [ "${1:-}" = "--update" ]; then
-    update=1
-    shift
-fi
 only=""
-if [ "${1:-}" = "--only" ]; then
-    only=",${2:?--only needs a list of result names},"
-    shift 2
-fi
-if [ "${1:-}" = "--with-training" ]; then
-    with_training=1
+while [ $# -gt 0 ]; do
+    case "$1" in
+        --update) update=1 ;;
+        --with-training) with_training=1 ;;
+        --only) only=",${2:?--only needs a list of result names},"; shift ;;
+        *) break ;;
+    esac
     shift
-fi
+done
 BIN=$(realpath "${1:-target/release/bkpbs}")
 [ -x "$BIN" ] || { echo "reproduce: error: $BIN is not an executable (cargo build --release)" >&2; exit 1; }
 scratch=$(mktemp -d)

@@ -392,8 +392,20 @@ fn may_cut_in(me: &VehicleState, speed: f64, lanes: u64, o: &VehicleState, b: &W
         return false;
     }
     let changer_speed = o.speed + b.hdv_accel * b.dt;
-    let gap = o.rear() + changer_speed * b.dt - (me.front() + speed * b.dt);
+    let gap = gap_after_step(me, speed, o, changer_speed, b);
     (beside(1) || beside(-1)) && b.cut_in.allows(gap, speed, changer_speed, b.dt)
+}
+
+/// The bumper gap from CAV `me` (driving its next step at `speed`) to `o` ahead at the step's
+/// end, `o` driving the step at `o_speed`.
+fn gap_after_step(
+    me: &VehicleState,
+    speed: f64,
+    o: &VehicleState,
+    o_speed: f64,
+    b: &WorstCase,
+) -> f64 {
+    o.rear() + o_speed * b.dt - (me.front() + speed * b.dt)
 }
 
 /// Whether ramp HDV `o`, on the acceleration lane ahead of a CAV that occupies main lane 1
@@ -418,9 +430,8 @@ fn may_take_gap(
     if !b.gap_accepting_mergers || !on_acceleration_lane(o) || lanes & bit(FIRST_MAIN_LANE) == 0 {
         return false;
     }
-    let gap_now = o.rear() - me.front();
-    let gap_next = gap_now + (o.speed + b.hdv_accel * b.dt) * b.dt - speed * b.dt;
-    gap_now >= 0.0 || gap_next >= 0.0
+    let fastest = o.speed + b.hdv_accel * b.dt;
+    o.rear() - me.front() >= 0.0 || gap_after_step(me, speed, o, fastest, b) >= 0.0
 }
 
 /// Whether CAV `me`, in main lane 1, must leave ramp HDV `o` (on the acceleration lane, not
