@@ -10,7 +10,8 @@ use std::path::{Path, PathBuf};
 use bkpbs::config::{Config, TrajectoryFormat};
 use bkpbs::episode;
 use bkpbs::model::road::Road;
-use bkpbs::sumo::network::{Layout, Net};
+use bkpbs::sumo::layout::{Discovery, Layout};
+use bkpbs::sumo::network::Net;
 use common::netconvert_net;
 
 const PLANNERS: [&str; 4] = ["sumo", "idm-mobil", "bk-mastar", "bk-pbs"];
@@ -67,8 +68,8 @@ fn check_rows(csv: &str, layout: &Layout, config: &Config, road: &Road) -> Frame
 /// frame, the frame where SUMO has the vehicle (to `tol_xy`; on `straight` nets s = x to 1 cm).
 fn every_planner_runs_on(net: &Path, straight: bool, tol_xy: f64) {
     let parsed = Net::read(net).unwrap();
-    let layout = Layout::discover(&parsed, net).unwrap();
-    let road = bkpbs::sumo::frame::road_from_net(&parsed, net).unwrap();
+    let layout = Discovery::of(&parsed).regions.remove(0);
+    let road = bkpbs::sumo::frame::road_from_net(&parsed, net, &[]).unwrap();
     for planner in PLANNERS {
         let mut c = Config::default();
         c.scenario.net_file = Some(net.to_path_buf());

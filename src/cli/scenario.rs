@@ -43,6 +43,10 @@ pub struct ScenarioArgs {
     /// Network file to use instead of the embedded merge network.
     #[arg(long)]
     net: Option<PathBuf>,
+    /// The network's merge regions to plan, by the edge an on-ramp joins (`!EDGE` leaves one
+    /// out); `bkpbs network FILE` lists them.
+    #[arg(long, value_delimiter = ',', value_name = "EDGE,...")]
+    regions: Option<Vec<String>>,
     /// HDV driver profile: sumo-safe (default), paper, heterogeneous, krauss, eidm, or one
     /// the config file defines under [hdv.profiles.NAME].
     #[arg(long, value_name = "NAME")]
@@ -84,6 +88,9 @@ impl ScenarioArgs {
         }
         if let Some(n) = &self.net {
             s.net_file = Some(n.clone());
+        }
+        if let Some(r) = &self.regions {
+            s.regions = r.clone();
         }
         if let Some(p) = &self.hdv_profile {
             c.hdv.profile = p.clone();

@@ -35,6 +35,10 @@ pub struct Scenario {
     pub lane_change_duration: f64,
     /// The merge network; `None` uses the one embedded in the binary (`sumo_net/merge.net.xml`).
     pub net_file: Option<PathBuf>,
+    /// Which of the network's merge regions to plan, by the edge an on-ramp joins (`bkpbs
+    /// network` lists them); `!EDGE` leaves that region out. Empty: every region.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub regions: Vec<String>,
 }
 
 impl Default for Scenario {
@@ -51,6 +55,7 @@ impl Default for Scenario {
             vehicle_width: 2.0,
             lane_change_duration: 1.0,
             net_file: None,
+            regions: Vec::new(),
         }
     }
 }

@@ -69,7 +69,7 @@ impl EntryControl {
         match queue.checked_sub(self.main_lanes) {
             Some(ramp) => (MERGE_LANE, road.zones[ramp].ramp_start + self.length),
             None => {
-                let first = road.edges[0].lanes[queue]
+                let first = road.edges[0].lanes[queue + road.first_through_lane()]
                     .as_ref()
                     .expect("main lanes are in the frame");
                 (first.lane, first.s0 + self.length)

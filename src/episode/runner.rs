@@ -271,11 +271,15 @@ impl<'a> Episode<'a> {
     fn admit(&mut self, sim: &mut Simulation, now: f64) -> Result<(), SumoError> {
         for a in self.entry.admit(now, &self.sumo_scene.scene) {
             let v = &a.vehicle;
+            let through = match v.origin {
+                Origin::Main => self.road.first_through_lane(),
+                Origin::Ramp => 0,
+            };
             sim.add_vehicle(
                 &v.id,
                 &demand::route_name(&self.road, v),
                 v.kind.as_str(),
-                v.depart_lane as i32,
+                (v.depart_lane as usize + through) as i32,
                 a.speed,
             )?;
         }

@@ -177,6 +177,14 @@ impl Road {
         self.zones.iter().map(|z| z.ramp_start).fold(0.0, f64::min)
     }
 
+    /// SUMO's index of the first edge's rightmost through lane: 0, or 1 where the section
+    /// begins beside an auxiliary lane (a deceleration lane to an off-ramp). Main-road vehicles
+    /// enter on the through lanes from there.
+    pub fn first_through_lane(&self) -> usize {
+        let first = self.edges.first().map_or(0, |e| e.lanes.len());
+        first.saturating_sub(self.main_lanes as usize)
+    }
+
     /// The leftmost frame lane.
     pub fn top_lane(&self) -> i32 {
         self.main_lanes

@@ -13,17 +13,18 @@ use std::sync::Arc;
 use crate::config::Scenario;
 use crate::model::road::Road;
 use crate::model::scene::{Kind, Origin, Scene, VehicleState};
-use crate::sumo::network::{Layout, Net, NetworkFileError};
+use crate::sumo::layout::Discovery;
+use crate::sumo::network::{Net, NetworkFileError};
 use crate::sumo::RawVehicleState;
 
 /// Why a network cannot serve as a merge road.
 #[derive(Debug, thiserror::Error)]
 pub enum NetworkError {
-    /// The network file could not be read, or holds no merge layout.
+    /// The network file could not be read.
     #[error(transparent)]
     File(#[from] NetworkFileError),
-    /// The layout was found but its lanes cannot be placed in a road frame.
-    #[error("network {path} cannot be planned on: {what}")]
+    /// The network holds no one region to plan on, or its lanes cannot be placed in a frame.
+    #[error("network {path}: {what}")]
     Shape {
         /// The network file.
         path: std::path::PathBuf,
@@ -32,31 +33,145 @@ pub enum NetworkError {
     },
 }
 
-/// The road frame of the network file at `path`: its layout discovered and every lane placed.
+/// The merge regions of a network, each with its road frame or why it cannot be planned on.
+pub struct Regions {
+    /// What was found: the regions' layouts, the junctions that are no merge, the edges left
+    /// out.
+    pub found: Discovery,
+    /// The road frame of each region of `found`, in its order.
+    pub roads: Vec<Result<Road, String>>,
+}
+
+impl Regions {
+    /// The regions of `net`, each placed in its frame.
+    pub fn of(net: &Net) -> Regions {
+        let found = Discovery::of(net);
+        let roads = found
+            .regions
+            .iter()
+            .map(|layout| crate::sumo::road_frame::road(net, layout))
+            .collect();
+        Regions { found, roads }
+    }
+
+    /// The indices of the regions `selection` picks (`[scenario] regions`: merge edges to
+    /// keep, `!EDGE` to leave out; empty: all).
+    ///
+    /// # Errors
+    /// An entry that names no merge edge of the network.
+    pub fn select(&self, selection: &[String]) -> Result<Vec<usize>, String> {
+        let names = |k: usize| self.found.regions[k].merge_edges().collect::<Vec<_>>();
+        let all = 0..self.found.regions.len();
+        for entry in selection {
+            let edge = entry.strip_prefix('!').unwrap_or(entry);
+            if !all.clone().any(|k| names(k).contains(&edge)) {
+                return Err(format!(
+                    "regions: '{edge}' is no edge an on-ramp joins (the merges: {})",
+                    self.merge_list()
+                ));
+            }
+        }
+        let kept = |k: &usize| {
+            let n = names(*k);
+            let named = |e: &String| n.contains(&e.strip_prefix('!').unwrap_or(e));
+            let wanted = selection.iter().filter(|e| !e.starts_with('!'));
+            let excluded = selection.iter().filter(|e| e.starts_with('!')).any(named);
+            !excluded && (wanted.clone().next().is_none() || wanted.clone().any(named))
+        };
+        Ok(all.filter(kept).collect())
+    }
+
+    /// The merge edges of every region, `A, B; C` (a region's merges together).
+    pub fn merge_list(&self) -> String {
+        let list: Vec<String> = self
+            .found
+            .regions
+            .iter()
+            .map(|r| r.merge_edges().collect::<Vec<_>>().join(", "))
+            .collect();
+        if list.is_empty() {
+            "none".into()
+        } else {
+            list.join("; ")
+        }
+    }
+
+    /// The road frame of the one region `selection` leaves: what an episode plans on.
+    ///
+    /// # Errors
+    /// No region, more than one, or one that cannot be placed in a frame, each in one phrase.
+    pub fn planned(mut self, selection: &[String]) -> Result<Road, String> {
+        let picked = self.select(selection)?;
+        match picked[..] {
+            [k] => self.roads.swap_remove(k),
+            [] if self.found.regions.is_empty() => Err(self.no_merge()),
+            [] => Err(format!(
+                "regions leaves no merge region (the merges: {})",
+                self.merge_list()
+            )),
+            _ => Err(format!(
+                "{} merge regions (merges at {}): an episode plans one; choose it with \
+                 --regions EDGE ([scenario] regions)",
+                picked.len(),
+                picked
+                    .iter()
+                    .map(|&k| self.found.regions[k]
+                        .merge_edges()
+                        .collect::<Vec<_>>()
+                        .join(", "))
+                    .collect::<Vec<_>>()
+                    .join("; ")
+            )),
+        }
+    }
+
+    /// Why a network without regions has none.
+    fn no_merge(&self) -> String {
+        let why: Vec<String> = self
+            .found
+            .not_merges
+            .iter()
+            .map(|n| format!("ramp '{}' {}", n.ramp, n.why))
+            .collect();
+        if why.is_empty() {
+            "no on-ramp joins a carriageway on an acceleration lane: no merge to plan".into()
+        } else {
+            format!("no merge to plan: {}", why.join("; "))
+        }
+    }
+}
+
+/// The road frame of the network file at `path`: its merge regions found, and the one
+/// `selection` picks placed in its frame.
 ///
 /// # Errors
-/// An unreadable file, or a network that is not a one-way carriageway with merges.
-pub fn road_from_net_file(path: &Path) -> Result<Road, NetworkError> {
+/// An unreadable file, or a network without the one region to plan.
+pub fn road_from_net_file(path: &Path, selection: &[String]) -> Result<Road, NetworkError> {
     let net = Net::read(path)?;
-    road_from_net(&net, path)
+    road_from_net(&net, path, selection)
 }
 
-/// The road frame of `net` (read from `path`, named in errors).
-pub fn road_from_net(net: &Net, path: &Path) -> Result<Road, NetworkError> {
-    let layout = Layout::discover(net, path)?;
-    crate::sumo::road_frame::road(net, &layout).map_err(|what| NetworkError::Shape {
-        path: path.to_path_buf(),
-        what,
-    })
+/// The road frame of `net` (read from `path`, named in errors) in the region `selection` picks.
+///
+/// # Errors
+/// As [`road_from_net_file`].
+pub fn road_from_net(net: &Net, path: &Path, selection: &[String]) -> Result<Road, NetworkError> {
+    Regions::of(net)
+        .planned(selection)
+        .map_err(|what| NetworkError::Shape {
+            path: path.to_path_buf(),
+            what,
+        })
 }
 
-/// The road frame of the scenario's network: the configured file, or the embedded one.
+/// The road frame of the scenario's network: the configured file (in its configured region),
+/// or the embedded one.
 ///
 /// # Errors
 /// As [`road_from_net_file`].
 pub fn scenario_road(scenario: &Scenario) -> Result<Road, NetworkError> {
     match &scenario.net_file {
-        Some(path) => road_from_net_file(path),
+        Some(path) => road_from_net_file(path, &scenario.regions),
         None => Ok(embedded_road()),
     }
 }
@@ -68,7 +183,7 @@ pub fn embedded_road() -> Road {
         let path = Path::new("merge.net.xml");
         let net =
             Net::parse(path, crate::model::road::EMBEDDED_NET).expect("the embedded net parses");
-        road_from_net(&net, path).expect("the embedded net is a merge")
+        road_from_net(&net, path, &[]).expect("the embedded net is a merge")
     })
     .clone()
 }

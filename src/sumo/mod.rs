@@ -8,6 +8,7 @@
 
 pub mod files;
 pub mod frame;
+pub mod layout;
 pub mod network;
 pub mod road_frame;
 

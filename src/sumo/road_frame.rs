@@ -21,7 +21,8 @@ use std::sync::Arc;
 use crate::model::road::{
     EdgeFrame, Entry, Exit, LaneFrame, MergeZone, Road, FIRST_MAIN_LANE, MERGE_LANE,
 };
-use crate::sumo::network::{Lane, Layout, MainEdge, Net, OnRamp};
+use crate::sumo::layout::{Layout, MainEdge, OnRamp};
+use crate::sumo::network::{Lane, Net};
 
 /// Where each main edge lies: its frame-lane offset and the span of its reference lane.
 struct MainFrames<'n> {
@@ -32,18 +33,26 @@ struct MainFrames<'n> {
 /// The road frame of `layout` (found in `net`); the error says in one phrase why the layout
 /// cannot be planned on.
 pub fn road(net: &Net, layout: &Layout) -> Result<Road, String> {
+    // The carriageway's own lanes: as many as its narrowest edge has; the rest are auxiliary.
+    let main_lanes = layout
+        .main
+        .iter()
+        .map(|m| m.lanes)
+        .min()
+        .expect("a main edge") as i32;
     let first = net_edge(net, &layout.main[0].id);
-    let main_lanes = first.lanes.len() as i32;
-    let lane_width = first.lanes[0].width;
+    let lane_width = first.lanes.last().expect("lanes checked").width;
     let (mut edges, main) = main_edges(net, layout, main_lanes)?;
     let mut internal = main_junctions(net, layout, &main);
     let mut ramps: Vec<&OnRamp> = layout.on_ramps.iter().collect();
     ramps.sort_by(|a, b| a.merge_start.total_cmp(&b.merge_start));
     let mut zones = Vec::new();
     for ramp in &ramps {
-        let acceleration = &net_edge(net, &ramp.joins).lanes[ramp.lane as usize];
-        let span = &main.spans[ramp.joins.as_str()];
-        let joined = (span.s0, span.s_at(acceleration.length));
+        let end_lane = &net_edge(net, &ramp.ends_on).lanes[ramp.end_lane as usize];
+        let joined = (
+            main.spans[ramp.joins.as_str()].s0,
+            main.spans[ramp.ends_on.as_str()].s_at(end_lane.length),
+        );
         let zone = ramp_frames(net, ramp, joined, &main.offsets, &mut edges, &mut internal)?;
         zones.push(zone);
     }
@@ -163,10 +172,17 @@ fn entries(net: &Net, layout: &Layout, ramps: &[&OnRamp]) -> Vec<Entry> {
             .position(|m| **m == r.joins)
             .expect("joins the main road");
         let route = r.edges.iter().map(|e| Arc::from(e.as_str()));
+        // SUMO refuses to insert a vehicle that cannot slow to the limit of a lane ahead: on a
+        // ramp of several short edges, the slowest of them.
+        let speed_limit = r
+            .edges
+            .iter()
+            .map(|e| limit(e))
+            .fold(f64::INFINITY, f64::min);
         out.push(Entry {
             name: Road::ramp_entry_name(ramps.len(), k),
             route: route.chain(main[join..].iter().cloned()).collect(),
-            speed_limit: limit(&r.edges[0]),
+            speed_limit,
         });
     }
     out
@@ -258,15 +274,13 @@ fn ramp_frames(
     internal: &mut InternalEdges,
 ) -> Result<MergeZone, String> {
     let name = &ramp.edges[0];
-    if ramp.merge_end.is_none() {
-        return Err(format!(
-            "on-ramp '{name}' joins as a lane gain (its lane never ends): no merge to plan"
-        ));
-    }
     if offsets[ramp.joins.as_str()] + ramp.lane as i32 != MERGE_LANE {
         return Err(format!(
-            "on-ramp '{name}' feeds lane {} of '{}', not its rightmost auxiliary lane",
-            ramp.lane, ramp.joins
+            "on-ramp '{name}' feeds lane {} of '{}', which has {} lanes: a ramp must join as \
+             the one lane the carriageway gains on the right",
+            ramp.lane,
+            ramp.joins,
+            net_edge(net, &ramp.joins).lanes.len()
         ));
     }
     let mut s_end = joined.0;
@@ -347,7 +361,8 @@ mod tests {
     fn shipped(name: &str) -> Road {
         let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("sumo_net/{name}.net.xml"));
         let net = Net::read(&path).unwrap();
-        road(&net, &Layout::discover(&net, &path).unwrap()).unwrap()
+        let found = crate::sumo::layout::Discovery::of(&net);
+        road(&net, &found.regions[0]).unwrap()
     }
 
     /// The paper network's frame is the fixed frame the scenario had before networks were
@@ -399,7 +414,7 @@ mod tests {
     fn worst_offset(name: &str) -> f64 {
         let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("sumo_net/{name}.net.xml"));
         let net = Net::read(&path).unwrap();
-        let layout = Layout::discover(&net, &path).unwrap();
+        let layout = crate::sumo::layout::Discovery::of(&net).regions.remove(0);
         let r = road(&net, &layout).unwrap();
         let mut worst: f64 = 0.0;
         for m in &layout.main {

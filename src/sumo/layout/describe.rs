@@ -1,0 +1,70 @@
+//! What `bkpbs network` prints: each region found, one line per element, then every junction
+//! that is no merge and every edge left out, grouped by why.
+
+use std::collections::BTreeMap;
+
+use super::{Discovery, Layout};
+
+impl Layout {
+    /// The region, one line per element.
+    pub fn describe(&self) -> String {
+        let mut out = format!("main carriageway: {:.2} m\n", self.length());
+        for m in &self.main {
+            out += &format!(
+                "  {:<16} s {:>8.2} – {:>8.2} m  {} lanes\n",
+                m.id,
+                m.s_start,
+                m.s_start + m.length,
+                m.lanes
+            );
+        }
+        for (k, r) in self.on_ramps.iter().enumerate() {
+            let on = if r.ends_on == r.joins {
+                String::new()
+            } else {
+                format!(" on '{}'", r.ends_on)
+            };
+            out += &format!(
+                "on-ramp {}: {} → {} lane {}: from s {:.2} m, ends at s {:.2} m{on}\n",
+                k + 1,
+                r.edges.join(" → "),
+                r.joins,
+                r.lane,
+                r.merge_start,
+                r.merge_end
+            );
+        }
+        for (k, r) in self.off_ramps.iter().enumerate() {
+            out += &format!(
+                "off-ramp {}: {} → {}\n",
+                k + 1,
+                r.leaves,
+                r.edges.join(" → ")
+            );
+        }
+        out
+    }
+}
+
+impl Discovery {
+    /// Junctions that are no merge and edges left out, grouped by why (the regions are
+    /// described with their road frames, by the caller).
+    pub fn describe_left_out(&self) -> String {
+        let mut out = String::new();
+        for n in &self.not_merges {
+            out += &format!("not a merge: ramp '{}' {}\n", n.ramp, n.why);
+        }
+        let mut by_why: BTreeMap<&str, Vec<&str>> = BTreeMap::new();
+        for (edge, why) in &self.left_out {
+            by_why.entry(why).or_default().push(edge);
+        }
+        for (why, edges) in by_why {
+            out += &format!(
+                "left out, {why} ({} edges): {}\n",
+                edges.len(),
+                edges.join(" ")
+            );
+        }
+        out
+    }
+}

@@ -1,0 +1,205 @@
+//! Where an on-ramp's traffic must join a carriageway, found edge by edge in any network: an
+//! edge fed by two roads, the one on the left (the carriageway) feeding its left lanes and the
+//! one on the right (the ramp) feeding only lanes right of them, where the ramp's lane ends,
+//! on that edge or further down the carriageway (a lane gain followed by a lane drop). A ramp
+//! lane that never ends is a lane gain and one that runs on into an off-ramp a weaving
+//! section: neither is a merge bkpbs plans, and each is reported with why.
+//!
+//! The carriageway through a merge is followed by its leftmost lane, upstream and downstream,
+//! so that a net with several roads (two carriageways, an interchange, local streets) gives
+//! each merge the carriageway it lies on.
+
+use std::collections::BTreeSet;
+
+use crate::sumo::network::Net;
+
+/// A merge found: ramp edge `ramp` feeds lane `lane` of edge `joins`, and that lane ends at the
+/// end of lane `end_lane` of edge `ends_on` (`joins` itself, or an edge downstream on the same
+/// carriageway).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Merge {
+    /// The ramp's last edge.
+    pub ramp: String,
+    /// The carriageway edge it joins.
+    pub joins: String,
+    /// The lane of `joins` it feeds.
+    pub lane: u32,
+    /// The carriageway edge on which that lane ends.
+    pub ends_on: String,
+    /// Its lane index there.
+    pub end_lane: u32,
+}
+
+/// An edge where a ramp joins but no merge is planned, and why.
+#[derive(Debug, Clone, PartialEq)]
+pub struct NotAMerge {
+    /// The ramp's last edge.
+    pub ramp: String,
+    /// Why its junction is no merge to plan.
+    pub why: String,
+}
+
+/// Every merge of `net`, in file order of the edges joined, and the junctions that looked like
+/// one but are not.
+pub fn find(net: &Net) -> (Vec<Merge>, Vec<NotAMerge>) {
+    let mut merges = Vec::new();
+    let mut not = Vec::new();
+    for e in &net.edges {
+        let preds = net.predecessors(&e.id);
+        if preds.len() < 2 {
+            continue;
+        }
+        let Some(main) = feeder(net, &e.id) else {
+            continue;
+        };
+        let main_lanes = lanes_fed(net, main, &e.id);
+        let lowest_main = main_lanes.first().copied().unwrap_or(0);
+        for ramp in preds.into_iter().filter(|p| *p != main) {
+            let fed = lanes_fed(net, ramp, &e.id);
+            if fed.iter().any(|l| *l >= lowest_main) {
+                continue; // joins beside or left of the carriageway: a junction, not a ramp
+            }
+            let lane = *fed.last().expect("a predecessor feeds a lane");
+            match follow_lane(net, &e.id, lane) {
+                LaneEnd::Ends(ends_on, end_lane) => merges.push(Merge {
+                    ramp: ramp.to_string(),
+                    joins: e.id.clone(),
+                    lane,
+                    ends_on,
+                    end_lane,
+                }),
+                LaneEnd::Gain => not.push(NotAMerge {
+                    ramp: ramp.to_string(),
+                    why: format!(
+                        "joins '{}' as a lane gain (its lane never ends): no merge to plan",
+                        e.id
+                    ),
+                }),
+                LaneEnd::Exit(exit) => not.push(NotAMerge {
+                    ramp: ramp.to_string(),
+                    why: format!(
+                        "joins '{}' on a lane that runs on into off-ramp '{exit}' (a weaving \
+                         section): not planned",
+                        e.id
+                    ),
+                }),
+            }
+        }
+    }
+    (merges, not)
+}
+
+/// The lanes of `to` that `from` feeds, rightmost first.
+fn lanes_fed(net: &Net, from: &str, to: &str) -> Vec<u32> {
+    let set: BTreeSet<u32> = net
+        .connections
+        .iter()
+        .filter(|c| c.from == from && c.to == to)
+        .map(|c| c.to_lane)
+        .collect();
+    set.into_iter().collect()
+}
+
+/// Where a lane that a ramp feeds leads.
+enum LaneEnd {
+    /// It ends at the end of this lane of this edge.
+    Ends(String, u32),
+    /// It never ends: the carriageway has gained a lane.
+    Gain,
+    /// It runs on into this off-ramp edge.
+    Exit(String),
+}
+
+/// Follows lane `lane` of `edge` down the carriageway until it ends, leaves it, or the
+/// carriageway ends.
+fn follow_lane(net: &Net, edge: &str, lane: u32) -> LaneEnd {
+    let (mut edge, mut lane) = (edge.to_string(), lane);
+    let mut seen = BTreeSet::new();
+    loop {
+        if !seen.insert(edge.clone()) {
+            return LaneEnd::Gain; // round a loop: it never ends
+        }
+        let next: Vec<_> = net
+            .connections
+            .iter()
+            .filter(|c| c.from == edge && c.from_lane == lane)
+            .collect();
+        let Some(first) = next.first() else {
+            return if net.successors(&edge).is_empty() {
+                LaneEnd::Gain // the carriageway ends with it
+            } else {
+                LaneEnd::Ends(edge, lane)
+            };
+        };
+        let on = successor(net, &edge);
+        let Some(c) = next.iter().find(|c| Some(c.to.as_str()) == on) else {
+            return LaneEnd::Exit(first.to.clone());
+        };
+        (edge, lane) = (c.to.clone(), c.to_lane);
+    }
+}
+
+/// The edge the leftmost lane of `edge` continues on (the widest, if it forks; none where two
+/// equally wide roads part): the carriageway's next edge.
+pub fn successor<'n>(net: &'n Net, edge: &str) -> Option<&'n str> {
+    let from = net
+        .connections
+        .iter()
+        .filter(|c| c.from == edge)
+        .map(|c| c.from_lane)
+        .max()?;
+    widest(
+        net,
+        net.connections
+            .iter()
+            .filter(|c| c.from == edge && c.from_lane == from)
+            .map(|c| c.to.as_str()),
+    )
+}
+
+/// The edge that feeds the leftmost lane of `edge` (the widest, if several): the
+/// carriageway's previous edge.
+pub fn feeder<'n>(net: &'n Net, edge: &str) -> Option<&'n str> {
+    let to = net
+        .connections
+        .iter()
+        .filter(|c| c.to == edge)
+        .map(|c| c.to_lane)
+        .max()?;
+    widest(
+        net,
+        net.connections
+            .iter()
+            .filter(|c| c.to == edge && c.to_lane == to)
+            .map(|c| c.from.as_str()),
+    )
+}
+
+/// The one edge of `ids` with the most lanes, if one has more than every other.
+fn widest<'n>(net: &'n Net, ids: impl Iterator<Item = &'n str>) -> Option<&'n str> {
+    let ids: BTreeSet<&str> = ids.collect();
+    let lanes = |id: &str| net.edge(id).lanes.len();
+    let most = ids.iter().map(|id| lanes(id)).max()?;
+    let best: Vec<&str> = ids.into_iter().filter(|id| lanes(id) == most).collect();
+    (best.len() == 1).then(|| best[0])
+}
+
+/// The carriageway through `edge`: followed by its leftmost lane upstream to a source and
+/// downstream to a sink (or to where it forks into equal roads, or loops).
+pub fn carriageway(net: &Net, edge: &str) -> Vec<String> {
+    let mut up = vec![edge.to_string()];
+    while let Some(p) = feeder(net, up.last().expect("non-empty")) {
+        if up.iter().any(|e| e == p) {
+            break;
+        }
+        up.push(p.to_string());
+    }
+    up.reverse();
+    while let Some(n) = successor(net, up.last().expect("non-empty")) {
+        if up.iter().any(|e| e == n) {
+            break;
+        }
+        up.push(n.to_string());
+    }
+    up
+}

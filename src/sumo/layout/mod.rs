@@ -1,0 +1,302 @@
+//! The merge regions of any SUMO network: each carriageway that on-ramps join, cut to the
+//! stretch around its merges, with its on-ramps (the acceleration lane each feeds and where that
+//! lane ends), the off-ramps leaving that stretch, and the reference line of its frame. Every
+//! edge of no region is left out with why: SUMO drives the vehicles there on their own models.
+//!
+//! A region runs from [`UPSTREAM`] metres before its first merge (whole edges, so a vehicle
+//! enters it at an edge's start) to [`DOWNSTREAM`] metres after its last merge lane ends; a
+//! carriageway that begins or ends sooner is taken whole, so each of the shipped networks is
+//! one region from its source to its sink. The distance along a region counts the junctions'
+//! internal lanes between its edges. The road frame of a region is built in `road_frame.rs`.
+
+mod describe;
+mod merges;
+
+use std::collections::{BTreeMap, BTreeSet};
+
+use crate::model::math::Point;
+use crate::model::reference_line::ReferenceLine;
+use crate::sumo::network::Net;
+
+pub use merges::{Merge, NotAMerge};
+
+/// How far upstream of its first merge a region begins (m): longer than the planners'
+/// horizon at the speed limit, so that a CAV is planned before it reaches the merge.
+pub const UPSTREAM: f64 = 300.0;
+/// How far downstream of its last merge lane's end a region ends (m): room for the vehicles
+/// that merged last to settle.
+pub const DOWNSTREAM: f64 = 100.0;
+
+/// An edge of the main carriageway and where it starts along it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MainEdge {
+    /// SUMO's edge id.
+    pub id: String,
+    /// Distance along the carriageway to the edge's start (m), internal lanes included.
+    pub s_start: f64,
+    /// Its length along the carriageway (m), measured on its leftmost lane.
+    pub length: f64,
+    /// Number of lanes.
+    pub lanes: u32,
+}
+
+/// An on-ramp: its edges, and the main-road lane it feeds.
+#[derive(Debug, Clone, PartialEq)]
+pub struct OnRamp {
+    /// Its edges, up to the main carriageway (not included): from where it forks off another
+    /// road (or its source, or [`UPSTREAM`] metres back) on.
+    pub edges: Vec<String>,
+    /// The main edge it joins and the lane of it the ramp's lane continues into.
+    pub joins: String,
+    /// Lane index on `joins`.
+    pub lane: u32,
+    /// The main edge on which that lane ends (`joins`, or one downstream after a lane gain).
+    pub ends_on: String,
+    /// Its lane index there.
+    pub end_lane: u32,
+    /// Where that lane ends along the carriageway (m): the acceleration lane's end, by which a
+    /// ramp vehicle must have merged.
+    pub merge_end: f64,
+    /// Where that lane starts along the carriageway (m): merging may begin here.
+    pub merge_start: f64,
+}
+
+/// An off-ramp: the main edge it leaves and its edges.
+#[derive(Debug, Clone, PartialEq)]
+pub struct OffRamp {
+    /// The main edge it leaves from.
+    pub leaves: String,
+    /// Its edges, up to a sink, a fork or a junction with another road.
+    pub edges: Vec<String>,
+}
+
+/// The merge layout of one region.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Layout {
+    /// The main carriageway's edges in the region, in driving order.
+    pub main: Vec<MainEdge>,
+    /// The on-ramps.
+    pub on_ramps: Vec<OnRamp>,
+    /// The off-ramps.
+    pub off_ramps: Vec<OffRamp>,
+    /// The curvilinear frame's reference line: s along it, d from it (positive left).
+    pub line: ReferenceLine,
+}
+
+/// What was found in a network: its merge regions, in file order of their first merge, and why
+/// every other edge was left out.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Discovery {
+    /// The regions: each a carriageway's stretch around its merges.
+    pub regions: Vec<Layout>,
+    /// Ramps joining a carriageway where no merge is planned, each with why.
+    pub not_merges: Vec<NotAMerge>,
+    /// Every edge in no region, with why (closed to cars, or far from any merge).
+    pub left_out: Vec<(String, String)>,
+}
+
+impl Discovery {
+    /// The merge regions of `net`.
+    pub fn of(net: &Net) -> Discovery {
+        let (merges, not_merges) = merges::find(net);
+        let mut by_road: BTreeMap<Vec<String>, Vec<Merge>> = BTreeMap::new();
+        let mut order: Vec<Vec<String>> = Vec::new();
+        for m in merges {
+            let road = merges::carriageway(net, &m.joins);
+            if !by_road.contains_key(&road) {
+                order.push(road.clone());
+            }
+            by_road.entry(road).or_default().push(m);
+        }
+        let regions: Vec<Layout> = order
+            .iter()
+            .map(|road| Layout::of_region(net, road, &by_road[road]))
+            .collect();
+        let used: BTreeSet<&str> = regions.iter().flat_map(Layout::edge_ids).collect();
+        let mut left_out = net.closed.clone();
+        left_out.extend(
+            net.edges
+                .iter()
+                .filter(|e| !used.contains(e.id.as_str()))
+                .map(|e| (e.id.clone(), "in no merge region".to_string())),
+        );
+        Discovery {
+            regions,
+            not_merges,
+            left_out,
+        }
+    }
+}
+
+impl Layout {
+    /// The region of carriageway `road` around `merges` (all on it, in its order).
+    fn of_region(net: &Net, road: &[String], merges: &[Merge]) -> Layout {
+        let at = |id: &str| road.iter().position(|e| e == id).expect("on the road");
+        let first = merges.iter().map(|m| at(&m.joins)).min().expect("a merge");
+        let last = merges
+            .iter()
+            .map(|m| at(&m.ends_on))
+            .max()
+            .expect("a merge");
+        let length = |id: &String| net.edge(id).lanes.last().map_or(0.0, |l| l.length);
+        let mut begin = first;
+        let mut upstream = 0.0;
+        while begin > 0 && upstream < UPSTREAM {
+            begin -= 1;
+            upstream += length(&road[begin]);
+        }
+        let mut end = last;
+        let mut downstream = 0.0;
+        while end + 1 < road.len() && downstream < DOWNSTREAM {
+            end += 1;
+            downstream += length(&road[end]);
+        }
+        let ids = &road[begin..=end];
+        let line = reference_line(net, ids);
+        let main = positions(net, ids, &line);
+        let on_main: BTreeSet<&str> = road.iter().map(String::as_str).collect();
+        let on_ramps = merges
+            .iter()
+            .map(|m| on_ramp(net, m, &on_main, &line))
+            .collect();
+        let next = road.get(end + 1).map(String::as_str);
+        Layout {
+            off_ramps: off_ramps(net, ids, next, &on_main),
+            main,
+            on_ramps,
+            line,
+        }
+    }
+
+    /// Every edge of the region: main, on-ramps, off-ramps.
+    pub fn edge_ids(&self) -> impl Iterator<Item = &str> {
+        let main = self.main.iter().map(|m| m.id.as_str());
+        let on = self.on_ramps.iter().flat_map(|r| r.edges.iter());
+        let off = self.off_ramps.iter().flat_map(|r| r.edges.iter());
+        main.chain(on.chain(off).map(String::as_str))
+    }
+
+    /// The edges its on-ramps join: the region's names in `[scenario] regions`.
+    pub fn merge_edges(&self) -> impl Iterator<Item = &str> {
+        self.on_ramps.iter().map(|r| r.joins.as_str())
+    }
+
+    /// Length of the main carriageway along the reference line (m).
+    pub fn length(&self) -> f64 {
+        self.line.length()
+    }
+}
+
+/// The reference line of a region: the centre line of each main edge's leftmost lane (a
+/// through lane: ramps join on the right) and of the internal lane joining it to the next
+/// edge's, in order.
+fn reference_line(net: &Net, ids: &[String]) -> ReferenceLine {
+    let mut points: Vec<Point> = Vec::new();
+    for (k, id) in ids.iter().enumerate() {
+        let left = net.edge(id).lanes.last().expect("an edge has lanes");
+        points.extend(&left.shape);
+        let Some(next) = ids.get(k + 1) else { break };
+        let via = net
+            .connections
+            .iter()
+            .filter(|c| &c.from == id && &c.to == next)
+            .max_by_key(|c| c.from_lane)
+            .and_then(|c| c.via.as_ref())
+            .and_then(|v| net.internal.get(v));
+        if let Some(lane) = via {
+            points.extend(&lane.shape);
+        }
+    }
+    ReferenceLine::new(points).unwrap_or_else(|| {
+        let left = net.edge(&ids[0]).lanes.last().expect("an edge has lanes");
+        // A lane without shape points: SUMO always writes them; a straight stand-in of its
+        // length keeps the region usable.
+        ReferenceLine::new([Point::new(0.0, 0.0), Point::new(left.length.max(1.0), 0.0)])
+            .expect("two distinct points")
+    })
+}
+
+/// Where each main edge starts along the reference line.
+fn positions(net: &Net, ids: &[String], line: &ReferenceLine) -> Vec<MainEdge> {
+    ids.iter()
+        .map(|id| {
+            let e = net.edge(id);
+            let left = e.lanes.last().expect("an edge has lanes");
+            let s_start = left.shape.first().map_or(0.0, |p| line.to_frame(*p).0);
+            let s_end = left.shape.last().map_or(0.0, |p| line.to_frame(*p).0);
+            MainEdge {
+                id: id.clone(),
+                s_start,
+                length: s_end - s_start,
+                lanes: e.lanes.len() as u32,
+            }
+        })
+        .collect()
+}
+
+/// The on-ramp of `merge`: its edges walked upstream while each has one way in and one way
+/// out (up to [`UPSTREAM`] metres), and where its lane starts and ends along `line`.
+fn on_ramp(net: &Net, merge: &Merge, on_main: &BTreeSet<&str>, line: &ReferenceLine) -> OnRamp {
+    let mut edges = vec![merge.ramp.clone()];
+    let mut length = net.edge(&merge.ramp).lanes[0].length;
+    while length < UPSTREAM {
+        let here = &edges[0];
+        let [p] = net.predecessors(here)[..] else {
+            break;
+        };
+        if on_main.contains(p) || net.successors(p).len() != 1 || edges.iter().any(|e| e == p) {
+            break;
+        }
+        length += net.edge(p).lanes[0].length;
+        edges.insert(0, p.to_string());
+    }
+    let at = |p: Option<&Point>| p.map_or(0.0, |p| line.to_frame(*p).0);
+    let start = &net.edge(&merge.joins).lanes[merge.lane as usize];
+    let end = &net.edge(&merge.ends_on).lanes[merge.end_lane as usize];
+    OnRamp {
+        edges,
+        joins: merge.joins.clone(),
+        lane: merge.lane,
+        ends_on: merge.ends_on.clone(),
+        end_lane: merge.end_lane,
+        merge_start: at(start.shape.first()),
+        merge_end: at(end.shape.last()),
+    }
+}
+
+/// The off-ramps of the region `ids`: every road a main edge leads to other than the
+/// carriageway (`next`: the carriageway's edge after the region), walked downstream while each
+/// edge has one way on and one way in.
+fn off_ramps(
+    net: &Net,
+    ids: &[String],
+    next: Option<&str>,
+    on_main: &BTreeSet<&str>,
+) -> Vec<OffRamp> {
+    let mut out = Vec::new();
+    for m in ids {
+        for first in net.successors(m) {
+            if on_main.contains(first) || Some(first) == next {
+                continue;
+            }
+            let mut edges = vec![first.to_string()];
+            while let [n] = net.successors(edges.last().expect("non-empty"))[..] {
+                if on_main.contains(n)
+                    || net.predecessors(n).len() != 1
+                    || edges.iter().any(|e| e == n)
+                {
+                    break;
+                }
+                edges.push(n.to_string());
+            }
+            out.push(OffRamp {
+                leaves: m.clone(),
+                edges,
+            });
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,264 @@
+//! Merge regions on networks the test builds with netconvert, and on SUMO's own shipped
+//! scenarios: each layout is found, `bkpbs network` fails exactly where `episode` does, and an
+//! episode on a region runs with every vehicle accounted for.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+
+use common::{bkpbs, csv_rows, refused_naming, stderr};
+
+/// Writes nodes `(id, x, y)`, edges `(id, from, to, lanes, extra attributes)` and
+/// connections `(from, fromLane, to, toLane)` as plain XML and builds the net with netconvert
+/// (which adds its own turnarounds at the ends of two-way roads).
+fn build(
+    dir: &Path,
+    nodes: &[(&str, f64, f64)],
+    edges: &[(&str, &str, &str, u32, &str)],
+    cons: &[(&str, u32, &str, u32)],
+) -> PathBuf {
+    let mut nod = String::from("<nodes>\n");
+    for (id, x, y) in nodes {
+        nod += &format!("<node id=\"{id}\" x=\"{x}\" y=\"{y}\"/>\n");
+    }
+    let mut edg = String::from("<edges>\n");
+    for (id, from, to, lanes, extra) in edges {
+        edg += &format!(
+            "<edge id=\"{id}\" from=\"{from}\" to=\"{to}\" numLanes=\"{lanes}\" speed=\"33.33\" {extra}/>\n"
+        );
+    }
+    let mut con = String::from("<connections>\n");
+    for (from, fl, to, tl) in cons {
+        con += &format!(
+            "<connection from=\"{from}\" to=\"{to}\" fromLane=\"{fl}\" toLane=\"{tl}\"/>\n"
+        );
+    }
+    for (name, text) in [
+        ("n.nod.xml", nod + "</nodes>\n"),
+        ("n.edg.xml", edg + "</edges>\n"),
+        ("n.con.xml", con + "</connections>\n"),
+    ] {
+        std::fs::write(dir.join(name), text).unwrap();
+    }
+    let status = std::process::Command::new("netconvert")
+        .current_dir(dir)
+        .args(["-n", "n.nod.xml", "-e", "n.edg.xml", "-x", "n.con.xml"])
+        .args(["-o", "n.net.xml", "--no-warnings"])
+        .output()
+        .expect("netconvert runs");
+    assert!(
+        status.status.success(),
+        "{}",
+        String::from_utf8_lossy(&status.stderr)
+    );
+    dir.join("n.net.xml")
+}
+
+/// The main lanes of `from` continuing on `to`, aligned on the left.
+fn through(
+    from: &'static str,
+    from_lanes: u32,
+    to: &'static str,
+    to_lanes: u32,
+) -> Vec<(&'static str, u32, &'static str, u32)> {
+    let n = from_lanes.min(to_lanes);
+    (0..n)
+        .map(|k| (from, from_lanes - n + k, to, to_lanes - n + k))
+        .collect()
+}
+
+/// Two carriageways in opposite directions on shared nodes (netconvert adds U-turns at their
+/// ends), each with an on-ramp, and a footway beside the eastbound ramp.
+fn two_carriageways(dir: &Path) -> PathBuf {
+    let nodes = [
+        ("a", 0.0, 0.0),
+        ("b", 600.0, 0.0),
+        ("c", 850.0, 0.0),
+        ("d", 1200.0, 0.0),
+        ("re", 450.0, -60.0),
+        ("rw", 1000.0, 60.0),
+        ("wa", 300.0, -90.0),
+    ];
+    let edges = [
+        ("e0", "a", "b", 2, ""),
+        ("e1", "b", "c", 3, ""),
+        ("e2", "c", "d", 2, ""),
+        ("w0", "d", "c", 2, ""),
+        ("w1", "c", "b", 3, ""),
+        ("w2", "b", "a", 2, ""),
+        ("onE", "re", "b", 1, ""),
+        ("onW", "rw", "c", 1, ""),
+        ("walk", "wa", "re", 1, "allow=\"pedestrian\" width=\"2\""),
+    ];
+    let mut cons = Vec::new();
+    for (f, fl, t, tl) in [
+        ("e0", 2, "e1", 3),
+        ("e1", 3, "e2", 2),
+        ("w0", 2, "w1", 3),
+        ("w1", 3, "w2", 2),
+    ] {
+        cons.extend(through(f, fl, t, tl));
+    }
+    cons.extend([("onE", 0, "e1", 0), ("onW", 0, "w1", 0)]);
+    build(dir, &nodes, &edges, &cons)
+}
+
+/// A ramp joining as a lane gained on one edge and dropped at the end of the next.
+fn lane_gain_then_drop(dir: &Path) -> PathBuf {
+    let nodes = [
+        ("a", 0.0, 0.0),
+        ("b", 400.0, 0.0),
+        ("c", 550.0, 0.0),
+        ("d", 700.0, 0.0),
+        ("e", 1000.0, 0.0),
+        ("r", 250.0, -60.0),
+    ];
+    let edges = [
+        ("up", "a", "b", 2, ""),
+        ("gain", "b", "c", 3, ""),
+        ("drop", "c", "d", 3, ""),
+        ("down", "d", "e", 2, ""),
+        ("on", "r", "b", 1, ""),
+    ];
+    let mut cons = through("up", 2, "gain", 3);
+    cons.extend([
+        ("gain", 0, "drop", 0),
+        ("gain", 1, "drop", 1),
+        ("gain", 2, "drop", 2),
+    ]);
+    cons.extend(through("drop", 3, "down", 2));
+    cons.push(("on", 0, "gain", 0));
+    build(dir, &nodes, &edges, &cons)
+}
+
+/// `bkpbs episode` on `net` in `regions` for `steps`, into `out`.
+fn episode(
+    net: &Path,
+    regions: Option<&str>,
+    planner: &str,
+    steps: u32,
+    out: &Path,
+) -> std::process::Output {
+    let mut args = vec![
+        "episode".to_string(),
+        "--net".into(),
+        net.display().to_string(),
+        "--planner".into(),
+        planner.into(),
+        "--steps".into(),
+        steps.to_string(),
+        "--out".into(),
+        out.display().to_string(),
+    ];
+    if let Some(r) = regions {
+        args.extend(["--regions".into(), r.into()]);
+    }
+    bkpbs(&args.iter().map(String::as_str).collect::<Vec<_>>())
+}
+
+/// Every vehicle of the episode in `out` accounted for: inserted = arrived + present +
+/// crashed; none crashed; some arrived.
+fn accounted(out: &Path) {
+    let rows = csv_rows(&std::fs::read(out.join("episode.csv")).unwrap());
+    let n = |k: &str| rows[0][k].parse::<u64>().unwrap();
+    assert_eq!(
+        n("inserted"),
+        n("arrived") + n("present") + n("crashed"),
+        "{:?}",
+        rows[0]
+    );
+    assert!(n("arrived") > 5, "{:?}", rows[0]);
+    assert_eq!(n("controllable_crashed"), 0, "{:?}", rows[0]);
+}
+
+#[test]
+fn two_carriageways_give_two_regions_and_an_episode_plans_the_one_chosen() {
+    let dir = tempfile::tempdir().unwrap();
+    let net = two_carriageways(dir.path());
+    let o = bkpbs(&["network", net.to_str().unwrap()]);
+    let text = String::from_utf8_lossy(&o.stdout).to_string();
+    assert!(text.contains("region 1 (merges at e1)"), "{text}");
+    assert!(text.contains("region 2 (merges at w1)"), "{text}");
+    assert!(
+        text.contains("left out, closed to cars (1 edges): walk"),
+        "{text}"
+    );
+    // Two regions: the command refuses as the episode does, naming both.
+    refused_naming(&o, &["2 merge regions", "e1", "w1", "--regions"]);
+    let out = dir.path().join("both");
+    let e = episode(&net, None, "bk-pbs", 50, &out);
+    refused_naming(&e, &["2 merge regions"]);
+    assert!(!out.join("episode.csv").exists());
+    // One chosen (or the other left out): both commands go ahead.
+    let o = bkpbs(&["network", net.to_str().unwrap(), "--regions", "!e1"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(String::from_utf8_lossy(&o.stdout).contains("region 1 (merges at e1) (not selected)"));
+    let out = dir.path().join("west");
+    let e = episode(&net, Some("w1"), "bk-pbs", 400, &out);
+    assert!(e.status.success(), "{}", stderr(&e));
+    accounted(&out);
+    let vehicles = csv_rows(&std::fs::read(out.join("vehicles.csv")).unwrap());
+    assert!(vehicles
+        .iter()
+        .any(|v| v["origin"] == "ramp" && v["outcome"] == "arrived"));
+    // A name that is no merge edge: one line naming it and the merges there are.
+    let o = bkpbs(&["network", net.to_str().unwrap(), "--regions", "e0"]);
+    refused_naming(&o, &["'e0'", "e1; w1"]);
+}
+
+#[test]
+fn a_lane_gained_and_dropped_downstream_is_a_merge() {
+    let dir = tempfile::tempdir().unwrap();
+    let net = lane_gain_then_drop(dir.path());
+    let o = bkpbs(&["network", net.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = String::from_utf8_lossy(&o.stdout).to_string();
+    let ramp = text
+        .lines()
+        .find(|l| l.starts_with("on-ramp 1"))
+        .expect(&text);
+    assert!(
+        ramp.contains("on → gain lane 0") && ramp.ends_with("on 'drop'"),
+        "{text}"
+    );
+    let road = bkpbs::sumo::frame::road_from_net_file(&net, &[]).unwrap();
+    // The merge zone runs over both edges: 150 m gained, 150 m more to the drop.
+    let z = road.zones[0];
+    assert!((z.end - z.start - 300.0).abs() < 10.0, "{z:?}");
+    let out = dir.path().join("out");
+    let e = episode(&net, None, "bk-pbs", 400, &out);
+    assert!(e.status.success(), "{}", stderr(&e));
+    accounted(&out);
+}
+
+/// SUMO's own shipped scenarios, as a user would bring them: their merges are found and an
+/// episode runs on each.
+#[test]
+fn sumos_game_scenarios_have_their_merges_found() {
+    let home = std::env::var("SUMO_HOME").unwrap_or_else(|_| "/usr/share/sumo".into());
+    let game = Path::new(&home).join("tools/game");
+    for (net, merges) in [
+        ("A10KW/osm.net.xml", vec!["264308374", "4054057"]),
+        ("ramp/ramp.net.xml", vec!["gneE7"]),
+    ] {
+        let path = game.join(net);
+        assert!(
+            path.exists(),
+            "SUMO's game scenarios (sumo-tools) are installed: {path:?}"
+        );
+        let o = bkpbs(&["network", path.to_str().unwrap()]);
+        let text = String::from_utf8_lossy(&o.stdout).to_string();
+        for (k, m) in merges.iter().enumerate() {
+            assert!(
+                text.contains(&format!("region {} (merges at {m})", k + 1)),
+                "{text}"
+            );
+            let dir = tempfile::tempdir().unwrap();
+            let out = dir.path().join("out");
+            let e = episode(&path, Some(m), "bk-pbs", 400, &out);
+            assert!(e.status.success(), "{net} {m}: {}", stderr(&e));
+            accounted(&out);
+        }
+        assert_eq!(o.status.success(), merges.len() == 1, "{}", stderr(&o));
+    }
+}
