@@ -109,7 +109,7 @@ fn parse_toml(text: &str, path: Option<&Path>) -> PyResult<toml::Table> {
 }
 
 fn read_file(path: &Path) -> PyResult<toml::Table> {
-    let text = std::fs::read_to_string(path)
+    let text = bkpbs::io::bounded::read_text(path, bkpbs::io::bounded::FileKind::Config)
         .map_err(|e| bad_input(format!("cannot read config file {}: {e}", path.display())))?;
     parse_toml(&text, Some(path))
 }

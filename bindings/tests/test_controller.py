@@ -95,6 +95,9 @@ def test_controller_on_a_users_network():
     ) == {}
     with pytest.raises(bkpbs.BkpbsError, match="no-such.net.xml"):
         bkpbs.Controller("bk-pbs", net_file="no-such.net.xml")
+    # A device is refused at once, not read until memory runs out.
+    with pytest.raises(bkpbs.BkpbsError, match="not a regular file"):
+        bkpbs.Controller("bk-pbs", net_file="/dev/zero")
 
 
 def test_same_scene_same_plan(scene):

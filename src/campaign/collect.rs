@@ -88,9 +88,12 @@ pub fn collect(out: &Path, grid: &Grid, shard: Shard) -> Result<Results, Results
                 }
             }
         } else if shard.contains(position) {
-            let error = std::fs::read_to_string(dir.join(ERROR_FILE))
-                .map(|s| s.trim().to_string())
-                .unwrap_or_else(|_| "not run".into());
+            let error = crate::io::bounded::read_text(
+                &dir.join(ERROR_FILE),
+                crate::io::bounded::FileKind::Data,
+            )
+            .map(|s| s.trim().to_string())
+            .unwrap_or_else(|_| "not run".into());
             let mut fields = csv::StringRecord::new();
             fields.push_field(&cell.planner);
             fields.push_field(&cell.alpha.to_string());

@@ -142,7 +142,10 @@ pub fn read_records(
         path: path.to_path_buf(),
         message: e.to_string(),
     };
-    let mut r = csv::Reader::from_path(path).map_err(read_err)?;
+    let mut r = csv::Reader::from_reader(
+        crate::io::bounded::open(path, crate::io::bounded::FileKind::Data)
+            .map_err(|e| read_err(e.into()))?,
+    );
     let found: Vec<String> = r
         .headers()
         .map_err(read_err)?

@@ -208,10 +208,12 @@ fn parse_error(path: &Path, message: impl Into<String>) -> SettingsError {
 }
 
 fn read_file(path: &Path) -> Result<FileParts, SettingsError> {
-    let text = std::fs::read_to_string(path).map_err(|error| SettingsError::Read {
-        path: path.to_path_buf(),
-        error,
-    })?;
+    let text = crate::io::bounded::read_text(path, crate::io::bounded::FileKind::Config).map_err(
+        |error| SettingsError::Read {
+            path: path.to_path_buf(),
+            error,
+        },
+    )?;
     let mut doc: toml::Table = toml::from_str(&text).map_err(|e| {
         parse_error(
             path,
@@ -465,9 +467,18 @@ fn worker_count(
     match table.workers {
         Some(w) => {
             let origin = origin(o.workers.is_some(), "--workers", "workers", file);
-            at_least_one(origin, "workers", w as u64).map(|()| w)
+            at_least_one(origin.clone(), "workers", w as u64)?;
+            if w > crate::io::cores::max_parallel() {
+                return Err(SettingsError::OutOfRange {
+                    origin,
+                    what: "workers",
+                    value: w.to_string(),
+                    reason: "is more than four per core of this machine",
+                });
+            }
+            Ok(w)
         }
-        None => Ok(std::thread::available_parallelism().map_or(1, |n| n.get())),
+        None => Ok(crate::io::cores::available()),
     }
 }
 

@@ -45,10 +45,10 @@ impl BenchArgs {
             p.check(&config)?;
         }
         bkpbs::sumo::frame::scenario_road(&config.scenario)?;
-        if self.threads.contains(&0) {
-            anyhow::bail!("--threads: a thread count must be at least 1");
+        for &t in &self.threads {
+            bkpbs::io::cores::check("--threads", t).map_err(anyhow::Error::msg)?;
         }
-        let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+        let cores = bkpbs::io::cores::available();
         let mut threads = self.threads;
         if threads.is_empty() {
             threads = if cores > 1 { vec![1, cores] } else { vec![1] };

@@ -131,9 +131,11 @@ pub struct Training {
 }
 
 impl TrainArgs {
-    /// Cannot fail: clap already refuses `--conditioned` with `--unconditioned`.
-    pub fn resolve(self) -> Training {
-        Training {
+    /// Refuses a thread count of 0 or beyond the machine's (clap already refuses
+    /// `--conditioned` with `--unconditioned`).
+    pub fn resolve(self) -> Result<Training> {
+        bkpbs::io::cores::check("--threads", self.threads).map_err(anyhow::Error::msg)?;
+        Ok(Training {
             data: self.data,
             out: self.out,
             conditioned: !self.unconditioned,
@@ -144,7 +146,7 @@ impl TrainArgs {
                 patience: self.patience,
                 ..Default::default()
             },
-        }
+        })
     }
 }
 

@@ -49,6 +49,11 @@ pub struct TrainRlArgs {
     config: Option<PathBuf>,
 }
 
+/// The most SUMO episodes per PPO update.
+const MAX_EPISODES_PER_UPDATE: usize = 1000;
+/// The most held-out evaluation episodes.
+const MAX_EVAL_EPISODES: u64 = 100_000;
+
 /// A checked training run.
 pub struct TrainRl {
     files: RunFiles,
@@ -64,10 +69,27 @@ impl TrainRlArgs {
         if self.steps == 0 || self.episodes_per_update == 0 {
             anyhow::bail!("--steps and --episodes-per-update must be positive");
         }
-        let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+        // Each episode of an update keeps its rollout in memory until the update, and each
+        // held-out episode is set up before the first runs: beyond these a run would only
+        // exhaust memory (the paper uses 4 and 20).
+        if self.episodes_per_update > MAX_EPISODES_PER_UPDATE {
+            anyhow::bail!(
+                "--episodes-per-update {}: at most {MAX_EPISODES_PER_UPDATE} (every rollout of \
+                 an update is held in memory)",
+                self.episodes_per_update
+            );
+        }
+        if self.eval_episodes > MAX_EVAL_EPISODES {
+            anyhow::bail!(
+                "--eval-episodes {}: at most {MAX_EVAL_EPISODES}",
+                self.eval_episodes
+            );
+        }
+        let cores = bkpbs::io::cores::available();
         let threads = self.threads.unwrap_or(cores);
-        if threads == 0 || self.workers == Some(0) {
-            anyhow::bail!("--threads and --workers must be positive");
+        bkpbs::io::cores::check("--threads", threads).map_err(anyhow::Error::msg)?;
+        if let Some(w) = self.workers {
+            bkpbs::io::cores::check("--workers", w).map_err(anyhow::Error::msg)?;
         }
         rayon::ThreadPoolBuilder::new()
             .num_threads(threads)

@@ -207,10 +207,12 @@ pub fn parse(text: &str, path: &Path) -> Result<Vec<TraceLine>, TraceError> {
 
 /// Reads `trace.jsonl` at `path`.
 pub fn read(path: &Path) -> Result<Vec<TraceLine>, TraceError> {
-    let text = std::fs::read_to_string(path).map_err(|cause| TraceError::Read {
-        path: path.to_path_buf(),
-        cause,
-    })?;
+    let text = crate::io::bounded::read_text(path, crate::io::bounded::FileKind::Data).map_err(
+        |cause| TraceError::Read {
+            path: path.to_path_buf(),
+            cause,
+        },
+    )?;
     parse(&text, path)
 }
 

@@ -2,9 +2,11 @@
 //! renamed over the target. A crash or a kill never leaves a half-written result, and an
 //! earlier result stays until it is replaced whole. The lowest layer: results, model files and
 //! data sets all go through it. [`interrupt`]: stop signals as requests, so that a run
-//! interrupted by them tidies up.
+//! interrupted by them tidies up. [`bounded`]: every file read, read with a bound.
 
+pub mod bounded;
 pub mod child;
+pub mod cores;
 pub mod interrupt;
 
 use std::io::Write;

@@ -177,10 +177,11 @@ impl PolicyFile {
 
     /// Reads and checks a policy file.
     pub fn read(path: &Path) -> Result<PolicyFile, PolicyError> {
-        let text = std::fs::read_to_string(path).map_err(|cause| PolicyError::Read {
-            path: path.to_path_buf(),
-            cause,
-        })?;
+        let text = crate::io::bounded::read_text(path, crate::io::bounded::FileKind::Model)
+            .map_err(|cause| PolicyError::Read {
+                path: path.to_path_buf(),
+                cause,
+            })?;
         PolicyFile::from_json(path, &text)
     }
 

@@ -171,8 +171,8 @@ impl Longitudinal {
 /// made for `profile` (unless `None`: any profile).
 pub fn load(path: &Path, profile: Option<&str>) -> Result<IdmParams, ModelError> {
     let p = || PathBuf::from(path);
-    let text =
-        std::fs::read_to_string(path).map_err(|cause| ModelError::Read { path: p(), cause })?;
+    let text = crate::io::bounded::read_text(path, crate::io::bounded::FileKind::Model)
+        .map_err(|cause| ModelError::Read { path: p(), cause })?;
     let c: CalibrationView = serde_json::from_str(&text).map_err(|e| ModelError::Json {
         path: p(),
         message: e.to_string(),

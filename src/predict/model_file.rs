@@ -276,10 +276,11 @@ impl ModelFile {
 
     /// Reads and checks a model file.
     pub fn read(path: &Path) -> Result<ModelFile, ModelError> {
-        let text = std::fs::read_to_string(path).map_err(|cause| ModelError::Read {
-            path: path.to_path_buf(),
-            cause,
-        })?;
+        let text = crate::io::bounded::read_text(path, crate::io::bounded::FileKind::Model)
+            .map_err(|cause| ModelError::Read {
+                path: path.to_path_buf(),
+                cause,
+            })?;
         ModelFile::from_json(path, &text)
     }
 

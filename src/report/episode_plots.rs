@@ -93,7 +93,10 @@ pub fn plot_dir(dir: &Path) -> Result<EpisodePlots, EpisodePlotError> {
 /// directory's name without one.
 fn episode_title(dir: &Path) -> String {
     let from_csv = || -> Option<String> {
-        let mut r = csv::Reader::from_path(dir.join("episode.csv")).ok()?;
+        let mut r = csv::Reader::from_reader(
+            crate::io::bounded::open(&dir.join("episode.csv"), crate::io::bounded::FileKind::Data)
+                .ok()?,
+        );
         let header = r.headers().ok()?.clone();
         let row = r.records().next()?.ok()?;
         let get = |name: &str| {

@@ -140,7 +140,10 @@ pub fn read_collisions(path: &Path) -> Result<Vec<CollisionRow>, ExplainError> {
         path: path.to_path_buf(),
         message,
     };
-    let mut r = csv::Reader::from_path(path).map_err(|e| bad(e.to_string()))?;
+    let mut r = csv::Reader::from_reader(
+        crate::io::bounded::open(path, crate::io::bounded::FileKind::Data)
+            .map_err(|e| bad(e.to_string()))?,
+    );
     r.deserialize()
         .map(|row| row.map_err(|e| bad(e.to_string())))
         .collect()

@@ -108,7 +108,8 @@ fn read_text(path: &Path) -> Result<String, TracksError> {
         path: path.to_path_buf(),
         cause,
     };
-    let bytes = std::fs::read(path).map_err(err)?;
+    let bytes =
+        crate::io::bounded::read_bytes(path, crate::io::bounded::FileKind::Data).map_err(err)?;
     let mut text = String::new();
     if path.extension().is_some_and(|e| e == "gz") {
         flate2::read::GzDecoder::new(&bytes[..])

@@ -137,7 +137,8 @@ fn same_settings(dirs: &[PathBuf]) -> Result<(), ReportError> {
 /// `campaign.toml`), or none.
 fn grid_order(dir: &Path) -> Result<(Vec<String>, Vec<String>), ReportError> {
     let path = dir.join(SETTINGS_FILE);
-    let Ok(text) = std::fs::read_to_string(&path) else {
+    let Ok(text) = crate::io::bounded::read_text(&path, crate::io::bounded::FileKind::Config)
+    else {
         return Ok(Default::default());
     };
     let bad = |message: String| ReportError::Settings {

@@ -99,10 +99,11 @@ pub enum NetworkFileError {
 impl Net {
     /// Reads the network file at `path`.
     pub fn read(path: &Path) -> Result<Net, NetworkFileError> {
-        let text = std::fs::read_to_string(path).map_err(|cause| NetworkFileError::Read {
-            path: path.to_path_buf(),
-            cause,
-        })?;
+        let text = crate::io::bounded::read_text(path, crate::io::bounded::FileKind::Network)
+            .map_err(|cause| NetworkFileError::Read {
+                path: path.to_path_buf(),
+                cause,
+            })?;
         Net::parse(path, &text)
     }
 

@@ -154,10 +154,11 @@ impl Dataset {
 
     /// Reads and checks a data file.
     pub fn read(path: &Path) -> Result<Dataset, DataError> {
-        let bytes = std::fs::read(path).map_err(|cause| DataError::Read {
-            path: path.to_path_buf(),
-            cause,
-        })?;
+        let bytes = crate::io::bounded::read_bytes(path, crate::io::bounded::FileKind::Data)
+            .map_err(|cause| DataError::Read {
+                path: path.to_path_buf(),
+                cause,
+            })?;
         Dataset::from_bytes(path, &bytes)
     }
 

@@ -209,7 +209,8 @@ pub fn start_or_resume(
             path: path.clone(),
             message,
         };
-        let text = std::fs::read_to_string(&path).map_err(|e| bad(e.to_string()))?;
+        let text = crate::io::bounded::read_text(&path, crate::io::bounded::FileKind::Model)
+            .map_err(|e| bad(e.to_string()))?;
         let mut ck: Checkpoint = serde_json::from_str(&text).map_err(|e| bad(e.to_string()))?;
         if ck.format != CHECKPOINT_FORMAT {
             return Err(bad(format!("format '{}'", ck.format)));
