@@ -104,8 +104,41 @@ fn keep_sumo_log(err: episode::EpisodeError, out: &std::path::Path) -> anyhow::E
     }
 }
 
+/// Runs the user's scenario, writes its files and prints its summary.
+fn run_scenario(e: &Episode) -> Result<()> {
+    if e.trace
+        || e.config.output.trajectories != bkpbs::config::TrajectoryFormat::None
+        || e.config.sumo.gui
+    {
+        anyhow::bail!("--sumocfg: --trace, --trajectories and --gui are not available for a scenario of your own yet");
+    }
+    let r = episode::sumocfg::run(&e.config, e.planner.name())
+        .map_err(|err| keep_sumo_log(err, &e.out))?;
+    episode::sumocfg::write(&r, &e.out).with_context(|| {
+        format!(
+            "episode finished but its results could not be saved in {}",
+            e.out.display()
+        )
+    })?;
+    let s = &r.summary;
+    let loss = s
+        .mean_time_loss_s
+        .map_or("-".into(), |x| format!("{x:.2} s"));
+    println!(
+        "{} α={} seed={} on {} (region {}): inserted {} ({} CAVs, share {:.3}), in region {}, arrived {}, crashed {} (controllable {}), mean timeLoss {loss}",
+        s.planner, s.alpha, s.seed, e.config.scenario.sumocfg.as_ref().expect("a scenario").display(), s.region,
+        s.inserted, s.inserted_cav, s.cav_share, s.in_region, s.arrived, s.crashed, s.controllable_crashed
+    );
+    println!("SUMO options bkpbs set: {}", r.sumo_options.join(" "));
+    println!("results: {}", e.out.join("episode.csv").display());
+    Ok(())
+}
+
 /// Runs the episode, writes its files and prints its summary and where the files are.
 pub fn run(e: Episode) -> Result<()> {
+    if e.config.scenario.sumocfg.is_some() {
+        return run_scenario(&e);
+    }
     let saving = || {
         format!(
             "episode finished but its results could not be saved in {}",

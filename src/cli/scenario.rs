@@ -47,6 +47,11 @@ pub struct ScenarioArgs {
     /// out); `bkpbs network FILE` lists them.
     #[arg(long, value_delimiter = ',', value_name = "EDGE,...")]
     regions: Option<Vec<String>>,
+    /// A SUMO configuration of your own (.sumocfg: its net, routes, flows, vehicle types):
+    /// run instead of the paper's demand, α of its vehicles CAVs; --steps defaults to its
+    /// begin–end interval.
+    #[arg(long, value_name = "FILE")]
+    sumocfg: Option<PathBuf>,
     /// HDV driver profile: sumo-safe (default), paper, heterogeneous, krauss, eidm, or one
     /// the config file defines under [hdv.profiles.NAME].
     #[arg(long, value_name = "NAME")]
@@ -91,6 +96,17 @@ impl ScenarioArgs {
         }
         if let Some(r) = &self.regions {
             s.regions = r.clone();
+        }
+        if let Some(cfg) = &self.sumocfg {
+            s.sumocfg = Some(cfg.clone());
+            // The scenario's own interval, unless --steps shortens it (an unreadable file is
+            // reported when the episode starts).
+            let interval = bkpbs::sumo::sumocfg::SumoConfig::read(cfg)
+                .ok()
+                .and_then(|c| c.steps(s.dt));
+            if let (None, Some(n)) = (self.steps, interval) {
+                s.steps = n;
+            }
         }
         if let Some(p) = &self.hdv_profile {
             c.hdv.profile = p.clone();

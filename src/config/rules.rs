@@ -178,7 +178,15 @@ pub(super) fn check_scenario(s: &Scenario) -> Result<(), ConfigError> {
         vehicle_length => Positive,
         vehicle_width => Positive,
         lane_change_duration => AtLeast(s.dt, "must be at least one step"),
-    ))
+    ))?;
+    if let (Some(cfg), Some(_)) = (&s.sumocfg, &s.net_file) {
+        return Err(ConfigError::Invalid {
+            field: "scenario.sumocfg",
+            value: cfg.display().to_string(),
+            reason: "comes with its own net-file: leave scenario.net_file (--net) unset",
+        });
+    }
+    Ok(())
 }
 
 /// The speed ranges are pairs bounded by the speed limit, so they have a rule of their own.

@@ -39,6 +39,10 @@ pub struct Scenario {
     /// network` lists them); `!EDGE` leaves that region out. Empty: every region.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub regions: Vec<String>,
+    /// A user's SUMO configuration to run instead of the paper's demand: its network, routes,
+    /// vehicle types and options (the network is its `net-file`; `net_file` must be unset).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sumocfg: Option<PathBuf>,
 }
 
 impl Default for Scenario {
@@ -56,6 +60,7 @@ impl Default for Scenario {
             lane_change_duration: 1.0,
             net_file: None,
             regions: Vec::new(),
+            sumocfg: None,
         }
     }
 }

@@ -8,6 +8,7 @@ use crate::config::ConfigError;
 use crate::controller::BuildError;
 use crate::sumo::files::InputError;
 use crate::sumo::frame::NetworkError;
+use crate::sumo::sumocfg::SumoConfigError;
 use crate::sumo::SumoError;
 
 /// Why an episode could not complete.
@@ -55,6 +56,12 @@ pub enum EpisodeError {
         /// The signal's number (2 for `SIGINT`, 15 for `SIGTERM`).
         signal: i32,
     },
+    /// The user's SUMO configuration cannot be run.
+    #[error(transparent)]
+    Scenario(#[from] SumoConfigError),
+    /// SUMO's own output of the episode could not be read back.
+    #[error("{0}")]
+    Output(String),
     /// A failure with SUMO's own reason: libsumo reports only "Process Error", the reason goes
     /// to SUMO's (captured) console.
     #[error("{cause}; SUMO said: {said}")]

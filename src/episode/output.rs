@@ -145,6 +145,11 @@ fn collision_row(c: &CollisionEvent) -> Vec<String> {
     ]
 }
 
+/// `collisions.csv` of `events` as bytes.
+pub fn collisions_csv(events: &[CollisionEvent]) -> Vec<u8> {
+    csv_bytes(&COLLISION_COLUMNS, events.iter().map(collision_row))
+}
+
 impl EpisodeResult {
     /// `episode.csv` as bytes.
     pub fn episode_csv(&self) -> Vec<u8> {
@@ -161,10 +166,7 @@ impl EpisodeResult {
 
     /// `collisions.csv` as bytes.
     pub fn collisions_csv(&self) -> Vec<u8> {
-        csv_bytes(
-            &COLLISION_COLUMNS,
-            self.collisions.iter().map(collision_row),
-        )
+        collisions_csv(&self.collisions)
     }
 
     /// `timing.csv` as bytes.

@@ -411,24 +411,9 @@ impl<'a> Episode<'a> {
         }
     }
 
-    /// Sends the controller's maneuvers to SUMO: speeds in one batch, then lane changes.
+    /// Sends the controller's maneuvers to SUMO.
     fn apply(&mut self, sim: &mut Simulation) -> Result<(), SumoError> {
-        let sc = &self.config.scenario;
-        let vehicles = &self.sumo_scene.scene.vehicles;
-        sim.set_speeds(self.commands.iter().map(|c| {
-            let speed = frame::commanded_speed(c.maneuver.speed, sc);
-            (&*vehicles[c.vehicle].id, speed)
-        }))?;
-        for c in &self.commands {
-            let v = &vehicles[c.vehicle];
-            if let Some(dir) = c.maneuver.lane_change {
-                let target = v.lane + dir.offset();
-                if let Some(idx) = self.sumo_scene.sumo_lane_index(c.vehicle, target) {
-                    sim.change_lane(&v.id, idx, self.config.scenario.dt)?;
-                }
-            }
-        }
-        Ok(())
+        send_commands(sim, &self.sumo_scene, &self.commands, &self.config.scenario)
     }
 
     fn finish(self, loop_s: f64, stranded: usize) -> EpisodeResult {
@@ -461,4 +446,29 @@ impl<'a> Episode<'a> {
             sumo_log: String::new(),
         }
     }
+}
+
+/// Sends `commands` for the vehicles of `scene` to SUMO: speeds in one batch, then lane changes
+/// (into the SUMO lane of the target frame lane, where there is one).
+pub(crate) fn send_commands(
+    sim: &mut Simulation,
+    scene: &SumoScene,
+    commands: &[Command],
+    sc: &crate::config::Scenario,
+) -> Result<(), SumoError> {
+    let vehicles = &scene.scene.vehicles;
+    sim.set_speeds(commands.iter().map(|c| {
+        let speed = frame::commanded_speed(c.maneuver.speed, sc);
+        (&*vehicles[c.vehicle].id, speed)
+    }))?;
+    for c in commands {
+        let v = &vehicles[c.vehicle];
+        if let Some(dir) = c.maneuver.lane_change {
+            let target = v.lane + dir.offset();
+            if let Some(idx) = scene.sumo_lane_index(c.vehicle, target) {
+                sim.change_lane(&v.id, idx, sc.dt)?;
+            }
+        }
+    }
+    Ok(())
 }

@@ -170,6 +170,13 @@ pub fn road_from_net(net: &Net, path: &Path, selection: &[String]) -> Result<Roa
 /// # Errors
 /// As [`road_from_net_file`].
 pub fn scenario_road(scenario: &Scenario) -> Result<Road, NetworkError> {
+    if let Some(cfg) = &scenario.sumocfg {
+        let cfg = crate::sumo::sumocfg::SumoConfig::read(cfg).map_err(|e| NetworkError::Shape {
+            path: cfg.clone(),
+            what: e.to_string(),
+        })?;
+        return road_from_net_file(&cfg.net, &scenario.regions);
+    }
     match &scenario.net_file {
         Some(path) => road_from_net_file(path, &scenario.regions),
         None => Ok(embedded_road()),
@@ -339,19 +346,31 @@ pub fn state_at(
     front: f64,
     lane: i32,
 ) -> VehicleState {
+    let size = (scenario.vehicle_length, scenario.vehicle_width);
+    state_sized(road, who, raw, (front, lane), size)
+}
+
+/// Like [`state_at`] for a vehicle of its own `(length, width)` (m), as SUMO has its type.
+pub fn state_sized(
+    road: &Road,
+    who: Identity,
+    raw: &RawVehicleState,
+    (front, lane): (f64, i32),
+    (length, width): (f64, f64),
+) -> VehicleState {
     VehicleState {
         id: who.id,
         kind: who.kind,
         origin: who.origin,
-        s: front - 0.5 * scenario.vehicle_length,
+        s: front - 0.5 * length,
         lane,
         lateral: raw.lateral_offset,
         speed: raw.speed,
         accel: raw.acceleration,
         heading: (90.0 - raw.angle).to_radians() - road.heading_at(front),
         desired_speed: who.desired_speed,
-        length: scenario.vehicle_length,
-        width: scenario.vehicle_width,
+        length,
+        width,
         on_ramp: is_on_ramp(road, raw.edge_code),
     }
 }

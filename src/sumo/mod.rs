@@ -11,6 +11,7 @@ pub mod frame;
 pub mod layout;
 pub mod network;
 pub mod road_frame;
+pub mod sumocfg;
 
 mod ffi;
 mod quiet;
@@ -304,6 +305,17 @@ impl Simulation {
             let bytes = std::slice::from_raw_parts(ptr as *const u8, len);
             Ok(String::from_utf8_lossy(bytes).into_owned())
         }
+    }
+
+    /// The vehicle's length and width (m), from its type.
+    pub fn vehicle_size(&self, id: &str) -> Result<(f64, f64), SumoError> {
+        let cid = c_string(id)?;
+        let (mut length, mut width) = (0.0, 0.0);
+        // SAFETY: a valid C string and out-pointers.
+        decode("vehicle.getLength/getWidth", unsafe {
+            ffi::bk_vehicle_size(cid.as_ptr(), &mut length, &mut width)
+        })?;
+        Ok((length, width))
     }
 
     /// Collisions detected during the last step.

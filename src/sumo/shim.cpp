@@ -265,6 +265,13 @@ int BK(change_lane)(const char* id, int32_t lane_index, double duration) {
     return guarded([&] { api::Vehicle::changeLane(id, lane_index, duration); });
 }
 
+int BK(vehicle_size)(const char* id, double* length, double* width) {
+    return guarded([&] {
+        *length = api::Vehicle::getLength(id);
+        *width = api::Vehicle::getWidth(id);
+    });
+}
+
 int BK(vehicle_driving_distance)(const char* id, const char* edge, double pos, double* out) {
     return guarded([&] { *out = api::Vehicle::getDrivingDistance(id, edge, pos); });
 }

@@ -1,0 +1,190 @@
+//! What an episode on a user's scenario records: per vehicle SUMO's own trip figures (from its
+//! tripinfo output, unfinished trips included, so a vehicle that never arrives still counts
+//! with the time it lost) and bkpbs's (who was a CAV, when it was in the merge region,
+//! collisions); one summary row. Its columns differ from the paper demand's `episode.csv`,
+//! whose delays are defined against bkpbs's own insertion; here SUMO's `timeLoss` is the delay.
+
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use serde::Serialize;
+
+use crate::episode::cells::{self, cells};
+
+/// One vehicle SUMO inserted (a `vehicles.csv` row).
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct ScenarioVehicle {
+    /// SUMO's vehicle id.
+    pub id: String,
+    /// Its SUMO vehicle type.
+    #[serde(rename = "type")]
+    pub sumo_type: String,
+    /// `cav` or `hdv`.
+    pub kind: String,
+    /// Where it entered the merge region (`main`, `ramp`), empty if it never did.
+    pub region_origin: String,
+    /// When SUMO inserted it (s).
+    #[serde(serialize_with = "cells::decimals::<2, _>")]
+    pub depart_s: f64,
+    /// When it was first seen in the region (s).
+    #[serde(serialize_with = "cells::opt_decimals::<2, _>")]
+    pub region_enter_s: Option<f64>,
+    /// When it was last seen in the region (s).
+    #[serde(serialize_with = "cells::opt_decimals::<2, _>")]
+    pub region_leave_s: Option<f64>,
+    /// `arrived`, `crashed` or `present` (still driving at the end).
+    pub outcome: String,
+    /// When it arrived at its route's end (s).
+    #[serde(serialize_with = "cells::opt_decimals::<2, _>")]
+    pub arrival_s: Option<f64>,
+    /// SUMO's `timeLoss` (s): time lost against driving at its ideal speed, to its arrival or to
+    /// the episode's end.
+    #[serde(serialize_with = "cells::opt_decimals::<2, _>")]
+    pub time_loss_s: Option<f64>,
+    /// SUMO's `routeLength` (m) driven.
+    #[serde(serialize_with = "cells::opt_decimals::<2, _>")]
+    pub route_length_m: Option<f64>,
+    /// When it was removed in a collision (s).
+    #[serde(serialize_with = "cells::opt_decimals::<2, _>")]
+    pub crash_time_s: Option<f64>,
+    /// Who it collided with.
+    pub crashed_with: String,
+    /// Whether a CAV took part in its collision.
+    pub controllable_crash: bool,
+}
+
+/// The one-row summary of an episode on a user's scenario (`episode.csv`).
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct ScenarioSummary {
+    /// The controller's name.
+    pub planner: String,
+    /// The share α of the scenario's vehicles made CAVs.
+    pub alpha: f64,
+    /// The episode's seed (SUMO's, and the CAV draw's).
+    pub seed: u64,
+    /// Simulated steps.
+    pub steps: u32,
+    /// The merge edges of the region planned.
+    pub region: String,
+    /// Vehicles SUMO inserted.
+    pub inserted: usize,
+    /// CAVs among them.
+    pub inserted_cav: usize,
+    /// The realised CAV share.
+    #[serde(serialize_with = "cells::decimals::<4, _>")]
+    pub cav_share: f64,
+    /// Vehicles that were in the region.
+    pub in_region: usize,
+    /// Vehicles that reached their route's end.
+    pub arrived: usize,
+    /// Vehicles removed in collisions.
+    pub crashed: usize,
+    /// Vehicles still driving at the end.
+    pub present: usize,
+    /// Vehicles removed in a collision a CAV took part in.
+    pub controllable_crashed: usize,
+    /// Collisions between HDVs only.
+    pub hdv_collisions: usize,
+    /// Mean SUMO `timeLoss` per vehicle not crashed, arrived or not (s).
+    #[serde(serialize_with = "cells::opt_decimals::<4, _>")]
+    pub mean_time_loss_s: Option<f64>,
+    /// The same over the vehicles that were in the region (s).
+    #[serde(serialize_with = "cells::opt_decimals::<4, _>")]
+    pub mean_time_loss_region_s: Option<f64>,
+    /// Total `timeLoss` of the vehicles not crashed (vehicle-hours).
+    #[serde(serialize_with = "cells::decimals::<6, _>")]
+    pub time_loss_veh_h: f64,
+}
+
+impl ScenarioSummary {
+    /// The summary of `vehicles` (`collisions`: how many involved HDVs only).
+    pub fn of(head: ScenarioSummary, vehicles: &[ScenarioVehicle], hdv_collisions: usize) -> Self {
+        let count = |f: &dyn Fn(&ScenarioVehicle) -> bool| vehicles.iter().filter(|v| f(v)).count();
+        let mean = |f: &dyn Fn(&ScenarioVehicle) -> bool| {
+            let losses: Vec<f64> = vehicles
+                .iter()
+                .filter(|v| v.outcome != "crashed" && f(v))
+                .filter_map(|v| v.time_loss_s)
+                .collect();
+            (!losses.is_empty()).then(|| losses.iter().sum::<f64>() / losses.len() as f64)
+        };
+        let inserted = vehicles.len();
+        let inserted_cav = count(&|v| v.kind == "cav");
+        ScenarioSummary {
+            inserted,
+            inserted_cav,
+            cav_share: if inserted == 0 {
+                0.0
+            } else {
+                inserted_cav as f64 / inserted as f64
+            },
+            in_region: count(&|v| v.region_enter_s.is_some()),
+            arrived: count(&|v| v.outcome == "arrived"),
+            crashed: count(&|v| v.outcome == "crashed"),
+            present: count(&|v| v.outcome == "present"),
+            controllable_crashed: count(&|v| v.controllable_crash),
+            hdv_collisions,
+            mean_time_loss_s: mean(&|_| true),
+            mean_time_loss_region_s: mean(&|v| v.region_enter_s.is_some()),
+            time_loss_veh_h: vehicles
+                .iter()
+                .filter(|v| v.outcome != "crashed")
+                .filter_map(|v| v.time_loss_s)
+                .sum::<f64>()
+                / 3600.0,
+            ..head
+        }
+    }
+}
+
+/// SUMO's figures of one trip (a `<tripinfo>` element).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Trip {
+    /// `timeLoss` (s).
+    pub time_loss: f64,
+    /// `routeLength` (m).
+    pub route_length: f64,
+}
+
+/// The trips of SUMO's tripinfo output at `path`, by vehicle id.
+///
+/// # Errors
+/// A file that cannot be read or is no tripinfo output.
+pub fn read_trips(path: &Path) -> Result<BTreeMap<String, Trip>, String> {
+    let text = crate::io::bounded::read_text(path, crate::io::bounded::FileKind::Data)
+        .map_err(|e| format!("cannot read SUMO's tripinfo output {}: {e}", path.display()))?;
+    let doc = roxmltree::Document::parse(&text)
+        .map_err(|e| format!("SUMO's tripinfo output {}: {e}", path.display()))?;
+    let num = |n: roxmltree::Node, k: &str| n.attribute(k).and_then(|v| v.parse::<f64>().ok());
+    Ok(doc
+        .descendants()
+        .filter(|n| n.has_tag_name("tripinfo"))
+        .filter_map(|n| {
+            let trip = Trip {
+                time_loss: num(n, "timeLoss")?,
+                route_length: num(n, "routeLength")?,
+            };
+            Some((n.attribute("id")?.to_string(), trip))
+        })
+        .collect())
+}
+
+/// The CSV text of `rows` (columns: the fields of `T`).
+pub fn csv_of<T: Serialize + Default>(rows: &[T]) -> Vec<u8> {
+    let header: Vec<&str> = cells(&T::default())
+        .expect("a flat record")
+        .into_iter()
+        .map(|c| c.column)
+        .collect();
+    let mut w = csv::Writer::from_writer(Vec::new());
+    w.write_record(&header).expect("writing to memory");
+    for r in rows {
+        let row: Vec<String> = cells(r)
+            .expect("a flat record")
+            .iter()
+            .map(|c| c.value.csv_text())
+            .collect();
+        w.write_record(&row).expect("writing to memory");
+    }
+    w.into_inner().expect("writing to memory")
+}

@@ -1,0 +1,124 @@
+//! Episodes on a user's own SUMO scenario (`--sumocfg`), on SUMO's shipped `ramp` game
+//! scenario copied as a user would: its routes and vehicle types run, every vehicle SUMO
+//! inserted is in vehicles.csv with SUMO's own timeLoss, and with SUMO driving the CAVs the
+//! figures are those of SUMO run alone with the same options (the oracle).
+
+mod common;
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use common::{bkpbs, csv_rows, refused_naming, stderr};
+
+/// SUMO's `game` directory copied into `dir` (its configurations name files beside them).
+fn game_copy(dir: &Path) -> PathBuf {
+    let home = std::env::var("SUMO_HOME").unwrap_or_else(|_| "/usr/share/sumo".into());
+    let game = Path::new(&home).join("tools/game");
+    assert!(
+        game.exists(),
+        "SUMO's game scenarios (sumo-tools) are installed"
+    );
+    let out = dir.join("game");
+    let status = Command::new("cp")
+        .args(["-r", game.to_str().unwrap(), out.to_str().unwrap()])
+        .status()
+        .unwrap();
+    assert!(status.success());
+    out
+}
+
+fn scenario(cfg: &Path, planner: &str, steps: &str, out: &Path) -> std::process::Output {
+    bkpbs(&[
+        "episode",
+        "--sumocfg",
+        cfg.to_str().unwrap(),
+        "--planner",
+        planner,
+        "--steps",
+        steps,
+        "--seed",
+        "3",
+        "--out",
+        out.to_str().unwrap(),
+    ])
+}
+
+/// SUMO's own `timeLoss` per vehicle in a tripinfo file.
+fn time_losses(path: &Path) -> Vec<(String, String)> {
+    let text = std::fs::read_to_string(path).unwrap();
+    let doc = roxmltree::Document::parse(&text).unwrap();
+    let mut out: Vec<(String, String)> = doc
+        .descendants()
+        .filter(|n| n.has_tag_name("tripinfo"))
+        .map(|n| {
+            let loss: f64 = n.attribute("timeLoss").unwrap().parse().unwrap();
+            (n.attribute("id").unwrap().to_string(), format!("{loss:.2}"))
+        })
+        .collect();
+    out.sort();
+    out
+}
+
+#[test]
+fn the_ramp_game_runs_with_its_own_routes_and_sumo_alone_agrees() {
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = game_copy(dir.path()).join("ramp.sumocfg");
+    let out = dir.path().join("bk-pbs");
+    let o = scenario(&cfg, "bk-pbs", "600", &out);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let ep = &csv_rows(&std::fs::read(out.join("episode.csv")).unwrap())[0];
+    let vehicles = csv_rows(&std::fs::read(out.join("vehicles.csv")).unwrap());
+    let n = |k: &str| ep[k].parse::<usize>().unwrap();
+    assert_eq!(n("inserted"), vehicles.len());
+    assert_eq!(n("inserted"), n("arrived") + n("crashed") + n("present"));
+    assert_eq!(n("controllable_crashed"), 0, "{ep:?}");
+    let share: f64 = ep["cav_share"].parse().unwrap();
+    assert!(
+        n("inserted") > 100 && (0.35..0.65).contains(&share),
+        "{ep:?}"
+    );
+    assert!(vehicles.iter().any(|v| v["region_origin"] == "ramp"));
+    assert!(vehicles
+        .iter()
+        .filter(|v| v["outcome"] != "crashed")
+        .all(|v| !v["time_loss_s"].is_empty()));
+    let options = std::fs::read_to_string(out.join("sumo_options.txt")).unwrap();
+    assert!(options.contains("--collision.action warn"), "{options}");
+
+    // The oracle: with SUMO driving the CAVs, each vehicle's timeLoss is SUMO's own in a run
+    // of SUMO alone on the same configuration and options.
+    let out = dir.path().join("sumo");
+    let o = scenario(&cfg, "sumo", "600", &out);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let trip = dir.path().join("alone.xml");
+    let mut args: Vec<String> = options.split_whitespace().map(String::from).collect();
+    let k = args.iter().position(|a| a == "--tripinfo-output").unwrap();
+    args[k + 1] = trip.display().to_string();
+    let status = Command::new("sumo")
+        .args(["-c", cfg.to_str().unwrap(), "--end", "120"])
+        .args(&args)
+        .output()
+        .unwrap();
+    assert!(
+        status.status.success(),
+        "{}",
+        String::from_utf8_lossy(&status.stderr)
+    );
+    let mut ours: Vec<(String, String)> =
+        csv_rows(&std::fs::read(out.join("vehicles.csv")).unwrap())
+            .into_iter()
+            .map(|v| (v["id"].clone(), v["time_loss_s"].clone()))
+            .collect();
+    ours.sort();
+    assert_eq!(ours, time_losses(&trip));
+}
+
+#[test]
+fn a_scenario_at_another_step_length_is_one_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = game_copy(dir.path()).join("A10KW.sumocfg");
+    let out = dir.path().join("out");
+    let o = scenario(&cfg, "bk-pbs", "10", &out);
+    refused_naming(&o, &["A10KW.sumocfg", "step-length 0.5 s", "0.2 s"]);
+    assert!(!out.join("episode.csv").exists());
+}
