@@ -194,23 +194,10 @@ impl<'a> Episode<'a> {
 
     fn run(mut self, mut sim: Simulation) -> Result<EpisodeResult, EpisodeError> {
         let loop_start = Instant::now();
-        let steps = self.config.scenario.steps;
-        let dt = self.config.scenario.dt;
-        let at = |step: u32| {
-            move |cause| EpisodeError::Step {
-                step,
-                time: step as f64 * dt,
-                cause,
-            }
-        };
-        sim.set_edge_codes(&frame::edge_names(&self.road))
-            .map_err(at(0))?;
-        for step in 0..steps {
-            if let Some(signal) = crate::io::interrupt::requested() {
-                return Err(EpisodeError::Interrupted { step, signal });
-            }
-            self.step(&mut sim, step + 1 < steps).map_err(at(step))?;
-        }
+        let (config, road) = (self.config, self.road.clone());
+        lock_step(&mut sim, &road, config, |sim, plan| self.step(sim, plan))?;
+        let steps = config.scenario.steps;
+        let at = step_error(config.scenario.dt);
         let loop_s = loop_start.elapsed().as_secs_f64();
         let stranded = self.standing_on_acceleration_lane();
         self.measure_remaining(&sim).map_err(at(steps))?;
@@ -469,6 +456,39 @@ pub(crate) fn send_commands(
                 sim.change_lane(&v.id, idx, sc.dt)?;
             }
         }
+    }
+    Ok(())
+}
+
+/// The error of SUMO failing at `step`, on a clock of `dt` seconds.
+pub(crate) fn step_error(dt: f64) -> impl Fn(u32) -> Box<dyn Fn(SumoError) -> EpisodeError> {
+    move |step| {
+        Box::new(move |cause| EpisodeError::Step {
+            step,
+            time: step as f64 * dt,
+            cause,
+        })
+    }
+}
+
+/// The lock-step loop of an episode on `road`: `scenario.steps` calls of `step` (told whether
+/// to plan: not after the last), the edge codes of `road` registered first, and a stop signal
+/// seen between two steps ending it.
+pub(crate) fn lock_step(
+    sim: &mut Simulation,
+    road: &Road,
+    config: &Config,
+    mut step: impl FnMut(&mut Simulation, bool) -> Result<(), SumoError>,
+) -> Result<(), EpisodeError> {
+    let steps = config.scenario.steps;
+    let at = step_error(config.scenario.dt);
+    sim.set_edge_codes(&frame::edge_names(road))
+        .map_err(at(0))?;
+    for k in 0..steps {
+        if let Some(signal) = crate::io::interrupt::requested() {
+            return Err(EpisodeError::Interrupted { step: k, signal });
+        }
+        step(sim, k + 1 < steps).map_err(at(k))?;
     }
     Ok(())
 }

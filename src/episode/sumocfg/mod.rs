@@ -197,24 +197,12 @@ impl<'a> ScenarioRun<'a> {
     }
 
     fn run(&mut self, mut sim: Simulation) -> Result<(), EpisodeError> {
-        let steps = self.config.scenario.steps;
-        let dt = self.config.scenario.dt;
-        let at = |step: u32| {
-            move |cause| EpisodeError::Step {
-                step,
-                time: step as f64 * dt,
-                cause,
-            }
-        };
-        sim.set_edge_codes(&frame::edge_names(&self.road))
-            .map_err(at(0))?;
-        for step in 0..steps {
-            if let Some(signal) = crate::io::interrupt::requested() {
-                return Err(EpisodeError::Interrupted { step, signal });
-            }
-            self.step(&mut sim, step + 1 < steps).map_err(at(step))?;
-        }
-        sim.close().map_err(at(steps))?;
+        let (config, road) = (self.config, self.road.clone());
+        crate::episode::runner::lock_step(&mut sim, &road, config, |sim, plan| {
+            self.step(sim, plan)
+        })?;
+        let at = crate::episode::runner::step_error(config.scenario.dt);
+        sim.close().map_err(at(config.scenario.steps))?;
         Ok(())
     }
 
