@@ -122,3 +122,48 @@ fn a_scenario_at_another_step_length_is_one_line() {
     refused_naming(&o, &["A10KW.sumocfg", "step-length 0.5 s", "0.2 s"]);
     assert!(!out.join("episode.csv").exists());
 }
+
+/// A10KW at the planners' step: both carriageways' merges are planned in one episode, each by
+/// its own planner, and `network --sumocfg` agrees with the episode on what runs.
+#[test]
+fn the_interchange_plans_both_carriageways_at_once() {
+    let dir = tempfile::tempdir().unwrap();
+    let game = game_copy(dir.path());
+    let text = std::fs::read_to_string(game.join("A10KW.sumocfg")).unwrap();
+    let cfg = game.join("A10KW-0.2.sumocfg");
+    std::fs::write(
+        &cfg,
+        text.replace(
+            "<step-length value=\"0.5\"/>",
+            "<step-length value=\"0.2\"/>",
+        ),
+    )
+    .unwrap();
+    let o = bkpbs(&["network", "--sumocfg", cfg.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let o = bkpbs(&[
+        "network",
+        "--sumocfg",
+        game.join("A10KW.sumocfg").to_str().unwrap(),
+    ]);
+    refused_naming(&o, &["step-length 0.5 s"]);
+    let out = dir.path().join("out");
+    let o = scenario(&cfg, "bk-pbs", "750", &out);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let ep = &csv_rows(&std::fs::read(out.join("episode.csv")).unwrap())[0];
+    assert_eq!(ep["regions"], "264308374; 4054057");
+    assert_eq!(ep["controllable_crashed"], "0", "{ep:?}");
+    let vehicles = csv_rows(&std::fs::read(out.join("vehicles.csv")).unwrap());
+    for region in ["264308374", "4054057"] {
+        let there: Vec<_> = vehicles.iter().filter(|v| v["region"] == region).collect();
+        assert!(there.len() > 20, "{region}: {}", there.len());
+        assert!(there.iter().any(|v| v["kind"] == "cav"));
+        assert!(there
+            .iter()
+            .filter(|v| v["outcome"] != "crashed")
+            .all(|v| !v["region_delay_s"].is_empty()));
+    }
+    // Few reach the on-ramps: the game's local streets jam at their junctions, in SUMO alone
+    // as well; the first does within 40 s.
+    assert!(vehicles.iter().any(|v| v["region_origin"] == "ramp"));
+}

@@ -45,13 +45,15 @@ pub fn episode_error(e: &EpisodeError) -> PyErr {
         | EpisodeError::NoGui(_)
         | EpisodeError::Controller(_)
         | EpisodeError::Input(InputError::MissingNet(_))
+        | EpisodeError::Scenario(_)
         | EpisodeError::Road(_) => BkpbsError::new_err(message),
         EpisodeError::Input(InputError::Write { .. }) => PyOSError::new_err(message),
         // Only the bkpbs binary takes stop signals as requests; kept exhaustive all the same.
         EpisodeError::Interrupted { .. } => PyKeyboardInterrupt::new_err(message),
-        EpisodeError::Start { .. } | EpisodeError::Step { .. } | EpisodeError::Sumo { .. } => {
-            SumoError::new_err(message)
-        }
+        EpisodeError::Start { .. }
+        | EpisodeError::Step { .. }
+        | EpisodeError::Sumo { .. }
+        | EpisodeError::Output(_) => SumoError::new_err(message),
     }
 }
 

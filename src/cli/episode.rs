@@ -121,13 +121,25 @@ fn run_scenario(e: &Episode) -> Result<()> {
         )
     })?;
     let s = &r.summary;
-    let loss = s
-        .mean_time_loss_s
-        .map_or("-".into(), |x| format!("{x:.2} s"));
+    let secs = |x: Option<f64>| x.map_or("-".into(), |x| format!("{x:.2} s"));
+    let cfg = e.config.scenario.sumocfg.as_ref().expect("a scenario");
     println!(
-        "{} α={} seed={} on {} (region {}): inserted {} ({} CAVs, share {:.3}), in region {}, arrived {}, crashed {} (controllable {}), mean timeLoss {loss}",
-        s.planner, s.alpha, s.seed, e.config.scenario.sumocfg.as_ref().expect("a scenario").display(), s.region,
-        s.inserted, s.inserted_cav, s.cav_share, s.in_region, s.arrived, s.crashed, s.controllable_crashed
+        "{} α={} seed={} on {} (regions {}): inserted {} ({} CAVs, share {:.3}), in a region {}, \
+         arrived {}, crashed {} (controllable {}), mean timeLoss {}, mean delay in its region {}",
+        s.planner,
+        s.alpha,
+        s.seed,
+        cfg.display(),
+        s.regions,
+        s.inserted,
+        s.inserted_cav,
+        s.cav_share,
+        s.in_region,
+        s.arrived,
+        s.crashed,
+        s.controllable_crashed,
+        secs(s.mean_time_loss_s),
+        secs(s.mean_region_delay_s)
     );
     println!("SUMO options bkpbs set: {}", r.sumo_options.join(" "));
     println!("results: {}", e.out.join("episode.csv").display());

@@ -195,7 +195,9 @@ impl<'a> Episode<'a> {
     fn run(mut self, mut sim: Simulation) -> Result<EpisodeResult, EpisodeError> {
         let loop_start = Instant::now();
         let (config, road) = (self.config, self.road.clone());
-        lock_step(&mut sim, &road, config, |sim, plan| self.step(sim, plan))?;
+        lock_step(&mut sim, &frame::edge_names(&road), config, |sim, plan| {
+            self.step(sim, plan)
+        })?;
         let steps = config.scenario.steps;
         let at = step_error(config.scenario.dt);
         let loop_s = loop_start.elapsed().as_secs_f64();
@@ -471,19 +473,18 @@ pub(crate) fn step_error(dt: f64) -> impl Fn(u32) -> Box<dyn Fn(SumoError) -> Ep
     }
 }
 
-/// The lock-step loop of an episode on `road`: `scenario.steps` calls of `step` (told whether
-/// to plan: not after the last), the edge codes of `road` registered first, and a stop signal
-/// seen between two steps ending it.
+/// The lock-step loop of an episode: `scenario.steps` calls of `step` (told whether to plan:
+/// not after the last), the frame's `edge_names` registered first (readings carry their
+/// codes), and a stop signal seen between two steps ending it.
 pub(crate) fn lock_step(
     sim: &mut Simulation,
-    road: &Road,
+    edge_names: &[&str],
     config: &Config,
     mut step: impl FnMut(&mut Simulation, bool) -> Result<(), SumoError>,
 ) -> Result<(), EpisodeError> {
     let steps = config.scenario.steps;
     let at = step_error(config.scenario.dt);
-    sim.set_edge_codes(&frame::edge_names(road))
-        .map_err(at(0))?;
+    sim.set_edge_codes(edge_names).map_err(at(0))?;
     for k in 0..steps {
         if let Some(signal) = crate::io::interrupt::requested() {
             return Err(EpisodeError::Interrupted { step: k, signal });

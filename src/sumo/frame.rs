@@ -125,6 +125,43 @@ impl Regions {
         }
     }
 
+    /// The road frames of every region `selection` leaves: what an episode on a user's own
+    /// scenario plans.
+    ///
+    /// # Errors
+    /// No region, or one that cannot be placed in a frame (naming it).
+    pub fn all_planned(mut self, selection: &[String]) -> Result<Vec<Road>, String> {
+        let picked = self.select(selection)?;
+        if picked.is_empty() {
+            return Err(if self.found.regions.is_empty() {
+                self.no_merge()
+            } else {
+                format!(
+                    "regions leaves no merge region (the merges: {})",
+                    self.merge_list()
+                )
+            });
+        }
+        let names: Vec<String> = picked
+            .iter()
+            .map(|&k| {
+                self.found.regions[k]
+                    .merge_edges()
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            })
+            .collect();
+        let mut roads = std::mem::take(&mut self.roads);
+        picked
+            .iter()
+            .zip(names)
+            .map(|(&k, name)| {
+                std::mem::replace(&mut roads[k], Err(String::new()))
+                    .map_err(|why| format!("region at {name}: {why}"))
+            })
+            .collect()
+    }
+
     /// Why a network without regions has none.
     fn no_merge(&self) -> String {
         let why: Vec<String> = self
@@ -164,6 +201,36 @@ pub fn road_from_net(net: &Net, path: &Path, selection: &[String]) -> Result<Roa
         })
 }
 
+/// The road frames of every region `selection` picks of a user's scenario (`scenario.sumocfg`):
+/// an episode on a scenario of its own plans them all.
+///
+/// # Errors
+/// An unreadable configuration or network, no region, or a region that cannot be placed in
+/// a frame.
+pub fn scenario_roads(scenario: &Scenario) -> Result<Vec<Road>, NetworkError> {
+    let Some(path) = &scenario.sumocfg else {
+        return Ok(vec![scenario_road(scenario)?]);
+    };
+    let net_path = sumocfg_net(path)?;
+    let regions = Regions::of(&Net::read(&net_path)?);
+    regions
+        .all_planned(&scenario.regions)
+        .map_err(|what| NetworkError::Shape {
+            path: net_path,
+            what,
+        })
+}
+
+/// The network a SUMO configuration names.
+fn sumocfg_net(path: &Path) -> Result<std::path::PathBuf, NetworkError> {
+    crate::sumo::sumocfg::SumoConfig::read(path)
+        .map(|c| c.net)
+        .map_err(|e| NetworkError::Shape {
+            path: path.to_path_buf(),
+            what: e.to_string(),
+        })
+}
+
 /// The road frame of the scenario's network: the configured file (in its configured region),
 /// or the embedded one.
 ///
@@ -171,11 +238,7 @@ pub fn road_from_net(net: &Net, path: &Path, selection: &[String]) -> Result<Roa
 /// As [`road_from_net_file`].
 pub fn scenario_road(scenario: &Scenario) -> Result<Road, NetworkError> {
     if let Some(cfg) = &scenario.sumocfg {
-        let cfg = crate::sumo::sumocfg::SumoConfig::read(cfg).map_err(|e| NetworkError::Shape {
-            path: cfg.clone(),
-            what: e.to_string(),
-        })?;
-        return road_from_net_file(&cfg.net, &scenario.regions);
+        return road_from_net_file(&sumocfg_net(cfg)?, &scenario.regions);
     }
     match &scenario.net_file {
         Some(path) => road_from_net_file(path, &scenario.regions),

@@ -21,7 +21,9 @@ pub struct ScenarioVehicle {
     pub sumo_type: String,
     /// `cav` or `hdv`.
     pub kind: String,
-    /// Where it entered the merge region (`main`, `ramp`), empty if it never did.
+    /// The first merge region it entered (the edges its on-ramps join), empty if none.
+    pub region: String,
+    /// Where it entered that region (`main`, `ramp`), empty if it never did.
     pub region_origin: String,
     /// When SUMO inserted it (s).
     #[serde(serialize_with = "cells::decimals::<2, _>")]
@@ -32,6 +34,14 @@ pub struct ScenarioVehicle {
     /// When it was last seen in the region (s).
     #[serde(serialize_with = "cells::opt_decimals::<2, _>")]
     pub region_leave_s: Option<f64>,
+    /// How far it drove in the region between its first and last reading there (m).
+    #[serde(serialize_with = "cells::opt_decimals::<2, _>")]
+    pub region_distance_m: Option<f64>,
+    /// Its system delay in the region (s): the time between those readings less the free-flow
+    /// time over that distance from the speed it entered with (`metrics`' t*, at the region's
+    /// `v_max`); a vehicle still there at the end counts to its last reading; none if crashed.
+    #[serde(serialize_with = "cells::opt_decimals::<4, _>")]
+    pub region_delay_s: Option<f64>,
     /// `arrived`, `crashed` or `present` (still driving at the end).
     pub outcome: String,
     /// When it arrived at its route's end (s).
@@ -64,8 +74,8 @@ pub struct ScenarioSummary {
     pub seed: u64,
     /// Simulated steps.
     pub steps: u32,
-    /// The merge edges of the region planned.
-    pub region: String,
+    /// The regions planned, each as the edges its on-ramps join (`; ` between regions).
+    pub regions: String,
     /// Vehicles SUMO inserted.
     pub inserted: usize,
     /// CAVs among them.
@@ -94,6 +104,9 @@ pub struct ScenarioSummary {
     /// Total `timeLoss` of the vehicles not crashed (vehicle-hours).
     #[serde(serialize_with = "cells::decimals::<6, _>")]
     pub time_loss_veh_h: f64,
+    /// Mean system delay in its region over the vehicles that were in one, not crashed (s).
+    #[serde(serialize_with = "cells::opt_decimals::<4, _>")]
+    pub mean_region_delay_s: Option<f64>,
 }
 
 impl ScenarioSummary {
@@ -126,6 +139,10 @@ impl ScenarioSummary {
             hdv_collisions,
             mean_time_loss_s: mean(&|_| true),
             mean_time_loss_region_s: mean(&|v| v.region_enter_s.is_some()),
+            mean_region_delay_s: {
+                let d: Vec<f64> = vehicles.iter().filter_map(|v| v.region_delay_s).collect();
+                (!d.is_empty()).then(|| d.iter().sum::<f64>() / d.len() as f64)
+            },
             time_loss_veh_h: vehicles
                 .iter()
                 .filter(|v| v.outcome != "crashed")

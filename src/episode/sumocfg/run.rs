@@ -1,0 +1,440 @@
+//! The lock-step loop of an episode on a user's scenario: SUMO steps, departures get their
+//! CAV draw, collisions and arrivals are booked, and each merge region's vehicles are read into
+//! its own scene and planned by its own controller, regions one after the other in a fixed
+//! order (each deterministic, and none sees another's vehicles).
+
+use std::collections::HashMap;
+
+use crate::config::Config;
+use crate::controller::{CavHandling, Command, Controller};
+use crate::episode::error::EpisodeError;
+use crate::episode::metrics::CollisionEvent;
+use crate::model::kinematics::free_flow_time;
+use crate::model::road::Road;
+use crate::model::scene::{Kind, Origin};
+use crate::sumo::frame::{self, SumoScene};
+use crate::sumo::{RawVehicleState, Simulation, SumoError, VehicleReadings};
+
+use super::records::{self, ScenarioSummary, ScenarioVehicle};
+use super::{is_cav, merge_edges, ScenarioResult};
+
+/// SUMO's defaults, restored when a CAV leaves the planned part of a region: every safety check
+/// on, and its own lane changes (SUMO's `speedMode` 31 and `laneChangeMode` 1621).
+const SPEED_MODE_SUMO: i32 = 31;
+const LC_MODE_SUMO: i32 = 0b110_0101_0101;
+
+/// One merge region: its frame, its planner, this step's scene and commands.
+pub struct Region {
+    /// The region's configuration: the episode's, `v_max` capped at the region's limit.
+    pub config: Config,
+    pub road: Road,
+    pub controller: Box<dyn Controller>,
+    scene: SumoScene,
+    commands: Vec<Command>,
+    /// Frame `s` from which the planner drives CAVs: the end of the region's first edge.
+    control_start: f64,
+    /// Its edges' codes start here in the codes registered with SUMO.
+    code_offset: i32,
+    /// The edges its on-ramps join, its name in the results.
+    name: String,
+}
+
+impl Region {
+    /// The region of `road`, planned by `controller` under `config`.
+    pub fn new(config: Config, road: Road, controller: Box<dyn Controller>) -> Region {
+        // The main edges come first in the frame: the second one starts where the first ends.
+        let control_start = road
+            .edges
+            .get(1)
+            .filter(|e| !e.on_ramp)
+            .and_then(|e| e.lanes.iter().flatten().map(|l| l.s0).reduce(f64::min))
+            .unwrap_or(0.0);
+        Region {
+            scene: SumoScene::new(&road),
+            name: merge_edges(&road).join(" "),
+            config,
+            road,
+            controller,
+            commands: Vec::new(),
+            control_start,
+            code_offset: 0,
+        }
+    }
+
+    /// The reading with its edge code counted within this region, if it is on one of its edges.
+    fn local(&self, raw: &RawVehicleState) -> Option<RawVehicleState> {
+        let code = raw.edge_code - self.code_offset;
+        (raw.edge_code >= 0 && (0..self.road.edges.len() as i32).contains(&code)).then_some({
+            RawVehicleState {
+                edge_code: code,
+                ..*raw
+            }
+        })
+    }
+}
+
+/// A vehicle of the scenario, as far as bkpbs follows it.
+struct Line {
+    record: ScenarioVehicle,
+    kind: Kind,
+    /// Its length and width (m), from its SUMO type.
+    size: (f64, f64),
+    /// The region it entered first, and where and how: its frame position and speed then.
+    entry: Option<Entry>,
+    /// The region whose planner commands it now.
+    commanded: Option<usize>,
+}
+
+/// A vehicle's passage through the first region it entered.
+#[derive(Clone, Copy)]
+struct Entry {
+    region: usize,
+    origin: Origin,
+    /// Whether its route leaves the region before the region's end (by an off-ramp): the
+    /// planners keep a CAV on the carriageway, so SUMO drives it.
+    leaves_early: bool,
+    time: f64,
+    front: f64,
+    speed: f64,
+    /// Its last reading in the region: time and front.
+    last: (f64, f64),
+}
+
+/// The loop's state.
+pub struct ScenarioRun<'a> {
+    config: &'a Config,
+    regions: Vec<Region>,
+    lines: Vec<Line>,
+    index: HashMap<String, usize>,
+    readings: VehicleReadings,
+    collisions: Vec<CollisionEvent>,
+}
+
+impl<'a> ScenarioRun<'a> {
+    pub fn new(config: &'a Config, mut regions: Vec<Region>) -> Self {
+        let mut offset = 0;
+        for r in &mut regions {
+            r.code_offset = offset;
+            offset += r.road.edges.len() as i32;
+        }
+        ScenarioRun {
+            config,
+            regions,
+            lines: Vec::new(),
+            index: HashMap::new(),
+            readings: VehicleReadings::default(),
+            collisions: Vec::new(),
+        }
+    }
+
+    /// Runs the episode's steps, then closes SUMO (which writes the tripinfo output).
+    pub fn run(&mut self, mut sim: Simulation) -> Result<(), EpisodeError> {
+        let config = self.config;
+        let names: Vec<String> = self
+            .regions
+            .iter()
+            .flat_map(|r| frame::edge_names(&r.road))
+            .map(String::from)
+            .collect();
+        let names: Vec<&str> = names.iter().map(String::as_str).collect();
+        let at = crate::episode::runner::step_error(config.scenario.dt);
+        crate::episode::runner::lock_step(&mut sim, &names, config, |sim, plan| {
+            self.step(sim, plan)
+        })?;
+        sim.close().map_err(at(config.scenario.steps))?;
+        Ok(())
+    }
+
+    /// One SUMO step and, unless it is the last, one planning round per region.
+    fn step(&mut self, sim: &mut Simulation, plan: bool) -> Result<(), SumoError> {
+        let now = sim.time()?;
+        sim.step()?;
+        self.book_departures(sim, now)?;
+        sim.read_vehicles(&mut self.readings)?;
+        self.book_collisions(sim, now)?;
+        for id in sim.arrived()? {
+            if let Some(&k) = self.index.get(&id) {
+                let r = &mut self.lines[k].record;
+                if r.outcome == "present" {
+                    r.outcome = "arrived".into();
+                    r.arrival_s = Some(now);
+                }
+            }
+        }
+        self.build_scenes(sim, now)?;
+        if plan {
+            for r in &mut self.regions {
+                r.commands.clear();
+                r.controller.plan(&r.scene.scene, &mut r.commands);
+                if r.controller.handling() == CavHandling::Commanded {
+                    crate::episode::runner::send_commands(
+                        sim,
+                        &r.scene,
+                        &r.commands,
+                        &r.config.scenario,
+                    )?;
+                }
+            }
+        }
+        Ok(())
+    }
+
+    fn book_departures(&mut self, sim: &mut Simulation, now: f64) -> Result<(), SumoError> {
+        let s = &self.config.scenario;
+        for id in sim.departed()? {
+            let sumo_type = sim.vehicle_type(&id)?;
+            let size = sim.vehicle_size(&id)?;
+            let kind = if is_cav(s.seed, &id, s.alpha) {
+                Kind::Cav
+            } else {
+                Kind::Hdv
+            };
+            self.index.insert(id.clone(), self.lines.len());
+            self.lines.push(Line {
+                record: ScenarioVehicle {
+                    id,
+                    sumo_type,
+                    kind: kind.as_str().into(),
+                    depart_s: now,
+                    outcome: "present".into(),
+                    ..ScenarioVehicle::default()
+                },
+                kind,
+                size,
+                entry: None,
+                commanded: None,
+            });
+        }
+        Ok(())
+    }
+
+    /// Removes both vehicles of each collision and books it (a CAV in it makes it
+    /// controllable).
+    fn book_collisions(&mut self, sim: &mut Simulation, now: f64) -> Result<(), SumoError> {
+        for c in sim.collisions()? {
+            let kind = |id: &str| self.index.get(id).map(|&k| self.lines[k].kind);
+            let event = CollisionEvent {
+                time: now,
+                collider_kind: kind(&c.collider),
+                victim_kind: kind(&c.victim),
+                collider: c.collider.clone(),
+                victim: c.victim.clone(),
+                lane: c.lane.clone(),
+                position: c.position,
+            };
+            for (me, other) in [(&c.collider, &c.victim), (&c.victim, &c.collider)] {
+                let Some(&k) = self.index.get(me) else {
+                    continue;
+                };
+                let r = &mut self.lines[k].record;
+                if r.outcome == "present" {
+                    sim.remove_vehicle(me)?;
+                    r.outcome = "crashed".into();
+                    r.crash_time_s = Some(now);
+                }
+                if !r.crashed_with.is_empty() {
+                    r.crashed_with.push(' ');
+                }
+                r.crashed_with.push_str(other);
+                r.controllable_crash |= event.controllable();
+            }
+            self.collisions.push(event);
+        }
+        Ok(())
+    }
+
+    /// This step's scene of every region: each vehicle read on its edges, with its own size;
+    /// a CAV entering the part a planner drives is taken over, one leaving it handed back.
+    fn build_scenes(&mut self, sim: &mut Simulation, now: f64) -> Result<(), SumoError> {
+        for r in &mut self.regions {
+            r.scene.clear(now);
+        }
+        let mut planned_by: Vec<Option<usize>> = vec![None; self.lines.len()];
+        // Taken out for the loop, which places vehicles into `self`, and put back after it.
+        let readings = std::mem::take(&mut self.readings);
+        for (id, raw) in readings.ids.iter().zip(&readings.states) {
+            let Some(&k) = self.index.get(id) else {
+                continue;
+            };
+            if self.lines[k].record.outcome != "present" {
+                continue;
+            }
+            let found = self.regions.iter().enumerate().find_map(|(g, r)| {
+                let local = r.local(raw)?;
+                frame::frame_position(&r.road, &local).map(|p| (g, local, p))
+            });
+            let Some((g, local, position)) = found else {
+                continue;
+            };
+            match self.place(sim, k, g, &local, position, now) {
+                Ok(true) => planned_by[k] = Some(g),
+                Ok(false) => {}
+                Err(e) => {
+                    self.readings = readings;
+                    return Err(e);
+                }
+            }
+        }
+        self.readings = readings;
+        self.hand_back(sim, &planned_by)
+    }
+
+    /// Puts vehicle `k`, read at `position` in region `g`, in that region's scene; whether
+    /// the region's planner drives it. The planners have no lane for a CAV on a deceleration
+    /// lane (lane 0 outside a merge zone), nor a way off the carriageway: there SUMO drives it,
+    /// and the planner sees it as any vehicle SUMO drives. On the region's first edge it is
+    /// SUMO's too: the planner sees no one behind the region's start, so a CAV taken over there
+    /// could brake in front of a follower it cannot see.
+    fn place(
+        &mut self,
+        sim: &mut Simulation,
+        k: usize,
+        g: usize,
+        raw: &RawVehicleState,
+        (front, lane): (f64, i32),
+        now: f64,
+    ) -> Result<bool, SumoError> {
+        let region = &mut self.regions[g];
+        let line = &mut self.lines[k];
+        if line.entry.is_none() {
+            line.entry = Some(enter(&line.record.id, sim, g, region, raw, front, now)?);
+            line.record.region = region.name.clone();
+        }
+        let mut entry = line.entry.expect("set on entry");
+        let first = entry.region == g;
+        if first {
+            entry.last = (now, front);
+            line.entry = Some(entry);
+        }
+        let planned = line.kind == Kind::Cav
+            && !(first && entry.leaves_early)
+            && front >= region.control_start
+            && region.road.lanes_at(front).contains(&lane);
+        let commanded = region.controller.handling() == CavHandling::Commanded;
+        if planned && commanded && line.commanded != Some(g) {
+            sim.set_speed_mode(&line.record.id, 0)?;
+            sim.set_lane_change_mode(&line.record.id, 0)?;
+            line.commanded = Some(g);
+        }
+        let who = frame::Identity {
+            id: line.record.id.as_str().into(),
+            kind: if planned { Kind::Cav } else { Kind::Hdv },
+            origin: if first { entry.origin } else { Origin::Main },
+            desired_speed: region.config.scenario.v_max,
+        };
+        let vehicle = frame::state_sized(&region.road, who, raw, (front, lane), line.size);
+        region.scene.push(vehicle, raw.edge_code);
+        Ok(planned)
+    }
+
+    /// Hands every commanded CAV that no region's planner drives now back to SUMO.
+    fn hand_back(
+        &mut self,
+        sim: &mut Simulation,
+        planned_by: &[Option<usize>],
+    ) -> Result<(), SumoError> {
+        for (k, line) in self.lines.iter_mut().enumerate() {
+            if line.commanded.is_some() && line.commanded != planned_by[k] {
+                line.commanded = None;
+                if line.record.outcome == "present" {
+                    sim.set_speed(&line.record.id, -1.0)?;
+                    sim.set_speed_mode(&line.record.id, SPEED_MODE_SUMO)?;
+                    sim.set_lane_change_mode(&line.record.id, LC_MODE_SUMO)?;
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// The records with SUMO's trip figures and each vehicle's delay in its region, and the
+    /// summary.
+    pub fn finish(
+        self,
+        planner: &str,
+        tripinfo: &std::path::Path,
+        sumo_options: Vec<String>,
+    ) -> Result<ScenarioResult, String> {
+        let trips = records::read_trips(tripinfo)?;
+        let vehicles: Vec<ScenarioVehicle> = self
+            .lines
+            .into_iter()
+            .map(|l| {
+                let mut v = l.record;
+                if let Some(t) = trips.get(&v.id) {
+                    v.time_loss_s = Some(t.time_loss);
+                    v.route_length_m = Some(t.route_length);
+                }
+                if let Some(e) = l.entry {
+                    passage(&mut v, &e, &self.regions[e.region].config);
+                }
+                v
+            })
+            .collect();
+        let sc = &self.config.scenario;
+        let hdv_collisions = self.collisions.iter().filter(|c| !c.controllable()).count();
+        let head = ScenarioSummary {
+            planner: planner.into(),
+            alpha: sc.alpha,
+            seed: sc.seed,
+            steps: sc.steps,
+            regions: self
+                .regions
+                .iter()
+                .map(|r| r.name.clone())
+                .collect::<Vec<_>>()
+                .join("; "),
+            ..ScenarioSummary::default()
+        };
+        Ok(ScenarioResult {
+            summary: ScenarioSummary::of(head, &vehicles, hdv_collisions),
+            vehicles,
+            collisions: self.collisions,
+            sumo_options,
+            sumo_log: String::new(),
+        })
+    }
+}
+
+/// A vehicle's first reading in region `region`: when, where, how fast, from where, and
+/// whether its route leaves the region early.
+fn enter(
+    id: &str,
+    sim: &Simulation,
+    g: usize,
+    region: &Region,
+    raw: &RawVehicleState,
+    front: f64,
+    now: f64,
+) -> Result<Entry, SumoError> {
+    let (end, pos) = (&region.road.end_edge.0, region.road.end_edge.1);
+    Ok(Entry {
+        region: g,
+        origin: if frame::is_on_ramp(&region.road, raw.edge_code) {
+            Origin::Ramp
+        } else {
+            Origin::Main
+        },
+        // SUMO answers a negative distance for an edge off the vehicle's route.
+        leaves_early: sim.driving_distance(id, end, pos)? < 0.0,
+        time: now,
+        front,
+        speed: raw.speed,
+        last: (now, front),
+    })
+}
+
+/// Fills in a vehicle's passage through its first region: when it was there, how far it
+/// drove, and its delay against driving that far free from the speed it entered with.
+fn passage(v: &mut ScenarioVehicle, e: &Entry, config: &Config) {
+    let s = &config.scenario;
+    let (last_time, last_front) = e.last;
+    let distance = (last_front - e.front).max(0.0);
+    let free = free_flow_time(distance, e.speed, s.free_flow_accel, s.v_max.max(e.speed));
+    v.region_origin = e.origin.as_str().into();
+    v.region_enter_s = Some(e.time);
+    v.region_leave_s = Some(last_time);
+    v.region_distance_m = Some(distance);
+    if v.outcome != "crashed" {
+        v.region_delay_s = Some(last_time - e.time - free);
+    }
+}
