@@ -129,3 +129,56 @@ fn oversized_counts_are_refused_before_anything_starts() {
     let o = bounded(&["bench", "--threads", "1,100000"]);
     refused_naming(&o, &["--threads", "100000"]);
 }
+
+/// Networks SUMO would assert on or mis-measure (finding 6): NaN or infinite lane sizes, a NaN
+/// shape point, an acceleration lane shorter than a car. Each is one `error:` line from
+/// `network` and from `episode`, before SUMO starts; the old code ran them (exit 0).
+#[test]
+fn networks_of_impossible_lanes_are_refused() {
+    let net = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/sumo_net/merge.net.xml"
+    ))
+    .unwrap();
+    let acc = r#"id="acc_0" index="0" speed="40.00" length="180.00""#;
+    assert!(net.contains(acc));
+    let dir = tempfile::tempdir().unwrap();
+    for (name, broken, named) in [
+        (
+            "nan-width",
+            net.replacen(r#"width="4.50""#, r#"width="nan""#, 1),
+            "width NaN",
+        ),
+        (
+            "inf-length",
+            net.replace(acc, &acc.replace("180.00", "inf")),
+            "length inf",
+        ),
+        (
+            "nan-shape",
+            net.replacen("shape=\"150.00,", "shape=\"nan,", 1),
+            "finite",
+        ),
+        (
+            "short",
+            net.replace(acc, &acc.replace("180.00", "0.10")),
+            "shorter than one vehicle",
+        ),
+    ] {
+        let path = dir.path().join(format!("{name}.net.xml"));
+        std::fs::write(&path, broken).unwrap();
+        let p = path.to_str().unwrap();
+        refused_naming(&bounded(&["network", p]), &[named]);
+        let out = dir.path().join(name);
+        let o = bounded(&[
+            "episode",
+            "--net",
+            p,
+            "--steps",
+            "5",
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        refused_naming(&o, &[named]);
+    }
+}

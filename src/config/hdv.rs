@@ -124,6 +124,55 @@ impl HdvProfile {
     }
 }
 
+/// The largest magnitude of a numeric vType attribute: beyond it no physical vehicle (SUMO
+/// asserts on some, e.g. `accel = 1e308`).
+const ATTRIBUTE_MAGNITUDE: f64 = 1e4;
+
+/// Whether SUMO can be given vType attribute `key = value`: a name as SUMO spells its
+/// attributes (letters, digits, `_`, `.`, from a letter), a number finite and within
+/// ±[`ATTRIBUTE_MAGNITUDE`] (SUMO spins for ever on `minGap = nan`), and no markup (a `"` would
+/// end the attribute and let the rest be read as XML).
+fn check_attribute(key: &str, value: &str) -> Result<(), &'static str> {
+    let name_ok = key.chars().next().is_some_and(|c| c.is_ascii_alphabetic())
+        && key
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '.');
+    if !name_ok || key == "id" {
+        return Err(
+            "not a SUMO vType attribute name (letters, digits, '_', from a letter; not id)",
+        );
+    }
+    if value
+        .chars()
+        .any(|c| matches!(c, '<' | '>' | '&' | '"' | '\'') || c.is_control())
+    {
+        return Err(
+            "SUMO attribute values hold no markup characters (< > & \" ') or control characters",
+        );
+    }
+    let looks_numeric = value
+        .trim()
+        .trim_start_matches(['+', '-'])
+        .chars()
+        .next()
+        .is_some_and(|c| c.is_ascii_digit() || c == '.')
+        || ["nan", "inf", "infinity"].contains(
+            &value
+                .trim()
+                .trim_start_matches(['+', '-'])
+                .to_ascii_lowercase()
+                .as_str(),
+        );
+    if looks_numeric {
+        match value.trim().parse::<f64>() {
+            Ok(x) if x.is_finite() && x.abs() <= ATTRIBUTE_MAGNITUDE => {}
+            Ok(_) => return Err("must be a finite number within ±10000"),
+            Err(_) => {}
+        }
+    }
+    Ok(())
+}
+
 fn attributes(pairs: &[(&str, &str)]) -> BTreeMap<String, String> {
     pairs
         .iter()
@@ -246,6 +295,23 @@ impl HdvSettings {
         names
     }
 
+    /// Checks the vType attributes profile `p` gives SUMO, fixed or drawn.
+    fn check_attributes(&self, p: &HdvProfile) -> Result<(), ConfigError> {
+        let fixed = p.attributes.iter().map(|(k, v)| (k, v.clone()));
+        let drawn = p.draws.iter().map(|(k, [_, high])| (k, high.to_string()));
+        for (key, value) in fixed.chain(drawn) {
+            if let Err(reason) = check_attribute(key, &value) {
+                return Err(ConfigError::InvalidAttribute {
+                    profile: self.profile.clone(),
+                    key: key.clone(),
+                    value,
+                    reason,
+                });
+            }
+        }
+        Ok(())
+    }
+
     /// Checks the profile in use (and that it exists).
     pub fn validate(&self) -> Result<(), ConfigError> {
         let p = self.resolved()?;
@@ -263,6 +329,7 @@ impl HdvSettings {
                 "must be 1 to 1000 driver types",
             );
         }
+        self.check_attributes(&p)?;
         for (key, [low, high]) in &p.draws {
             if !(low.is_finite() && high.is_finite() && *low > 0.0 && low <= high) {
                 return Err(ConfigError::InvalidDraw {

@@ -77,6 +77,18 @@ pub enum ConfigError {
         /// Every known profile name, comma-separated.
         known: String,
     },
+    /// A SUMO vType attribute of the HDV profile that SUMO cannot be given.
+    #[error("invalid setting hdv.profiles.{profile}.attributes.{key} = {value:?}: {reason}")]
+    InvalidAttribute {
+        /// The profile.
+        profile: String,
+        /// The attribute's name.
+        key: String,
+        /// Its value, as given.
+        value: String,
+        /// The rule it breaks.
+        reason: &'static str,
+    },
     /// A per-driver draw range of the HDV profile is not a positive `[low, high]`.
     #[error("invalid setting hdv draw {key} = [{low}, {high}]: must be positive and low ≤ high")]
     InvalidDraw {

@@ -410,3 +410,34 @@ fn missing_and_malformed_files_name_the_file() {
     let e = Config::from_file(&p).unwrap_err().to_string();
     assert!(e.contains("bad.toml") && e.starts_with("malformed"), "{e}");
 }
+
+/// Profile attributes SUMO cannot be given (hardening II, findings 2, 4 and 5): each refused in
+/// one line naming the setting, before anything is written into SUMO's XML; the values that
+/// used to inject a second vType, spin SUMO for ever or make it assert.
+#[test]
+fn hostile_profile_attributes_are_refused_naming_the_setting() {
+    for (key, value, rule) in [
+        ("tau", "1\"/><vType id=\"evil", "markup"),
+        ("color", "1&2<3", "markup"),
+        ("minGap", "nan", "finite"),
+        ("accel", "1e308", "finite"),
+        ("tau", "inf", "finite"),
+        ("tau", "-inf", "finite"),
+        ("bad name", "1", "attribute name"),
+        ("id", "x", "attribute name"),
+    ] {
+        let text =
+            format!("[hdv]\nprofile = \"x\"\n[hdv.profiles.x.attributes]\n\"{key}\" = '{value}'\n");
+        let c: Config = toml::from_str(&text).unwrap();
+        let e = c.validate().unwrap_err().to_string();
+        assert!(
+            e.starts_with(&format!(
+                "invalid setting hdv.profiles.x.attributes.{key} = "
+            )) && e.contains(rule),
+            "{key} = {value}: {e}"
+        );
+    }
+    // What SUMO's own attributes look like passes: numbers, colours, names.
+    let ok = "[hdv]\nprofile = \"x\"\n[hdv.profiles.x.attributes]\nsigma = \"0.5\"\ncolor = \"1,0,0\"\nlcAssertive = \"2\"\nlatAlignment = \"center\"\n";
+    toml::from_str::<Config>(ok).unwrap().validate().unwrap();
+}

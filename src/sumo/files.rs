@@ -108,8 +108,29 @@ fn set(a: &mut Attributes, key: &str, value: &str) {
 }
 
 fn vtype_line(a: &Attributes) -> String {
-    let attrs: Vec<String> = a.iter().map(|(k, v)| format!("{k}=\"{v}\"")).collect();
+    // Values are checked where they are configured; escaped here all the same, so nothing
+    // written into SUMO's XML can end an attribute.
+    let attrs: Vec<String> = a
+        .iter()
+        .map(|(k, v)| format!("{k}=\"{}\"", xml_escape(v)))
+        .collect();
     format!("    <vType {}/>\n", attrs.join(" "))
+}
+
+/// `text` with XML's five special characters escaped.
+fn xml_escape(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    for c in text.chars() {
+        match c {
+            '&' => out.push_str("&amp;"),
+            '<' => out.push_str("&lt;"),
+            '>' => out.push_str("&gt;"),
+            '"' => out.push_str("&quot;"),
+            '\'' => out.push_str("&apos;"),
+            c => out.push(c),
+        }
+    }
+    out
 }
 
 /// `hdv` as a distribution of `driver_types` types, each with its drawn attributes (see

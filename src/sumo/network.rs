@@ -256,11 +256,20 @@ impl Net {
 
 /// A `<lane>` element.
 fn lane(l: roxmltree::Node) -> Result<Lane, String> {
+    // SUMO asserts on (or silently mis-measures with) lanes of no positive, finite size.
     let num = |k: &str| -> Result<f64, String> {
-        l.attribute(k)
+        let x: f64 = l
+            .attribute(k)
             .ok_or_else(|| format!("lane without {k}"))?
             .parse()
-            .map_err(|_| format!("lane {k} is not a number"))
+            .map_err(|_| format!("lane {k} is not a number"))?;
+        if !(x.is_finite() && x > 0.0) && k != "index" {
+            return Err(format!(
+                "lane '{}' has {k} {x}: must be a positive, finite number",
+                l.attribute("id").unwrap_or_default()
+            ));
+        }
+        Ok(x)
     };
     let shape = l
         .attribute("shape")
@@ -268,10 +277,13 @@ fn lane(l: roxmltree::Node) -> Result<Lane, String> {
         .split_whitespace()
         .map(|p| {
             let (x, y) = p.split_once(',').ok_or("bad shape point")?;
-            Ok(Point::new(
-                x.parse().map_err(|_| "bad shape point")?,
-                y.parse().map_err(|_| "bad shape point")?,
-            ))
+            let coordinate = |v: &str| {
+                v.parse::<f64>()
+                    .ok()
+                    .filter(|c| c.is_finite())
+                    .ok_or("bad shape point (not a finite number)")
+            };
+            Ok(Point::new(coordinate(x)?, coordinate(y)?))
         })
         .collect::<Result<Vec<Point>, &str>>()?;
     Ok(Lane {

@@ -24,6 +24,9 @@ use crate::model::road::{
 use crate::sumo::layout::{Layout, MainEdge, OnRamp};
 use crate::sumo::network::{Lane, Net};
 
+/// The shortest acceleration lane a merge is planned on (m): room for one car.
+const MIN_ACCELERATION_LANE: f64 = 5.0;
+
 /// Where each main edge lies: its frame-lane offset and the span of its reference lane.
 struct MainFrames<'n> {
     offsets: BTreeMap<&'n str, i32>,
@@ -53,6 +56,15 @@ pub fn road(net: &Net, layout: &Layout) -> Result<Road, String> {
             main.spans[ramp.joins.as_str()].s0,
             main.spans[ramp.ends_on.as_str()].s_at(end_lane.length),
         );
+        if joined.1 - joined.0 < MIN_ACCELERATION_LANE {
+            return Err(format!(
+                "the acceleration lane of on-ramp '{}' on '{}' is {:.2} m long, shorter than one \
+                 vehicle ({MIN_ACCELERATION_LANE} m): no merge to plan",
+                ramp.edges[0],
+                ramp.joins,
+                joined.1 - joined.0
+            ));
+        }
         let zone = ramp_frames(net, ramp, joined, &main.offsets, &mut edges, &mut internal)?;
         zones.push(zone);
     }
