@@ -150,27 +150,14 @@ fn check_attribute(key: &str, value: &str) -> Result<(), &'static str> {
             "SUMO attribute values hold no markup characters (< > & \" ') or control characters",
         );
     }
-    let looks_numeric = value
-        .trim()
-        .trim_start_matches(['+', '-'])
-        .chars()
-        .next()
-        .is_some_and(|c| c.is_ascii_digit() || c == '.')
-        || ["nan", "inf", "infinity"].contains(
-            &value
-                .trim()
-                .trim_start_matches(['+', '-'])
-                .to_ascii_lowercase()
-                .as_str(),
-        );
-    if looks_numeric {
-        match value.trim().parse::<f64>() {
-            Ok(x) if x.is_finite() && x.abs() <= ATTRIBUTE_MAGNITUDE => {}
-            Ok(_) => return Err("must be a finite number within ±10000"),
-            Err(_) => {}
+    // Rust reads "nan", "inf" and "1e308" as numbers, as SUMO does; "1,0,0" or "center" are
+    // no number and pass as text.
+    match value.trim().parse::<f64>() {
+        Ok(x) if !(x.is_finite() && x.abs() <= ATTRIBUTE_MAGNITUDE) => {
+            Err("must be a finite number within ±10000")
         }
+        _ => Ok(()),
     }
-    Ok(())
 }
 
 fn attributes(pairs: &[(&str, &str)]) -> BTreeMap<String, String> {

@@ -12,9 +12,10 @@ use crate::model::kinematics::free_flow_time;
 use crate::model::scene::{Kind, Origin};
 
 /// How a vehicle's episode ended.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub enum Outcome {
     /// Still in the network when the episode ended.
+    #[default]
     Present,
     /// Left the section (at its end, or by an off-ramp) without a collision.
     Arrived,

@@ -199,7 +199,7 @@ impl<'a> Episode<'a> {
             self.step(sim, plan)
         })?;
         let steps = config.scenario.steps;
-        let at = step_error(config.scenario.dt);
+        let at = |step| step_error(config.scenario.dt, step);
         let loop_s = loop_start.elapsed().as_secs_f64();
         let stranded = self.standing_on_acceleration_lane();
         self.measure_remaining(&sim).map_err(at(steps))?;
@@ -462,14 +462,12 @@ pub(crate) fn send_commands(
     Ok(())
 }
 
-/// The error of SUMO failing at `step`, on a clock of `dt` seconds.
-pub(crate) fn step_error(dt: f64) -> impl Fn(u32) -> Box<dyn Fn(SumoError) -> EpisodeError> {
-    move |step| {
-        Box::new(move |cause| EpisodeError::Step {
-            step,
-            time: step as f64 * dt,
-            cause,
-        })
+/// The error of SUMO failing at `step`, on a clock of `dt` seconds per step.
+pub(crate) fn step_error(dt: f64, step: u32) -> impl Fn(SumoError) -> EpisodeError {
+    move |cause| EpisodeError::Step {
+        step,
+        time: step as f64 * dt,
+        cause,
     }
 }
 
@@ -483,7 +481,7 @@ pub(crate) fn lock_step(
     mut step: impl FnMut(&mut Simulation, bool) -> Result<(), SumoError>,
 ) -> Result<(), EpisodeError> {
     let steps = config.scenario.steps;
-    let at = step_error(config.scenario.dt);
+    let at = |step| step_error(config.scenario.dt, step);
     sim.set_edge_codes(edge_names).map_err(at(0))?;
     for k in 0..steps {
         if let Some(signal) = crate::io::interrupt::requested() {

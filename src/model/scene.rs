@@ -5,11 +5,12 @@ use std::sync::Arc;
 use crate::model::road::Road;
 
 /// Who drives a vehicle.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub enum Kind {
     /// Connected automated vehicle: commanded by the controller under test.
     Cav,
     /// Human-driven vehicle: SUMO's driver models (plus the ramp merge rule).
+    #[default]
     Hdv,
 }
 

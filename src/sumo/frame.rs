@@ -62,32 +62,35 @@ impl Regions {
     pub fn select(&self, selection: &[String]) -> Result<Vec<usize>, String> {
         let names = |k: usize| self.found.regions[k].merge_edges().collect::<Vec<_>>();
         let all = 0..self.found.regions.len();
+        let (mut wanted, mut excluded) = (Vec::new(), Vec::new());
         for entry in selection {
-            let edge = entry.strip_prefix('!').unwrap_or(entry);
-            if !all.clone().any(|k| names(k).contains(&edge)) {
-                return Err(format!(
-                    "regions: '{edge}' is no edge an on-ramp joins (the merges: {})",
-                    self.merge_list()
-                ));
+            match entry.strip_prefix('!') {
+                Some(edge) => excluded.push(edge),
+                None => wanted.push(entry.as_str()),
             }
+        }
+        let unknown = |e: &&str| !all.clone().any(|k| names(k).contains(e));
+        if let Some(edge) = (selection.iter())
+            .map(|e| e.strip_prefix('!').unwrap_or(e))
+            .find(unknown)
+        {
+            return Err(format!(
+                "regions: '{edge}' is no edge an on-ramp joins (the merges: {})",
+                self.merge_list()
+            ));
         }
         let kept = |k: &usize| {
             let n = names(*k);
-            let named = |e: &String| n.contains(&e.strip_prefix('!').unwrap_or(e));
-            let wanted = selection.iter().filter(|e| !e.starts_with('!'));
-            let excluded = selection.iter().filter(|e| e.starts_with('!')).any(named);
-            !excluded && (wanted.clone().next().is_none() || wanted.clone().any(named))
+            let named = |e: &&str| n.contains(e);
+            !excluded.iter().any(named) && (wanted.is_empty() || wanted.iter().any(named))
         };
         Ok(all.filter(kept).collect())
     }
 
     /// The merge edges of every region, `A, B; C` (a region's merges together).
     pub fn merge_list(&self) -> String {
-        let list: Vec<String> = self
-            .found
-            .regions
-            .iter()
-            .map(|r| r.merge_edges().collect::<Vec<_>>().join(", "))
+        let list: Vec<String> = (0..self.found.regions.len())
+            .map(|k| self.region_name(k))
             .collect();
         if list.is_empty() {
             "none".into()
@@ -100,29 +103,19 @@ impl Regions {
     ///
     /// # Errors
     /// No region, more than one, or one that cannot be placed in a frame, each in one phrase.
-    pub fn planned(mut self, selection: &[String]) -> Result<Road, String> {
-        let picked = self.select(selection)?;
-        match picked[..] {
-            [k] => self.roads.swap_remove(k),
-            [] if self.found.regions.is_empty() => Err(self.no_merge()),
-            [] => Err(format!(
-                "regions leaves no merge region (the merges: {})",
-                self.merge_list()
-            )),
-            _ => Err(format!(
+    pub fn planned(self, selection: &[String]) -> Result<Road, String> {
+        let picked = self.picked(selection)?;
+        if let [_, _, ..] = picked[..] {
+            let names: Vec<String> = picked.iter().map(|&k| self.region_name(k)).collect();
+            return Err(format!(
                 "{} merge regions (merges at {}): an episode plans one; choose it with \
                  --regions EDGE ([scenario] regions)",
                 picked.len(),
-                picked
-                    .iter()
-                    .map(|&k| self.found.regions[k]
-                        .merge_edges()
-                        .collect::<Vec<_>>()
-                        .join(", "))
-                    .collect::<Vec<_>>()
-                    .join("; ")
-            )),
+                names.join("; ")
+            ));
         }
+        let mut roads = self.roads;
+        roads.swap_remove(picked[0])
     }
 
     /// The road frames of every region `selection` leaves: what an episode on a user's own
@@ -130,36 +123,42 @@ impl Regions {
     ///
     /// # Errors
     /// No region, or one that cannot be placed in a frame (naming it).
-    pub fn all_planned(mut self, selection: &[String]) -> Result<Vec<Road>, String> {
-        let picked = self.select(selection)?;
-        if picked.is_empty() {
-            return Err(if self.found.regions.is_empty() {
-                self.no_merge()
-            } else {
-                format!(
-                    "regions leaves no merge region (the merges: {})",
-                    self.merge_list()
-                )
-            });
-        }
-        let names: Vec<String> = picked
-            .iter()
-            .map(|&k| {
-                self.found.regions[k]
-                    .merge_edges()
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            })
-            .collect();
-        let mut roads = std::mem::take(&mut self.roads);
+    pub fn all_planned(self, selection: &[String]) -> Result<Vec<Road>, String> {
+        let picked = self.picked(selection)?;
+        let names: Vec<String> = picked.iter().map(|&k| self.region_name(k)).collect();
+        let mut roads: Vec<Option<Result<Road, String>>> =
+            self.roads.into_iter().map(Some).collect();
         picked
             .iter()
             .zip(names)
             .map(|(&k, name)| {
-                std::mem::replace(&mut roads[k], Err(String::new()))
-                    .map_err(|why| format!("region at {name}: {why}"))
+                let road = roads[k].take().expect("each region picked once");
+                road.map_err(|why| format!("region at {name}: {why}"))
             })
             .collect()
+    }
+
+    /// The regions `selection` picks, at least one.
+    fn picked(&self, selection: &[String]) -> Result<Vec<usize>, String> {
+        let picked = self.select(selection)?;
+        if !picked.is_empty() {
+            Ok(picked)
+        } else if self.found.regions.is_empty() {
+            Err(self.no_merge())
+        } else {
+            Err(format!(
+                "regions leaves no merge region (the merges: {})",
+                self.merge_list()
+            ))
+        }
+    }
+
+    /// Region `k` by the edges its on-ramps join, `A, B`.
+    fn region_name(&self, k: usize) -> String {
+        self.found.regions[k]
+            .merge_edges()
+            .collect::<Vec<_>>()
+            .join(", ")
     }
 
     /// Why a network without regions has none.

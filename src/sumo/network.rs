@@ -6,7 +6,7 @@
 //!
 //! Edge ids are free and internal junction lanes are allowed (netconvert's defaults).
 
-use std::collections::{BTreeMap, BTreeSet};
+use std::collections::{BTreeMap, BTreeSet, HashMap};
 use std::path::{Path, PathBuf};
 
 use crate::model::math::Point;
@@ -65,6 +65,12 @@ pub struct Net {
     pub connections: Vec<Connection>,
     /// The normal edges left out, each with why (closed to cars, and its OSM-style type).
     pub closed: Vec<(String, String)>,
+    /// Position of each edge in `edges`, and of each connection in `connections` by the edge
+    /// it leaves and the one it enters: the layout asks for them by edge, edge after edge, on
+    /// nets of many thousands.
+    index: HashMap<String, usize>,
+    outgoing: HashMap<String, Vec<usize>>,
+    incoming: HashMap<String, Vec<usize>>,
 }
 
 /// Why a network file cannot be used.
@@ -122,9 +128,19 @@ impl Net {
             internal: BTreeMap::new(),
             connections: Vec::new(),
             closed: Vec::new(),
+            index: HashMap::new(),
+            outgoing: HashMap::new(),
+            incoming: HashMap::new(),
         };
         net.read_edges(&doc, &bad)?;
+        net.index = (net.edges.iter().enumerate())
+            .map(|(k, e)| (e.id.clone(), k))
+            .collect();
         net.read_connections(&doc, &bad)?;
+        for (k, c) in net.connections.iter().enumerate() {
+            net.outgoing.entry(c.from.clone()).or_default().push(k);
+            net.incoming.entry(c.to.clone()).or_default().push(k);
+        }
         Ok(net)
     }
 
@@ -216,40 +232,38 @@ impl Net {
     }
 
     fn lane_for_cars(&self, edge: &str, index: u32) -> bool {
-        self.edges
-            .iter()
-            .find(|e| e.id == edge)
-            .and_then(|e| e.lanes.get(index as usize))
+        self.index
+            .get(edge)
+            .and_then(|&k| self.edges[k].lanes.get(index as usize))
             .is_some_and(|l| l.for_cars)
     }
 
     /// The edge of this id; the caller knows it exists.
     pub(crate) fn edge(&self, id: &str) -> &Edge {
-        self.edges
-            .iter()
-            .find(|e| e.id == id)
-            .expect("a known edge")
+        &self.edges[*self.index.get(id).expect("a known edge")]
+    }
+
+    /// The connections leaving edge `id`, in file order.
+    pub(crate) fn outgoing(&self, id: &str) -> impl Iterator<Item = &Connection> {
+        let at = self.outgoing.get(id).map_or(&[][..], Vec::as_slice);
+        at.iter().map(|&k| &self.connections[k])
+    }
+
+    /// The connections entering edge `id`, in file order.
+    pub(crate) fn incoming(&self, id: &str) -> impl Iterator<Item = &Connection> {
+        let at = self.incoming.get(id).map_or(&[][..], Vec::as_slice);
+        at.iter().map(|&k| &self.connections[k])
     }
 
     /// The distinct edges `id` leads to.
     pub(crate) fn successors(&self, id: &str) -> Vec<&str> {
-        let set: BTreeSet<&str> = self
-            .connections
-            .iter()
-            .filter(|c| c.from == id)
-            .map(|c| c.to.as_str())
-            .collect();
+        let set: BTreeSet<&str> = self.outgoing(id).map(|c| c.to.as_str()).collect();
         set.into_iter().collect()
     }
 
     /// The distinct edges leading to `id`.
     pub(crate) fn predecessors(&self, id: &str) -> Vec<&str> {
-        let set: BTreeSet<&str> = self
-            .connections
-            .iter()
-            .filter(|c| c.to == id)
-            .map(|c| c.from.as_str())
-            .collect();
+        let set: BTreeSet<&str> = self.incoming(id).map(|c| c.from.as_str()).collect();
         set.into_iter().collect()
     }
 }
@@ -258,12 +272,14 @@ impl Net {
 fn lane(l: roxmltree::Node) -> Result<Lane, String> {
     // SUMO asserts on (or silently mis-measures with) lanes of no positive, finite size.
     let num = |k: &str| -> Result<f64, String> {
-        let x: f64 = l
-            .attribute(k)
+        l.attribute(k)
             .ok_or_else(|| format!("lane without {k}"))?
             .parse()
-            .map_err(|_| format!("lane {k} is not a number"))?;
-        if !(x.is_finite() && x > 0.0) && k != "index" {
+            .map_err(|_| format!("lane {k} is not a number"))
+    };
+    let size = |k: &str| -> Result<f64, String> {
+        let x = num(k)?;
+        if !(x.is_finite() && x > 0.0) {
             return Err(format!(
                 "lane '{}' has {k} {x}: must be a positive, finite number",
                 l.attribute("id").unwrap_or_default()
@@ -289,10 +305,10 @@ fn lane(l: roxmltree::Node) -> Result<Lane, String> {
     Ok(Lane {
         id: l.attribute("id").unwrap_or_default().into(),
         index: num("index")? as u32,
-        length: num("length")?,
+        length: size("length")?,
         // SUMO's default lane width when the attribute is absent.
-        width: l.attribute("width").map_or(Ok(3.2), |_| num("width"))?,
-        speed: num("speed").unwrap_or(13.89),
+        width: l.attribute("width").map_or(Ok(3.2), |_| size("width"))?,
+        speed: size("speed").unwrap_or(13.89),
         shape,
         for_cars: open_to_cars(l.attribute("allow"), l.attribute("disallow")),
     })

@@ -43,7 +43,7 @@ pub fn road(net: &Net, layout: &Layout) -> Result<Road, String> {
         .map(|m| m.lanes)
         .min()
         .expect("a main edge") as i32;
-    let first = net_edge(net, &layout.main[0].id);
+    let first = net.edge(&layout.main[0].id);
     let lane_width = first.lanes.last().expect("lanes checked").width;
     let (mut edges, main) = main_edges(net, layout, main_lanes)?;
     let mut internal = main_junctions(net, layout, &main);
@@ -51,7 +51,7 @@ pub fn road(net: &Net, layout: &Layout) -> Result<Road, String> {
     ramps.sort_by(|a, b| a.merge_start.total_cmp(&b.merge_start));
     let mut zones = Vec::new();
     for ramp in &ramps {
-        let end_lane = &net_edge(net, &ramp.ends_on).lanes[ramp.end_lane as usize];
+        let end_lane = &net.edge(&ramp.ends_on).lanes[ramp.end_lane as usize];
         let joined = (
             main.spans[ramp.joins.as_str()].s0,
             main.spans[ramp.ends_on.as_str()].s_at(end_lane.length),
@@ -71,7 +71,7 @@ pub fn road(net: &Net, layout: &Layout) -> Result<Road, String> {
     edges.extend(internal.into_edges());
     let entries = entries(net, layout, &ramps);
     let last = layout.main.last().expect("a main carriageway");
-    let end_lane = net_edge(net, &last.id).lanes.last().expect("lanes checked");
+    let end_lane = net.edge(&last.id).lanes.last().expect("lanes checked");
     let section_end = main.spans[last.id.as_str()].s_at(end_lane.length);
     Ok(Road {
         edges,
@@ -100,7 +100,7 @@ fn main_edges<'n>(
     };
     for m in &layout.main {
         let offset = lane_offset(m, main_lanes)?;
-        let edge = net_edge(net, &m.id);
+        let edge = net.edge(&m.id);
         let left = edge.lanes.last().expect("lanes checked");
         let span = LaneFrame {
             lane: 0,
@@ -136,14 +136,10 @@ fn main_junctions(net: &Net, layout: &Layout, main: &MainFrames<'_>) -> Internal
     let mut internal = InternalEdges::default();
     for pair in layout.main.windows(2) {
         let (from, to) = (pair[0].id.as_str(), pair[1].id.as_str());
-        let left = net_edge(net, from).lanes.last().expect("lanes checked");
+        let left = net.edge(from).lanes.last().expect("lanes checked");
         let s_a = main.spans[from].s_at(left.length);
         let s_b = main.spans[to].s0;
-        for c in net
-            .connections
-            .iter()
-            .filter(|c| c.from == from && c.to == to)
-        {
+        for c in net.outgoing(from).filter(|c| c.to == to) {
             if let Some(via) = c.via.as_ref().and_then(|v| net.internal.get(v)) {
                 let frame = LaneFrame {
                     lane: main.offsets[from] + c.from_lane as i32,
@@ -170,7 +166,7 @@ fn entries(net: &Net, layout: &Layout, ramps: &[&OnRamp]) -> Vec<Entry> {
         .map(|m| Arc::from(m.id.as_str()))
         .collect();
     let limit = |edge: &str| {
-        let lanes = &net_edge(net, edge).lanes;
+        let lanes = &net.edge(edge).lanes;
         lanes.iter().map(|l| l.speed).fold(f64::INFINITY, f64::min)
     };
     let mut out = vec![Entry {
@@ -210,7 +206,7 @@ fn exits(net: &Net, layout: &Layout) -> Vec<Exit> {
         .enumerate()
         .map(|(k, r)| {
             let last = r.edges.last().expect("an off-ramp has an edge");
-            let lane = &net_edge(net, last).lanes[0];
+            let lane = &net.edge(last).lanes[0];
             Exit {
                 name: format!("off{}", k + 1),
                 leaves: Arc::from(r.leaves.as_str()),
@@ -219,10 +215,6 @@ fn exits(net: &Net, layout: &Layout) -> Vec<Exit> {
             }
         })
         .collect()
-}
-
-fn net_edge<'n>(net: &'n Net, id: &str) -> &'n crate::sumo::network::Edge {
-    net.edges.iter().find(|e| e.id == id).expect("a known edge")
 }
 
 /// Frame lane of the edge's lane 0: the carriageway's lanes are aligned on the left.
@@ -292,13 +284,13 @@ fn ramp_frames(
              the one lane the carriageway gains on the right",
             ramp.lane,
             ramp.joins,
-            net_edge(net, &ramp.joins).lanes.len()
+            net.edge(&ramp.joins).lanes.len()
         ));
     }
     let mut s_end = joined.0;
     let mut next = ramp.joins.as_str();
     for id in ramp.edges.iter().rev() {
-        let e = net_edge(net, id);
+        let e = net.edge(id);
         if e.lanes.len() != 1 {
             return Err(format!(
                 "ramp edge '{id}' has {} lanes; ramps of one lane only",
@@ -306,9 +298,8 @@ fn ramp_frames(
             ));
         }
         let via = net
-            .connections
-            .iter()
-            .find(|c| &c.from == id && c.to == next)
+            .outgoing(id)
+            .find(|c| c.to == next)
             .and_then(|c| c.via.as_ref())
             .and_then(|v| net.internal.get(v));
         if let Some(via) = via {
@@ -431,7 +422,7 @@ mod tests {
         let mut worst: f64 = 0.0;
         for m in &layout.main {
             let frame = r.edge(&m.id).unwrap();
-            for l in &net_edge(&net, &m.id).lanes {
+            for l in &net.edge(&m.id).lanes {
                 let f = frame.lanes[l.index as usize].as_ref().unwrap();
                 let d = f64::from(f.lane - r.top_lane()) * r.lane_width;
                 for k in 0..=(l.length as usize) {

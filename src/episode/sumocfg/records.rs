@@ -10,6 +10,16 @@ use std::path::Path;
 use serde::Serialize;
 
 use crate::episode::cells::{self, cells};
+use crate::episode::metrics::Outcome;
+use crate::model::scene::Kind;
+
+fn kind_name<S: serde::Serializer>(k: &Kind, s: S) -> Result<S::Ok, S::Error> {
+    s.serialize_str(k.as_str())
+}
+
+fn outcome_name<S: serde::Serializer>(o: &Outcome, s: S) -> Result<S::Ok, S::Error> {
+    s.serialize_str(o.as_str())
+}
 
 /// One vehicle SUMO inserted (a `vehicles.csv` row).
 #[derive(Debug, Clone, Default, PartialEq, Serialize)]
@@ -20,7 +30,8 @@ pub struct ScenarioVehicle {
     #[serde(rename = "type")]
     pub sumo_type: String,
     /// `cav` or `hdv`.
-    pub kind: String,
+    #[serde(serialize_with = "kind_name")]
+    pub kind: Kind,
     /// The first merge region it entered (the edges its on-ramps join), empty if none.
     pub region: String,
     /// Where it entered that region (`main`, `ramp`), empty if it never did.
@@ -43,7 +54,8 @@ pub struct ScenarioVehicle {
     #[serde(serialize_with = "cells::opt_decimals::<4, _>")]
     pub region_delay_s: Option<f64>,
     /// `arrived`, `crashed` or `present` (still driving at the end).
-    pub outcome: String,
+    #[serde(serialize_with = "outcome_name")]
+    pub outcome: Outcome,
     /// When it arrived at its route's end (s).
     #[serde(serialize_with = "cells::opt_decimals::<2, _>")]
     pub arrival_s: Option<f64>,
@@ -116,13 +128,13 @@ impl ScenarioSummary {
         let mean = |f: &dyn Fn(&ScenarioVehicle) -> bool| {
             let losses: Vec<f64> = vehicles
                 .iter()
-                .filter(|v| v.outcome != "crashed" && f(v))
+                .filter(|v| v.outcome != Outcome::Crashed && f(v))
                 .filter_map(|v| v.time_loss_s)
                 .collect();
             (!losses.is_empty()).then(|| losses.iter().sum::<f64>() / losses.len() as f64)
         };
         let inserted = vehicles.len();
-        let inserted_cav = count(&|v| v.kind == "cav");
+        let inserted_cav = count(&|v| v.kind == Kind::Cav);
         ScenarioSummary {
             inserted,
             inserted_cav,
@@ -132,9 +144,9 @@ impl ScenarioSummary {
                 inserted_cav as f64 / inserted as f64
             },
             in_region: count(&|v| v.region_enter_s.is_some()),
-            arrived: count(&|v| v.outcome == "arrived"),
-            crashed: count(&|v| v.outcome == "crashed"),
-            present: count(&|v| v.outcome == "present"),
+            arrived: count(&|v| v.outcome == Outcome::Arrived),
+            crashed: count(&|v| v.outcome == Outcome::Crashed),
+            present: count(&|v| v.outcome == Outcome::Present),
             controllable_crashed: count(&|v| v.controllable_crash),
             hdv_collisions,
             mean_time_loss_s: mean(&|_| true),
@@ -145,7 +157,7 @@ impl ScenarioSummary {
             },
             time_loss_veh_h: vehicles
                 .iter()
-                .filter(|v| v.outcome != "crashed")
+                .filter(|v| v.outcome != Outcome::Crashed)
                 .filter_map(|v| v.time_loss_s)
                 .sum::<f64>()
                 / 3600.0,

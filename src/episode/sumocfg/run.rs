@@ -8,7 +8,7 @@ use std::collections::HashMap;
 use crate::config::Config;
 use crate::controller::{CavHandling, Command, Controller};
 use crate::episode::error::EpisodeError;
-use crate::episode::metrics::CollisionEvent;
+use crate::episode::metrics::{CollisionEvent, Outcome};
 use crate::model::kinematics::free_flow_time;
 use crate::model::road::Road;
 use crate::model::scene::{Kind, Origin};
@@ -76,7 +76,6 @@ impl Region {
 /// A vehicle of the scenario, as far as bkpbs follows it.
 struct Line {
     record: ScenarioVehicle,
-    kind: Kind,
     /// Its length and width (m), from its SUMO type.
     size: (f64, f64),
     /// The region it entered first, and where and how: its frame position and speed then.
@@ -137,11 +136,12 @@ impl<'a> ScenarioRun<'a> {
             .map(String::from)
             .collect();
         let names: Vec<&str> = names.iter().map(String::as_str).collect();
-        let at = crate::episode::runner::step_error(config.scenario.dt);
         crate::episode::runner::lock_step(&mut sim, &names, config, |sim, plan| {
             self.step(sim, plan)
         })?;
-        sim.close().map_err(at(config.scenario.steps))?;
+        let (dt, steps) = (config.scenario.dt, config.scenario.steps);
+        sim.close()
+            .map_err(crate::episode::runner::step_error(dt, steps))?;
         Ok(())
     }
 
@@ -155,8 +155,8 @@ impl<'a> ScenarioRun<'a> {
         for id in sim.arrived()? {
             if let Some(&k) = self.index.get(&id) {
                 let r = &mut self.lines[k].record;
-                if r.outcome == "present" {
-                    r.outcome = "arrived".into();
+                if r.outcome == Outcome::Present {
+                    r.outcome = Outcome::Arrived;
                     r.arrival_s = Some(now);
                 }
             }
@@ -194,12 +194,10 @@ impl<'a> ScenarioRun<'a> {
                 record: ScenarioVehicle {
                     id,
                     sumo_type,
-                    kind: kind.as_str().into(),
+                    kind,
                     depart_s: now,
-                    outcome: "present".into(),
                     ..ScenarioVehicle::default()
                 },
-                kind,
                 size,
                 entry: None,
                 commanded: None,
@@ -212,7 +210,7 @@ impl<'a> ScenarioRun<'a> {
     /// controllable).
     fn book_collisions(&mut self, sim: &mut Simulation, now: f64) -> Result<(), SumoError> {
         for c in sim.collisions()? {
-            let kind = |id: &str| self.index.get(id).map(|&k| self.lines[k].kind);
+            let kind = |id: &str| self.index.get(id).map(|&k| self.lines[k].record.kind);
             let event = CollisionEvent {
                 time: now,
                 collider_kind: kind(&c.collider),
@@ -227,9 +225,9 @@ impl<'a> ScenarioRun<'a> {
                     continue;
                 };
                 let r = &mut self.lines[k].record;
-                if r.outcome == "present" {
+                if r.outcome == Outcome::Present {
                     sim.remove_vehicle(me)?;
-                    r.outcome = "crashed".into();
+                    r.outcome = Outcome::Crashed;
                     r.crash_time_s = Some(now);
                 }
                 if !r.crashed_with.is_empty() {
@@ -256,7 +254,7 @@ impl<'a> ScenarioRun<'a> {
             let Some(&k) = self.index.get(id) else {
                 continue;
             };
-            if self.lines[k].record.outcome != "present" {
+            if self.lines[k].record.outcome != Outcome::Present {
                 continue;
             }
             let found = self.regions.iter().enumerate().find_map(|(g, r)| {
@@ -306,7 +304,7 @@ impl<'a> ScenarioRun<'a> {
             entry.last = (now, front);
             line.entry = Some(entry);
         }
-        let planned = line.kind == Kind::Cav
+        let planned = line.record.kind == Kind::Cav
             && !(first && entry.leaves_early)
             && front >= region.control_start
             && region.road.lanes_at(front).contains(&lane);
@@ -336,7 +334,7 @@ impl<'a> ScenarioRun<'a> {
         for (k, line) in self.lines.iter_mut().enumerate() {
             if line.commanded.is_some() && line.commanded != planned_by[k] {
                 line.commanded = None;
-                if line.record.outcome == "present" {
+                if line.record.outcome == Outcome::Present {
                     sim.set_speed(&line.record.id, -1.0)?;
                     sim.set_speed_mode(&line.record.id, SPEED_MODE_SUMO)?;
                     sim.set_lane_change_mode(&line.record.id, LC_MODE_SUMO)?;
@@ -434,7 +432,7 @@ fn passage(v: &mut ScenarioVehicle, e: &Entry, config: &Config) {
     v.region_enter_s = Some(e.time);
     v.region_leave_s = Some(last_time);
     v.region_distance_m = Some(distance);
-    if v.outcome != "crashed" {
+    if v.outcome != Outcome::Crashed {
         v.region_delay_s = Some(last_time - e.time - free);
     }
 }

@@ -92,9 +92,8 @@ pub fn find(net: &Net) -> (Vec<Merge>, Vec<NotAMerge>) {
 /// The lanes of `to` that `from` feeds, rightmost first.
 fn lanes_fed(net: &Net, from: &str, to: &str) -> Vec<u32> {
     let set: BTreeSet<u32> = net
-        .connections
-        .iter()
-        .filter(|c| c.from == from && c.to == to)
+        .outgoing(from)
+        .filter(|c| c.to == to)
         .map(|c| c.to_lane)
         .collect();
     set.into_iter().collect()
@@ -120,9 +119,8 @@ fn follow_lane(net: &Net, edge: &str, lane: u32) -> LaneEnd {
             return LaneEnd::Gain; // round a loop: it never ends
         }
         let next: Vec<_> = net
-            .connections
-            .iter()
-            .filter(|c| c.from == edge && c.from_lane == lane)
+            .outgoing(&edge)
+            .filter(|c| c.from_lane == lane)
             .collect();
         let Some(first) = next.first() else {
             return if net.successors(&edge).is_empty() {
@@ -142,17 +140,11 @@ fn follow_lane(net: &Net, edge: &str, lane: u32) -> LaneEnd {
 /// The edge the leftmost lane of `edge` continues on (the widest, if it forks; none where two
 /// equally wide roads part): the carriageway's next edge.
 pub fn successor<'n>(net: &'n Net, edge: &str) -> Option<&'n str> {
-    let from = net
-        .connections
-        .iter()
-        .filter(|c| c.from == edge)
-        .map(|c| c.from_lane)
-        .max()?;
+    let from = net.outgoing(edge).map(|c| c.from_lane).max()?;
     widest(
         net,
-        net.connections
-            .iter()
-            .filter(|c| c.from == edge && c.from_lane == from)
+        net.outgoing(edge)
+            .filter(|c| c.from_lane == from)
             .map(|c| c.to.as_str()),
     )
 }
@@ -160,17 +152,11 @@ pub fn successor<'n>(net: &'n Net, edge: &str) -> Option<&'n str> {
 /// The edge that feeds the leftmost lane of `edge` (the widest, if several): the
 /// carriageway's previous edge.
 pub fn feeder<'n>(net: &'n Net, edge: &str) -> Option<&'n str> {
-    let to = net
-        .connections
-        .iter()
-        .filter(|c| c.to == edge)
-        .map(|c| c.to_lane)
-        .max()?;
+    let to = net.incoming(edge).map(|c| c.to_lane).max()?;
     widest(
         net,
-        net.connections
-            .iter()
-            .filter(|c| c.to == edge && c.to_lane == to)
+        net.incoming(edge)
+            .filter(|c| c.to_lane == to)
             .map(|c| c.from.as_str()),
     )
 }

@@ -98,7 +98,7 @@ pub struct Discovery {
 impl Discovery {
     /// The merge regions of `net`.
     pub fn of(net: &Net) -> Discovery {
-        let (merges, not_merges) = merges::find(net);
+        let (merges, mut not_merges) = merges::find(net);
         let mut by_road: BTreeMap<Vec<String>, Vec<Merge>> = BTreeMap::new();
         let mut order: Vec<Vec<String>> = Vec::new();
         for m in merges {
@@ -108,10 +108,17 @@ impl Discovery {
             }
             by_road.entry(road).or_default().push(m);
         }
-        let regions: Vec<Layout> = order
-            .iter()
-            .map(|road| Layout::of_region(net, road, &by_road[road]))
-            .collect();
+        let mut regions: Vec<Layout> = Vec::new();
+        for road in &order {
+            let merges = &by_road[road];
+            match Layout::of_region(net, road, merges) {
+                Some(layout) => regions.push(layout),
+                None => not_merges.extend(merges.iter().map(|m| NotAMerge {
+                    ramp: m.ramp.clone(),
+                    why: format!("joins '{}', a carriageway without lane shapes", m.joins),
+                })),
+            }
+        }
         let used: BTreeSet<&str> = regions.iter().flat_map(Layout::edge_ids).collect();
         let mut left_out = net.closed.clone();
         left_out.extend(
@@ -130,7 +137,7 @@ impl Discovery {
 
 impl Layout {
     /// The region of carriageway `road` around `merges` (all on it, in its order).
-    fn of_region(net: &Net, road: &[String], merges: &[Merge]) -> Layout {
+    fn of_region(net: &Net, road: &[String], merges: &[Merge]) -> Option<Layout> {
         let at = |id: &str| road.iter().position(|e| e == id).expect("on the road");
         let first = merges.iter().map(|m| at(&m.joins)).min().expect("a merge");
         let last = merges
@@ -152,7 +159,7 @@ impl Layout {
             downstream += length(&road[end]);
         }
         let ids = &road[begin..=end];
-        let line = reference_line(net, ids);
+        let line = reference_line(net, ids)?;
         let main = positions(net, ids, &line);
         let on_main: BTreeSet<&str> = road.iter().map(String::as_str).collect();
         let on_ramps = merges
@@ -160,12 +167,12 @@ impl Layout {
             .map(|m| on_ramp(net, m, &on_main, &line))
             .collect();
         let next = road.get(end + 1).map(String::as_str);
-        Layout {
+        Some(Layout {
             off_ramps: off_ramps(net, ids, next, &on_main),
             main,
             on_ramps,
             line,
-        }
+        })
     }
 
     /// Every edge of the region: main, on-ramps, off-ramps.
@@ -189,17 +196,16 @@ impl Layout {
 
 /// The reference line of a region: the centre line of each main edge's leftmost lane (a
 /// through lane: ramps join on the right) and of the internal lane joining it to the next
-/// edge's, in order.
-fn reference_line(net: &Net, ids: &[String]) -> ReferenceLine {
+/// edge's, in order; `None` if their shapes hold fewer than two distinct points.
+fn reference_line(net: &Net, ids: &[String]) -> Option<ReferenceLine> {
     let mut points: Vec<Point> = Vec::new();
     for (k, id) in ids.iter().enumerate() {
         let left = net.edge(id).lanes.last().expect("an edge has lanes");
         points.extend(&left.shape);
         let Some(next) = ids.get(k + 1) else { break };
         let via = net
-            .connections
-            .iter()
-            .filter(|c| &c.from == id && &c.to == next)
+            .outgoing(id)
+            .filter(|c| &c.to == next)
             .max_by_key(|c| c.from_lane)
             .and_then(|c| c.via.as_ref())
             .and_then(|v| net.internal.get(v));
@@ -207,13 +213,7 @@ fn reference_line(net: &Net, ids: &[String]) -> ReferenceLine {
             points.extend(&lane.shape);
         }
     }
-    ReferenceLine::new(points).unwrap_or_else(|| {
-        let left = net.edge(&ids[0]).lanes.last().expect("an edge has lanes");
-        // A lane without shape points: SUMO always writes them; a straight stand-in of its
-        // length keeps the region usable.
-        ReferenceLine::new([Point::new(0.0, 0.0), Point::new(left.length.max(1.0), 0.0)])
-            .expect("two distinct points")
-    })
+    ReferenceLine::new(points)
 }
 
 /// Where each main edge starts along the reference line.
