@@ -132,7 +132,8 @@ fn oversized_counts_are_refused_before_anything_starts() {
 
 /// Networks SUMO would assert on or mis-measure (finding 6): NaN or infinite lane sizes, a NaN
 /// shape point, an acceleration lane shorter than a car. Each is one `error:` line from
-/// `network` and from `episode`, before SUMO starts; the old code ran them (exit 0).
+/// `network`, `episode`, `bench` and `collect`, before SUMO starts; the old code ran them
+/// (exit 0).
 #[test]
 fn networks_of_impossible_lanes_are_refused() {
     let net = std::fs::read_to_string(concat!(
@@ -178,6 +179,21 @@ fn networks_of_impossible_lanes_are_refused() {
             "5",
             "--out",
             out.to_str().unwrap(),
+        ]);
+        refused_naming(&o, &[named]);
+        // Finding 4: `bench` printed no error line on such nets, `collect` aborted.
+        refused_naming(&bounded(&["bench", "--net", p, "--steps", "5"]), &[named]);
+        let data = dir.path().join(format!("{name}.bin"));
+        let o = bounded(&[
+            "collect",
+            "--episodes",
+            "1",
+            "--steps",
+            "5",
+            "--net",
+            p,
+            "--out",
+            data.to_str().unwrap(),
         ]);
         refused_naming(&o, &[named]);
     }

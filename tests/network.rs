@@ -12,7 +12,7 @@ use common::netconvert_net;
 fn net_has_the_papers_geometry() {
     let config = Config::default();
     let input = EpisodeInput::write(&config, &embedded_road()).unwrap();
-    let sim = Simulation::start(&input.command_line(&config)).unwrap();
+    let sim = Simulation::start(&input.command_line(&config), config.sumo.stall_limit()).unwrap();
     // Lane counts per edge.
     for (edge, lanes) in [("main_in", 2), ("ramp", 1), ("acc", 3), ("main_out", 2)] {
         assert_eq!(sim.edge_lane_count(edge).unwrap(), lanes, "{edge}");
@@ -81,8 +81,8 @@ fn start_close_start_in_one_process_reproduces_the_run() {
 fn a_second_simulation_in_the_same_thread_is_refused() {
     let config = Config::default();
     let input = EpisodeInput::write(&config, &embedded_road()).unwrap();
-    let sim = Simulation::start(&input.command_line(&config)).unwrap();
-    let err = Simulation::start(&input.command_line(&config))
+    let sim = Simulation::start(&input.command_line(&config), config.sumo.stall_limit()).unwrap();
+    let err = Simulation::start(&input.command_line(&config), config.sumo.stall_limit())
         .err()
         .unwrap();
     assert!(err.to_string().contains("already open"), "{err}");
@@ -93,7 +93,8 @@ fn a_second_simulation_in_the_same_thread_is_refused() {
 fn sumo_errors_carry_sumos_message() {
     let config = Config::default();
     let input = EpisodeInput::write(&config, &embedded_road()).unwrap();
-    let mut sim = Simulation::start(&input.command_line(&config)).unwrap();
+    let mut sim =
+        Simulation::start(&input.command_line(&config), config.sumo.stall_limit()).unwrap();
     let err = sim
         .set_speed("no-such-vehicle", 3.0)
         .unwrap_err()

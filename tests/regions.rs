@@ -235,8 +235,7 @@ fn a_lane_gained_and_dropped_downstream_is_a_merge() {
 /// episode runs on each.
 #[test]
 fn sumos_game_scenarios_have_their_merges_found() {
-    let home = std::env::var("SUMO_HOME").unwrap_or_else(|_| "/usr/share/sumo".into());
-    let game = Path::new(&home).join("tools/game");
+    let game = common::sumo_game_dir();
     for (net, merges) in [
         ("A10KW/osm.net.xml", vec!["264308374", "4054057"]),
         ("ramp/ramp.net.xml", vec!["gneE7"]),

@@ -12,12 +12,7 @@ use common::{bkpbs, csv_rows, refused_naming, stderr};
 
 /// SUMO's `game` directory copied into `dir` (its configurations name files beside them).
 fn game_copy(dir: &Path) -> PathBuf {
-    let home = std::env::var("SUMO_HOME").unwrap_or_else(|_| "/usr/share/sumo".into());
-    let game = Path::new(&home).join("tools/game");
-    assert!(
-        game.exists(),
-        "SUMO's game scenarios (sumo-tools) are installed"
-    );
+    let game = common::sumo_game_dir();
     let out = dir.join("game");
     let status = Command::new("cp")
         .args(["-r", game.to_str().unwrap(), out.to_str().unwrap()])

@@ -291,13 +291,19 @@ pub(super) fn check_predictor(p: &PredictorSettings) -> Result<(), ConfigError> 
     Ok(())
 }
 
-/// sumo-gui's pause per step: from none to ten seconds.
+/// sumo-gui's pause per step: from none to ten seconds; the stall bound: from a tenth of a
+/// second to a day.
 pub(super) fn check_sumo(s: &SumoSettings) -> Result<(), ConfigError> {
-    match s.gui_delay_ms {
-        Some(d) if !(0.0..=10_000.0).contains(&d) => Err(ConfigError::Invalid {
+    match (s.gui_delay_ms, s.stall_timeout_s) {
+        (Some(d), _) if !(0.0..=10_000.0).contains(&d) => Err(ConfigError::Invalid {
             field: "sumo.gui_delay_ms",
             value: d.to_string(),
             reason: "must lie in [0, 10000] ms",
+        }),
+        (_, Some(t)) if !(0.1..=86_400.0).contains(&t) => Err(ConfigError::Invalid {
+            field: "sumo.stall_timeout_s",
+            value: t.to_string(),
+            reason: "must lie in [0.1, 86400] s",
         }),
         _ => Ok(()),
     }

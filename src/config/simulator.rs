@@ -8,6 +8,11 @@ use std::path::PathBuf;
 
 use serde::{Deserialize, Serialize};
 
+/// How long one SUMO call (start, a step, close) may take before the watchdog ends the run,
+/// unless `sumo.stall_timeout_s` says otherwise: far beyond any step, or the load of a large
+/// network, seen here.
+pub const DEFAULT_STALL_LIMIT: std::time::Duration = std::time::Duration::from_secs(120);
+
 /// How SUMO is run.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -25,6 +30,19 @@ pub struct SumoSettings {
     /// Pause of sumo-gui per step (ms); default: real time (one step length).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub gui_delay_ms: Option<f64>,
+    /// How long one SUMO call (its start, one step) may take before the run is ended as stuck
+    /// (s); default [`DEFAULT_STALL_LIMIT`]. A guard against a SUMO that loops
+    /// inside a call, where nothing else could stop it.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stall_timeout_s: Option<f64>,
+}
+
+impl SumoSettings {
+    /// The bound on one SUMO call (checked by the configuration's validation).
+    pub fn stall_limit(&self) -> std::time::Duration {
+        self.stall_timeout_s
+            .map_or(DEFAULT_STALL_LIMIT, std::time::Duration::from_secs_f64)
+    }
 }
 
 /// Optional outputs of an episode. A campaign does not record them in its settings: they do

@@ -107,9 +107,11 @@ pub fn sumo_alone_ms_per_step(config: &Config) -> Result<f64, EpisodeError> {
         &input.vehicle_types,
         demand_file.path(),
     );
-    let mut sim = Simulation::start(&args).map_err(|cause| EpisodeError::Start {
-        net: input.net.clone(),
-        cause,
+    let mut sim = Simulation::start(&args, config.sumo.stall_limit()).map_err(|cause| {
+        EpisodeError::Start {
+            net: input.net.clone(),
+            cause,
+        }
     })?;
     let start = Instant::now();
     for step in 0..config.scenario.steps {

@@ -116,16 +116,15 @@ pub fn run_observed(
         StderrCapture::start()
     };
     let outcome = (|| {
-        let sim = Simulation::start(&input.command_line(config)).map_err(|cause| {
-            EpisodeError::Start {
+        let sim = Simulation::start(&input.command_line(config), config.sumo.stall_limit())
+            .map_err(|cause| EpisodeError::Start {
                 net: config
                     .scenario
                     .net_file
                     .clone()
                     .unwrap_or_else(|| "(embedded)".into()),
                 cause,
-            }
-        })?;
+            })?;
         let mut built;
         let controller: &mut dyn Controller = match driver {
             Driver::Named(name) => {

@@ -14,6 +14,10 @@ use std::sync::atomic::{AtomicBool, AtomicI32, Ordering};
 static RECEIVED: AtomicI32 = AtomicI32::new(0);
 /// Whether a second signal ends the process at once.
 static ESCALATE: AtomicBool = AtomicBool::new(true);
+/// Whether some loop has seen the signal ([`requested`]), so the run is tidying up; a signal
+/// nobody notices means the run is stuck in a call, and the watchdog (`io::watchdog`, which
+/// runs while a SUMO call is under way) ends it.
+static NOTICED: AtomicBool = AtomicBool::new(false);
 
 /// The signals that ask a run to stop.
 const STOP_SIGNALS: [libc::c_int; 3] = [libc::SIGINT, libc::SIGTERM, libc::SIGHUP];
@@ -50,12 +54,27 @@ pub fn install(escalate: bool) {
     }
 }
 
-/// The stop signal received so far, if any.
+/// The stop signal received so far, if any; the caller is taken to act on it (a loop at a
+/// safe point), which tells the watchdog that the run is not stuck.
 pub fn requested() -> Option<i32> {
+    let signal = received();
+    if signal.is_some() {
+        NOTICED.store(true, Ordering::SeqCst);
+    }
+    signal
+}
+
+/// The stop signal received so far, without noticing it (for the watchdog).
+pub(super) fn received() -> Option<i32> {
     match RECEIVED.load(Ordering::SeqCst) {
         0 => None,
         s => Some(s),
     }
+}
+
+/// Whether a loop has noticed the stop signal.
+pub(super) fn noticed() -> bool {
+    NOTICED.load(Ordering::SeqCst)
 }
 
 /// The signal's usual name ("SIGINT"), for messages.

@@ -2,12 +2,14 @@
 //! renamed over the target. A crash or a kill never leaves a half-written result, and an
 //! earlier result stays until it is replaced whole. The lowest layer: results, model files and
 //! data sets all go through it. [`interrupt`]: stop signals as requests, so that a run
-//! interrupted by them tidies up. [`bounded`]: every file read, read with a bound.
+//! interrupted by them tidies up, and [`watchdog`] ends one that is stuck inside SUMO.
+//! [`bounded`]: every file read, read with a bound.
 
 pub mod bounded;
 pub mod child;
 pub mod cores;
 pub mod interrupt;
+pub mod watchdog;
 
 use std::io::Write;
 use std::path::{Path, PathBuf};

@@ -313,22 +313,59 @@ pub fn command_line(config: &Config, net: &Path, vtypes: &Path, routes: &Path) -
 /// libtraci when a command line starts with it.
 pub const GUI_PROGRAM: &str = "sumo-gui";
 
-/// Why sumo-gui cannot be shown here, if it cannot: no display, or no sumo-gui.
+/// Why sumo-gui cannot be shown here, if it cannot: no display, an X display nobody answers
+/// at (sumo-gui would die, and libtraci retry its port for a minute), or no sumo-gui.
 pub fn gui_unavailable() -> Option<String> {
-    let display = ["DISPLAY", "WAYLAND_DISPLAY"]
-        .iter()
-        .any(|v| std::env::var_os(v).is_some_and(|d| !d.is_empty()));
-    if !display {
+    let var = |v: &str| std::env::var(v).ok().filter(|d| !d.is_empty());
+    let (display, wayland) = (var("DISPLAY"), var("WAYLAND_DISPLAY"));
+    if display.is_none() && wayland.is_none() {
         return Some(
             "no display for sumo-gui (DISPLAY is not set); on a machine without one run under a \
              virtual X server: xvfb-run -a bkpbs episode --gui …"
                 .into(),
         );
     }
+    if let (Some(d), None) = (&display, &wayland) {
+        if !x_server_answers(d) {
+            return Some(format!(
+                "no X server answers at DISPLAY={d} for sumo-gui; start one, or run under a \
+                 virtual X server: xvfb-run -a bkpbs episode --gui …"
+            ));
+        }
+    }
     let on_path = std::env::var_os("PATH").is_some_and(|path| {
         std::env::split_paths(&path).any(|dir| dir.join(GUI_PROGRAM).is_file())
     });
     (!on_path).then(|| format!("{GUI_PROGRAM} is not installed (Debian: apt-get install sumo)"))
+}
+
+/// Whether something listens where X display `display` (`[host]:N[.S]`) lives: the local
+/// socket `/tmp/.X11-unix/XN` (or its abstract twin) for a local display, TCP port 6000 + N
+/// for a remote one. A display name of another form is given the benefit of the doubt.
+pub fn x_server_answers(display: &str) -> bool {
+    use std::os::linux::net::SocketAddrExt;
+    let Some((host, rest)) = display.rsplit_once(':') else {
+        return true;
+    };
+    let Ok(n) = rest.split('.').next().unwrap_or("").parse::<u16>() else {
+        return true;
+    };
+    if host.is_empty() || host == "unix" {
+        let path = format!("/tmp/.X11-unix/X{n}");
+        let abstract_name = std::os::unix::net::SocketAddr::from_abstract_name(path.as_bytes());
+        return std::os::unix::net::UnixStream::connect(&path).is_ok()
+            || abstract_name
+                .and_then(|a| std::os::unix::net::UnixStream::connect_addr(&a))
+                .is_ok();
+    }
+    let Some(port) = n.checked_add(6000) else {
+        return false;
+    };
+    use std::net::ToSocketAddrs;
+    let timeout = std::time::Duration::from_secs(2);
+    (host, port).to_socket_addrs().is_ok_and(|mut addrs| {
+        addrs.any(|a| std::net::TcpStream::connect_timeout(&a, timeout).is_ok())
+    })
 }
 
 /// SUMO route file with one route per entry of `road`, named after it (vehicles are added at

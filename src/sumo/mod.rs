@@ -42,6 +42,12 @@ pub enum SumoError {
     /// A string handed to SUMO contained a NUL byte.
     #[error("string passed to SUMO contains a NUL byte: {0:?}")]
     NulInString(String),
+    /// A simulation step returned without advancing SUMO's clock.
+    #[error("SUMO's simulation time did not advance in a step (still at {time} s)")]
+    Stalled {
+        /// SUMO's time before and after the step (s).
+        time: f64,
+    },
 }
 
 /// Turns a shim status code into a `Result`, attaching SUMO's message.
@@ -146,6 +152,10 @@ pub struct VehicleReadings {
 /// The open libsumo simulation of this process.
 pub struct Simulation {
     open: bool,
+    /// The bound on one SUMO call, for the watchdog.
+    stall_limit: std::time::Duration,
+    /// SUMO's time after the last step (s), to see that each step advances it.
+    time: f64,
     /// Reused buffers of [`Simulation::set_speeds`].
     batch_ids: Vec<u8>,
     batch_speeds: Vec<f64>,
@@ -157,37 +167,68 @@ impl Simulation {
     /// program name it ignores), or, when `args[0]` is `sumo-gui`, that program driven through
     /// libtraci (same calls, same results, shown live).
     ///
-    /// Waits while another thread of this process has a simulation open.
-    pub fn start(args: &[String]) -> Result<Self, SumoError> {
+    /// Waits while another thread of this process has a simulation open. Each SUMO call of
+    /// the start, the steps and the close must return within `stall_limit`, or the watchdog
+    /// ends the process with one error line ([`crate::io::watchdog`]); while the simulation is
+    /// open, a libsumo abort is one error line too ([`quiet::report_aborts`]).
+    pub fn start(args: &[String], stall_limit: std::time::Duration) -> Result<Self, SumoError> {
         let slot = SlotGuard::acquire()?;
-        ffi::use_traci(args.first().map(String::as_str) == Some(files::GUI_PROGRAM));
+        let gui = args.first().map(String::as_str) == Some(files::GUI_PROGRAM);
+        ffi::use_traci(gui);
         let mut buf = Vec::new();
         for a in args {
             buf.extend_from_slice(c_string(a)?.as_bytes_with_nul());
         }
+        let program = if gui { "sumo-gui" } else { "SUMO" };
+        let busy = crate::io::watchdog::busy(format!("starting {program}"), stall_limit);
+        quiet::report_aborts(true);
         // SAFETY: `buf` holds `args.len()` NUL-terminated strings.
-        decode("start", unsafe {
+        let started = decode("start", unsafe {
             ffi::bk_start(buf.as_ptr() as *const c_char, args.len())
-        })?;
-        Ok(Simulation {
+        });
+        drop(busy);
+        if let Err(e) = started {
+            quiet::report_aborts(false);
+            return Err(e);
+        }
+        let mut sim = Simulation {
             open: true,
+            stall_limit,
+            time: f64::NEG_INFINITY,
             batch_ids: Vec::new(),
             batch_speeds: Vec::new(),
             _slot: slot,
-        })
+        };
+        sim.time = sim.time()?;
+        Ok(sim)
     }
 
     /// Ends the simulation and frees the process's slot for the next one.
     pub fn close(mut self) -> Result<(), SumoError> {
         self.open = false;
+        let _busy = crate::io::watchdog::busy("closing SUMO", self.stall_limit);
         // SAFETY: plain call into the shim.
-        decode("close", unsafe { ffi::bk_close() })
+        let closed = decode("close", unsafe { ffi::bk_close() });
+        quiet::report_aborts(false);
+        closed
     }
 
-    /// Advances SUMO by one step of its `--step-length`.
+    /// Advances SUMO by one step of its `--step-length`; a step that leaves SUMO's clock where
+    /// it was is an error (a simulation that stops advancing would otherwise run forever).
     pub fn step(&mut self) -> Result<(), SumoError> {
+        let busy = crate::io::watchdog::busy(
+            format!("the simulation step at t = {} s", self.time),
+            self.stall_limit,
+        );
         // SAFETY: plain call into the shim.
-        decode("simulationStep", unsafe { ffi::bk_step() })
+        decode("simulationStep", unsafe { ffi::bk_step() })?;
+        drop(busy);
+        let now = self.time()?;
+        if now <= self.time {
+            return Err(SumoError::Stalled { time: now });
+        }
+        self.time = now;
+        Ok(())
     }
 
     /// Current simulation time (s).
@@ -543,6 +584,7 @@ impl Drop for Simulation {
             unsafe {
                 ffi::bk_close();
             }
+            quiet::report_aborts(false);
         }
     }
 }

@@ -6,8 +6,8 @@
 //! afterwards; what was captured is handed back so it can be saved next to the results.
 //!
 //! libsumo can also abort the whole process (Debian builds it with assertions on). So that such
-//! a death is never silent, a SIGABRT handler restores stderr and replays the captured text
-//! before the process dies.
+//! a death is one `error:` line like every other failure, a SIGABRT handler restores stderr,
+//! prints SUMO's last captured line and exits with code 1.
 
 use std::io::{Read, Seek, SeekFrom};
 use std::os::fd::AsRawFd;
@@ -18,29 +18,61 @@ use std::sync::atomic::{AtomicI32, Ordering};
 static SAVED_STDERR: AtomicI32 = AtomicI32::new(-1);
 static CAPTURE_FD: AtomicI32 = AtomicI32::new(-1);
 
-extern "C" fn replay_on_abort(_signal: libc::c_int) {
+extern "C" fn report_abort(_signal: libc::c_int) {
     let saved = SAVED_STDERR.load(Ordering::SeqCst);
     let capture = CAPTURE_FD.load(Ordering::SeqCst);
-    // SAFETY: only async-signal-safe calls (dup2, write, lseek, read, signal, raise).
+    let mut tail = [0u8; 4096];
+    // SAFETY: only async-signal-safe calls (dup2, lseek, read, write, _exit) on valid buffers.
     unsafe {
+        let mut n = 0;
         if saved >= 0 {
             libc::dup2(saved, 2);
-            let head = b"error: SUMO aborted the process; it said:\n";
-            libc::write(2, head.as_ptr() as *const libc::c_void, head.len());
             if capture >= 0 {
-                libc::lseek(capture, 0, libc::SEEK_SET);
-                let mut buf = [0u8; 4096];
-                loop {
-                    let n = libc::read(capture, buf.as_mut_ptr() as *mut libc::c_void, buf.len());
-                    if n <= 0 {
-                        break;
-                    }
-                    libc::write(2, buf.as_ptr() as *const libc::c_void, n as usize);
-                }
+                let size = libc::lseek(capture, 0, libc::SEEK_END);
+                let from = (size - tail.len() as libc::off_t).max(0);
+                libc::lseek(capture, from, libc::SEEK_SET);
+                n = libc::read(capture, tail.as_mut_ptr() as *mut libc::c_void, tail.len()).max(0)
+                    as usize;
             }
         }
-        libc::signal(libc::SIGABRT, libc::SIG_DFL);
-        libc::raise(libc::SIGABRT);
+        let said = last_line(&tail[..n]);
+        let head: &[u8] = if said.is_empty() {
+            b"error: SUMO aborted the process (its own message is on the line above)"
+        } else {
+            b"error: SUMO aborted the process: "
+        };
+        for part in [head, said, b"\n"] {
+            libc::write(2, part.as_ptr() as *const libc::c_void, part.len());
+        }
+        libc::_exit(1);
+    }
+}
+
+/// The last non-empty line of `text`, without its line end (allocation-free, for the handler).
+fn last_line(text: &[u8]) -> &[u8] {
+    let trimmed = match text.iter().rposition(|b| !b.is_ascii_whitespace()) {
+        Some(end) => &text[..=end],
+        None => return &[],
+    };
+    match trimmed.iter().rposition(|&b| b == b'\n') {
+        Some(start) => &trimmed[start + 1..],
+        None => trimmed,
+    }
+}
+
+/// Makes a libsumo abort (an assertion inside SUMO) one `error:` line and exit code 1, with
+/// SUMO's last words when they were captured; `false` restores the default (an abort outside
+/// SUMO is not SUMO's). [`super::Simulation`] turns it on while a simulation is open.
+pub fn report_aborts(on: bool) {
+    let handler: extern "C" fn(libc::c_int) = report_abort;
+    let action = if on {
+        handler as libc::sighandler_t
+    } else {
+        libc::SIG_DFL
+    };
+    // SAFETY: installs a handler that only makes async-signal-safe calls, or the default.
+    unsafe {
+        libc::signal(libc::SIGABRT, action);
     }
 }
 
@@ -66,8 +98,7 @@ impl StderrCapture {
             }
             SAVED_STDERR.store(saved, Ordering::SeqCst);
             CAPTURE_FD.store(file.as_raw_fd(), Ordering::SeqCst);
-            let handler: extern "C" fn(libc::c_int) = replay_on_abort;
-            libc::signal(libc::SIGABRT, handler as libc::sighandler_t);
+            crate::io::watchdog::report_to(saved);
             Some(StderrCapture { saved, file })
         }
     }
@@ -76,7 +107,7 @@ impl StderrCapture {
         if self.saved >= 0 {
             // SAFETY: `saved` is a valid duplicate of the original stderr.
             unsafe {
-                libc::signal(libc::SIGABRT, libc::SIG_DFL);
+                crate::io::watchdog::report_to(-1);
                 SAVED_STDERR.store(-1, Ordering::SeqCst);
                 CAPTURE_FD.store(-1, Ordering::SeqCst);
                 libc::dup2(self.saved, 2);
@@ -119,10 +150,11 @@ mod tests {
     }
 
     #[test]
-    fn abort_while_capturing_replays_the_capture() {
+    fn abort_while_capturing_is_one_line_with_sumos_last_words() {
         if std::env::var_os("BKPBS_ABORT_CHILD").is_some() {
             let _c = StderrCapture::start();
-            let line = b"last words\n";
+            report_aborts(true);
+            let line = b"earlier words\nlast words\n\n";
             // SAFETY: writing a valid buffer to fd 2.
             unsafe { libc::write(2, line.as_ptr() as *const libc::c_void, line.len()) };
             // SAFETY: this child process is meant to die here.
@@ -131,17 +163,20 @@ mod tests {
         let out = std::process::Command::new(std::env::current_exe().unwrap())
             .args([
                 "--exact",
-                "sumo::quiet::tests::abort_while_capturing_replays_the_capture",
+                "sumo::quiet::tests::abort_while_capturing_is_one_line_with_sumos_last_words",
                 "--nocapture",
             ])
             .env("BKPBS_ABORT_CHILD", "1")
             .output()
             .unwrap();
-        assert!(!out.status.success());
+        assert_eq!(out.status.code(), Some(1));
         let err = String::from_utf8_lossy(&out.stderr);
-        assert!(
-            err.contains("SUMO aborted the process") && err.contains("last words"),
+        let errors: Vec<&str> = err.lines().filter(|l| l.starts_with("error:")).collect();
+        assert_eq!(
+            errors,
+            ["error: SUMO aborted the process: last words"],
             "{err}"
         );
+        assert!(!err.contains("earlier words"), "{err}");
     }
 }

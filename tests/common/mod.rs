@@ -112,6 +112,18 @@ pub fn wait_for(what: &str, seconds: u64, mut done: impl FnMut() -> bool) {
     }
 }
 
+/// SUMO's shipped game scenarios (`$SUMO_HOME/tools/game`, Debian's sumo-tools), asserted
+/// present: real scenarios nobody here wrote.
+pub fn sumo_game_dir() -> std::path::PathBuf {
+    let home = std::env::var("SUMO_HOME").unwrap_or_else(|_| "/usr/share/sumo".into());
+    let game = std::path::Path::new(&home).join("tools/game");
+    assert!(
+        game.exists(),
+        "SUMO's game scenarios (sumo-tools) are installed"
+    );
+    game
+}
+
 /// Sends `signal` to process `pid` (a negative `pid`: to its process group).
 pub fn send_signal(pid: i32, signal: i32) {
     // SAFETY: plain kill(2) on a process the test started.

@@ -118,9 +118,11 @@ pub fn run(config: &Config, planner: &str) -> Result<ScenarioResult, EpisodeErro
     args.extend(options.iter().cloned());
     let capture = (!config.sumo.verbose).then(StderrCapture::start).flatten();
     let outcome = (|| {
-        let sim = Simulation::start(&args).map_err(|cause| EpisodeError::Start {
-            net: cfg.net.clone(),
-            cause,
+        let sim = Simulation::start(&args, config.sumo.stall_limit()).map_err(|cause| {
+            EpisodeError::Start {
+                net: cfg.net.clone(),
+                cause,
+            }
         })?;
         let regions = roads
             .into_iter()
