@@ -1,16 +1,20 @@
 //! Resume state and collection: which cells of a campaign directory are finished, and the
 //! gathering of their per-episode files into the directory's collected [`Results`].
 //!
-//! A cell is finished exactly when its `episode.csv` exists (the worker writes it last, through
-//! a rename), so a killed campaign never counts a half-written cell as done, and a re-run never
-//! runs a finished one again.
+//! A cell is finished exactly when its files are whole and are this campaign's: `episode.csv`
+//! (the worker writes it last, through a rename) holds the one row of this cell with the
+//! campaign's steps, `vehicles.csv` has a row per scheduled vehicle, `timing.csv` its row, and
+//! the cell's `settings.toml` records the very settings the campaign would run it with. So a
+//! killed campaign never counts a half-written cell as done, a re-run never runs a finished one
+//! again, and a damaged, foreign or edited cell is run again, with the reason printed.
 
 use std::path::{Path, PathBuf};
 
-use super::grid::{Cell, Grid, Shard};
+use super::grid::{Cell, Grid};
 use super::results::{self, episodes_header, Results, ResultsError};
+use super::settings::{results_settings, Settings};
 use super::table::{key, Row, CELL_COLUMNS};
-use super::worker::{DONE_FILE, ERROR_FILE};
+use super::worker::{DONE_FILE, ERROR_FILE, SETTINGS_RECORD};
 use crate::episode::output::{TIMING_COLUMNS, VEHICLE_COLUMNS};
 
 /// Directory of the per-episode files below a campaign directory.
@@ -21,10 +25,76 @@ pub fn cell_dir(out: &Path, cell: &Cell) -> PathBuf {
     out.join(EPISODES_DIR).join(cell.dir_name())
 }
 
-/// Has this cell's episode finished: its `episode.csv` exists and holds the one row of this
-/// cell? A corrupt or foreign one does not count, so the cell is run again.
-pub fn is_done(out: &Path, cell: &Cell) -> bool {
-    finished_row(&cell_dir(out, cell), cell).is_some()
+/// Has this cell's episode finished, as the campaign `settings` would run it?
+pub fn is_done(out: &Path, settings: &Settings, cell: &Cell) -> bool {
+    matches!(cell_state(out, settings, cell), CellState::Done(_))
+}
+
+/// Where a cell stands.
+#[derive(Debug, Clone, PartialEq)]
+pub enum CellState {
+    /// Finished: its `episode.csv` row.
+    Done(csv::StringRecord),
+    /// No `episode.csv`: not run, or stopped before it was written.
+    NotRun,
+    /// An `episode.csv` is there but the cell is not finished as this campaign's: why.
+    Stale(String),
+}
+
+/// Where `cell` of the campaign `settings` stands in `out`.
+pub fn cell_state(out: &Path, settings: &Settings, cell: &Cell) -> CellState {
+    let dir = cell_dir(out, cell);
+    if !dir.join(DONE_FILE).exists() {
+        return CellState::NotRun;
+    }
+    match finished_row(&dir, settings, cell) {
+        Ok(row) => CellState::Done(row),
+        Err(why) => CellState::Stale(why),
+    }
+}
+
+/// The row of `cell`'s `episode.csv` in `dir` if the cell's files are whole and this
+/// campaign's; otherwise what is wrong.
+fn finished_row(dir: &Path, settings: &Settings, cell: &Cell) -> Result<csv::StringRecord, String> {
+    let rows = results::read_records(&dir.join(DONE_FILE), &episodes_header())
+        .map_err(|e| e.to_string())?;
+    let [row] = rows.as_slice() else {
+        return Err(format!("{DONE_FILE} holds {} rows, not 1", rows.len()));
+    };
+    if results::cell_of(row).map(|c| key(&c)) != Ok(key(cell)) {
+        return Err(format!("{DONE_FILE} belongs to another cell"));
+    }
+    let column = |name: &str| {
+        let i = episodes_header().iter().position(|c| c == name);
+        i.and_then(|i| row.get(i)).unwrap_or("").to_string()
+    };
+    let steps = settings.config.scenario.steps.to_string();
+    if column("steps") != steps {
+        let found = column("steps");
+        return Err(format!(
+            "{DONE_FILE} has steps {found}, the campaign {steps}"
+        ));
+    }
+    check_rows(dir, "vehicles.csv", &VEHICLE_COLUMNS, &column("scheduled"))?;
+    check_rows(dir, "timing.csv", &TIMING_COLUMNS, "1")?;
+    let recorded = crate::io::bounded::read_text(
+        &dir.join(SETTINGS_RECORD),
+        crate::io::bounded::FileKind::Config,
+    )
+    .map_err(|_| format!("{SETTINGS_RECORD} is missing or unreadable"))?;
+    if recorded != results_settings(&settings.episode_config(cell)) {
+        return Err(format!("{SETTINGS_RECORD} records other settings"));
+    }
+    Ok(row.clone())
+}
+
+/// Checks that the cell's `name` is readable with `cols` and has `expected` rows.
+fn check_rows(dir: &Path, name: &str, cols: &[&str], expected: &str) -> Result<(), String> {
+    let rows = results::read_records(&dir.join(name), &strings(cols)).map_err(|e| e.to_string())?;
+    if rows.len().to_string() != expected {
+        return Err(format!("{name} has {} rows, not {expected}", rows.len()));
+    }
+    Ok(())
 }
 
 /// The episodes `out`'s `episodes.csv` records that a collection for `grid` would leave out:
@@ -42,23 +112,15 @@ pub fn recorded_outside(out: &Path, grid: &Grid) -> Vec<Cell> {
         .collect()
 }
 
-/// The row of `cell`'s `episode.csv` in `dir`, if the file holds exactly that.
-fn finished_row(dir: &Path, cell: &Cell) -> Option<csv::StringRecord> {
-    let rows = results::read_records(&dir.join(DONE_FILE), &episodes_header()).ok()?;
-    let [row] = rows.as_slice() else {
-        return None;
-    };
-    (results::cell_of(row).map(|c| key(&c)) == Ok(key(cell))).then(|| row.clone())
-}
-
 fn strings(cols: &[&str]) -> Vec<String> {
     cols.iter().map(|s| s.to_string()).collect()
 }
 
-/// Gathers every finished cell of `grid` found in `out` (whichever shard ran it) in grid order,
-/// and lists as failures the unfinished cells of `shard`, with the message of their
-/// `error.txt`.
-pub fn collect(out: &Path, grid: &Grid, shard: Shard) -> Result<Results, ResultsError> {
+/// Gathers every finished cell of the campaign `settings` found in `out` (whichever shard ran
+/// it) in grid order, and lists as failures the unfinished cells of its shard, with the
+/// message of their `error.txt`.
+pub fn collect(out: &Path, settings: &Settings) -> Result<Results, ResultsError> {
+    let (grid, shard) = (&settings.grid, settings.shard);
     let mut res = Results {
         planners: grid.planners.clone(),
         profiles: grid.profiles.clone(),
@@ -66,7 +128,7 @@ pub fn collect(out: &Path, grid: &Grid, shard: Shard) -> Result<Results, Results
     };
     for (position, cell) in grid.cells().into_iter().enumerate() {
         let dir = cell_dir(out, &cell);
-        if let Some(row) = finished_row(&dir, &cell) {
+        if let CellState::Done(row) = cell_state(out, settings, &cell) {
             let row = &row;
             // The cell columns exactly as the episode wrote them.
             let lead: Vec<&str> = row.iter().take(CELL_COLUMNS.len()).collect();

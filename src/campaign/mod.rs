@@ -7,16 +7,18 @@
 //! ```text
 //! campaign.toml                      the settings (grid and scenario); a re-run must agree
 //! episodes/<planner>/a<α>_l<λ>_s<seed>/
-//!     episode.csv vehicles.csv collisions.csv timing.csv [sumo.log]   a finished cell
+//!     episode.csv vehicles.csv collisions.csv timing.csv settings.toml [sumo.log]   a finished cell
 //!     error.txt                                                       a failed one
 //! episodes.csv vehicles.csv timings.csv failures.csv                  collected, grid order
 //! report/                                                             tables and figures
 //! ```
 //!
-//! Modules: [`grid`] (cells, order, shards), [`settings`] (file and flags), [`worker`] and
+//! Modules: [`grid`] (cells, order, shards), [`settings`] (file and flags), [`claim`] (one
+//! set of settings per directory at a time), [`worker`] and
 //! [`pool`] (the two ends of the worker processes), [`collect`] (resume state, gathering),
 //! [`results`] (the collected files), [`tasks`] (the same run for other schedulers).
 
+pub mod claim;
 pub mod collect;
 pub mod grid;
 #[doc(hidden)] // worker-process plumbing: the campaign runs it, a library user never does
@@ -59,6 +61,23 @@ pub enum CampaignError {
         dir: PathBuf,
         /// The first differing setting, dotted (`scenario.dt`, `campaign.steps`, …).
         key: String,
+    },
+    /// Another campaign with other settings is running in the directory.
+    #[error(
+        "{dir} is in use by a running campaign with other settings ({key} differs); wait for it \
+         or use another --out"
+    )]
+    HeldByOther {
+        /// The campaign directory (`--out`).
+        dir: PathBuf,
+        /// The first differing setting, dotted.
+        key: String,
+    },
+    /// Another run held the directory's settings for longer than a run may wait.
+    #[error("{dir} stayed locked by another campaign run's settings check for 30 s")]
+    Busy {
+        /// The campaign directory (`--out`).
+        dir: PathBuf,
     },
     /// The directory's collected `episodes.csv` has episodes outside this grid; collecting this
     /// run would silently lose them.
@@ -113,6 +132,7 @@ pub fn run(settings: &Settings, out: &Path, exe: &Path) -> Result<RunSummary, Ca
     let plan = tasks::prepare(settings, out)?;
     announce(settings, &plan);
     let (shard_size, already_done) = (plan.shard_size, plan.already_done);
+    let _claim = plan.claim.clone();
     let (ran, failed_now) = run_requests(settings, exe, plan.requests);
     let results = tasks::collect(settings, out)?;
     let summary = RunSummary {

@@ -379,14 +379,7 @@ impl Settings {
     /// The first scenario setting (dotted key) in which two campaigns' episodes differ, if any:
     /// campaigns that agree here may share a results directory.
     pub fn scenario_difference(&self, other: &Settings) -> Option<String> {
-        let mut a = self.config.clone();
-        let mut b = other.config.clone();
-        for c in [&mut a, &mut b] {
-            // How SUMO is watched does not change what it computes.
-            c.sumo.verbose = false;
-            c.sumo.gui = false;
-            c.sumo.gui_delay_ms = None;
-        }
+        let (a, b) = (unwatched(&self.config), unwatched(&other.config));
         first_difference(
             &toml::Value::Table(scenario_table(&a)),
             &toml::Value::Table(scenario_table(&b)),
@@ -544,6 +537,31 @@ fn check_values(
         }),
         None => Ok(()),
     }
+}
+
+/// The configuration without how SUMO is watched (its console output, sumo-gui, the stall
+/// bound), which does not change what SUMO computes.
+fn unwatched(config: &Config) -> Config {
+    let mut c = config.clone();
+    c.sumo.verbose = false;
+    c.sumo.gui = false;
+    c.sumo.gui_delay_ms = None;
+    c.sumo.stall_timeout_s = None;
+    c
+}
+
+/// Everything in an episode's configuration that decides its results, as TOML: the whole
+/// configuration, cell keys included, without how SUMO is watched and without the optional
+/// outputs. A campaign's worker records it in the cell (`settings.toml`), and a cell whose
+/// record differs from what the campaign would run is not finished (an edited
+/// `campaign.toml` cannot pass off old episodes as its own).
+pub fn results_settings(config: &Config) -> String {
+    let mut doc = match toml::Value::try_from(unwatched(config)).expect("config serialises") {
+        toml::Value::Table(t) => t,
+        _ => unreachable!("a struct serialises to a table"),
+    };
+    doc.remove("output");
+    toml::to_string_pretty(&doc).expect("config serialises")
 }
 
 /// The configuration as a TOML table without the per-cell scenario keys and without the

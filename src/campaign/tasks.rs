@@ -6,7 +6,9 @@
 //! replaces only the middle and produces the same directory, byte for byte.
 
 use std::path::Path;
+use std::sync::Arc;
 
+use super::claim::{self, Claim};
 use super::collect::{self, cell_dir};
 use super::results::Results;
 use super::worker::{self, Outcome, Request};
@@ -22,13 +24,51 @@ pub struct Plan {
     pub shard_size: usize,
     /// Cells of the shard found finished.
     pub already_done: usize,
+    /// The directory's settings, claimed while this is held ([`claim`]).
+    pub claim: Arc<Claim>,
 }
 
 /// Readies `out` for a run of `settings` and lists its unfinished episodes.
 ///
 /// # Errors
-/// `out` holds a campaign with other scenario settings, or `campaign.toml` cannot be written.
+/// `out` holds a campaign with other scenario settings, or is in use by a running one with
+/// other settings, or `campaign.toml` cannot be written.
 pub fn prepare(settings: &Settings, out: &Path) -> Result<Plan, CampaignError> {
+    let claim = claim::claim(settings, out, || check_and_record(settings, out))?;
+    // Left by a campaign killed while collecting.
+    worker::remove_stale_temporaries(out);
+
+    let mut shard_size = 0;
+    let mut requests = Vec::new();
+    for (position, cell) in settings.grid.cells().iter().enumerate() {
+        if !settings.shard.contains(position) {
+            continue;
+        }
+        shard_size += 1;
+        let state = collect::cell_state(out, settings, cell);
+        if let collect::CellState::Stale(why) = &state {
+            println!("campaign: {cell} runs again: {why}");
+        }
+        if !matches!(state, collect::CellState::Done(_)) {
+            requests.push(Request {
+                position,
+                planner: cell.planner.clone(),
+                dir: cell_dir(out, cell),
+                config: settings.episode_config(cell),
+            });
+        }
+    }
+    Ok(Plan {
+        already_done: shard_size - requests.len(),
+        requests,
+        shard_size,
+        claim: Arc::new(claim),
+    })
+}
+
+/// The first run's part of the claim: `out` must not hold a campaign of other scenario
+/// settings, nor recorded episodes this grid would drop; then this run's settings are written.
+fn check_and_record(settings: &Settings, out: &Path) -> Result<(), CampaignError> {
     let settings_path = out.join(SETTINGS_FILE);
     if settings_path.exists() {
         let earlier = Settings::from_campaign_file(&settings_path)?;
@@ -48,30 +88,7 @@ pub fn prepare(settings: &Settings, out: &Path) -> Result<Plan, CampaignError> {
         });
     }
     output::write_atomic(&settings_path, settings.to_toml().as_bytes())?;
-    // Left by a campaign killed while collecting.
-    worker::remove_stale_temporaries(out);
-
-    let mut shard_size = 0;
-    let mut requests = Vec::new();
-    for (position, cell) in settings.grid.cells().iter().enumerate() {
-        if !settings.shard.contains(position) {
-            continue;
-        }
-        shard_size += 1;
-        if !collect::is_done(out, cell) {
-            requests.push(Request {
-                position,
-                planner: cell.planner.clone(),
-                dir: cell_dir(out, cell),
-                config: settings.episode_config(cell),
-            });
-        }
-    }
-    Ok(Plan {
-        already_done: shard_size - requests.len(),
-        requests,
-        shard_size,
-    })
+    Ok(())
 }
 
 /// Runs one episode in this process as a worker does: its files in the cell directory, or
@@ -94,7 +111,7 @@ pub fn run_request(req: &Request) -> Outcome {
 /// A cell's files are unreadable or belong to another cell, or the collected files cannot be
 /// written.
 pub fn collect(settings: &Settings, out: &Path) -> Result<Results, CampaignError> {
-    let results = collect::collect(out, &settings.grid, settings.shard)?;
+    let results = collect::collect(out, settings)?;
     results.write(out)?;
     Ok(results)
 }

@@ -26,6 +26,9 @@ use crate::{episode, io};
 pub const ERROR_FILE: &str = "error.txt";
 /// Name of the file whose presence marks a finished cell.
 pub const DONE_FILE: &str = "episode.csv";
+/// Name of the cell's record of the settings its episode ran with
+/// ([`super::settings::results_settings`]).
+pub const SETTINGS_RECORD: &str = "settings.toml";
 
 /// Test hook: `BKPBS_WORKER_FAULT=panic:<seed>` makes the planner "panic" in every episode
 /// with that seed, `exit:<seed>` makes the worker process die there, `hang:<seed>` makes the
@@ -166,16 +169,19 @@ fn injected_fault(req: &Request) {
 
 /// Runs one episode and writes its files; the error text on failure.
 pub(crate) fn run_cell(req: &Request) -> Result<(), String> {
-    // A retried cell: the old failure note goes first. A kill from here on leaves neither the
-    // note nor episode.csv, and the cell simply runs again next time.
-    match std::fs::remove_file(req.dir.join(ERROR_FILE)) {
-        Ok(()) => {}
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
-        Err(e) => {
-            return Err(format!(
-                "cannot clear {}: {e}",
-                req.dir.join(ERROR_FILE).display()
-            ))
+    // A retried cell: the old failure note and a stale episode.csv (a cell is only asked for
+    // when it is not finished) go first. A kill from here on leaves neither, and the cell
+    // simply runs again next time.
+    for name in [ERROR_FILE, DONE_FILE] {
+        match std::fs::remove_file(req.dir.join(name)) {
+            Ok(()) => {}
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
+            Err(e) => {
+                return Err(format!(
+                    "cannot clear {}: {e}",
+                    req.dir.join(name).display()
+                ))
+            }
         }
     }
     remove_stale_temporaries(&req.dir);
@@ -199,8 +205,10 @@ pub(crate) fn run_cell(req: &Request) -> Result<(), String> {
             return Err(format!("planner {} panicked: {message}", req.planner));
         }
     };
-    result.write(&req.dir).map_err(|e| e.to_string())?;
-    Ok(())
+    let record = super::settings::results_settings(&req.config);
+    io::write_atomic(&req.dir.join(SETTINGS_RECORD), record.as_bytes())
+        .and_then(|()| result.write(&req.dir).map(drop))
+        .map_err(|e| e.to_string())
 }
 
 /// Removes the temporary files an earlier, killed write left in `dir`: those whose writer

@@ -135,7 +135,9 @@ pub fn plot_cells(
     let dirs: Vec<PathBuf> = cells
         .iter()
         .enumerate()
-        .filter(|(i, c)| settings.shard.contains(*i) && crate::campaign::collect::is_done(out, c))
+        .filter(|(i, c)| {
+            settings.shard.contains(*i) && crate::campaign::collect::is_done(out, settings, c)
+        })
         .map(|(_, c)| crate::campaign::collect::cell_dir(out, c))
         .collect();
     let results: Vec<Result<bool, EpisodePlotError>> = dirs
