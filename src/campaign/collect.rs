@@ -10,9 +10,10 @@
 
 use std::path::{Path, PathBuf};
 
+use super::comparison::results_settings;
 use super::grid::{Cell, Grid};
 use super::results::{self, episodes_header, Results, ResultsError};
-use super::settings::{results_settings, Settings};
+use super::settings::Settings;
 use super::table::{key, Row, CELL_COLUMNS};
 use super::worker::{DONE_FILE, ERROR_FILE, SETTINGS_RECORD};
 use crate::episode::output::{TIMING_COLUMNS, VEHICLE_COLUMNS};

@@ -20,6 +20,7 @@
 
 pub mod claim;
 pub mod collect;
+pub mod comparison;
 pub mod grid;
 #[doc(hidden)] // worker-process plumbing: the campaign runs it, a library user never does
 pub mod pool;

@@ -26,12 +26,10 @@ use std::time::Duration;
 
 use serde::{Deserialize, Serialize};
 
+use super::comparison::{first_difference, scenario_table, unwatched, PER_CELL_KEYS};
 use super::grid::{Cell, Grid, Shard, ShardError};
 use crate::config::{Config, ConfigError, TrajectoryFormat};
 use crate::controller::{PlannerKind, UnknownPlanner, PLANNERS};
-
-/// Scenario keys a campaign sets itself.
-const PER_CELL_KEYS: [&str; 4] = ["alpha", "lambda", "seed", "steps"];
 
 /// Why campaign settings cannot be used.
 #[derive(Debug, thiserror::Error)]
@@ -536,70 +534,6 @@ fn check_values(
             reason,
         }),
         None => Ok(()),
-    }
-}
-
-/// The configuration without how SUMO is watched (its console output, sumo-gui, the stall
-/// bound), which does not change what SUMO computes.
-fn unwatched(config: &Config) -> Config {
-    let mut c = config.clone();
-    c.sumo.verbose = false;
-    c.sumo.gui = false;
-    c.sumo.gui_delay_ms = None;
-    c.sumo.stall_timeout_s = None;
-    c
-}
-
-/// Everything in an episode's configuration that decides its results, as TOML: the whole
-/// configuration, cell keys included, without how SUMO is watched and without the optional
-/// outputs. A campaign's worker records it in the cell (`settings.toml`), and a cell whose
-/// record differs from what the campaign would run is not finished (an edited
-/// `campaign.toml` cannot pass off old episodes as its own).
-pub fn results_settings(config: &Config) -> String {
-    let mut doc = match toml::Value::try_from(unwatched(config)).expect("config serialises") {
-        toml::Value::Table(t) => t,
-        _ => unreachable!("a struct serialises to a table"),
-    };
-    doc.remove("output");
-    toml::to_string_pretty(&doc).expect("config serialises")
-}
-
-/// The configuration as a TOML table without the per-cell scenario keys and without the
-/// optional outputs, which do not change results (runs with and without trajectories may
-/// share a directory).
-fn scenario_table(config: &Config) -> toml::Table {
-    let mut doc = match toml::Value::try_from(config).expect("config serialises") {
-        toml::Value::Table(t) => t,
-        _ => unreachable!("a struct serialises to a table"),
-    };
-    doc.remove("output");
-    if let Some(toml::Value::Table(s)) = doc.get_mut("scenario") {
-        for key in PER_CELL_KEYS {
-            s.remove(key);
-        }
-    }
-    doc
-}
-
-fn first_difference(a: &toml::Value, b: &toml::Value, path: &str) -> Option<String> {
-    match (a, b) {
-        (toml::Value::Table(x), toml::Value::Table(y)) => {
-            let mut keys: Vec<&String> = x.keys().chain(y.keys()).collect();
-            keys.sort();
-            keys.dedup();
-            keys.into_iter().find_map(|k| {
-                let p = if path.is_empty() {
-                    k.clone()
-                } else {
-                    format!("{path}.{k}")
-                };
-                match (x.get(k), y.get(k)) {
-                    (Some(u), Some(v)) => first_difference(u, v, &p),
-                    _ => Some(p),
-                }
-            })
-        }
-        _ => (a != b).then(|| path.to_string()),
     }
 }
 

@@ -27,7 +27,7 @@ pub const ERROR_FILE: &str = "error.txt";
 /// Name of the file whose presence marks a finished cell.
 pub const DONE_FILE: &str = "episode.csv";
 /// Name of the cell's record of the settings its episode ran with
-/// ([`super::settings::results_settings`]).
+/// ([`super::comparison::results_settings`]).
 pub const SETTINGS_RECORD: &str = "settings.toml";
 
 /// Test hook: `BKPBS_WORKER_FAULT=panic:<seed>` makes the planner "panic" in every episode
@@ -205,7 +205,7 @@ pub(crate) fn run_cell(req: &Request) -> Result<(), String> {
             return Err(format!("planner {} panicked: {message}", req.planner));
         }
     };
-    let record = super::settings::results_settings(&req.config);
+    let record = super::comparison::results_settings(&req.config);
     io::write_atomic(&req.dir.join(SETTINGS_RECORD), record.as_bytes())
         .and_then(|()| result.write(&req.dir).map(drop))
         .map_err(|e| e.to_string())

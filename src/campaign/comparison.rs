@@ -1,0 +1,73 @@
+//! Which settings decide an episode's results, and where two sets of settings first differ:
+//! what lets campaigns share a directory, and what a finished cell must have run with.
+
+use crate::config::Config;
+
+/// Scenario keys a campaign sets itself, per cell.
+pub(super) const PER_CELL_KEYS: [&str; 4] = ["alpha", "lambda", "seed", "steps"];
+
+/// The configuration without how SUMO is watched (its console output, sumo-gui, the stall
+/// bound), which does not change what SUMO computes.
+pub(super) fn unwatched(config: &Config) -> Config {
+    let mut c = config.clone();
+    c.sumo.verbose = false;
+    c.sumo.gui = false;
+    c.sumo.gui_delay_ms = None;
+    c.sumo.stall_timeout_s = None;
+    c
+}
+
+/// Everything in an episode's configuration that decides its results, as TOML: the whole
+/// configuration, cell keys included, without how SUMO is watched and without the optional
+/// outputs. A campaign's worker records it in the cell (`settings.toml`), and a cell whose
+/// record differs from what the campaign would run is not finished (an edited
+/// `campaign.toml` cannot pass off old episodes as its own).
+pub fn results_settings(config: &Config) -> String {
+    toml::to_string_pretty(&config_table(&unwatched(config))).expect("config serialises")
+}
+
+/// The configuration as a TOML table without the optional outputs.
+fn config_table(config: &Config) -> toml::Table {
+    let mut doc = match toml::Value::try_from(config).expect("config serialises") {
+        toml::Value::Table(t) => t,
+        _ => unreachable!("a struct serialises to a table"),
+    };
+    doc.remove("output");
+    doc
+}
+
+/// The configuration as a TOML table without the per-cell scenario keys and without the
+/// optional outputs, which do not change results (runs with and without trajectories may
+/// share a directory).
+pub(super) fn scenario_table(config: &Config) -> toml::Table {
+    let mut doc = config_table(config);
+    if let Some(toml::Value::Table(s)) = doc.get_mut("scenario") {
+        for key in PER_CELL_KEYS {
+            s.remove(key);
+        }
+    }
+    doc
+}
+
+/// The first dotted key in which `a` and `b` differ, if any.
+pub(super) fn first_difference(a: &toml::Value, b: &toml::Value, path: &str) -> Option<String> {
+    match (a, b) {
+        (toml::Value::Table(x), toml::Value::Table(y)) => {
+            let mut keys: Vec<&String> = x.keys().chain(y.keys()).collect();
+            keys.sort();
+            keys.dedup();
+            keys.into_iter().find_map(|k| {
+                let p = if path.is_empty() {
+                    k.clone()
+                } else {
+                    format!("{path}.{k}")
+                };
+                match (x.get(k), y.get(k)) {
+                    (Some(u), Some(v)) => first_difference(u, v, &p),
+                    _ => Some(p),
+                }
+            })
+        }
+        _ => (a != b).then(|| path.to_string()),
+    }
+}
