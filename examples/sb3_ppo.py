@@ -28,7 +28,8 @@ import bkpbs.gym as bg
 def train(steps: int, seed: int):
     from stable_baselines3 import PPO
 
-    env = bg.MergeEnv(alpha=0.5, lam=3000.0)
+    # This PPO does not mask: a masked-out primitive runs as idle.
+    env = bg.MergeEnv(alpha=0.5, lam=3000.0, masked_actions="idle")
     model = PPO(
         "MlpPolicy",
         env,
@@ -52,7 +53,7 @@ def evaluate(model, alpha: float, lam: float, seeds):
     """Every CAV driven by the trained policy; the episode's summary (as episode.csv)."""
     rows = []
     for seed in seeds:
-        env = bg.MergeParallelEnv(alpha=alpha, lam=lam)
+        env = bg.MergeParallelEnv(alpha=alpha, lam=lam, masked_actions="idle")
         obs, _ = env.reset(seed=seed)
         while env.agents:
             batch = np.stack([obs[a] for a in env.agents])

@@ -464,6 +464,11 @@ fn report_refuses_damaged_episode_rows_naming_file_and_line() {
         (duplicated, "line 10: cell"),
         (with_field(2, 20, "NaN"), "line 3: mean_delay_s = 'NaN'"),
         (with_field(2, 20, "-999"), "line 3: mean_delay_s = '-999'"),
+        // Hardening II, finding 8: this was reported as "± inf".
+        (
+            with_field(2, 20, "1e308"),
+            "line 3: mean_delay_s = '1e308' is above 1e15",
+        ),
         (
             with_field(4, 17, "7.5"),
             "line 5: controllable_collision_rate = '7.5'",

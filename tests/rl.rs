@@ -198,3 +198,51 @@ fn single_cav_training() {
     let steps: u64 = row[1].parse().unwrap();
     assert!((10..=400).contains(&steps), "{curve}");
 }
+
+/// Hardening II, finding 8: a checkpoint counting 1e18 updates, or holding a weight of 3e38,
+/// was resumed and failed later naming no culprit; a policy of 3e38 passed as "finite".
+#[test]
+fn checkpoints_and_policies_with_impossible_numbers_are_refused_naming_the_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let a = dir.path().join("a");
+    let o = bkpbs(&train_args(a.to_str().unwrap(), "1"));
+    assert!(o.status.success(), "{}", stderr(&o));
+    let path = a.join("checkpoint.json");
+    let original: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    for (key, value, named) in [
+        (
+            "updates",
+            serde_json::json!(1_000_000_000_000_000_000u64),
+            "learning curve",
+        ),
+        ("actor", serde_json::json!(null), "at most"),
+    ] {
+        let mut ck = original.clone();
+        if key == "actor" {
+            ck["actor"][0] = serde_json::json!(3e38);
+        } else {
+            ck[key] = value;
+        }
+        std::fs::write(&path, ck.to_string()).unwrap();
+        let line = one_error_line(&bkpbs(&train_args(a.to_str().unwrap(), "3000")));
+        assert!(
+            line.contains("checkpoint.json") && line.contains(named),
+            "{line}"
+        );
+    }
+    let policy_text =
+        std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/models/rl-ppo.json"))
+            .unwrap();
+    let mut policy: serde_json::Value = serde_json::from_str(&policy_text).unwrap();
+    policy["actor"][0] = serde_json::json!(3e38);
+    let huge = dir.path().join("huge-policy.json");
+    std::fs::write(&huge, policy.to_string()).unwrap();
+    let cfg = dir.path().join("huge.toml");
+    std::fs::write(&cfg, format!("[rl]\npolicy = {:?}\n", huge)).unwrap();
+    let line = one_error_line(&rl_ppo_episode(&["--config", cfg.to_str().unwrap()]));
+    assert!(
+        line.contains("huge-policy.json") && line.contains("at most 1e4"),
+        "{line}"
+    );
+}

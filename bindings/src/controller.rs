@@ -122,6 +122,14 @@ impl PyController {
         let time = time.unwrap_or(self.calls as f64 * sc.dt);
         let framed = scene_of(vehicles, &self.road, sc, &mut self.origins, time)?;
         let scene = &framed.scene;
+        let max = bkpbs::model::scene::MAX_SCENE_VEHICLES;
+        if scene.vehicles.len() > max {
+            return Err(bad_input(format!(
+                "{} vehicles on the merge section in one plan call: at most {max} (a section \
+                 holds a few hundred; planning time grows faster than their number)",
+                scene.vehicles.len()
+            )));
+        }
         self.commands.clear();
         self.inner.plan(scene, &mut self.commands);
         let out = PyDict::new(py);

@@ -226,3 +226,15 @@ def test_learned_predictor(scene, source):
 def test_controller_with_a_model_file(scene):
     c = bkpbs.Controller("bk-mastar", model=MODELS / "gcn-unconditioned.json")
     assert set(c.plan(scene)) == {v["id"] for v in scene if v["type"] == "cav"}
+
+
+def test_a_scene_beyond_any_merge_section_is_refused_at_once():
+    # Hardening II, finding 8: 3,000 CAVs took over 40 s in one plan call, without a bound.
+    import time
+
+    crowd = [vehicle(f"c{k}", "cav", "main_in", k % 2, 1.0 + 0.14 * k, 20.0) for k in range(1001)]
+    c = bkpbs.Controller("bk-pbs")
+    start = time.perf_counter()
+    with pytest.raises(bkpbs.BkpbsError, match="1001 vehicles on the merge section in one plan call: at most 1000"):
+        c.plan(crowd)
+    assert time.perf_counter() - start < 5.0

@@ -15,7 +15,8 @@ def test_merge_env_passes_gymnasium_check_env():
 
     # An instance, not gymnasium.make's: with a spec, check_env opens a second environment for
     # the other render modes while the first is open, and libsumo has one simulation per process.
-    env = bg.MergeEnv(render_mode="rgb_array", steps=200)
+    # check_env samples actions at random, masked ones included.
+    env = bg.MergeEnv(render_mode="rgb_array", steps=200, masked_actions="idle")
     try:
         check_env(env, skip_render_check=False)
     finally:
@@ -60,7 +61,7 @@ def test_same_seed_same_episode():
 def test_merge_parallel_env_passes_pettingzoo_parallel_api_test():
     from pettingzoo.test import parallel_api_test
 
-    env = bg.MergeParallelEnv(steps=150, alpha=0.6)
+    env = bg.MergeParallelEnv(steps=150, alpha=0.6, masked_actions="idle")
     try:
         parallel_api_test(env, num_cycles=200)
     finally:
@@ -86,7 +87,7 @@ def test_render_and_bad_input():
 def test_misuse_is_one_clear_error():
     from bkpbs import SimulationBusyError
 
-    env = bg.MergeParallelEnv(steps=60)
+    env = bg.MergeParallelEnv(steps=60, masked_actions="idle")
     env.reset(seed=2)
     n = len(env.agents)
     with pytest.raises(BkpbsError, match="not one of the 6 primitives"):
@@ -103,3 +104,82 @@ def test_misuse_is_one_clear_error():
     env.close()
     other.reset(seed=1)  # free again
     other.close()
+
+
+def _first_reset(seed: int) -> tuple:
+    """The first observation, agent and demand seed of a fresh MergeEnv reset with ``seed``."""
+    env = bg.MergeEnv(steps=100)
+    try:
+        obs, info = env.reset(seed=seed)
+        return obs, info["agent"], info["demand_seed"]
+    finally:
+        env.close()
+
+
+def test_reset_alone_decides_what_follows_whatever_ran_before():
+    # Hardening II, finding 7: reset(seed=9) after an episode of seed 8 returned seed 8's agent
+    # and a non-zero observation; a fresh process gave agent None, then step() said "done".
+    env = bg.MergeEnv(steps=100)
+    env.reset(seed=8)
+    env.step(bg.MergeEnv.action_names.index("idle"))
+    obs, info = env.reset(seed=9)
+    after_history = (obs, info["agent"], info["demand_seed"])
+    env.step(bg.MergeEnv.action_names.index("idle"))  # the episode runs
+    env.close()
+    fresh = _first_reset(9)
+    assert after_history[1] is not None and after_history[1] == fresh[1]
+    assert after_history[2] == fresh[2]
+    assert np.array_equal(after_history[0], fresh[0])
+    # And in another process.
+    import subprocess
+    import sys
+
+    code = (
+        "import bkpbs.gym as bg, numpy as np\n"
+        "e = bg.MergeEnv(steps=100); o, i = e.reset(seed=9)\n"
+        "print(i['agent'], i['demand_seed'], o.tobytes().hex())\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    agent, seed, hexobs = out.stdout.split()
+    assert (agent, int(seed), hexobs) == (fresh[1], fresh[2], fresh[0].tobytes().hex())
+
+
+def test_a_seed_without_a_cav_is_skipped_and_said():
+    # With 100 steps, seeds whose first CAV comes after the warm-up too late have no agent.
+    seen = [_first_reset(s)[2] for s in range(8, 14)]
+    assert all(used >= s for used, s in zip(seen, range(8, 14)))
+    assert any(used != s for used, s in zip(seen, range(8, 14))), seen
+
+
+def test_invalid_fractional_and_masked_actions_raise():
+    env = bg.MergeEnv(steps=200)
+    _, info = env.reset(seed=3)
+    for bad in (1.5, 2.0, True, 7, -1, "left"):
+        with pytest.raises(ValueError, match="action"):
+            env.step(bad)
+    env.step(np.int64(bg.MergeEnv.action_names.index("idle")))  # numpy integers are fine
+    masked = None
+    for _ in range(150):
+        mask = info["action_mask"]
+        if not mask.all():
+            masked = int(np.flatnonzero(mask == 0)[0])
+            break
+        _, _, te, tr, info = env.step(bg.MergeEnv.action_names.index("idle"))
+        assert not (te or tr)
+    assert masked is not None, "some primitive is masked on the acceleration lane"
+    with pytest.raises(ValueError, match="masked out"):
+        env.step(masked)
+    env.close()
+    with pytest.raises(ValueError, match="masked_actions"):
+        bg.MergeEnv(masked_actions="sometimes")
+
+
+def test_parallel_actions_for_unknown_agents_raise():
+    env = bg.MergeParallelEnv(steps=80)
+    env.reset(seed=2)
+    idle = bg.MergeEnv.action_names.index("idle")
+    with pytest.raises(ValueError, match="not acting now: ghost"):
+        env.step({**{a: idle for a in env.agents}, "ghost": idle})
+    with pytest.raises(ValueError, match="not an integer"):
+        env.step({a: 0.5 for a in env.agents})
+    env.close()

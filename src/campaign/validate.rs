@@ -54,6 +54,10 @@ const DELAYS: [&str; 6] = [
 const LOWEST_DELAY: f64 = -1.0;
 /// A fraction of the inserted vehicles: at most 1.
 const RATE: &str = "controllable_collision_rate";
+/// Above any value an episode records (the largest, search-node counts, stay below 1e10), and
+/// low enough that sums of squares stay finite: a delay of 1e308 once made the report print
+/// "± inf".
+const LARGEST: f64 = 1e15;
 
 /// What `column` may hold, as a reason if `value` breaks it.
 fn problem(column: &str, value: &str) -> Option<&'static str> {
@@ -72,6 +76,8 @@ fn problem(column: &str, value: &str) -> Option<&'static str> {
         Some("is negative")
     } else if column == RATE && x > 1.0 {
         Some("is a rate above 1")
+    } else if x > LARGEST {
+        Some("is above 1e15, beyond any value an episode records")
     } else {
         None
     }

@@ -156,7 +156,37 @@ fn check_attribute(key: &str, value: &str) -> Result<(), &'static str> {
         Ok(x) if !(x.is_finite() && x.abs() <= ATTRIBUTE_MAGNITUDE) => {
             Err("must be a finite number within ±10000")
         }
+        Ok(x) => check_range(key, x),
         _ => Ok(()),
+    }
+}
+
+/// SUMO's own range for the vType attributes whose out-of-range values make it assert or
+/// misbehave (a zero length asserts, a zero deceleration divides by it); others pass.
+fn check_range(key: &str, x: f64) -> Result<(), &'static str> {
+    const POSITIVE: [&str; 12] = [
+        "accel",
+        "decel",
+        "emergencyDecel",
+        "apparentDecel",
+        "length",
+        "width",
+        "height",
+        "maxSpeed",
+        "desiredMaxSpeed",
+        "tau",
+        "speedFactor",
+        "actionStepLength",
+    ];
+    const NON_NEGATIVE: [&str; 4] = ["minGap", "speedDev", "minGapLat", "maxSpeedLat"];
+    if POSITIVE.contains(&key) && x <= 0.0 {
+        Err("must be positive (SUMO's range for this attribute)")
+    } else if NON_NEGATIVE.contains(&key) && x < 0.0 {
+        Err("must not be negative (SUMO's range for this attribute)")
+    } else if key == "sigma" && !(0.0..=1.0).contains(&x) {
+        Err("must lie in [0, 1] (SUMO's range for the driver imperfection)")
+    } else {
+        Ok(())
     }
 }
 

@@ -425,6 +425,10 @@ fn hostile_profile_attributes_are_refused_naming_the_setting() {
         ("tau", "-inf", "finite"),
         ("bad name", "1", "attribute name"),
         ("id", "x", "attribute name"),
+        ("length", "0", "positive"),
+        ("decel", "-3", "positive"),
+        ("minGap", "-1", "not be negative"),
+        ("sigma", "1.5", "[0, 1]"),
     ] {
         let text =
             format!("[hdv]\nprofile = \"x\"\n[hdv.profiles.x.attributes]\n\"{key}\" = '{value}'\n");

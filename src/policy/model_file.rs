@@ -12,6 +12,9 @@ use super::network::{ActorCritic, HIDDEN};
 use super::observation::OBS_DIM;
 use crate::planner::primitives::Primitive;
 
+/// The largest weight magnitude a policy file may hold: trained policies stay below 100 (the
+/// shipped one below 20); 3e38 passed a finiteness check and overflowed to infinity later.
+pub const MAX_WEIGHT: f32 = 1e4;
 /// Format tag of the policy file (its `format` field).
 pub const POLICY_FORMAT: &str = "bkpbs-rl-policy";
 /// Version of the policy file format this build reads and writes (its `version` field).
@@ -169,8 +172,16 @@ impl PolicyFile {
                 critic.n_params
             )));
         }
-        if !self.actor.iter().chain(&self.critic).all(|w| w.is_finite()) {
-            return Err(shape("non-finite weights".into()));
+        if !self
+            .actor
+            .iter()
+            .chain(&self.critic)
+            .all(|w| w.is_finite() && w.abs() <= MAX_WEIGHT)
+        {
+            return Err(shape(format!(
+                "a weight is not a finite number of magnitude at most {MAX_WEIGHT:e} (trained \
+                 policies stay below 100; larger ones overflow the network's sums)"
+            )));
         }
         Ok(())
     }

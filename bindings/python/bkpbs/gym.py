@@ -8,9 +8,16 @@
   policy of the paper's test set-up); agents appear when inserted and leave when they arrive
   (truncated) or crash (terminated).
 
-Each step's ``info`` holds the agent's ``action_mask`` (1 = allowed by the lane-change rules); a
-masked-out action is executed as idle. SUMO runs in-process (libsumo): one environment per
-process at a time; use vectorised environments with subprocesses for more.
+Each step's ``info`` holds the agent's ``action_mask`` (1 = allowed by the lane-change rules).
+An action must be an integer in ``range(6)`` (a fractional or out-of-range one is a
+``ValueError``); a masked-out action is a ``ValueError`` too, unless the environment is made with
+``masked_actions="idle"``, which executes it as idle (for learners that do not mask, such as
+Stable-Baselines3's PPO, and for Gymnasium's ``check_env``, which samples actions at random).
+
+``reset(seed=s)`` alone decides what follows, whatever ran before. A demand seed whose episode
+never has a controllable CAV is skipped: the next seed is tried, and ``info["demand_seed"]``
+says which seed the episode runs. SUMO runs in-process (libsumo): one environment per process
+at a time; use vectorised environments with subprocesses for more.
 """
 
 from __future__ import annotations
@@ -31,6 +38,8 @@ except ImportError:  # pragma: no cover - exercised only without pettingzoo
 
 OBS_DIM: int = MergeEnvCore.OBS_DIM
 N_ACTIONS: int = len(MergeEnvCore.action_names())
+# How many demand seeds a reset tries for one with a controllable CAV before it gives up.
+MAX_SKIPPED_SEEDS = 100
 # Every feature is scaled by a fixed constant and clipped well inside this range.
 OBS_BOUND = 4.0
 
@@ -42,6 +51,48 @@ def _observation_space() -> spaces.Box:
 def _check_render_mode(mode: Optional[str]) -> None:
     if mode not in (None, "rgb_array"):
         raise ValueError(f"render_mode {mode!r}: only 'rgb_array' is supported")
+
+
+def _check_masked_actions(policy: str) -> None:
+    if policy not in ("raise", "idle"):
+        raise ValueError(f"masked_actions {policy!r}: use 'raise' or 'idle'")
+
+
+def _action_index(action: Any, mask: np.ndarray, agent: Any, masked_actions: str) -> int:
+    """The primitive index of ``action`` for ``agent``, checked: an integer (a Python or numpy
+    integer, or a one-element integer array) in range, and allowed by ``mask`` unless masked
+    actions are executed as idle."""
+    value = action
+    if isinstance(value, np.ndarray) and value.size == 1:
+        value = value.reshape(()).item() if np.issubdtype(value.dtype, np.integer) else value
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)):
+        raise ValueError(f"action {action!r} for agent {agent}: not an integer primitive index")
+    index = int(value)
+    if not 0 <= index < N_ACTIONS:
+        raise ValueError(f"action {index} for agent {agent}: not one of the {N_ACTIONS} primitives")
+    if not mask[index]:
+        if masked_actions == "idle":
+            return MergeEnvCore.action_names().index("idle")
+        name = MergeEnvCore.action_names()[index]
+        raise ValueError(
+            f"action {index} ({name}) for agent {agent} is masked out by the lane-change rules "
+            "(info['action_mask']); make the environment with masked_actions='idle' to run it as idle"
+        )
+    return index
+
+
+def _reset_to_an_agent(core: "_Core", seed: int) -> Tuple[int, List[str], np.ndarray, np.ndarray]:
+    """Resets ``core`` with demand seed ``seed``, or the next seeds if an episode never has a
+    controllable CAV; the seed used and the first step's agents, observations and masks."""
+    for demand_seed in range(seed, seed + MAX_SKIPPED_SEEDS):
+        core.env.reset(demand_seed)
+        ids, obs, masks = core.arrays()
+        if ids:
+            return demand_seed, ids, obs, masks
+    raise RuntimeError(
+        f"demand seeds {seed}..{seed + MAX_SKIPPED_SEEDS - 1} all give episodes without a "
+        "controllable CAV: raise alpha or lam, or lengthen steps"
+    )
 
 
 class _Core:
@@ -74,36 +125,45 @@ class MergeEnv(gymnasium.Env):
         config: Any = None,
         render_mode: Optional[str] = None,
         render_size: Tuple[int, int] = (600, 150),
+        masked_actions: str = "raise",
         **overrides: Any,
     ):
         _check_render_mode(render_mode)
+        _check_masked_actions(masked_actions)
         self.render_mode, self.render_size = render_mode, render_size
+        self.masked_actions = masked_actions
         self.observation_space = _observation_space()
         self.action_space = spaces.Discrete(N_ACTIONS)
         self._core = _Core("single", alpha, lam, config, overrides)
         self._obs = np.zeros(OBS_DIM, dtype=np.float32)
         self._mask = np.ones(N_ACTIONS, dtype=np.int8)
+        self._ego: Optional[str] = None
+        self._ended = True
 
     def _read(self) -> Dict[str, Any]:
         ids, obs, masks = self._core.arrays()
         if ids:
             self._obs, self._mask = obs[0], masks[0]
-            self._ego = ids[0]
-        return {"action_mask": self._mask, "agent": getattr(self, "_ego", None)}
+        return {"action_mask": self._mask, "agent": self._ego}
 
     def reset(self, *, seed: Optional[int] = None, options: Optional[Dict[str, Any]] = None):
         super().reset(seed=seed)
         demand_seed = int(self.np_random.integers(0, 2**31 - 1)) if seed is None else int(seed)
-        self._core.env.reset(demand_seed)
-        info = self._read()
+        used, ids, obs, masks = _reset_to_an_agent(self._core, demand_seed)
+        self._ego, self._obs, self._mask, self._ended = ids[0], obs[0], masks[0], False
+        info = {"action_mask": self._mask, "agent": self._ego, "demand_seed": used}
         return self._obs.copy(), info
 
     def step(self, action):
-        rewards, terminated, truncated, done = self._core.env.step([int(action)])
+        if self._ended:
+            raise RuntimeError("the episode has ended: call reset() first")
+        index = _action_index(action, self._mask, self._ego, self.masked_actions)
+        rewards, terminated, truncated, done = self._core.env.step([index])
         reward = float(sum(r for _, r in rewards))
         ended = bool(terminated) or bool(truncated) or done
-        info = self._read() if not ended else {"action_mask": self._mask, "agent": getattr(self, "_ego", None)}
+        info = self._read() if not ended else {"action_mask": self._mask, "agent": self._ego}
         if ended:
+            self._ended = True
             info["episode_summary"] = self._core.env.summary()
         return self._obs.copy(), reward, bool(terminated), ended and not terminated, info
 
@@ -128,15 +188,19 @@ class MergeParallelEnv(_ParallelBase):
         config: Any = None,
         render_mode: Optional[str] = None,
         render_size: Tuple[int, int] = (600, 150),
+        masked_actions: str = "raise",
         **overrides: Any,
     ):
         _check_render_mode(render_mode)
+        _check_masked_actions(masked_actions)
         self.render_mode, self.render_size = render_mode, render_size
+        self.masked_actions = masked_actions
         self._core = _Core("all", alpha, lam, config, overrides)
         self._rng = np.random.default_rng()
         self.agents: List[str] = []
         self.possible_agents: List[str] = []
         self._last_obs: Dict[str, np.ndarray] = {}
+        self._masks: Dict[str, np.ndarray] = {}
 
     @functools.lru_cache(maxsize=None)
     def observation_space(self, agent: str) -> spaces.Box:
@@ -151,6 +215,7 @@ class MergeParallelEnv(_ParallelBase):
         self.agents = list(ids)
         observations = {a: obs[k] for k, a in enumerate(ids)}
         self._last_obs.update(observations)
+        self._masks = {a: masks[k] for k, a in enumerate(ids)}
         infos = {a: {"action_mask": masks[k]} for k, a in enumerate(ids)}
         return observations, infos
 
@@ -158,15 +223,24 @@ class MergeParallelEnv(_ParallelBase):
         if seed is not None:
             self._rng = np.random.default_rng(seed)
         demand_seed = int(self._rng.integers(0, 2**31 - 1)) if seed is None else int(seed)
-        self._core.env.reset(demand_seed)
+        used, _, _, _ = _reset_to_an_agent(self._core, demand_seed)
         self.possible_agents = self._core.env.possible_agents()
         self._last_obs = {}
-        return self._observe()
+        observations, infos = self._observe()
+        for info in infos.values():
+            info["demand_seed"] = used
+        return observations, infos
 
     def step(self, actions: Dict[str, Any]):
         acting = list(self.agents)
+        unknown = sorted(str(a) for a in set(actions) - set(acting))
+        if unknown:
+            raise ValueError(f"actions for agents that are not acting now: {', '.join(unknown)}")
         idle = self._core.env.action_names().index("idle")
-        chosen = [int(actions.get(a, idle)) for a in acting]
+        chosen = [
+            _action_index(actions[a], self._masks[a], a, self.masked_actions) if a in actions else idle
+            for a in acting
+        ]
         rewards, terminated, truncated, _done = self._core.env.step(chosen)
         observations, infos = self._observe()
         reward = {a: 0.0 for a in acting}

@@ -197,6 +197,37 @@ impl RunFiles {
     }
 }
 
+/// A resumed checkpoint's own consistency: weights as a policy file's (finite, bounded), one
+/// learning-curve row per update, a finite wall time. An `updates = 1e18` or weights of 3e38
+/// once passed and failed later without naming the file.
+fn check_progress(ck: &Checkpoint) -> Result<(), String> {
+    let max = crate::policy::model_file::MAX_WEIGHT;
+    if !ck
+        .actor
+        .iter()
+        .chain(&ck.critic)
+        .all(|w| w.is_finite() && w.abs() <= max)
+    {
+        return Err(format!(
+            "a weight is not a finite number of magnitude at most {max:e}"
+        ));
+    }
+    if ck.updates != ck.curve.len() as u64 {
+        return Err(format!(
+            "it counts {} updates but its learning curve has {} rows",
+            ck.updates,
+            ck.curve.len()
+        ));
+    }
+    if !(ck.wall_s.is_finite() && ck.wall_s >= 0.0) {
+        return Err(format!(
+            "wall_s {} is not a finite, non-negative time",
+            ck.wall_s
+        ));
+    }
+    Ok(())
+}
+
 /// A fresh run's checkpoint, or the one in `files` when resuming.
 pub fn start_or_resume(
     files: &RunFiles,
@@ -221,6 +252,7 @@ pub fn start_or_resume(
                 "its networks have other shapes than this build's".into()
             ));
         }
+        check_progress(&ck).map_err(bad)?;
         ck.settings.steps = settings.steps; // the budget may be extended
         if ck.settings != settings || ck.config != config {
             return Err(TrainError::OtherSettings(path));
