@@ -14,7 +14,7 @@ use bkpbs::report::stats::{sample_std, t_975, Estimate};
 
 mod common;
 
-use common::{bkpbs, one_error_line};
+use common::{assert_ok, bkpbs, one_error_line};
 
 // ---------------------------------------------------------------- statistics, grid, shards
 
@@ -187,15 +187,6 @@ fn report(dirs: &[&Path], extra: &[&str]) -> Output {
 
 fn text(b: &[u8]) -> String {
     String::from_utf8_lossy(b).into_owned()
-}
-
-fn assert_ok(o: &Output) {
-    assert!(
-        o.status.success(),
-        "stdout:\n{}\nstderr:\n{}",
-        text(&o.stdout),
-        text(&o.stderr)
-    );
 }
 
 fn read(p: &Path) -> String {

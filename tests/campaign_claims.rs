@@ -10,7 +10,7 @@ mod common;
 use std::path::Path;
 use std::process::{Command, Output, Stdio};
 
-use common::csv_rows;
+use common::{assert_ok, csv_rows};
 
 const BIN: &str = env!("CARGO_BIN_EXE_bkpbs");
 
@@ -33,15 +33,6 @@ fn run(c: &mut Command) -> Output {
 
 fn text(b: &[u8]) -> String {
     String::from_utf8_lossy(b).into_owned()
-}
-
-fn assert_ok(o: &Output) {
-    assert!(
-        o.status.success(),
-        "stdout:\n{}\nstderr:\n{}",
-        text(&o.stdout),
-        text(&o.stderr)
-    );
 }
 
 /// The `steps` of every collected episode row in `out`.

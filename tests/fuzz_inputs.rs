@@ -7,8 +7,8 @@
 
 mod common;
 
-use std::process::{Command, Output, Stdio};
-use std::time::{Duration, Instant};
+use std::process::{Command, Output};
+use std::time::Duration;
 
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -70,28 +70,8 @@ fn pick<'a>(rng: &mut ChaCha8Rng, from: &[&'a str]) -> &'a str {
 
 /// Runs `bkpbs args`, killed past [`BOUND`], and checks how it ended.
 fn run_bounded(case: &str, args: &[&str]) -> Output {
-    let start = Instant::now();
-    let child = Command::new(BIN)
-        .args(args)
-        .stdin(Stdio::null())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("the binary runs");
-    let pid = child.id() as i32;
-    let killer = std::thread::spawn(move || {
-        while start.elapsed() < BOUND {
-            std::thread::sleep(Duration::from_millis(50));
-            // SAFETY: signal 0 only probes whether the process still exists.
-            if unsafe { libc::kill(pid, 0) } != 0 {
-                return;
-            }
-        }
-        common::send_signal(pid, libc::SIGKILL);
-    });
-    let out = child.wait_with_output().unwrap();
-    killer.join().unwrap();
-    assert!(start.elapsed() < BOUND, "{case}: ran past {BOUND:?}");
+    let (out, took) = common::output_within(Command::new(BIN).args(args), BOUND);
+    assert!(took < BOUND, "{case}: ran past {BOUND:?}");
     let err = common::stderr(&out);
     assert!(!err.contains("panicked"), "{case}: {err}");
     if !out.status.success() {

@@ -7,8 +7,8 @@
 mod common;
 
 use std::os::unix::process::CommandExt;
-use std::process::{Command, Output, Stdio};
-use std::time::{Duration, Instant};
+use std::process::{Command, Output};
+use std::time::Duration;
 
 use common::refused_naming;
 
@@ -21,10 +21,7 @@ const TIME_BOUND: Duration = Duration::from_secs(10);
 /// `bkpbs args`, its address space bounded, killed if it outlives the time bound.
 fn bounded(args: &[&str]) -> Output {
     let mut cmd = Command::new(env!("CARGO_BIN_EXE_bkpbs"));
-    cmd.args(args)
-        .stdin(Stdio::null())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped());
+    cmd.args(args);
     // SAFETY: setrlimit is async-signal-safe and touches only the child.
     unsafe {
         cmd.pre_exec(|| {
@@ -38,22 +35,7 @@ fn bounded(args: &[&str]) -> Output {
             Ok(())
         });
     }
-    let start = Instant::now();
-    let child = cmd.spawn().expect("the binary runs");
-    let pid = child.id() as i32;
-    let watchdog = std::thread::spawn(move || {
-        while start.elapsed() < TIME_BOUND {
-            std::thread::sleep(Duration::from_millis(50));
-            // SAFETY: signal 0 only probes whether the process still exists.
-            if unsafe { libc::kill(pid, 0) } != 0 {
-                return;
-            }
-        }
-        common::send_signal(pid, libc::SIGKILL);
-    });
-    let out = child.wait_with_output().unwrap();
-    let took = start.elapsed();
-    watchdog.join().unwrap();
+    let (out, took) = common::output_within(&mut cmd, TIME_BOUND);
     assert!(took < TIME_BOUND, "{args:?} took {took:?}");
     out
 }

@@ -124,6 +124,46 @@ pub fn sumo_game_dir() -> std::path::PathBuf {
     game
 }
 
+/// Runs `cmd` (its output piped), killed with SIGKILL if it outlives `bound`; its output and
+/// how long it took.
+pub fn output_within(
+    cmd: &mut Command,
+    bound: std::time::Duration,
+) -> (Output, std::time::Duration) {
+    let start = std::time::Instant::now();
+    let child = cmd
+        .stdin(std::process::Stdio::null())
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("the binary runs");
+    let pid = child.id() as i32;
+    let killer = std::thread::spawn(move || {
+        while start.elapsed() < bound {
+            std::thread::sleep(std::time::Duration::from_millis(50));
+            // SAFETY: signal 0 only probes whether the process still exists.
+            if unsafe { libc::kill(pid, 0) } != 0 {
+                return;
+            }
+        }
+        send_signal(pid, libc::SIGKILL);
+    });
+    let out = child.wait_with_output().unwrap();
+    let took = start.elapsed();
+    killer.join().unwrap();
+    (out, took)
+}
+
+/// Asserts that the run `o` succeeded, showing both its streams otherwise.
+pub fn assert_ok(o: &Output) {
+    assert!(
+        o.status.success(),
+        "stdout:\n{}\nstderr:\n{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    );
+}
+
 /// Sends `signal` to process `pid` (a negative `pid`: to its process group).
 pub fn send_signal(pid: i32, signal: i32) {
     // SAFETY: plain kill(2) on a process the test started.
