@@ -393,14 +393,26 @@ fn a_driver_profile_sumo_rejects_or_nobody_knows_is_one_error_line() {
     let o = episode_into(&out, &["--hdv-profile", "reckless", "--steps", "10"]);
     assert_clear_failure(&o, "unknown HDV profile 'reckless'", &out);
     assert!(stderr(&o).contains("sumo-safe, paper, heterogeneous, krauss, eidm"));
-    // SUMO itself refuses a negative reaction time; its reason is in the line.
+    // A negative reaction time is outside SUMO's range: refused naming the setting.
     let (cfg, out) = config_file(
         d.path(),
         "bad.toml",
         "[hdv]\nprofile = \"mine\"\n[hdv.profiles.mine]\nattributes = { tau = \"-1\" }\n",
     );
     let o = episode_into(&out, &["--config", &cfg, "--steps", "10"]);
-    assert_clear_failure(&o, "SUMO said", &out);
+    assert_clear_failure(&o, "hdv.profiles.mine.attributes.tau", &out);
+    // SUMO itself refuses a reaction time that is no number; its reason is in the line.
+    let (cfg, out) = config_file(
+        d.path(),
+        "text.toml",
+        "[hdv]\nprofile = \"mine\"\n[hdv.profiles.mine]\nattributes = { tau = \"fast\" }\n",
+    );
+    let o = episode_into(&out, &["--config", &cfg, "--steps", "10"]);
+    assert_clear_failure(
+        &o,
+        "SUMO said: Invalid Car-Following-Model Attribute tau",
+        &out,
+    );
 }
 
 #[test]
