@@ -60,19 +60,33 @@ fn last_line(text: &[u8]) -> &[u8] {
     }
 }
 
+/// The SIGABRT action in place before [`report_aborts`] took over (Python's faulthandler, say),
+/// put back when it lets go.
+static PREVIOUS_ABORT_ACTION: std::sync::Mutex<Option<libc::sigaction>> =
+    std::sync::Mutex::new(None);
+
 /// Makes a libsumo abort (an assertion inside SUMO) one `error:` line and exit code 1, with
-/// SUMO's last words when they were captured; `false` restores the default (an abort outside
-/// SUMO is not SUMO's). [`super::Simulation`] turns it on while a simulation is open.
+/// SUMO's last words when they were captured; `false` puts back the action that was there
+/// before (an abort outside SUMO is not SUMO's). [`super::Simulation`] turns it on while a
+/// simulation is open.
 pub fn report_aborts(on: bool) {
-    let handler: extern "C" fn(libc::c_int) = report_abort;
-    let action = if on {
-        handler as libc::sighandler_t
-    } else {
-        libc::SIG_DFL
-    };
-    // SAFETY: installs a handler that only makes async-signal-safe calls, or the default.
+    let mut previous = PREVIOUS_ABORT_ACTION
+        .lock()
+        .unwrap_or_else(|e| e.into_inner());
+    // SAFETY: sigaction with zeroed, filled-in structs; the handler installed only makes
+    // async-signal-safe calls.
     unsafe {
-        libc::signal(libc::SIGABRT, action);
+        if on && previous.is_none() {
+            let handler: extern "C" fn(libc::c_int) = report_abort;
+            let mut action: libc::sigaction = std::mem::zeroed();
+            action.sa_sigaction = handler as libc::sighandler_t;
+            libc::sigemptyset(&mut action.sa_mask);
+            let mut old: libc::sigaction = std::mem::zeroed();
+            libc::sigaction(libc::SIGABRT, &action, &mut old);
+            *previous = Some(old);
+        } else if let (false, Some(old)) = (on, previous.take()) {
+            libc::sigaction(libc::SIGABRT, &old, std::ptr::null_mut());
+        }
     }
 }
 
@@ -147,6 +161,32 @@ mod tests {
         unsafe { libc::write(2, line.as_ptr() as *const libc::c_void, line.len()) };
         let text = c.finish();
         assert!(text.contains("captured line"));
+    }
+
+    extern "C" fn someone_elses(_signal: libc::c_int) {}
+
+    /// The SIGABRT handler now in place.
+    fn current_abort_handler() -> libc::sighandler_t {
+        // SAFETY: sigaction with a null new action only reads the current one.
+        unsafe {
+            let mut now: libc::sigaction = std::mem::zeroed();
+            libc::sigaction(libc::SIGABRT, std::ptr::null(), &mut now);
+            now.sa_sigaction
+        }
+    }
+
+    #[test]
+    fn the_abort_handler_puts_back_the_one_it_replaced() {
+        let theirs: extern "C" fn(libc::c_int) = someone_elses;
+        // SAFETY: installs a handler that does nothing.
+        unsafe { libc::signal(libc::SIGABRT, theirs as libc::sighandler_t) };
+        report_aborts(true);
+        let ours: extern "C" fn(libc::c_int) = report_abort;
+        assert_eq!(current_abort_handler(), ours as libc::sighandler_t);
+        report_aborts(false);
+        assert_eq!(current_abort_handler(), theirs as libc::sighandler_t);
+        // SAFETY: back to the default.
+        unsafe { libc::signal(libc::SIGABRT, libc::SIG_DFL) };
     }
 
     #[test]
