@@ -32,9 +32,21 @@ static BUSY: Mutex<Option<Section>> = Mutex::new(None);
 static STARTED: Once = Once::new();
 
 struct Section {
-    what: String,
+    what: &'static str,
+    /// SUMO's time when the call began, for the message, if it is a step.
+    at: Option<f64>,
     since: Instant,
     limit: Duration,
+}
+
+impl Section {
+    /// "the simulation step at t = 12.4 s", "starting sumo-gui".
+    fn describe(&self) -> String {
+        match self.at {
+            Some(t) => format!("{} at t = {t} s", self.what),
+            None => self.what.to_string(),
+        }
+    }
 }
 
 /// A marked call; the mark ends when this is dropped.
@@ -47,12 +59,14 @@ impl Drop for Busy {
     }
 }
 
-/// Marks a call that must return within `limit` (`what` names it in the error line, as
-/// "the simulation step at t = 12.4 s"). Starts the watchdog if it is not running.
-pub fn busy(what: impl Into<String>, limit: Duration) -> Busy {
+/// Marks a call that must return within `limit`: `what` names it in the error line, with
+/// SUMO's time `at` when it is a step ("the simulation step at t = 12.4 s"). Allocates
+/// nothing, as it runs every step. Starts the watchdog if it is not running.
+pub fn busy(what: &'static str, at: Option<f64>, limit: Duration) -> Busy {
     start();
     *BUSY.lock().unwrap_or_else(|e| e.into_inner()) = Some(Section {
-        what: what.into(),
+        what,
+        at,
         since: Instant::now(),
         limit,
     });
@@ -101,7 +115,7 @@ fn watch() {
 /// What is under way, if a call is marked.
 fn busy_now() -> Option<String> {
     let guard = BUSY.lock().unwrap_or_else(|e| e.into_inner());
-    guard.as_ref().map(|s| s.what.clone())
+    guard.as_ref().map(Section::describe)
 }
 
 /// The error line of a marked call past its bound, if there is one.
@@ -111,7 +125,7 @@ fn overrun() -> Option<String> {
     (s.since.elapsed() > s.limit).then(|| {
         format!(
             "SUMO is stuck: {} has not ended after {} s (sumo.stall_timeout_s); stopped",
-            s.what,
+            s.describe(),
             s.limit.as_secs_f64()
         )
     })
@@ -135,7 +149,7 @@ mod tests {
 
     #[test]
     fn a_call_within_its_bound_is_not_reported() {
-        let guard = busy("a quick call", Duration::from_secs(60));
+        let guard = busy("a quick call", None, Duration::from_secs(60));
         assert_eq!(overrun(), None);
         assert_eq!(busy_now().as_deref(), Some("a quick call"));
         drop(guard);
@@ -145,7 +159,7 @@ mod tests {
     #[test]
     fn a_call_past_its_bound_ends_the_process_with_one_line() {
         if std::env::var_os("BKPBS_WATCHDOG_CHILD").is_some() {
-            let _guard = busy("a stuck call", Duration::from_millis(200));
+            let _guard = busy("a stuck call", Some(3.2), Duration::from_millis(200));
             std::thread::sleep(Duration::from_secs(30));
             return;
         }
@@ -164,7 +178,7 @@ mod tests {
         let err = String::from_utf8_lossy(&out.stderr);
         let line = err.lines().find(|l| l.starts_with("error:")).unwrap();
         assert!(
-            line.contains("a stuck call has not ended after 0.2 s"),
+            line.contains("a stuck call at t = 3.2 s has not ended after 0.2 s"),
             "{err}"
         );
     }

@@ -179,8 +179,12 @@ impl Simulation {
         for a in args {
             buf.extend_from_slice(c_string(a)?.as_bytes_with_nul());
         }
-        let program = if gui { "sumo-gui" } else { "SUMO" };
-        let busy = crate::io::watchdog::busy(format!("starting {program}"), stall_limit);
+        let what = if gui {
+            "starting sumo-gui"
+        } else {
+            "starting SUMO"
+        };
+        let busy = crate::io::watchdog::busy(what, None, stall_limit);
         quiet::report_aborts(true);
         // SAFETY: `buf` holds `args.len()` NUL-terminated strings.
         let started = decode("start", unsafe {
@@ -206,7 +210,7 @@ impl Simulation {
     /// Ends the simulation and frees the process's slot for the next one.
     pub fn close(mut self) -> Result<(), SumoError> {
         self.open = false;
-        let _busy = crate::io::watchdog::busy("closing SUMO", self.stall_limit);
+        let _busy = crate::io::watchdog::busy("closing SUMO", None, self.stall_limit);
         // SAFETY: plain call into the shim.
         let closed = decode("close", unsafe { ffi::bk_close() });
         quiet::report_aborts(false);
@@ -216,10 +220,8 @@ impl Simulation {
     /// Advances SUMO by one step of its `--step-length`; a step that leaves SUMO's clock where
     /// it was is an error (a simulation that stops advancing would otherwise run forever).
     pub fn step(&mut self) -> Result<(), SumoError> {
-        let busy = crate::io::watchdog::busy(
-            format!("the simulation step at t = {} s", self.time),
-            self.stall_limit,
-        );
+        let busy =
+            crate::io::watchdog::busy("the simulation step", Some(self.time), self.stall_limit);
         // SAFETY: plain call into the shim.
         decode("simulationStep", unsafe { ffi::bk_step() })?;
         drop(busy);
