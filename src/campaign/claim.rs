@@ -48,14 +48,16 @@ pub fn claim(
     let lock = File::open(out).map_err(write_err)?;
     let started = Instant::now();
     loop {
-        if try_lock(&lock, libc::LOCK_EX) {
+        // A file system without flock (some network ones) cannot be claimed: the run goes on
+        // as before the claim existed.
+        if try_lock(&lock, libc::LOCK_EX).unwrap_or(true) {
             check()?;
             // Shared from now on: runs of the same settings may join. (Converting cannot fail
             // while the lock is held; if it did, the claim would simply stay exclusive.)
-            try_lock(&lock, libc::LOCK_SH);
+            let _ = try_lock(&lock, libc::LOCK_SH);
             return Ok(Claim { _dir: lock });
         }
-        if try_lock(&lock, libc::LOCK_SH) {
+        if try_lock(&lock, libc::LOCK_SH).unwrap_or(false) {
             return join_running(settings, out).map(|()| Claim { _dir: lock });
         }
         if started.elapsed() > WAIT {
@@ -67,10 +69,18 @@ pub fn claim(
     }
 }
 
-/// Whether `flock(op | LOCK_NB)` succeeded.
-fn try_lock(file: &File, op: libc::c_int) -> bool {
+/// Whether `flock(op | LOCK_NB)` took the lock (`false`: another process holds it, or a signal
+/// came; try again), or why the file system cannot lock.
+fn try_lock(file: &File, op: libc::c_int) -> std::io::Result<bool> {
     // SAFETY: flock on a valid open descriptor.
-    unsafe { libc::flock(file.as_raw_fd(), op | libc::LOCK_NB) == 0 }
+    if unsafe { libc::flock(file.as_raw_fd(), op | libc::LOCK_NB) } == 0 {
+        return Ok(true);
+    }
+    let e = std::io::Error::last_os_error();
+    match e.raw_os_error() {
+        Some(libc::EWOULDBLOCK | libc::EINTR) => Ok(false),
+        _ => Err(e),
+    }
 }
 
 /// A run that found the directory in use proceeds only with exactly the running settings.
