@@ -31,11 +31,22 @@ pub fn is_done(out: &Path, settings: &Settings, cell: &Cell) -> bool {
     matches!(cell_state(out, settings, cell), CellState::Done(_))
 }
 
+/// A finished cell's files as read by the check, for the collection to gather.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Finished {
+    /// Its `episode.csv` row.
+    pub row: csv::StringRecord,
+    /// Its `vehicles.csv` rows.
+    pub vehicles: Vec<csv::StringRecord>,
+    /// Its `timing.csv` row.
+    pub timing: Vec<csv::StringRecord>,
+}
+
 /// Where a cell stands.
 #[derive(Debug, Clone, PartialEq)]
 pub enum CellState {
-    /// Finished: its `episode.csv` row.
-    Done(csv::StringRecord),
+    /// Finished, with its files.
+    Done(Finished),
     /// No `episode.csv`: not run, or stopped before it was written.
     NotRun,
     /// An `episode.csv` is there but the cell is not finished as this campaign's: why.
@@ -54,11 +65,11 @@ pub fn cell_state(out: &Path, settings: &Settings, cell: &Cell) -> CellState {
     }
 }
 
-/// The row of `cell`'s `episode.csv` in `dir` if the cell's files are whole and this
-/// campaign's; otherwise what is wrong.
-fn finished_row(dir: &Path, settings: &Settings, cell: &Cell) -> Result<csv::StringRecord, String> {
-    let rows = results::read_records(&dir.join(DONE_FILE), &episodes_header())
-        .map_err(|e| e.to_string())?;
+/// The files of `cell` in `dir` if they are whole and this campaign's; otherwise what is
+/// wrong.
+fn finished_row(dir: &Path, settings: &Settings, cell: &Cell) -> Result<Finished, String> {
+    let header = episodes_header();
+    let rows = results::read_records(&dir.join(DONE_FILE), &header).map_err(|e| e.to_string())?;
     let [row] = rows.as_slice() else {
         return Err(format!("{DONE_FILE} holds {} rows, not 1", rows.len()));
     };
@@ -66,7 +77,7 @@ fn finished_row(dir: &Path, settings: &Settings, cell: &Cell) -> Result<csv::Str
         return Err(format!("{DONE_FILE} belongs to another cell"));
     }
     let column = |name: &str| {
-        let i = episodes_header().iter().position(|c| c == name);
+        let i = header.iter().position(|c| c == name);
         i.and_then(|i| row.get(i)).unwrap_or("").to_string()
     };
     let steps = settings.config.scenario.steps.to_string();
@@ -76,8 +87,8 @@ fn finished_row(dir: &Path, settings: &Settings, cell: &Cell) -> Result<csv::Str
             "{DONE_FILE} has steps {found}, the campaign {steps}"
         ));
     }
-    check_rows(dir, "vehicles.csv", &VEHICLE_COLUMNS, &column("scheduled"))?;
-    check_rows(dir, "timing.csv", &TIMING_COLUMNS, "1")?;
+    let vehicles = rows_counted(dir, "vehicles.csv", &VEHICLE_COLUMNS, &column("scheduled"))?;
+    let timing = rows_counted(dir, "timing.csv", &TIMING_COLUMNS, "1")?;
     let recorded = crate::io::bounded::read_text(
         &dir.join(SETTINGS_RECORD),
         crate::io::bounded::FileKind::Config,
@@ -86,16 +97,25 @@ fn finished_row(dir: &Path, settings: &Settings, cell: &Cell) -> Result<csv::Str
     if recorded != results_settings(&settings.episode_config(cell)) {
         return Err(format!("{SETTINGS_RECORD} records other settings"));
     }
-    Ok(row.clone())
+    Ok(Finished {
+        row: row.clone(),
+        vehicles,
+        timing,
+    })
 }
 
-/// Checks that the cell's `name` is readable with `cols` and has `expected` rows.
-fn check_rows(dir: &Path, name: &str, cols: &[&str], expected: &str) -> Result<(), String> {
+/// The rows of the cell's `name`, read with `cols`, if there are `expected` of them.
+fn rows_counted(
+    dir: &Path,
+    name: &str,
+    cols: &[&str],
+    expected: &str,
+) -> Result<Vec<csv::StringRecord>, String> {
     let rows = results::read_records(&dir.join(name), &strings(cols)).map_err(|e| e.to_string())?;
     if rows.len().to_string() != expected {
         return Err(format!("{name} has {} rows, not {expected}", rows.len()));
     }
-    Ok(())
+    Ok(rows)
 }
 
 /// The episodes `out`'s `episodes.csv` records that a collection for `grid` would leave out:
@@ -129,19 +149,18 @@ pub fn collect(out: &Path, settings: &Settings) -> Result<Results, ResultsError>
     };
     for (position, cell) in grid.cells().into_iter().enumerate() {
         let dir = cell_dir(out, &cell);
-        if let CellState::Done(row) = cell_state(out, settings, &cell) {
-            let row = &row;
+        if let CellState::Done(done) = cell_state(out, settings, &cell) {
             // The cell columns exactly as the episode wrote them.
-            let lead: Vec<&str> = row.iter().take(CELL_COLUMNS.len()).collect();
+            let lead: Vec<&str> = done.row.iter().take(CELL_COLUMNS.len()).collect();
             res.episodes.rows.push(Row {
                 cell: cell.clone(),
-                fields: row.clone(),
+                fields: done.row.clone(),
             });
-            for (name, cols, table) in [
-                ("vehicles.csv", &VEHICLE_COLUMNS[..], &mut res.vehicles),
-                ("timing.csv", &TIMING_COLUMNS[..], &mut res.timings),
+            for (records, table) in [
+                (&done.vehicles, &mut res.vehicles),
+                (&done.timing, &mut res.timings),
             ] {
-                for rec in results::read_records(&dir.join(name), &strings(cols))? {
+                for rec in records {
                     let mut fields = csv::StringRecord::from(lead.clone());
                     fields.extend(rec.iter());
                     table.rows.push(Row {

@@ -15,6 +15,14 @@ use crate::planner::primitives::Primitive;
 /// The largest weight magnitude a policy file may hold: trained policies stay below 100 (the
 /// shipped one below 20); 3e38 passed a finiteness check and overflowed to infinity later.
 pub const MAX_WEIGHT: f32 = 1e4;
+
+/// Whether every weight is a finite number of magnitude at most [`MAX_WEIGHT`] (policy files
+/// and `train-rl` checkpoints alike).
+pub fn weights_in_range<'a>(weights: impl IntoIterator<Item = &'a f32>) -> bool {
+    weights
+        .into_iter()
+        .all(|w| w.is_finite() && w.abs() <= MAX_WEIGHT)
+}
 /// Format tag of the policy file (its `format` field).
 pub const POLICY_FORMAT: &str = "bkpbs-rl-policy";
 /// Version of the policy file format this build reads and writes (its `version` field).
@@ -172,12 +180,7 @@ impl PolicyFile {
                 critic.n_params
             )));
         }
-        if !self
-            .actor
-            .iter()
-            .chain(&self.critic)
-            .all(|w| w.is_finite() && w.abs() <= MAX_WEIGHT)
-        {
+        if !weights_in_range(self.actor.iter().chain(&self.critic)) {
             return Err(shape(format!(
                 "a weight is not a finite number of magnitude at most {MAX_WEIGHT:e} (trained \
                  policies stay below 100; larger ones overflow the network's sums)"

@@ -201,15 +201,10 @@ impl RunFiles {
 /// learning-curve row per update, a finite wall time. An `updates = 1e18` or weights of 3e38
 /// once passed and failed later without naming the file.
 fn check_progress(ck: &Checkpoint) -> Result<(), String> {
-    let max = crate::policy::model_file::MAX_WEIGHT;
-    if !ck
-        .actor
-        .iter()
-        .chain(&ck.critic)
-        .all(|w| w.is_finite() && w.abs() <= max)
-    {
+    use crate::policy::model_file::{weights_in_range, MAX_WEIGHT};
+    if !weights_in_range(ck.actor.iter().chain(&ck.critic)) {
         return Err(format!(
-            "a weight is not a finite number of magnitude at most {max:e}"
+            "a weight is not a finite number of magnitude at most {MAX_WEIGHT:e}"
         ));
     }
     if ck.updates != ck.curve.len() as u64 {
