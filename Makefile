@@ -3,10 +3,36 @@ SHELL := /bin/bash
 CARGO ?= cargo
 DEMO_OUT ?= out/demo
 
-.PHONY: deps demo test build net pytest docs
+.PHONY: deps demo test build net pytest docs test-sumo-latest
+
+# Which SUMO bkpbs builds and runs against: `apt`, Debian's package (the default), or `pip`, the
+# eclipse-sumo wheel of version $(SUMO_PIP_VERSION) from PyPI, installed into the virtualenv
+# $(VENV). A pip build has its own target directory (target/sumo-pip), so both can stand side by
+# side, and runs with the wheel's SUMO_HOME and programs (sumo, netconvert, sumo-gui) first on PATH.
+SUMO ?= apt
+SUMO_PIP_VERSION ?= 1.28.0
+PYTHON ?= python3
+VENV ?= .venv
+# The wheel's SUMO_HOME inside the virtualenv (site-packages/sumo).
+PIP_SUMO_HOME := $(abspath $(VENV))/lib/python$(shell $(PYTHON) -c 'import sys; print("%d.%d" % sys.version_info[:2])' 2>/dev/null)/site-packages/sumo
+ifeq ($(SUMO),pip)
+export SUMO_HOME := $(PIP_SUMO_HOME)
+export CARGO_TARGET_DIR := $(abspath target/sumo-pip)
+export PATH := $(SUMO_HOME)/bin:$(PATH)
+# The other SUMO, for the test that a run against it is refused: Debian's.
+export BKPBS_OTHER_SUMO_LIB ?= $(dir $(firstword $(wildcard /usr/lib/*/libsumocpp.so)))
+else ifeq ($(SUMO),apt)
+export BKPBS_OTHER_SUMO_LIB ?= $(PIP_SUMO_HOME)/lib64
+else
+$(error SUMO=$(SUMO): choose apt (Debian's package, the default) or pip (the eclipse-sumo wheel))
+endif
+TARGET_DIR := $(abspath $(or $(CARGO_TARGET_DIR),target))
 
 deps:
 	@bash scripts/ensure-deps.sh
+ifeq ($(SUMO),pip)
+	@VENV=$(VENV) SUMO_PIP_VERSION=$(SUMO_PIP_VERSION) bash scripts/ensure-python.sh sumo
+endif
 
 build: deps
 	$(CARGO) build --release --quiet
@@ -15,12 +41,15 @@ build: deps
 # steps), started afresh, with its report tables printed.
 demo: build
 	rm -rf $(DEMO_OUT)
-	./target/release/bkpbs campaign --alphas 0.4,0.8 --lambdas 2500,3000 --seeds 2 --steps 400 --out $(DEMO_OUT)
+	$(TARGET_DIR)/release/bkpbs campaign --alphas 0.4,0.8 --lambdas 2500,3000 --seeds 2 --steps 400 --out $(DEMO_OUT)
 	@echo "demo: CSV files in $(DEMO_OUT)/ (episodes.csv, vehicles.csv, timings.csv, failures.csv; one directory per episode under episodes/)"
 	@echo "demo: tables and figures in $(DEMO_OUT)/report/ (tables.md, *.csv, collision_heatmap, delay_vs_collision, metrics_vs_alpha .png/.svg)"
 
 # The whole suite: formatting, lints, unit and integration tests (integration tests run real SUMO).
+# The Python tools and the eclipse-sumo wheel come first: the tests check that a run against a
+# SUMO other than the one bkpbs was built against (the wheel's or Debian's) is refused.
 test: deps
+	@VENV=$(VENV) SUMO_PIP_VERSION=$(SUMO_PIP_VERSION) bash scripts/ensure-python.sh sumo tools
 	@if $(CARGO) fmt --version >/dev/null 2>&1; then $(CARGO) fmt --all -- --check; else echo "test: rustfmt not installed, format check skipped"; fi
 	@if $(CARGO) clippy --version >/dev/null 2>&1; then $(CARGO) clippy --quiet --all-targets -- -D warnings; else echo "test: clippy not installed, lint skipped"; fi
 	$(CARGO) test --quiet
@@ -29,10 +58,8 @@ test: deps
 # The Python bindings (bindings/): a virtualenv $(VENV) with maturin, pytest and ray
 # (scripts/ensure-python.sh), the wheel built with maturin and installed into it, then the Python
 # tests (real SUMO, a local Ray), which compare against the CLI binary `cargo test` builds.
-VENV ?= .venv
-TARGET_DIR := $(abspath $(or $(CARGO_TARGET_DIR),target))
 pytest: deps
-	@VENV=$(VENV) bash scripts/ensure-python.sh
+	@VENV=$(VENV) SUMO_PIP_VERSION=$(SUMO_PIP_VERSION) bash scripts/ensure-python.sh sumo tools
 	$(CARGO) build --quiet --profile test --bin bkpbs
 	rm -rf $(TARGET_DIR)/wheels
 	$(VENV)/bin/maturin build --quiet -m bindings/Cargo.toml --profile dev --out $(TARGET_DIR)/wheels
@@ -51,3 +78,8 @@ docs:
 	@if ! [ -x "$(MDBOOK)" ]; then $(CARGO) install mdbook --locked; fi
 	$(MDBOOK) build docs
 	RUSTDOCFLAGS="-D warnings" $(CARGO) doc --no-deps
+
+# The suite against today's SUMO as well: `make test SUMO=pip` (the eclipse-sumo wheel), beside
+# the default build. Not part of `make test` (see the guide's installation chapter).
+test-sumo-latest:
+	@$(MAKE) --no-print-directory test SUMO=pip

@@ -1,8 +1,23 @@
 #!/usr/bin/env bash
-# Makes the Python environment of the bindings' tests, only what is missing (idempotent): a
-# virtualenv at $VENV (default .venv, from `python3`) with maturin, pytest, ray, gymnasium and pettingzoo from PyPI.
-# Fails with one clear line when something cannot be had.
+# Makes the project's Python environment, only what is missing (idempotent): a virtualenv at
+# $VENV (default .venv, from `python3`) with, from PyPI,
+#   tools  maturin, pytest, ray, gymnasium and pettingzoo (the bindings' tests), and
+#   sumo   SUMO's own wheel eclipse-sumo, version $SUMO_PIP_VERSION (default 1.28.0): headers,
+#          libsumocpp and programs (`make ... SUMO=pip` builds against it).
+# The arguments name which (default: tools). Fails with one clear line when something cannot be had.
 set -euo pipefail
+
+want_tools=0
+want_sumo=0
+[ $# -gt 0 ] || set -- tools
+for what in "$@"; do
+    case "$what" in
+        tools) want_tools=1 ;;
+        sumo) want_sumo=1 ;;
+        *) echo "python: error: unknown part '$what' (tools, sumo)" >&2; exit 1 ;;
+    esac
+done
+SUMO_PIP_VERSION=${SUMO_PIP_VERSION:-1.28.0}
 
 VENV=${VENV:-.venv}
 say() { echo "python: $*" >&2; }
@@ -33,13 +48,19 @@ if ! "$VENV/bin/python" -c pass >/dev/null 2>&1; then
     fi
 fi
 
-# What the tests need, installed only when it cannot be imported.
+# What is wanted, installed only when it cannot be imported (or is another version).
 need=()
-"$VENV/bin/python" -c 'import maturin' 2>/dev/null || need+=("maturin>=1.9.4,<2")
-"$VENV/bin/python" -c 'import pytest' 2>/dev/null || need+=("pytest>=7")
-"$VENV/bin/python" -c 'import ray' 2>/dev/null || need+=("ray>=2.9")
-"$VENV/bin/python" -c 'import gymnasium' 2>/dev/null || need+=("gymnasium>=1.0")
-"$VENV/bin/python" -c 'import pettingzoo' 2>/dev/null || need+=("pettingzoo>=1.24")
+if [ $want_tools = 1 ]; then
+    "$VENV/bin/python" -c 'import maturin' 2>/dev/null || need+=("maturin>=1.9.4,<2")
+    "$VENV/bin/python" -c 'import pytest' 2>/dev/null || need+=("pytest>=7")
+    "$VENV/bin/python" -c 'import ray' 2>/dev/null || need+=("ray>=2.9")
+    "$VENV/bin/python" -c 'import gymnasium' 2>/dev/null || need+=("gymnasium>=1.0")
+    "$VENV/bin/python" -c 'import pettingzoo' 2>/dev/null || need+=("pettingzoo>=1.24")
+fi
+if [ $want_sumo = 1 ]; then
+    have=$("$VENV/bin/python" -c 'import importlib.metadata as m; print(m.version("eclipse-sumo"))' 2>/dev/null || true)
+    [ "$have" = "$SUMO_PIP_VERSION" ] || need+=("eclipse-sumo==$SUMO_PIP_VERSION")
+fi
 if [ ${#need[@]} -gt 0 ]; then
     say "installing ${need[*]} into $VENV (pip)"
     "$VENV/bin/python" -m pip install --quiet --disable-pip-version-check "${need[@]}" \

@@ -128,11 +128,14 @@ fn heterogeneous_drivers_differ() {
         .map(|t| t.split('@').next().unwrap())
         .collect();
     assert!(types.len() >= 5, "driver types seen: {types:?}");
-    let vtypes = bkpbs::sumo::files::vehicle_types(&{
-        let mut c = Config::default();
-        c.hdv.profile = "heterogeneous".into();
-        c
-    });
+    let vtypes = bkpbs::sumo::files::vehicle_types(
+        &{
+            let mut c = Config::default();
+            c.hdv.profile = "heterogeneous".into();
+            c
+        },
+        4.5,
+    );
     let taus: BTreeSet<&str> = vtypes
         .split("tau=\"")
         .skip(1)

@@ -193,10 +193,10 @@ pub fn write_scenario<'py>(
             p
         }
     };
-    let vtypes = dir.join("vtypes.add.xml");
-    write(&vtypes, &files::vehicle_types(&config))?;
-    let routes = dir.join("demand.rou.xml");
     let road = bkpbs::sumo::frame::scenario_road(&config.scenario).map_err(bad_input)?;
+    let vtypes = dir.join("vtypes.add.xml");
+    write(&vtypes, &files::vehicle_types(&config, road.lane_width))?;
+    let routes = dir.join("demand.rou.xml");
     demand::check_entries(&config, &road).map_err(bad_input)?;
     let planned = demand::generate(&config, &road);
     write(&routes, &demand::route_file(&road, &planned))?;

@@ -28,9 +28,18 @@ pub const REQUIRED: [&str; 8] = [
     "road_id",
 ];
 /// Keys a vehicle may have: `x`/`y` are accepted as read (the frame comes from the road, lane and
-/// lane position), `lateral_offset` is `getLateralLanePosition` (default 0), `origin` is
-/// `"main"`/`"ramp"`, `desired_speed` in m/s.
-pub const OPTIONAL: [&str; 5] = ["x", "y", "lateral_offset", "origin", "desired_speed"];
+/// lane position), `lateral_offset` is `getLateralLanePosition` (default 0), `lateral_speed` is
+/// `getLateralSpeed` (the heading is the direction of motion when it is given, SUMO's drawn
+/// `angle` otherwise: see `bkpbs::sumo::frame::heading`), `origin` is `"main"`/`"ramp"`,
+/// `desired_speed` in m/s.
+pub const OPTIONAL: [&str; 6] = [
+    "x",
+    "y",
+    "lateral_offset",
+    "lateral_speed",
+    "origin",
+    "desired_speed",
+];
 
 /// One vehicle as read from SUMO, checked.
 #[derive(Debug, Clone)]
@@ -89,6 +98,7 @@ fn read_vehicle(
         angle: v.required_number("angle")?,
         lane_position: v.required_number("lane_position")?,
         lateral_offset: v.optional_number("lateral_offset")?.unwrap_or(0.0),
+        lateral_speed: v.optional_number("lateral_speed")?.unwrap_or(f64::NAN),
         lane_index,
         edge_code: frame::edge_code(road, &road_id).unwrap_or(-1),
     };

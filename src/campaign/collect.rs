@@ -87,6 +87,11 @@ fn finished_row(dir: &Path, settings: &Settings, cell: &Cell) -> Result<Finished
             "{DONE_FILE} has steps {found}, the campaign {steps}"
         ));
     }
+    let version = crate::sumo::version::BUILT;
+    if column("sumo_version") != version {
+        let found = column("sumo_version");
+        return Err(format!("SUMO {found} ran it, this is SUMO {version}"));
+    }
     let vehicles = rows_counted(dir, "vehicles.csv", &VEHICLE_COLUMNS, &column("scheduled"))?;
     let timing = rows_counted(dir, "timing.csv", &TIMING_COLUMNS, "1")?;
     let recorded = crate::io::bounded::read_text(

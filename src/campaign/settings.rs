@@ -128,6 +128,10 @@ pub struct CampaignTable {
     /// HDV driver profiles, a grid axis; default: the one of `[hdv] profile`.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub hdv_profiles: Vec<String>,
+    /// The SUMO version the campaign runs on: always the one bkpbs was built against (written
+    /// into `campaign.toml`; a cell another SUMO ran runs again, and `report` merges campaigns
+    /// of different versions only with `--allow-mixed`).
+    pub sumo_version: String,
 }
 
 impl Default for CampaignTable {
@@ -142,6 +146,7 @@ impl Default for CampaignTable {
             workers: None,
             episode_timeout: None,
             hdv_profiles: Vec::new(),
+            sumo_version: crate::sumo::version::BUILT.to_string(),
         }
     }
 }
@@ -307,6 +312,9 @@ impl Settings {
             None => FileParts::default(),
         };
         apply_overrides(&mut table, o)?;
+        // A record of the SUMO that runs, not a choice: a file written by another SUMO runs
+        // on this one (and says so in the new campaign.toml).
+        table.sumo_version = crate::sumo::version::BUILT.to_string();
         let shard = match &o.shard {
             Some(s) => s.parse()?,
             None => Shard::ALL,
@@ -370,8 +378,11 @@ impl Settings {
     }
 
     /// Reads the settings a campaign directory was made with (its `campaign.toml`).
+    /// The file's `sumo_version` is kept: it records which SUMO ran the campaign.
     pub fn from_campaign_file(path: &Path) -> Result<Settings, SettingsError> {
-        Settings::resolve(Some(path), &Overrides::default())
+        let mut settings = Settings::resolve(Some(path), &Overrides::default())?;
+        settings.table.sumo_version = read_file(path)?.table.sumo_version;
+        Ok(settings)
     }
 
     /// The first scenario setting (dotted key) in which two campaigns' episodes differ, if any:
@@ -384,6 +395,10 @@ impl Settings {
             "",
         )
         .or_else(|| (self.table.steps != other.table.steps).then(|| "campaign.steps".into()))
+        .or_else(|| {
+            (self.table.sumo_version != other.table.sumo_version)
+                .then(|| "campaign.sumo_version".into())
+        })
     }
 }
 

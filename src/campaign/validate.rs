@@ -59,8 +59,14 @@ const RATE: &str = "controllable_collision_rate";
 /// "± inf".
 const LARGEST: f64 = 1e15;
 
+/// The columns that are names, not numbers: the SUMO version (any text SUMO reported).
+const TEXT: [&str; 1] = ["sumo_version"];
+
 /// What `column` may hold, as a reason if `value` breaks it.
 fn problem(column: &str, value: &str) -> Option<&'static str> {
+    if TEXT.contains(&column) {
+        return value.is_empty().then_some("is empty");
+    }
     let delay = DELAYS.contains(&column);
     if value.is_empty() {
         return (!delay).then_some("is empty");

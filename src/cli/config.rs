@@ -61,7 +61,10 @@ impl ConfigArgs {
 pub fn run(show: ShowConfig) -> Result<()> {
     match show {
         ShowConfig::Toml(c) => print!("{}", c.to_toml()),
-        ShowConfig::VehicleTypes(c) => print!("{}", files::vehicle_types(&c)),
+        ShowConfig::VehicleTypes(c) => {
+            let road = bkpbs::sumo::frame::scenario_road(&c.scenario)?;
+            print!("{}", files::vehicle_types(&c, road.lane_width))
+        }
     }
     Ok(())
 }

@@ -216,6 +216,9 @@ pub struct Summary {
     pub seed: u64,
     /// The HDV driver profile SUMO ran (`[hdv] profile`).
     pub hdv_profile: String,
+    /// The SUMO version that simulated the episode ([`crate::sumo::version::BUILT`]; a run
+    /// against another is refused): results move between SUMO versions.
+    pub sumo_version: String,
     /// Simulated steps.
     pub steps: u32,
     /// Mean system delay per vehicle (s) over every vehicle not crashed, arrived or not (see
@@ -316,6 +319,8 @@ pub struct SummaryInput<'a> {
     pub seed: u64,
     /// The HDV driver profile SUMO ran.
     pub hdv_profile: &'a str,
+    /// The SUMO version that ran the episode.
+    pub sumo_version: &'a str,
     /// Simulated steps.
     pub steps: u32,
     /// The episode's end: the time of its last state (s).
@@ -380,6 +385,7 @@ impl Summary {
             lambda: inp.lambda,
             seed: inp.seed,
             hdv_profile: inp.hdv_profile.to_string(),
+            sumo_version: inp.sumo_version.to_string(),
             steps: inp.steps,
             system_delay_s: system.mean,
             system_delay_veh_h: system.total_veh_h,
@@ -495,6 +501,7 @@ mod tests {
         SummaryInput {
             planner: "p",
             hdv_profile: "sumo-safe",
+            sumo_version: "1.15.0",
             alpha: 0.5,
             lambda: 3000.0,
             seed: 1,

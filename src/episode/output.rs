@@ -235,6 +235,7 @@ mod tests {
             lambda: 3000.0,
             seed: 7,
             hdv_profile: "sumo-safe".into(),
+            sumo_version: "1.28.0".into(),
             steps: 400,
             system_delay_s: Some(2.0 / 3.0),
             system_delay_veh_h: 0.0012345678,
@@ -277,7 +278,7 @@ mod tests {
         .unwrap();
         assert_eq!(
             text,
-            "planner,alpha,lambda,seed,hdv_profile,steps,system_delay_s,system_delay_veh_h,\
+            "planner,alpha,lambda,seed,hdv_profile,sumo_version,steps,system_delay_s,system_delay_veh_h,\
              own_speed_delay_s,scheduled,inserted,never_inserted,\
              inserted_cav,arrived,crashed,present,controllable_crashed,\
              controllable_collision_rate,hdv_collisions,hdv_crashed,mean_delay_s,\
@@ -285,7 +286,7 @@ mod tests {
              mean_speed_mps,stranded,\
              plan_searches,plan_nodes_expanded,plan_phase2,plan_fallbacks,pbs_nodes,\
              pbs_depth_sum,predictions,pbs_fallbacks,time_budget_hits,shield_overrides\n\
-             bk-pbs,0.6,3000,7,sumo-safe,400,0.6667,0.001235,0.2500,9,8,1,5,6,1,1,1,0.125000,\
+             bk-pbs,0.6,3000,7,sumo-safe,1.28.0,400,0.6667,0.001235,0.2500,9,8,1,5,6,1,1,1,0.125000,\
              0,0,0.3333,,-0.0000,270.14,66.8000,29.1235,2,1,2,3,4,5,6,7,8,9,10\n"
         );
     }

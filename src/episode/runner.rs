@@ -412,6 +412,7 @@ impl<'a> Episode<'a> {
         let summary = Summary::compute(&SummaryInput {
             planner: self.controller.name(),
             hdv_profile: &self.config.hdv.profile,
+            sumo_version: crate::sumo::version::BUILT,
             alpha: sc.alpha,
             lambda: sc.lambda,
             seed: sc.seed,

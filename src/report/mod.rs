@@ -24,6 +24,7 @@ pub mod stats;
 pub mod summary;
 pub mod tables;
 pub mod timespace;
+pub mod versions;
 
 use std::path::{Path, PathBuf};
 
@@ -74,6 +75,18 @@ pub enum ReportError {
         other: PathBuf,
         /// The first scenario setting (dotted key) found to differ.
         key: String,
+    },
+    /// Results of different SUMO versions, without `--allow-mixed`.
+    #[error(
+        "the results come from different SUMO versions ({versions}): results move between \
+         versions, so they are not merged unless --allow-mixed (each row's planner then carries \
+         its version, e.g. bk-pbs@{example})"
+    )]
+    MixedVersions {
+        /// The versions found, comma-separated, each with a directory holding it.
+        versions: String,
+        /// One of them, for the example.
+        example: String,
     },
     /// The results (CSV files) could not be read or merged.
     #[error(transparent)]
@@ -183,7 +196,7 @@ pub fn run_versus(
         same_settings(dirs)?;
     }
     let out = out.unwrap_or(first).to_path_buf();
-    let (results, mut files) = gather(dirs, &out)?;
+    let (results, mut files) = gather(dirs, &out, allow_mixed)?;
     let episodes = out.join("episodes.csv");
     let summary = Summary::from_results(&results, &episodes)?;
     let by_entry = entries::rows(&results);
@@ -217,7 +230,11 @@ pub fn run_versus(
 
 /// Reads the directories and, when they are several or `out` is another directory, writes the
 /// merged (sorted) results there; returns them and the files written.
-fn gather(dirs: &[PathBuf], out: &Path) -> Result<(Results, Vec<PathBuf>), ReportError> {
+fn gather(
+    dirs: &[PathBuf],
+    out: &Path,
+    allow_mixed: bool,
+) -> Result<(Results, Vec<PathBuf>), ReportError> {
     let mut parts = Vec::new();
     for dir in dirs {
         if !dir.join("episodes.csv").is_file() {
@@ -226,6 +243,7 @@ fn gather(dirs: &[PathBuf], out: &Path) -> Result<(Results, Vec<PathBuf>), Repor
         let (planners, profiles) = grid_order(dir)?;
         parts.push((dir.clone(), Results::read(dir, &planners, &profiles)?));
     }
+    versions::label_if_mixed(&mut parts, allow_mixed)?;
     let mut files = Vec::new();
     let results = if parts.len() == 1 {
         let (first, mut r) = parts.pop().expect("one part");

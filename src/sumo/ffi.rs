@@ -22,6 +22,9 @@ pub struct RawVehicleState {
     pub lane_position: f64,
     /// Offset from the lane's centre (m, positive to the left).
     pub lateral_offset: f64,
+    /// Lateral speed (m/s, positive to the left): how fast a lane change moves the vehicle
+    /// sideways; NaN where it is not known (a caller's reading without it).
+    pub lateral_speed: f64,
     /// SUMO lane index on the edge (0 = rightmost).
     pub lane_index: i32,
     /// Index of the vehicle's edge in the names set by `Simulation::set_edge_codes`; −1 for
@@ -83,6 +86,7 @@ shim_functions! {
     fn bk_close / bkt_close() -> i32;
     fn bk_step / bkt_step() -> i32;
     fn bk_time / bkt_time(out: *mut f64) -> i32;
+    fn bk_version / bkt_version(out: *mut *const c_char, len: *mut usize) -> i32;
     fn bk_min_expected_number / bkt_min_expected_number(out: *mut i32) -> i32;
     fn bk_id_list / bkt_id_list(which: i32, buf: *mut *const c_char, len: *mut usize) -> i32;
     fn bk_set_edge_names / bkt_set_edge_names(names: *const c_char, count: usize) -> i32;

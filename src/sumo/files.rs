@@ -33,8 +33,10 @@ pub enum InputError {
 /// Both are 5 m × 2 m with a 35 m/s maximum; speedFactor 1 and speedDev 0 so that the desired
 /// speed is exactly the one the demand draws (SUMO's default would randomise it). A profile
 /// with per-driver draws makes `hdv` a `vTypeDistribution` of driver types `hdv.0`, `hdv.1`, …
-/// (drawn from the episode's seed), from which SUMO gives each HDV one.
-pub fn vehicle_types(config: &Config) -> String {
+/// (drawn from the episode's seed), from which SUMO gives each HDV one. `lane_width` (m, the
+/// network's) sets the CAV type's lateral speed on SUMO versions that cap it
+/// ([`cav_lateral_speed`]).
+pub fn vehicle_types(config: &Config, lane_width: f64) -> String {
     let profile = config
         .hdv
         .resolved()
@@ -43,10 +45,30 @@ pub fn vehicle_types(config: &Config) -> String {
         true => vtype_line(&hdv_attributes(config, &profile, "hdv")),
         false => driver_types(config, &profile),
     };
-    let cav = vtype_line(&base_attributes(config, "cav", "0,200,0"));
+    let mut cav_attributes = base_attributes(config, "cav", "0,200,0");
+    for (k, v) in cav_lateral_speed(config, lane_width) {
+        set(&mut cav_attributes, k, &v);
+    }
+    let cav = vtype_line(&cav_attributes);
     format!(
         "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<!-- Vehicle types of the merge scenario (written by bkpbs from its configuration). -->\n<additional>\n{hdv}{cav}</additional>\n"
     )
+}
+
+/// The CAV type's lateral speed limits on a SUMO that caps a lane change's lateral speed
+/// ([`super::version::caps_lane_change_lateral_speed`]): `maxSpeedLat` and
+/// `lcMaxSpeedLatStanding` one lane width per `--lanechange.duration`, so a commanded lane
+/// change crosses its lane in that time at any speed, standing included, as on SUMO 1.15 and as
+/// the planner's motion primitives model it. With SUMO's defaults (1 m/s + the speed) a merge
+/// from standstill took 4.5 s instead of 1 s, half in either lane; a higher `maxSpeedLat` makes
+/// that SUMO move faster than one lane per duration. HDV types keep the defaults: they are
+/// SUMO's own drivers, as each version has them.
+fn cav_lateral_speed(config: &Config, lane_width: f64) -> Vec<(&'static str, String)> {
+    if !super::version::caps_lane_change_lateral_speed() {
+        return Vec::new();
+    }
+    let v = (lane_width / config.scenario.lane_change_duration).to_string();
+    vec![("maxSpeedLat", v.clone()), ("lcMaxSpeedLatStanding", v)]
 }
 
 /// Random stream of the drivers' drawn parameters.
@@ -226,7 +248,7 @@ impl EpisodeInput {
             Some(p) => p.clone(),
             None => put("merge.net.xml", EMBEDDED_NET)?,
         };
-        let vehicle_types = put("vtypes.add.xml", &vehicle_types(config))?;
+        let vehicle_types = put("vtypes.add.xml", &vehicle_types(config, road.lane_width))?;
         let routes = put("routes.rou.xml", &routes_xml(road))?;
         Ok(EpisodeInput {
             _dir: dir,
@@ -252,9 +274,13 @@ impl EpisodeInput {
 /// constant lateral speed.
 pub fn command_line(config: &Config, net: &Path, vtypes: &Path, routes: &Path) -> Vec<String> {
     let s = &config.scenario;
-    let program = if config.sumo.gui { GUI_PROGRAM } else { "sumo" };
+    let program = if config.sumo.gui {
+        gui_program()
+    } else {
+        "sumo".into()
+    };
     let mut args: Vec<String> = vec![
-        program.into(),
+        program,
         "--net-file".into(),
         net.display().to_string(),
         "--additional-files".into(),
@@ -313,6 +339,15 @@ pub fn command_line(config: &Config, net: &Path, vtypes: &Path, routes: &Path) -
 /// libtraci when a command line starts with it.
 pub const GUI_PROGRAM: &str = "sumo-gui";
 
+/// The sumo-gui to start: the one beside the SUMO bkpbs was built against when that is not
+/// Debian's system SUMO, else the first on `PATH`.
+pub fn gui_program() -> String {
+    super::version::BUILT_HOME
+        .map(|home| std::path::Path::new(home).join("bin").join(GUI_PROGRAM))
+        .filter(|p| p.is_file())
+        .map_or_else(|| GUI_PROGRAM.into(), |p| p.display().to_string())
+}
+
 /// Why sumo-gui cannot be shown here, if it cannot: no display, an X display nobody answers
 /// at (sumo-gui would die, and libtraci retry its port for a minute), or no sumo-gui.
 pub fn gui_unavailable() -> Option<String> {
@@ -333,9 +368,10 @@ pub fn gui_unavailable() -> Option<String> {
             ));
         }
     }
-    let on_path = std::env::var_os("PATH").is_some_and(|path| {
-        std::env::split_paths(&path).any(|dir| dir.join(GUI_PROGRAM).is_file())
-    });
+    let on_path = gui_program() != GUI_PROGRAM
+        || std::env::var_os("PATH").is_some_and(|path| {
+            std::env::split_paths(&path).any(|dir| dir.join(GUI_PROGRAM).is_file())
+        });
     (!on_path).then(|| format!("{GUI_PROGRAM} is not installed (Debian: apt-get install sumo)"))
 }
 

@@ -398,8 +398,8 @@ pub fn frame_position(road: &Road, raw: &RawVehicleState) -> Option<(f64, i32)> 
 }
 
 /// The vehicle at the frame position [`frame_position`] gave: the centre lies half a length
-/// behind the front bumper, and SUMO's angle (degrees, 0 = north, clockwise) becomes a heading
-/// relative to the road at the vehicle (radians, positive to the left).
+/// behind the front bumper, and its heading relative to the road (radians, positive to the left)
+/// is [`heading`]'s.
 pub fn state_at(
     road: &Road,
     scenario: &Scenario,
@@ -429,12 +429,35 @@ pub fn state_sized(
         lateral: raw.lateral_offset,
         speed: raw.speed,
         accel: raw.acceleration,
-        heading: (90.0 - raw.angle).to_radians() - road.heading_at(front),
+        heading: heading(road, raw, front),
         desired_speed: who.desired_speed,
         length,
         width,
         on_ramp: is_on_ramp(road, raw.edge_code),
     }
+}
+
+/// A vehicle's heading relative to the road at its front bumper `front` (radians, positive to
+/// the left): the direction it moves in, from its speed and lateral speed, on a lane of the
+/// frame (all run parallel to the road); 0 while it stands. On an on-ramp edge, which is not
+/// drawn parallel to the road and where nothing changes lanes, it is SUMO's angle (degrees,
+/// 0 = north, clockwise), and so it is for a reading without a lateral speed.
+///
+/// SUMO has no body angle of its own: the angle it reports during a lane change is a drawing,
+/// and versions draw it differently. 1.15 turns it up to 30° off the lane whatever the speed
+/// and back as the change ends; 1.28 draws the direction of motion, and after a lane change at
+/// standstill keeps the last one while the vehicle stands. Read as a heading, that kept angle
+/// (up to 0.8 rad) made a CAV's body cross the next lane, so its planner braked it for good at
+/// the end of the acceleration lane. The direction of motion is what SUMO executes on any
+/// version.
+pub fn heading(road: &Road, raw: &RawVehicleState, front: f64) -> f64 {
+    if is_on_ramp(road, raw.edge_code) || raw.lateral_speed.is_nan() {
+        return (90.0 - raw.angle).to_radians() - road.heading_at(front);
+    }
+    if raw.speed == 0.0 {
+        return 0.0;
+    }
+    raw.lateral_speed.atan2(raw.speed)
 }
 
 /// The vehicle in the road frame; `None` when it is off the merge section.
@@ -495,6 +518,7 @@ mod tests {
         let raw = RawVehicleState {
             speed: 20.0,
             angle: 80.0,
+            lateral_speed: 20.0 * 10f64.to_radians().tan(),
             lane_position: 30.0,
             lateral_offset: 0.5,
             lane_index: 0,
@@ -522,5 +546,40 @@ mod tests {
             desired_speed: 30.0,
         };
         assert!(vehicle_state(&road, &sc, who, &off).is_none());
+    }
+
+    #[test]
+    fn the_heading_is_the_direction_of_motion_not_sumos_drawn_angle() {
+        let road = Road::paper_default();
+        // SUMO 1.28 after a lane change at standstill: angle 42.74°, speed 0.
+        let stood = RawVehicleState {
+            speed: 0.0,
+            angle: 42.74,
+            lateral_speed: 0.0,
+            lane_position: 179.0,
+            lane_index: 1,
+            edge_code: edge_code(&road, "acc").unwrap(),
+            ..Default::default()
+        };
+        assert_eq!(heading(&road, &stood, 329.0), 0.0);
+        // SUMO 1.15 in a lane change at 26.9 m/s: angle 66° (24° off), moving 4.5 m/s sideways.
+        let changing = RawVehicleState {
+            speed: 26.9,
+            angle: 66.0,
+            lateral_speed: 4.5,
+            ..stood
+        };
+        assert!((heading(&road, &changing, 329.0) - 4.5f64.atan2(26.9)).abs() < 1e-15);
+        let on_ramp = RawVehicleState {
+            edge_code: edge_code(&road, "ramp").unwrap(),
+            angle: 63.0,
+            ..stood
+        };
+        assert!((heading(&road, &on_ramp, 100.0) - 27f64.to_radians()).abs() < 1e-12);
+        let unknown = RawVehicleState {
+            lateral_speed: f64::NAN,
+            ..changing
+        };
+        assert!((heading(&road, &unknown, 329.0) - 24f64.to_radians()).abs() < 1e-12);
     }
 }

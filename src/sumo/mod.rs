@@ -12,6 +12,7 @@ pub mod layout;
 pub mod network;
 pub mod road_frame;
 pub mod sumocfg;
+pub mod version;
 
 mod ffi;
 mod quiet;
@@ -42,6 +43,19 @@ pub enum SumoError {
     /// A string handed to SUMO contained a NUL byte.
     #[error("string passed to SUMO contains a NUL byte: {0:?}")]
     NulInString(String),
+    /// The process talks to another SUMO than the one bkpbs was built against.
+    #[error(
+        "bkpbs was built against SUMO {built} but runs SUMO {loaded} ({from}): run it with the SUMO \
+         it was built against, or rebuild it against this one (`make build`, with SUMO_HOME set to it)"
+    )]
+    VersionMismatch {
+        /// [`version::BUILT`].
+        built: &'static str,
+        /// The version the loaded libsumo (or the connected sumo-gui) reports.
+        loaded: String,
+        /// The library file loaded, or `sumo-gui`.
+        from: String,
+    },
     /// A simulation step returned without advancing SUMO's clock.
     #[error("SUMO's simulation time did not advance in a step (still at {time} s)")]
     Stalled {
@@ -173,8 +187,13 @@ impl Simulation {
     /// open, a libsumo abort is one error line too ([`quiet::report_aborts`]).
     pub fn start(args: &[String], stall_limit: std::time::Duration) -> Result<Self, SumoError> {
         let slot = SlotGuard::acquire()?;
-        let gui = args.first().map(String::as_str) == Some(files::GUI_PROGRAM);
+        let gui = args
+            .first()
+            .is_some_and(|p| p.ends_with(files::GUI_PROGRAM));
         ffi::use_traci(gui);
+        if !gui {
+            version::check(false)?;
+        }
         let mut buf = Vec::new();
         for a in args {
             buf.extend_from_slice(c_string(a)?.as_bytes_with_nul());
@@ -203,6 +222,9 @@ impl Simulation {
             batch_speeds: Vec::new(),
             _slot: slot,
         };
+        if gui {
+            version::check(true)?;
+        }
         sim.time = sim.time()?;
         Ok(sim)
     }

@@ -75,6 +75,7 @@ struct BkVehicleState {
     double angle;
     double lane_position;
     double lateral_offset;
+    double lateral_speed;
     int32_t lane_index;
     // Index into the edge names registered with `bk_set_edge_names`, or -1 for any other edge.
     int32_t edge_code;
@@ -111,6 +112,16 @@ int BK(step)() {
 
 int BK(time)(double* out) {
     return guarded([&] { *out = api::Simulation::getTime(); });
+}
+
+// SUMO's version string ("SUMO 1.15.0"). libsumo answers before any simulation starts (the
+// version compiled into the library that was loaded); libtraci asks the connected sumo-gui.
+int BK(version)(const char** out, size_t* len) {
+    return guarded([&] {
+        g_scalar_string = api::Simulation::getVersion().second;
+        *out = g_scalar_string.data();
+        *len = g_scalar_string.size();
+    });
 }
 
 int BK(min_expected_number)(int32_t* out) {
@@ -176,6 +187,7 @@ int BK(read_vehicles)(const BkVehicleState** states, size_t* count, const char**
             s.angle = api::Vehicle::getAngle(id);
             s.lane_position = api::Vehicle::getLanePosition(id);
             s.lateral_offset = api::Vehicle::getLateralLanePosition(id);
+            s.lateral_speed = api::Vehicle::getLateralSpeed(id);
             s.lane_index = api::Vehicle::getLaneIndex(id);
             const std::string edge = api::Vehicle::getRoadID(id);
             s.edge_code = -1;

@@ -33,6 +33,9 @@ class Vehicle:
     y: Optional[float] = None
     #: ``getLateralLanePosition`` (m, positive left); non-zero during a lane change.
     lateral_offset: Optional[float] = None
+    #: ``getLateralSpeed`` (m/s, positive left): with it the heading is the direction of motion,
+    #: without it SUMO's drawn ``angle``, which SUMO versions draw differently.
+    lateral_speed: Optional[float] = None
     #: ``"main"`` or ``"ramp"``; default: from the id (``main.N``/``ramp.N``) or the first road.
     origin: Optional[str] = None
     #: Default: v_max for CAVs, the current speed for HDVs.
@@ -51,6 +54,7 @@ def _variables(traci_module: Any) -> Dict[str, int]:
         "lane_position": tc.VAR_LANEPOSITION,
         "road_id": tc.VAR_ROAD_ID,
         "lateral_offset": tc.VAR_LANEPOSITION_LAT,
+        "lateral_speed": tc.VAR_SPEED_LAT,
     }
 
 
@@ -95,6 +99,7 @@ def read_vehicles(traci_module: Any) -> List[Dict[str, Any]]:
                 "lane_position": r[codes["lane_position"]],
                 "road_id": r[codes["road_id"]],
                 "lateral_offset": r[codes["lateral_offset"]],
+                "lateral_speed": r[codes["lateral_speed"]],
             }
         )
     return out
