@@ -16,6 +16,7 @@ use pyo3::prelude::*;
 fn _bkpbs(m: &Bound<'_, PyModule>) -> PyResult<()> {
     errors::register(m)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    m.add("SUMO_VERSION", bkpbs::sumo::version::BUILT)?;
     m.add("PLANNERS", controller::planners(m.py())?)?;
     m.add_class::<controller::PyController>()?;
     m.add_class::<controller::PyManeuver>()?;

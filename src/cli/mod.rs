@@ -22,7 +22,8 @@ use clap::{Parser, Subcommand};
 #[derive(Parser)]
 #[command(
     name = "bkpbs",
-    version,
+    // The SUMO it was built against (and will run: another is refused).
+    version = concat!(env!("CARGO_PKG_VERSION"), " (SUMO ", env!("BKPBS_SUMO_VERSION"), ")"),
     about = "BK-PBS merge coordination co-simulated with SUMO"
 )]
 pub struct Cli {

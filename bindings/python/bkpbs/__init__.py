@@ -19,6 +19,7 @@ Bad arguments raise :class:`BkpbsError` (a ``ValueError``); SUMO failures raise
 
 from ._bkpbs import (
     PLANNERS,
+    SUMO_VERSION,
     BkpbsError,
     Campaign,
     CampaignTask,
@@ -39,6 +40,7 @@ from .sumo import Vehicle, apply, read_vehicles
 
 __all__ = [
     "PLANNERS",
+    "SUMO_VERSION",
     "BkpbsError",
     "Campaign",
     "CampaignTask",

@@ -11,6 +11,9 @@ _ConfigSource = Union[Mapping[str, Any], str, "os.PathLike[str]", None]
 _PathArg = Union[str, "os.PathLike[str]"]
 
 __version__: str
+#: The SUMO version the module was built against and runs (a run against another libsumo is
+#: refused); every summary's ``sumo_version``.
+SUMO_VERSION: str
 #: The planner names ``Controller`` and ``run_episode`` accept.
 PLANNERS: List[str]
 
