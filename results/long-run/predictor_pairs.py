@@ -8,6 +8,11 @@ without ties, else normal with tie and continuity correction), as docs/src/campa
 describes. Standard library only.
 
     python3 results/long-run/predictor_pairs.py results/long-run/learned results/long-run/constant
+
+An optional third argument names the metrics (comma-separated; default the five below), and
+per planner it then adds the controllable collisions of the two runs (vehicles removed in
+collisions involving a CAV, of those inserted) with Fisher's exact two-sided p
+(results/sumo-versions uses this).
 """
 import csv
 import math
@@ -81,7 +86,30 @@ def line(label, pairs):
     return "| " + " | ".join(cells) + " |"
 
 
-def main(first, second):
+def fisher(k1, n1, k2, n2):
+    """Two-sided Fisher exact p of k1 of n1 against k2 of n2 (sum of tables no likelier)."""
+    k, n = k1 + k2, n1 + n2
+    def prob(x):
+        return math.comb(n1, x) * math.comb(n2, k - x) / math.comb(n, k)
+    seen = prob(k1)
+    lo, hi = max(0, k - n2), min(k, n1)
+    return min(1.0, sum(prob(x) for x in range(lo, hi + 1) if prob(x) <= seen * (1 + 1e-9)))
+
+
+def collisions(pairs):
+    total = [[0, 0], [0, 0]]
+    for a, b in pairs:
+        for side, r in enumerate((a, b)):
+            total[side][0] += int(r["controllable_crashed"])
+            total[side][1] += int(r["inserted"])
+    (k1, n1), (k2, n2) = total
+    return f"controllable collisions {k1} of {n1} against {k2} of {n2}: Fisher p = {fisher(k1, n1, k2, n2):.3f}"
+
+
+def main(first, second, metrics=None):
+    global METRICS
+    if metrics:
+        METRICS = metrics.split(",")
     a, b = rows(first), rows(second)
     keys = sorted(set(a) & set(b))
     by_planner = defaultdict(list)
@@ -98,7 +126,9 @@ def main(first, second):
         for cell, cks in sorted(cells.items()):
             print(line(" ".join(cell), [(a[k], b[k]) for k in cks]))
         print(line("**all**", [(a[k], b[k]) for k in ks]) + "\n")
+        if metrics:
+            print(collisions([(a[k], b[k]) for k in ks]) + "\n")
 
 
 if __name__ == "__main__":
-    main(*sys.argv[1:3])
+    main(*sys.argv[1:4])
