@@ -14,6 +14,8 @@ use bkpbs::report::stats::{sample_std, t_975, Estimate};
 
 mod common;
 
+use bkpbs::sumo::version::BUILT;
+
 use common::{assert_ok, bkpbs, one_error_line};
 
 // ---------------------------------------------------------------- statistics, grid, shards
@@ -231,12 +233,12 @@ fn one_and_two_workers_give_byte_identical_results() {
     let lines: Vec<&str> = episodes.lines().collect();
     assert_eq!(lines.len(), 1 + 8);
     assert!(
-        lines[1].starts_with("sumo,0.4,3000,0,sumo-safe,60,"),
+        lines[1].starts_with(&format!("sumo,0.4,3000,0,sumo-safe,{BUILT},60,")),
         "{}",
         lines[1]
     );
     assert!(
-        lines[8].starts_with("idm-mobil,0.8,3000,1,sumo-safe,60,"),
+        lines[8].starts_with(&format!("idm-mobil,0.8,3000,1,sumo-safe,{BUILT},60,")),
         "{}",
         lines[8]
     );
@@ -442,7 +444,11 @@ fn report_refuses_damaged_episode_rows_naming_file_and_line() {
     let whole = reference();
     let original = read(&whole.join("episodes.csv"));
     let lines: Vec<&str> = original.lines().collect();
-    // Column 17 (0-based) is controllable_collision_rate, 20 mean_delay_s.
+    let column = |name: &str| lines[0].split(',').position(|c| c == name).unwrap();
+    let (rate, mean_delay) = (
+        column("controllable_collision_rate"),
+        column("mean_delay_s"),
+    );
     let with_field = |line: usize, col: usize, value: &str| {
         let mut out: Vec<String> = lines.iter().map(|l| l.to_string()).collect();
         let mut f: Vec<&str> = lines[line].split(',').collect();
@@ -453,15 +459,21 @@ fn report_refuses_damaged_episode_rows_naming_file_and_line() {
     let duplicated = format!("{original}{}\n", lines[3]);
     for (damaged, expected) in [
         (duplicated, "line 10: cell"),
-        (with_field(2, 20, "NaN"), "line 3: mean_delay_s = 'NaN'"),
-        (with_field(2, 20, "-999"), "line 3: mean_delay_s = '-999'"),
+        (
+            with_field(2, mean_delay, "NaN"),
+            "line 3: mean_delay_s = 'NaN'",
+        ),
+        (
+            with_field(2, mean_delay, "-999"),
+            "line 3: mean_delay_s = '-999'",
+        ),
         // Hardening II, finding 8: this was reported as "± inf".
         (
-            with_field(2, 20, "1e308"),
+            with_field(2, mean_delay, "1e308"),
             "line 3: mean_delay_s = '1e308' is above 1e15",
         ),
         (
-            with_field(4, 17, "7.5"),
+            with_field(4, rate, "7.5"),
             "line 5: controllable_collision_rate = '7.5'",
         ),
     ] {
@@ -894,7 +906,7 @@ fn a_campaign_file_sets_the_grid_and_scenario_and_a_changed_scenario_is_refused(
         .lines()
         .nth(1)
         .unwrap()
-        .starts_with("idm-mobil,0.5,2500,7,sumo-safe,30,"));
+        .starts_with(&format!("idm-mobil,0.5,2500,7,sumo-safe,{BUILT},30,")));
     // The saved settings reproduce the campaign.
     let saved = read(&out.join("campaign.toml"));
     assert!(

@@ -274,13 +274,8 @@ impl EpisodeInput {
 /// constant lateral speed.
 pub fn command_line(config: &Config, net: &Path, vtypes: &Path, routes: &Path) -> Vec<String> {
     let s = &config.scenario;
-    let program = if config.sumo.gui {
-        gui_program()
-    } else {
-        "sumo".into()
-    };
     let mut args: Vec<String> = vec![
-        program,
+        program(config.sumo.gui),
         "--net-file".into(),
         net.display().to_string(),
         "--additional-files".into(),
@@ -338,6 +333,15 @@ pub fn command_line(config: &Config, net: &Path, vtypes: &Path, routes: &Path) -
 /// The program that shows an episode (`sumo.gui`); `Simulation::start` drives it through
 /// libtraci when a command line starts with it.
 pub const GUI_PROGRAM: &str = "sumo-gui";
+
+/// The program of a command line: `sumo` (a name libsumo ignores) or [`gui_program`].
+fn program(gui: bool) -> String {
+    if gui {
+        gui_program()
+    } else {
+        "sumo".into()
+    }
+}
 
 /// The sumo-gui to start: the one beside the SUMO bkpbs was built against when that is not
 /// Debian's system SUMO, else the first on `PATH`.
