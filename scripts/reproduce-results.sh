@@ -120,6 +120,18 @@ result rl-shield-off results/rl-ppo/shield-off "$BIN" campaign --planners rl-ppo
 result rl-shield-on results/rl-ppo/shield-on "$BIN" campaign --planners rl-ppo --seeds 10 \
     --config results/rl-ppo/shield-on.toml
 
+# The SUMO-version study (results/sumo-versions): each half with a binary built against its SUMO,
+# so a 1.28 build re-runs only its half: --only sumo-versions-1.28,sumo-versions-seeds-1.28.
+case "$("$BIN" --version)" in
+    *"SUMO 1.28.0"*)
+        result sumo-versions-1.28 results/sumo-versions/1.28 "$BIN" campaign
+        result sumo-versions-seeds-1.28 results/sumo-versions/seeds-0-9/1.28 "$BIN" campaign \
+            --alphas 0.5 --lambdas 3000 --seeds 10 ;;
+    *"SUMO 1.15.0"*)
+        result sumo-versions-seeds-1.15 results/sumo-versions/seeds-0-9/1.15 "$BIN" campaign \
+            --alphas 0.5 --lambdas 3000 --seeds 10 ;;
+esac
+
 # The long runs (~35 min on 2 cores): each campaign, then its paired report.
 long="--hdv-profiles sumo-safe,paper --alphas 0.4,0.6,0.8 --steps 1500"
 # shellcheck disable=SC2086
