@@ -40,21 +40,9 @@ fn every_result_names_the_sumo_that_ran_it() {
     let tmp = tempfile::tempdir().unwrap();
     let dir = tmp.path().join("c");
     let d = dir.to_str().unwrap();
-    let o = bkpbs(&[
-        "campaign",
-        "--planners",
-        "idm-mobil",
-        "--alphas",
-        "0.5",
-        "--lambdas",
-        "3000",
-        "--seeds",
-        "2",
-        "--steps",
-        "20",
-        "--out",
-        d,
-    ]);
+    let grid = "campaign --planners idm-mobil --alphas 0.5 --lambdas 3000 --seeds 2 --steps 20";
+    let args: Vec<&str> = grid.split_whitespace().chain(["--out", d]).collect();
+    let o = bkpbs(&args);
     assert!(o.status.success(), "{}", common::stderr(&o));
     let rows = csv_rows(&std::fs::read(dir.join("episodes.csv")).unwrap());
     assert_eq!(rows.len(), 2);
