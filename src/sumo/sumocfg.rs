@@ -1,7 +1,7 @@
 //! A user's SUMO configuration (`.sumocfg`): the options bkpbs must know before it runs it —
 //! the network (to find the merge regions), the step length (the planner's step), the
 //! simulated interval — read as SUMO reads them: each option an element with a `value`,
-//! anywhere under `<configuration>`, file names relative to the configuration's directory.
+//! anywhere under `<configuration>` (or `<sumoConfiguration>`), file names relative to the configuration's directory.
 //! Everything else in it (routes, flows, vehicle types, additional files, the user's own
 //! options) SUMO reads itself, from the file.
 
@@ -23,6 +23,9 @@ pub struct SumoConfig {
     /// Its `end` (s), if it sets one.
     pub end: Option<f64>,
 }
+
+/// The root elements of a SUMO configuration file.
+const ROOTS: [&str; 2] = ["configuration", "sumoConfiguration"];
 
 /// Why a configuration cannot be run.
 #[derive(Debug, thiserror::Error)]
@@ -60,8 +63,13 @@ impl SumoConfig {
             cause,
         })?;
         let doc = roxmltree::Document::parse(&text).map_err(|e| bad(e.to_string()))?;
-        if !doc.root_element().has_tag_name("configuration") {
-            return Err(bad("no <configuration> element".into()));
+        // SUMO writes `<sumoConfiguration>` (the shipped games of 1.28), older versions
+        // `<configuration>`; it reads both.
+        let root = doc.root_element().tag_name().name();
+        if !ROOTS.contains(&root) {
+            return Err(bad(format!(
+                "its root element is <{root}>, not <configuration> or <sumoConfiguration>"
+            )));
         }
         let option = |names: &[&str]| {
             doc.descendants()
@@ -169,5 +177,22 @@ mod tests {
         // SUMO's default step is 1 s.
         let p = write(d.path(), r#"<net-file value="a"/>"#);
         assert_eq!(SumoConfig::read(&p).unwrap().step_length, 1.0);
+        let p = d.path().join("r.sumocfg");
+        std::fs::write(&p, r#"<routes><net-file value="a"/></routes>"#).unwrap();
+        let e = SumoConfig::read(&p).unwrap_err().to_string();
+        assert!(e.contains("root element is <routes>"), "{e}");
+    }
+
+    /// The root newer SUMO writes (the games shipped with 1.28 have it).
+    #[test]
+    fn a_sumo_configuration_root_is_read_too() {
+        let d = tempfile::tempdir().unwrap();
+        let p = d.path().join("s.sumocfg");
+        let body = r#"<input><net-file value="a.net.xml"/></input>"#;
+        std::fs::write(&p, format!("<sumoConfiguration>{body}</sumoConfiguration>")).unwrap();
+        assert_eq!(
+            SumoConfig::read(&p).unwrap().net,
+            d.path().join("a.net.xml")
+        );
     }
 }
