@@ -182,6 +182,12 @@ fn a_sumo_abort_is_one_error_line_with_sumos_message() {
         .arg(d.path().join("run"))
         .output()
         .unwrap();
+    // Debian's libsumo (1.15) is built with assertions and aborts here; the eclipse-sumo
+    // wheel's (1.28) has none and runs the NaN (measured; the guide's SUMO facts).
+    if bkpbs::sumo::version::release() > (1, 15) {
+        assert!(out.status.success(), "{}", common::stderr(&out));
+        return;
+    }
     assert_eq!(out.status.code(), Some(1), "{}", common::stderr(&out));
     let line = common::one_error_line(&out);
     assert!(
