@@ -304,13 +304,22 @@ impl Settings {
     /// Reads the optional campaign file, applies the flags and validates everything, so that a
     /// bad setting stops the campaign before any episode runs.
     pub fn resolve(file: Option<&Path>, o: &Overrides) -> Result<Settings, SettingsError> {
-        let FileParts {
-            mut table,
-            mut config,
-        } = match file {
+        let parts = match file {
             Some(p) => read_file(p)?,
             None => FileParts::default(),
         };
+        Settings::from_parts(parts, file, o)
+    }
+
+    /// [`Settings::resolve`] of a file already read.
+    fn from_parts(
+        FileParts {
+            mut table,
+            mut config,
+        }: FileParts,
+        file: Option<&Path>,
+        o: &Overrides,
+    ) -> Result<Settings, SettingsError> {
         apply_overrides(&mut table, o)?;
         // A record of the SUMO that runs, not a choice: a file written by another SUMO runs
         // on this one (and says so in the new campaign.toml).
@@ -380,8 +389,10 @@ impl Settings {
     /// Reads the settings a campaign directory was made with (its `campaign.toml`).
     /// The file's `sumo_version` is kept: it records which SUMO ran the campaign.
     pub fn from_campaign_file(path: &Path) -> Result<Settings, SettingsError> {
-        let mut settings = Settings::resolve(Some(path), &Overrides::default())?;
-        settings.table.sumo_version = read_file(path)?.table.sumo_version;
+        let parts = read_file(path)?;
+        let recorded = parts.table.sumo_version.clone();
+        let mut settings = Settings::from_parts(parts, Some(path), &Overrides::default())?;
+        settings.table.sumo_version = recorded;
         Ok(settings)
     }
 
