@@ -439,9 +439,15 @@ pub fn state_sized(
 
 /// A vehicle's heading relative to the road at its front bumper `front` (radians, positive to
 /// the left): the direction it moves in, from its speed and lateral speed, on a lane of the
-/// frame (all run parallel to the road); 0 while it stands. On an on-ramp edge, which is not
-/// drawn parallel to the road and where nothing changes lanes, it is SUMO's angle (degrees,
-/// 0 = north, clockwise), and so it is for a reading without a lateral speed.
+/// frame (all run parallel to the road); 0 while it stands, and 0 on an on-ramp edge. Off the
+/// ramps, for a reading without a lateral speed it is SUMO's angle (degrees, 0 = north, clockwise) against
+/// the road's.
+///
+/// The frame straightens an on-ramp (its `s` runs along the ramp), and a ramp of one lane has
+/// no lane change, so a vehicle on it moves straight along the frame. SUMO's angle there, up to
+/// 30° off the carriageway on SUMO's `ramp` game, turned the planned body across the
+/// straightened 3.2 m ramp, so every plan left the road from its start and the first ramp CAV
+/// braked to a stop for good, closing the ramp; it also cut the commanded speed to `v cos θ`.
 ///
 /// SUMO has no body angle of its own: the angle it reports during a lane change is a drawing,
 /// and versions draw it differently. 1.15 turns it up to 30° off the lane whatever the speed
@@ -451,7 +457,10 @@ pub fn state_sized(
 /// the end of the acceleration lane. The direction of motion is what SUMO executes on any
 /// version.
 pub fn heading(road: &Road, raw: &RawVehicleState, front: f64) -> f64 {
-    if is_on_ramp(road, raw.edge_code) || raw.lateral_speed.is_nan() {
+    if is_on_ramp(road, raw.edge_code) {
+        return 0.0;
+    }
+    if raw.lateral_speed.is_nan() {
         return (90.0 - raw.angle).to_radians() - road.heading_at(front);
     }
     if raw.speed == 0.0 {
@@ -570,12 +579,14 @@ mod tests {
             ..stood
         };
         assert!((heading(&road, &changing, 329.0) - 4.5f64.atan2(26.9)).abs() < 1e-15);
+        // On the ramp's slanted part, 27° off the carriageway: the frame runs along the ramp.
         let on_ramp = RawVehicleState {
             edge_code: edge_code(&road, "ramp").unwrap(),
             angle: 63.0,
-            ..stood
+            lateral_speed: f64::NAN,
+            ..changing
         };
-        assert!((heading(&road, &on_ramp, 100.0) - 27f64.to_radians()).abs() < 1e-12);
+        assert_eq!(heading(&road, &on_ramp, 100.0), 0.0);
         let unknown = RawVehicleState {
             lateral_speed: f64::NAN,
             ..changing
