@@ -51,7 +51,7 @@ impl Drop for Slot {
 }
 
 /// The message of a caught panic.
-fn panic_message(payload: &(dyn std::any::Any + Send)) -> String {
+pub(crate) fn panic_message(payload: &(dyn std::any::Any + Send)) -> String {
     payload
         .downcast_ref::<&str>()
         .map(|s| s.to_string())
@@ -59,18 +59,21 @@ fn panic_message(payload: &(dyn std::any::Any + Send)) -> String {
         .unwrap_or_else(|| "unknown panic payload".into())
 }
 
-/// The α, λ and seed of an episode as a `scenario` table.
-pub(crate) fn cell_table(alpha: f64, lam: f64, seed: i64) -> PyResult<toml::Table> {
+/// The α, λ (unless left to the configuration) and seed of an episode as a `scenario` table.
+pub(crate) fn cell_table(alpha: f64, lam: Option<f64>, seed: i64) -> PyResult<toml::Table> {
     if seed < 0 {
         return Err(bad_input(format!(
             "invalid setting scenario.seed = {seed}: must not be negative"
         )));
     }
-    Ok(toml::Table::from_iter([
+    let mut table = toml::Table::from_iter([
         ("alpha".to_string(), toml::Value::Float(alpha)),
-        ("lambda".to_string(), toml::Value::Float(lam)),
         ("seed".to_string(), toml::Value::Integer(seed)),
-    ]))
+    ]);
+    if let Some(lam) = lam {
+        table.insert("lambda".to_string(), toml::Value::Float(lam));
+    }
+    Ok(table)
 }
 
 /// The `episode.csv` row as a dict: the values the row is written from, typed and at full
@@ -79,8 +82,13 @@ pub(crate) fn summary_dict<'py>(
     py: Python<'py>,
     r: &EpisodeResult,
 ) -> PyResult<Bound<'py, PyDict>> {
+    cells_dict(py, r.summary.cells())
+}
+
+/// A CSV row's cells as a dict of their typed, full-precision values.
+pub(crate) fn cells_dict(py: Python<'_>, row: Vec<Cell>) -> PyResult<Bound<'_, PyDict>> {
     let d = PyDict::new(py);
-    for Cell { column, value } in r.summary.cells() {
+    for Cell { column, value } in row {
         match value {
             Value::Text(s) => d.set_item(column, s)?,
             Value::Int(i) => d.set_item(column, i)?,
@@ -115,22 +123,40 @@ fn run_detached(py: Python<'_>, planner: &str, config: &Config) -> PyResult<Epis
 /// `seed` in the core's episode loop (SUMO in-process) and returns its summary: the values
 /// `episode.csv` is written from, at full precision. `config` (dict, TOML text or file) and
 /// keyword overrides (`steps=100`, `idm={"accel": 2.0}`) set the rest; `out` also writes the
-/// episode's CSV files there.
+/// episode's CSV files there. With `sumocfg` the episode runs the user's own SUMO scenario
+/// instead of the paper's demand (no `lam`), as `bkpbs episode --sumocfg` does, and returns
+/// that `episode.csv` row.
 #[pyfunction]
-#[pyo3(signature = (planner, alpha, lam, seed, *, config = None, out = None, **overrides))]
+#[pyo3(signature = (planner, alpha, lam = None, seed = 0, *, config = None, out = None, sumocfg = None, **overrides))]
 #[allow(clippy::too_many_arguments)]
 pub fn run_episode<'py>(
     py: Python<'py>,
     planner: &str,
     alpha: f64,
-    lam: f64,
+    lam: Option<f64>,
     seed: i64,
     config: Option<&Bound<'py, PyAny>>,
     out: Option<PathBuf>,
+    sumocfg: Option<PathBuf>,
     overrides: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     if !PLANNERS.contains(&planner) {
         return Err(bad_input(UnknownPlanner(planner.to_string())));
+    }
+    if let Some(sumocfg) = sumocfg {
+        if let Some(lam) = lam {
+            return Err(crate::scenario::lam_with_sumocfg(lam));
+        }
+        let call = crate::scenario::ScenarioCall {
+            planner,
+            alpha,
+            seed,
+            sumocfg,
+            config,
+            overrides,
+            out,
+        };
+        return crate::scenario::run(py, call);
     }
     let config = crate::config::resolve(config, overrides, cell_table(alpha, lam, seed)?)?;
     let result = run_detached(py, planner, &config)?;
@@ -159,7 +185,7 @@ pub fn write_demand(
     config: Option<&Bound<'_, PyAny>>,
     overrides: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<usize> {
-    let config = crate::config::resolve(config, overrides, cell_table(alpha, lam, seed)?)?;
+    let config = crate::config::resolve(config, overrides, cell_table(alpha, Some(lam), seed)?)?;
     let road = bkpbs::sumo::frame::scenario_road(&config.scenario).map_err(bad_input)?;
     demand::check_entries(&config, &road).map_err(bad_input)?;
     let planned = demand::generate(&config, &road);
@@ -184,7 +210,7 @@ pub fn write_scenario<'py>(
     config: Option<&Bound<'py, PyAny>>,
     overrides: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let config = crate::config::resolve(config, overrides, cell_table(alpha, lam, seed)?)?;
+    let config = crate::config::resolve(config, overrides, cell_table(alpha, Some(lam), seed)?)?;
     let net = match &config.scenario.net_file {
         Some(p) => p.clone(),
         None => {

@@ -61,7 +61,7 @@ impl PyMergeEnv {
                 )))
             }
         };
-        let cell = crate::episode::cell_table(alpha, lam, 0)?;
+        let cell = crate::episode::cell_table(alpha, Some(lam), 0)?;
         let config = crate::config::resolve(config, overrides, cell)?;
         Ok(PyMergeEnv {
             env: None,

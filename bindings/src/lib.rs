@@ -8,6 +8,7 @@ mod episode;
 mod errors;
 mod gym;
 mod predict;
+mod scenario;
 mod scene;
 
 use pyo3::prelude::*;

@@ -101,9 +101,7 @@ impl ScenarioArgs {
             s.sumocfg = Some(cfg.clone());
             // The scenario's own interval, unless --steps shortens it (an unreadable file is
             // reported when the episode starts).
-            let interval = bkpbs::sumo::sumocfg::SumoConfig::read(cfg)
-                .ok()
-                .and_then(|c| c.steps(s.dt));
+            let interval = bkpbs::sumo::sumocfg::SumoConfig::steps_of(cfg, s.dt);
             if let (None, Some(n)) = (self.steps, interval) {
                 s.steps = n;
             }

@@ -95,6 +95,13 @@ impl SumoConfig {
         })
     }
 
+    /// The steps of `dt` of the interval of the configuration at `path`: an episode's default
+    /// length. `None` for a file that cannot be read (the episode reports it when it starts)
+    /// or that sets no end.
+    pub fn steps_of(path: &Path, dt: f64) -> Option<u32> {
+        SumoConfig::read(path).ok()?.steps(dt)
+    }
+
     /// Steps of `dt` from its begin to its end, if it has an end.
     pub fn steps(&self, dt: f64) -> Option<u32> {
         self.end

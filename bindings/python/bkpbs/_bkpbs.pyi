@@ -185,16 +185,20 @@ class Campaign:
 def run_episode(
     planner: str,
     alpha: float,
-    lam: float,
-    seed: int,
+    lam: Optional[float] = None,
+    seed: int = 0,
     *,
     config: _ConfigSource = None,
     out: Optional[_PathArg] = None,
+    sumocfg: Optional[_PathArg] = None,
     **overrides: Any,
 ) -> Dict[str, Any]:
     """Runs one episode in the core's loop; returns the ``episode.csv`` row as a dict of the values
     it is written from: ``str``, ``int`` and full-precision ``float`` (not rounded to the CSV's
-    decimals), ``None`` for an empty cell."""
+    decimals), ``None`` for an empty cell. ``lam`` defaults to the configuration's λ. With
+    ``sumocfg`` the episode runs that SUMO scenario of your own instead of the paper's demand
+    (no ``lam``; its ``begin``–``end`` interval unless ``steps=`` shortens it), as
+    ``bkpbs episode --sumocfg`` does, and the row is that scenario ``episode.csv``'s."""
 
 def write_demand(
     out: _PathArg,

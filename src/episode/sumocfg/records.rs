@@ -78,12 +78,16 @@ pub struct ScenarioVehicle {
 /// The one-row summary of an episode on a user's scenario (`episode.csv`).
 #[derive(Debug, Clone, Default, PartialEq, Serialize)]
 pub struct ScenarioSummary {
+    /// The configuration's file name (`A10KW.sumocfg`).
+    pub scenario: String,
     /// The controller's name.
     pub planner: String,
     /// The share α of the scenario's vehicles made CAVs.
     pub alpha: f64,
     /// The episode's seed (SUMO's, and the CAV draw's).
     pub seed: u64,
+    /// The SUMO release that ran it.
+    pub sumo_version: String,
     /// Simulated steps.
     pub steps: u32,
     /// The regions planned, each as the edges its on-ramps join (`; ` between regions).

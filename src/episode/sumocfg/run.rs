@@ -371,7 +371,14 @@ impl<'a> ScenarioRun<'a> {
         let sc = &self.config.scenario;
         let hdv_collisions = self.collisions.iter().filter(|c| !c.controllable()).count();
         let head = ScenarioSummary {
+            scenario: sc
+                .sumocfg
+                .as_deref()
+                .and_then(std::path::Path::file_name)
+                .map(|n| n.to_string_lossy().into_owned())
+                .unwrap_or_default(),
             planner: planner.into(),
+            sumo_version: crate::sumo::version::BUILT.into(),
             alpha: sc.alpha,
             seed: sc.seed,
             steps: sc.steps,

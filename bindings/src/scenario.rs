@@ -1,0 +1,81 @@
+//! `bkpbs.run_episode(..., sumocfg=FILE)`: an episode on the user's own SUMO scenario in the
+//! core's loop (SUMO in-process, GIL released), as `bkpbs episode --sumocfg` runs it.
+
+use std::panic::{self, AssertUnwindSafe};
+use std::path::PathBuf;
+
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+
+use bkpbs::episode::cells::cells;
+use bkpbs::episode::sumocfg::{self, ScenarioResult};
+use bkpbs::episode::EpisodeError;
+use bkpbs::sumo::sumocfg::SumoConfig;
+
+use crate::episode::{cells_dict, panic_message, Slot};
+use crate::errors::{bad_input, episode_error, SumoError};
+
+/// What a scenario episode is run with besides the configuration.
+pub struct ScenarioCall<'a, 'py> {
+    pub planner: &'a str,
+    pub alpha: f64,
+    pub seed: i64,
+    pub sumocfg: PathBuf,
+    pub config: Option<&'a Bound<'py, PyAny>>,
+    pub overrides: Option<&'a Bound<'py, PyDict>>,
+    pub out: Option<PathBuf>,
+}
+
+/// Runs the scenario episode and returns its `episode.csv` row as a dict (the values it is
+/// written from); `out` also writes its files there. The scenario's `begin`–`end` interval is
+/// the episode's length unless `steps=` shortens it.
+pub fn run<'py>(py: Python<'py>, call: ScenarioCall<'_, 'py>) -> PyResult<Bound<'py, PyDict>> {
+    let mut table = crate::episode::cell_table(call.alpha, None, call.seed)?;
+    let path = call.sumocfg.display().to_string();
+    table.insert("sumocfg".into(), toml::Value::String(path));
+    let steps_given = call
+        .overrides
+        .is_some_and(|o| o.contains("steps").unwrap_or(false));
+    let mut config = crate::config::resolve(call.config, call.overrides, table)?;
+    if !steps_given {
+        if let Some(n) = SumoConfig::steps_of(&call.sumocfg, config.scenario.dt) {
+            config.scenario.steps = n;
+        }
+    }
+    let result = run_detached(py, call.planner, &config)?;
+    if let Some(dir) = call.out {
+        sumocfg::write(&result, &dir)
+            .map_err(|e| pyo3::exceptions::PyOSError::new_err(e.to_string()))?;
+    }
+    let row = cells(&result.summary).map_err(|e| SumoError::new_err(e.to_string()))?;
+    cells_dict(py, row)
+}
+
+/// Runs the scenario in this thread with the GIL released.
+fn run_detached(
+    py: Python<'_>,
+    planner: &str,
+    config: &bkpbs::config::Config,
+) -> PyResult<ScenarioResult> {
+    let _slot = Slot::claim()?;
+    let outcome = py.detach(|| {
+        panic::catch_unwind(AssertUnwindSafe(
+            || -> Result<ScenarioResult, EpisodeError> { sumocfg::run(config, planner) },
+        ))
+    });
+    match outcome {
+        Ok(Ok(result)) => Ok(result),
+        Ok(Err(e)) => Err(episode_error(&e)),
+        Err(payload) => Err(SumoError::new_err(format!(
+            "planner {planner} panicked: {}",
+            panic_message(payload.as_ref())
+        ))),
+    }
+}
+
+/// The error for a paper-demand argument given with a scenario of the user's own.
+pub fn lam_with_sumocfg(lam: f64) -> PyErr {
+    bad_input(format!(
+        "lam = {lam} was given with sumocfg: a scenario of your own brings its own demand"
+    ))
+}
