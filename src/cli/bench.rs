@@ -44,7 +44,11 @@ impl BenchArgs {
         for p in &planners {
             p.check(&config)?;
         }
-        bkpbs::sumo::frame::scenario_road(&config.scenario)?;
+        if config.scenario.sumocfg.is_some() {
+            bkpbs::sumo::frame::scenario_roads(&config.scenario)?;
+        } else {
+            bkpbs::sumo::frame::scenario_road(&config.scenario)?;
+        }
         for &t in &self.threads {
             bkpbs::io::cores::check("--threads", t).map_err(anyhow::Error::msg)?;
         }
@@ -66,8 +70,9 @@ impl BenchArgs {
 pub fn run(b: Bench) -> Result<()> {
     let s = &b.config.scenario;
     let net = s
-        .net_file
+        .sumocfg
         .as_ref()
+        .or(s.net_file.as_ref())
         .map_or("the embedded network".to_string(), |p| {
             p.display().to_string()
         });

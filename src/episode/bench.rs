@@ -6,7 +6,7 @@ use std::time::Instant;
 use crate::config::Config;
 use crate::episode::demand;
 use crate::episode::metrics::percentile;
-use crate::episode::{self, EpisodeError};
+use crate::episode::{self, sumocfg, EpisodeError};
 use crate::episode::{Driver, Observer};
 use crate::model::scene::{Kind, Scene};
 use crate::sumo::files::EpisodeInput;
@@ -58,15 +58,22 @@ impl Observer for Occupancy {
     }
 }
 
-/// One timed episode of `planner` on a rayon pool of `threads` threads: the row's figures.
-fn timed_episode(config: &Config, planner: &str, threads: usize) -> Result<[f64; 9], EpisodeError> {
-    let planned = demand::generate_for(config)?;
-    let mut seen = Occupancy::default();
-    let pool = rayon::ThreadPoolBuilder::new()
+/// A rayon pool of `threads` threads for the planners.
+fn pool(threads: usize) -> rayon::ThreadPool {
+    rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .build()
-        .expect("a thread pool");
-    let r = pool
+        .expect("a thread pool")
+}
+
+/// One timed episode of `planner` on a rayon pool of `threads` threads: the row's figures.
+fn timed_episode(config: &Config, planner: &str, threads: usize) -> Result<[f64; 9], EpisodeError> {
+    if config.scenario.sumocfg.is_some() {
+        return timed_scenario(config, planner, threads);
+    }
+    let planned = demand::generate_for(config)?;
+    let mut seen = Occupancy::default();
+    let r = pool(threads)
         .install(|| episode::run_observed(config, Driver::Named(planner), &planned, &mut seen))?;
     let t = &r.timing;
     let steps = config.scenario.steps as f64;
@@ -84,9 +91,34 @@ fn timed_episode(config: &Config, planner: &str, threads: usize) -> Result<[f64;
     ])
 }
 
-/// SUMO stepping the episode's demand (as a plain route file, inserted by SUMO itself) with
-/// nobody reading or commanding: the floor.
+/// One timed episode of `planner` on the user's scenario: the row's figures (planning per step
+/// is every region's together; no node count is kept there, so that figure is NaN).
+fn timed_scenario(
+    config: &Config,
+    planner: &str,
+    threads: usize,
+) -> Result<[f64; 9], EpisodeError> {
+    let r = pool(threads).install(|| sumocfg::run(config, planner))?;
+    let t = &r.timing;
+    Ok([
+        t.episode_ms_per_step,
+        t.plan_ms_median,
+        t.plan_ms_p99,
+        t.plan_ms_max,
+        f64::NAN,
+        t.shield_ms_median,
+        t.shield_ms_max,
+        r.vehicles_per_step,
+        r.cavs_per_step,
+    ])
+}
+
+/// SUMO stepping the episode's demand (as a plain route file, inserted by SUMO itself), or the
+/// user's scenario with bkpbs's options, with nobody reading or commanding: the floor.
 pub fn sumo_alone_ms_per_step(config: &Config) -> Result<f64, EpisodeError> {
+    if config.scenario.sumocfg.is_some() {
+        return sumocfg::sumo_alone_ms_per_step(config);
+    }
     let road = crate::sumo::frame::scenario_road(&config.scenario)?;
     let planned = demand::generate(config, &road);
     let input = EpisodeInput::write(config, &road)?;
@@ -210,6 +242,7 @@ pub fn table(rows: &[BenchRow]) -> String {
     }
     out += "(ms; planning figures are per step for all CAVs together, the shield's part of it \
             apart, medians over the repeats; ×N: the planner on N threads; veh/step and CAVs: on \
-            the section per step, on average)\n";
+            the section per step, on average; on a scenario of your own, in its regions, planning \
+            all regions together, and no node count: NaN)\n";
     out
 }

@@ -45,6 +45,11 @@ pub const TIMING_COLUMNS: [&str; 9] = [
     "shield_ms_max",
 ];
 
+/// `timing.csv` of an episode's `timing` as bytes.
+pub fn timing_csv(timing: &Timing) -> Vec<u8> {
+    csv_bytes(&TIMING_COLUMNS, std::iter::once(timing_row(timing)))
+}
+
 fn timing_row(t: &Timing) -> Vec<String> {
     [
         t.plan_ms_median,
@@ -171,7 +176,7 @@ impl EpisodeResult {
 
     /// `timing.csv` as bytes.
     pub fn timing_csv(&self) -> Vec<u8> {
-        csv_bytes(&TIMING_COLUMNS, std::iter::once(timing_row(&self.timing)))
+        timing_csv(&self.timing)
     }
 
     /// Writes the four CSV files (and SUMO's log and the trajectories, if any) into `dir` as

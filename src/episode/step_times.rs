@@ -56,6 +56,13 @@ impl StepTimes {
         self.shield_ms.push(controller.last_shield_ms());
     }
 
+    /// A planning round timed by the caller (several controllers' plans in one step): it took
+    /// `plan_ms`, of which the shields' part `shield_ms`.
+    pub fn add_round(&mut self, plan_ms: f64, shield_ms: f64) {
+        self.plan_ms.push(plan_ms);
+        self.shield_ms.push(shield_ms);
+    }
+
     /// The episode's timing, given the stepping loop's duration `loop_s` over `steps` steps;
     /// `wall_s` is left to the caller, who saw SUMO start and close.
     pub fn timing(self, loop_s: f64, steps: u32) -> Timing {

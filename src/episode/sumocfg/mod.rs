@@ -26,7 +26,7 @@ use rand::{Rng, SeedableRng};
 use crate::config::Config;
 use crate::controller;
 use crate::episode::error::EpisodeError;
-use crate::episode::metrics::CollisionEvent;
+use crate::episode::metrics::{CollisionEvent, Timing};
 use crate::model::road::Road;
 use crate::sumo::frame;
 use crate::sumo::sumocfg::SumoConfig;
@@ -47,6 +47,12 @@ pub struct ScenarioResult {
     pub sumo_options: Vec<String>,
     /// What SUMO printed to stderr.
     pub sumo_log: String,
+    /// Its wall-clock figures (`timing.csv`): planning per step is every region's together.
+    pub timing: Timing,
+    /// Vehicles in the regions' scenes per planning step, on average.
+    pub vehicles_per_step: f64,
+    /// CAVs the planners drove per planning step, on average.
+    pub cavs_per_step: f64,
 }
 
 /// The SUMO command line: the user's configuration, then what bkpbs must set — collisions
@@ -105,17 +111,11 @@ pub fn run(config: &Config, planner: &str) -> Result<ScenarioResult, EpisodeErro
     let cfg = SumoConfig::read(&path)?;
     cfg.check_step(config.scenario.dt)?;
     let roads = frame::scenario_roads(&config.scenario)?;
-    let dir = tempfile::Builder::new()
-        .prefix(&format!("bkpbs-scenario-{}-", std::process::id()))
-        .tempdir()
-        .map_err(|cause| crate::sumo::files::InputError::Write {
-            path: std::env::temp_dir(),
-            cause,
-        })?;
+    let dir = scratch_dir()?;
     let tripinfo = dir.path().join("tripinfo.xml");
     let options = sumo_options(config, &tripinfo);
-    let mut args = vec!["sumo".to_string(), "-c".into(), path.display().to_string()];
-    args.extend(options.iter().cloned());
+    let args = command_line(&path, &options);
+    let wall = std::time::Instant::now();
     let capture = (!config.sumo.verbose).then(StderrCapture::start).flatten();
     let outcome = (|| {
         let sim = Simulation::start(&args, config.sumo.stall_limit()).map_err(|cause| {
@@ -143,7 +143,68 @@ pub fn run(config: &Config, planner: &str) -> Result<ScenarioResult, EpisodeErro
         .map_err(|e| e.with_sumo_log(sumo_log.clone()))?
         .map_err(EpisodeError::Output)?;
     result.sumo_log = sumo_log;
+    result.timing.wall_s = wall.elapsed().as_secs_f64();
     Ok(result)
+}
+
+/// SUMO's command line: the user's configuration at `path`, then bkpbs's `options`.
+fn command_line(path: &std::path::Path, options: &[String]) -> Vec<String> {
+    let mut args = vec!["sumo".to_string(), "-c".into(), path.display().to_string()];
+    args.extend(options.iter().cloned());
+    args
+}
+
+/// A directory of the episode's own for SUMO's tripinfo output, removed with it.
+fn scratch_dir() -> Result<tempfile::TempDir, EpisodeError> {
+    tempfile::Builder::new()
+        .prefix(&format!("bkpbs-scenario-{}-", std::process::id()))
+        .tempdir()
+        .map_err(|cause| {
+            crate::sumo::files::InputError::Write {
+                path: std::env::temp_dir(),
+                cause,
+            }
+            .into()
+        })
+}
+
+/// SUMO stepping the user's scenario with bkpbs's options and nobody reading or commanding:
+/// the floor `bkpbs bench --sumocfg` compares the planners with (ms per step).
+///
+/// # Errors
+/// As [`run`]'s before the first step, or SUMO failing.
+pub fn sumo_alone_ms_per_step(config: &Config) -> Result<f64, EpisodeError> {
+    let path = config
+        .scenario
+        .sumocfg
+        .clone()
+        .expect("a scenario episode has a configuration");
+    let cfg = SumoConfig::read(&path)?;
+    cfg.check_step(config.scenario.dt)?;
+    let dir = scratch_dir()?;
+    let options = sumo_options(config, &dir.path().join("tripinfo.xml"));
+    let capture = (!config.sumo.verbose).then(StderrCapture::start).flatten();
+    let timed = (|| {
+        let mut sim = Simulation::start(&command_line(&path, &options), config.sumo.stall_limit())
+            .map_err(|cause| EpisodeError::Start {
+                net: cfg.net.clone(),
+                cause,
+            })?;
+        let start = std::time::Instant::now();
+        let steps = config.scenario.steps;
+        for step in 0..steps {
+            sim.step().map_err(|cause| EpisodeError::Step {
+                step,
+                time: step as f64 * config.scenario.dt,
+                cause,
+            })?;
+        }
+        let ms = start.elapsed().as_secs_f64() * 1e3 / f64::from(steps.max(1));
+        let _ = sim.close();
+        Ok(ms)
+    })();
+    let log = capture.map(StderrCapture::finish).unwrap_or_default();
+    timed.map_err(|e: EpisodeError| e.with_sumo_log(log))
 }
 
 /// The edges the region's on-ramps join: the first edge of each ramp's route off the ramp.
@@ -168,6 +229,7 @@ pub fn write(
     let episode = csv_of(std::slice::from_ref(&result.summary));
     let vehicles = csv_of(&result.vehicles);
     let collisions = crate::episode::output::collisions_csv(&result.collisions);
+    let timing = crate::episode::output::timing_csv(&result.timing);
     let options = result.sumo_options.join(" ") + "\n";
     let log = (!result.sumo_log.is_empty()).then_some(result.sumo_log.as_bytes());
     crate::io::replace_together(
@@ -177,6 +239,7 @@ pub fn write(
             ("sumo_options.txt", Some(options.as_bytes())),
             ("vehicles.csv", Some(&vehicles[..])),
             ("collisions.csv", Some(&collisions[..])),
+            ("timing.csv", Some(&timing[..])),
             ("episode.csv", Some(&episode[..])),
         ],
     )

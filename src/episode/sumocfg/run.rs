@@ -8,7 +8,8 @@ use std::collections::HashMap;
 use crate::config::Config;
 use crate::controller::{CavHandling, Command, Controller};
 use crate::episode::error::EpisodeError;
-use crate::episode::metrics::{CollisionEvent, Outcome};
+use crate::episode::metrics::{CollisionEvent, Outcome, Timing};
+use crate::episode::step_times::StepTimes;
 use crate::model::kinematics::free_flow_time;
 use crate::model::road::Road;
 use crate::model::scene::{Kind, Origin};
@@ -107,6 +108,10 @@ pub struct ScenarioRun<'a> {
     index: HashMap<String, usize>,
     readings: VehicleReadings,
     collisions: Vec<CollisionEvent>,
+    times: StepTimes,
+    /// Steps seen, and the vehicles and planned CAVs in the regions' scenes over them.
+    occupancy: (u64, u64, u64),
+    timing: Option<Timing>,
 }
 
 impl<'a> ScenarioRun<'a> {
@@ -123,6 +128,9 @@ impl<'a> ScenarioRun<'a> {
             index: HashMap::new(),
             readings: VehicleReadings::default(),
             collisions: Vec::new(),
+            times: StepTimes::new(config.scenario.steps),
+            occupancy: (0, 0, 0),
+            timing: None,
         }
     }
 
@@ -136,10 +144,14 @@ impl<'a> ScenarioRun<'a> {
             .map(String::from)
             .collect();
         let names: Vec<&str> = names.iter().map(String::as_str).collect();
+        let start = std::time::Instant::now();
         crate::episode::runner::lock_step(&mut sim, &names, config, |sim, plan| {
             self.step(sim, plan)
         })?;
+        let loop_s = start.elapsed().as_secs_f64();
         let (dt, steps) = (config.scenario.dt, config.scenario.steps);
+        let times = std::mem::replace(&mut self.times, StepTimes::new(0));
+        self.timing = Some(times.timing(loop_s, steps));
         sim.close()
             .map_err(crate::episode::runner::step_error(dt, steps))?;
         Ok(())
@@ -148,7 +160,7 @@ impl<'a> ScenarioRun<'a> {
     /// One SUMO step and, unless it is the last, one planning round per region.
     fn step(&mut self, sim: &mut Simulation, plan: bool) -> Result<(), SumoError> {
         let now = sim.time()?;
-        sim.step()?;
+        self.times.sumo_step(sim)?;
         self.book_departures(sim, now)?;
         sim.read_vehicles(&mut self.readings)?;
         self.book_collisions(sim, now)?;
@@ -163,9 +175,8 @@ impl<'a> ScenarioRun<'a> {
         }
         self.build_scenes(sim, now)?;
         if plan {
-            for r in &mut self.regions {
-                r.commands.clear();
-                r.controller.plan(&r.scene.scene, &mut r.commands);
+            self.plan_regions();
+            for r in &self.regions {
                 if r.controller.handling() == CavHandling::Commanded {
                     crate::episode::runner::send_commands(
                         sim,
@@ -177,6 +188,25 @@ impl<'a> ScenarioRun<'a> {
             }
         }
         Ok(())
+    }
+
+    /// One planning round of every region, timed together: the step's planning time.
+    fn plan_regions(&mut self) {
+        let start = std::time::Instant::now();
+        let mut shield_ms = 0.0;
+        for r in &mut self.regions {
+            r.commands.clear();
+            r.controller.plan(&r.scene.scene, &mut r.commands);
+            shield_ms += r.controller.last_shield_ms();
+        }
+        self.times
+            .add_round(start.elapsed().as_secs_f64() * 1e3, shield_ms);
+        self.occupancy.0 += 1;
+        for r in &self.regions {
+            let vehicles = &r.scene.scene.vehicles;
+            self.occupancy.1 += vehicles.len() as u64;
+            self.occupancy.2 += vehicles.iter().filter(|v| v.kind == Kind::Cav).count() as u64;
+        }
     }
 
     fn book_departures(&mut self, sim: &mut Simulation, now: f64) -> Result<(), SumoError> {
@@ -390,12 +420,17 @@ impl<'a> ScenarioRun<'a> {
                 .join("; "),
             ..ScenarioSummary::default()
         };
+        let (steps, in_scenes, cavs) = self.occupancy;
+        let per_step = |n: u64| n as f64 / steps.max(1) as f64;
         Ok(ScenarioResult {
             summary: ScenarioSummary::of(head, &vehicles, hdv_collisions),
             vehicles,
             collisions: self.collisions,
             sumo_options,
             sumo_log: String::new(),
+            timing: self.timing.expect("timed when the episode ran"),
+            vehicles_per_step: per_step(in_scenes),
+            cavs_per_step: per_step(cavs),
         })
     }
 }
