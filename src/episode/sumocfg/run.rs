@@ -34,6 +34,9 @@ pub struct Region {
     commands: Vec<Command>,
     /// Frame `s` from which the planner drives CAVs: the end of the region's first edge.
     control_start: f64,
+    /// Frame `s` up to which it drives them (their fronts): the start of the region's last
+    /// edge, or the region's end where that edge holds a merge zone's end.
+    control_end: f64,
     /// Its edges' codes start here in the codes registered with SUMO.
     code_offset: i32,
     /// The edges its on-ramps join, its name in the results.
@@ -50,7 +53,9 @@ impl Region {
             .filter(|e| !e.on_ramp)
             .and_then(|e| e.lanes.iter().flatten().map(|l| l.s0).reduce(f64::min))
             .unwrap_or(0.0);
+        let control_end = control_end(&road);
         Region {
+            control_end,
             scene: SumoScene::new(&road),
             name: merge_edges(&road).join(" "),
             config,
@@ -71,6 +76,26 @@ impl Region {
                 ..*raw
             }
         })
+    }
+}
+
+/// Where the planner of `road`'s region stops driving CAVs: the start of its last edge, so that
+/// SUMO takes a CAV back while the vehicles ahead of it are still in the region's scene. The
+/// planner sees nobody past the region's end: a CAV planned up to there drove on, planning as if
+/// the road ahead were empty, into a truck that had just left the region (SUMO's `ramp` game,
+/// bk-mastar, seed 2: a controllable crash 12 m past the end, 0.6 s after the hand-back).
+/// Where that edge holds the end of a merge zone, the region's end.
+fn control_end(road: &Road) -> f64 {
+    let region_end = road.section_end;
+    let last_start = road
+        .edge(&road.end_edge.0)
+        .and_then(|e| e.lanes.iter().flatten().map(|l| l.s0).reduce(f64::min))
+        .unwrap_or(region_end);
+    let merges_end = road.zones.iter().map(|z| z.end).fold(f64::MIN, f64::max);
+    if last_start >= merges_end {
+        last_start
+    } else {
+        region_end
     }
 }
 
@@ -337,6 +362,7 @@ impl<'a> ScenarioRun<'a> {
         let planned = line.record.kind == Kind::Cav
             && !(first && entry.leaves_early)
             && front >= region.control_start
+            && front < region.control_end
             && region.road.lanes_at(front).contains(&lane);
         let commanded = region.controller.handling() == CavHandling::Commanded;
         if planned && commanded && line.commanded != Some(g) {
