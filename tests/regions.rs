@@ -6,66 +6,8 @@ mod common;
 
 use std::path::{Path, PathBuf};
 
+use common::netconvert::{build, through};
 use common::{bkpbs, csv_rows, refused_naming, stderr};
-
-/// Writes nodes `(id, x, y)`, edges `(id, from, to, lanes, extra attributes)` and
-/// connections `(from, fromLane, to, toLane)` as plain XML and builds the net with netconvert
-/// (which adds its own turnarounds at the ends of two-way roads).
-fn build(
-    dir: &Path,
-    nodes: &[(&str, f64, f64)],
-    edges: &[(&str, &str, &str, u32, &str)],
-    cons: &[(&str, u32, &str, u32)],
-) -> PathBuf {
-    let mut nod = String::from("<nodes>\n");
-    for (id, x, y) in nodes {
-        nod += &format!("<node id=\"{id}\" x=\"{x}\" y=\"{y}\"/>\n");
-    }
-    let mut edg = String::from("<edges>\n");
-    for (id, from, to, lanes, extra) in edges {
-        edg += &format!(
-            "<edge id=\"{id}\" from=\"{from}\" to=\"{to}\" numLanes=\"{lanes}\" speed=\"33.33\" {extra}/>\n"
-        );
-    }
-    let mut con = String::from("<connections>\n");
-    for (from, fl, to, tl) in cons {
-        con += &format!(
-            "<connection from=\"{from}\" to=\"{to}\" fromLane=\"{fl}\" toLane=\"{tl}\"/>\n"
-        );
-    }
-    for (name, text) in [
-        ("n.nod.xml", nod + "</nodes>\n"),
-        ("n.edg.xml", edg + "</edges>\n"),
-        ("n.con.xml", con + "</connections>\n"),
-    ] {
-        std::fs::write(dir.join(name), text).unwrap();
-    }
-    let status = std::process::Command::new("netconvert")
-        .current_dir(dir)
-        .args(["-n", "n.nod.xml", "-e", "n.edg.xml", "-x", "n.con.xml"])
-        .args(["-o", "n.net.xml", "--no-warnings"])
-        .output()
-        .expect("netconvert runs");
-    assert!(
-        status.status.success(),
-        "{}",
-        String::from_utf8_lossy(&status.stderr)
-    );
-    dir.join("n.net.xml")
-}
-
-/// The main lanes of `from` continuing on `to`, aligned on the left.
-fn through(
-    from: &'static str,
-    from_lanes: u32,
-    to: &'static str,
-    to_lanes: u32,
-) -> Vec<(&'static str, u32, &'static str, u32)> {
-    let n = from_lanes.min(to_lanes);
-    (0..n)
-        .map(|k| (from, from_lanes - n + k, to, to_lanes - n + k))
-        .collect()
-}
 
 /// Two carriageways in opposite directions on shared nodes (netconvert adds U-turns at their
 /// ends), each with an on-ramp, and a footway beside the eastbound ramp.

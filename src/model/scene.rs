@@ -80,6 +80,10 @@ pub struct VehicleState {
     pub length: f64,
     /// Body width (m).
     pub width: f64,
+    /// Its own top speed (m/s; its SUMO type's `maxSpeed` on a scenario of the user's own):
+    /// a CAV's plans stay below it. Infinite where the planners' `v_max` is the only limit (the
+    /// paper's demand, whose CAV type's `maxSpeed` is `v_max`).
+    pub max_speed: f64,
     /// Still on the ramp edge (cannot change lanes yet).
     pub on_ramp: bool,
 }
@@ -101,6 +105,7 @@ impl VehicleState {
             desired_speed: 35.0,
             length: 5.0,
             width: 2.0,
+            max_speed: f64::INFINITY,
             on_ramp: false,
         }
     }

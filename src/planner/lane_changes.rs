@@ -96,6 +96,7 @@ impl LaneChanges {
             must_merge: v.origin == Origin::Ramp && (lane == MERGE_LANE || merging),
             length: v.length,
             width: v.width,
+            max_speed: v.max_speed,
             obstacles,
             guard: guard.map(|check| Guard {
                 check,

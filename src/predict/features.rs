@@ -526,6 +526,7 @@ mod tests {
             desired_speed: speed,
             length: 5.0,
             width: 2.0,
+            max_speed: f64::INFINITY,
             on_ramp: false,
         }
     }

@@ -433,6 +433,7 @@ pub fn state_sized(
         desired_speed: who.desired_speed,
         length,
         width,
+        max_speed: f64::INFINITY,
         on_ramp: is_on_ramp(road, raw.edge_code),
     }
 }

@@ -347,6 +347,17 @@ impl Simulation {
         Ok((length, width))
     }
 
+    /// The vehicle's own top speed (m/s): its type's `maxSpeed`, or what was set for it.
+    pub fn vehicle_max_speed(&self, id: &str) -> Result<f64, SumoError> {
+        let cid = c_string(id)?;
+        let mut speed = 0.0;
+        // SAFETY: a valid C string and out-pointer.
+        decode("vehicle.getMaxSpeed", unsafe {
+            ffi::bk_vehicle_max_speed(cid.as_ptr(), &mut speed)
+        })?;
+        Ok(speed)
+    }
+
     /// Collisions detected during the last step.
     pub fn collisions(&self) -> Result<Vec<Collision>, SumoError> {
         let mut items: *const ffi::RawCollision = std::ptr::null();

@@ -284,6 +284,10 @@ int BK(vehicle_size)(const char* id, double* length, double* width) {
     });
 }
 
+int BK(vehicle_max_speed)(const char* id, double* out) {
+    return guarded([&] { *out = api::Vehicle::getMaxSpeed(id); });
+}
+
 int BK(vehicle_driving_distance)(const char* id, const char* edge, double pos, double* out) {
     return guarded([&] { *out = api::Vehicle::getDrivingDistance(id, edge, pos); });
 }

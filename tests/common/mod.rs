@@ -2,6 +2,8 @@
 //! part of it, hence the `dead_code` allowance.
 #![allow(dead_code)]
 
+pub mod netconvert;
+
 use std::collections::BTreeMap;
 use std::process::{Command, Output};
 

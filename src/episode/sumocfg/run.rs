@@ -12,7 +12,7 @@ use crate::episode::metrics::{CollisionEvent, Outcome, Timing};
 use crate::episode::step_times::StepTimes;
 use crate::model::kinematics::free_flow_time;
 use crate::model::road::Road;
-use crate::model::scene::{Kind, Origin};
+use crate::model::scene::{Kind, Origin, VehicleState};
 use crate::sumo::frame::{self, SumoScene};
 use crate::sumo::{RawVehicleState, Simulation, SumoError, VehicleReadings};
 
@@ -104,6 +104,8 @@ struct Line {
     record: ScenarioVehicle,
     /// Its length and width (m), from its SUMO type.
     size: (f64, f64),
+    /// Its own top speed (m/s), from its SUMO type.
+    max_speed: f64,
     /// The region it entered first, and where and how: its frame position and speed then.
     entry: Option<Entry>,
     /// The region whose planner commands it now.
@@ -239,6 +241,7 @@ impl<'a> ScenarioRun<'a> {
         for id in sim.departed()? {
             let sumo_type = sim.vehicle_type(&id)?;
             let size = sim.vehicle_size(&id)?;
+            let max_speed = sim.vehicle_max_speed(&id)?;
             let kind = if is_cav(s.seed, &id, s.alpha) {
                 Kind::Cav
             } else {
@@ -254,6 +257,7 @@ impl<'a> ScenarioRun<'a> {
                     ..ScenarioVehicle::default()
                 },
                 size,
+                max_speed,
                 entry: None,
                 commanded: None,
             });
@@ -374,9 +378,12 @@ impl<'a> ScenarioRun<'a> {
             id: line.record.id.as_str().into(),
             kind: if planned { Kind::Cav } else { Kind::Hdv },
             origin: if first { entry.origin } else { Origin::Main },
-            desired_speed: region.config.scenario.v_max,
+            desired_speed: region.config.scenario.v_max.min(line.max_speed),
         };
-        let vehicle = frame::state_sized(&region.road, who, raw, (front, lane), line.size);
+        let vehicle = VehicleState {
+            max_speed: line.max_speed,
+            ..frame::state_sized(&region.road, who, raw, (front, lane), line.size)
+        };
         region.scene.push(vehicle, raw.edge_code);
         Ok(planned)
     }

@@ -85,6 +85,9 @@ pub struct Request<'a> {
     pub length: f64,
     /// The CAV's width (m).
     pub width: f64,
+    /// The CAV's own top speed (m/s): no move accelerates it past this (infinite: only the
+    /// planner's `v_max` limits it).
+    pub max_speed: f64,
     /// Other vehicles' trajectories, step 0 = now.
     pub obstacles: &'a [&'a Trajectory],
     /// The check a lane change started now must pass (none: every start the search finds free).

@@ -169,6 +169,14 @@ impl<'p> PhaseSearch<'p> {
         )
     }
 
+    /// Whether the move along `seg` from `n` ends faster than the CAV's own top speed and faster
+    /// than it started (a CAV above it may hold its speed or brake).
+    fn past_top_speed(&self, n: &Node, seg: &[BicycleState]) -> bool {
+        let cap = self.req.max_speed.max(n.state.speed) + 1e-9;
+        seg.last()
+            .is_some_and(|st| st.speed * st.heading.cos() > cap)
+    }
+
     /// Whether the CAV at `st` at `step` is on the road and clear of every obstacle.
     fn free(&self, st: &BicycleState, step: usize) -> bool {
         self.planner.on_road(st, self.req)
@@ -356,7 +364,7 @@ impl<'p> PhaseSearch<'p> {
             .iter()
             .enumerate()
             .all(|(k, st)| self.free(st, n.step + k + 1));
-        if !ok {
+        if !ok || self.past_top_speed(n, &seg) {
             return None;
         }
         let steps = seg.len();

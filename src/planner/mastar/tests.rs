@@ -31,6 +31,7 @@ fn request<'a>(
         must_merge,
         length: 5.0,
         width: 2.0,
+        max_speed: f64::INFINITY,
         obstacles,
         guard: None,
         first_moves: None,
@@ -321,4 +322,30 @@ fn the_check_horizon_is_the_horizon_plus_one_lane_change() {
     let lane_change = config.scenario.lane_change_steps();
     assert_eq!(m.check_horizon(), config.planner.horizon + lane_change);
     assert_eq!(m.check_horizon(), 20);
+}
+
+/// A truck's own top speed bounds its plan: it never accelerates past it, and one above it
+/// (as it entered) may hold its speed.
+#[test]
+fn a_cav_is_planned_within_its_own_top_speed() {
+    let m = Mastar::on_paper_road();
+    let free = request(&m, 100.0, 2, 20.0, false, &[]);
+    let fast = m.plan(&free).unwrap();
+    assert!(fast.trajectory.poses.iter().any(|p| p.speed > 22.5));
+    let truck = Request {
+        max_speed: 22.22,
+        ..free.clone()
+    };
+    let plan = m.plan(&truck).unwrap();
+    assert!(plan
+        .trajectory
+        .poses
+        .iter()
+        .all(|p| p.speed <= 22.22 + 1e-6));
+    let above = Request {
+        start: lane_state(&m.road, 100.0, 2, 25.0),
+        ..truck
+    };
+    let plan = m.plan(&above).unwrap();
+    assert!(plan.trajectory.poses.iter().all(|p| p.speed <= 25.0 + 1e-6));
 }

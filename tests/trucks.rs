@@ -1,0 +1,113 @@
+//! Trucks of 12 and 16.5 m among the CAVs, on a merge the test builds with netconvert and a
+//! scenario of its own (`--sumocfg`): the planners see each vehicle with its own type's
+//! length and top speed, so a CAV truck is planned as a truck (never faster than its type
+//! allows: its SUMO timeLoss is never negative), and neither search planner takes part in a
+//! collision.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+
+use common::netconvert::{build, through};
+use common::{bkpbs, csv_rows, stderr};
+
+/// A two-lane motorway with a 200 m acceleration lane that ends, fed by a one-lane ramp.
+fn merge(dir: &Path) -> PathBuf {
+    let nodes = [
+        ("a", 0.0, 0.0),
+        ("b", 500.0, 0.0),
+        ("c", 700.0, 0.0),
+        ("d", 1100.0, 0.0),
+        ("r", 350.0, -40.0),
+    ];
+    let edges = [
+        ("up", "a", "b", 2, ""),
+        ("acc", "b", "c", 3, ""),
+        ("down", "c", "d", 2, ""),
+        ("on", "r", "b", 1, ""),
+    ];
+    let mut cons = through("up", 2, "acc", 3);
+    cons.extend(through("acc", 3, "down", 2).into_iter().filter(|c| c.1 > 0));
+    cons.push(("on", 0, "acc", 0));
+    build(dir, &nodes, &edges, &cons)
+}
+
+/// Cars, 12 m trucks and 16.5 m trucks with their own accelerations and top speeds, on the
+/// main road and the ramp, for 300 s at the planners' step.
+fn scenario(dir: &Path) -> PathBuf {
+    let net = merge(dir);
+    let routes = r#"<routes>
+    <vTypeDistribution id="mix">
+        <vType id="car" probability="0.5" length="5" maxSpeed="33.33"/>
+        <vType id="truck12" probability="0.25" vClass="truck" length="12" accel="1.3" decel="4" maxSpeed="25"/>
+        <vType id="truck16" probability="0.25" vClass="truck" length="16.5" width="2.55" accel="1" decel="4" maxSpeed="22.22"/>
+    </vTypeDistribution>
+    <route id="main" edges="up acc down"/>
+    <route id="ramp" edges="on acc down"/>
+    <flow id="m" type="mix" route="main" begin="0" end="300" vehsPerHour="1800" departSpeed="max" departLane="best"/>
+    <flow id="r" type="mix" route="ramp" begin="0" end="300" vehsPerHour="400" departSpeed="max"/>
+</routes>
+"#;
+    std::fs::write(dir.join("mix.rou.xml"), routes).unwrap();
+    let cfg = format!(
+        r#"<configuration>
+    <input><net-file value="{}"/><route-files value="mix.rou.xml"/></input>
+    <time><begin value="0"/><end value="300"/><step-length value="0.2"/></time>
+</configuration>
+"#,
+        net.file_name().unwrap().to_str().unwrap()
+    );
+    let path = dir.join("mix.sumocfg");
+    std::fs::write(&path, cfg).unwrap();
+    path
+}
+
+#[test]
+fn cav_trucks_are_planned_with_their_own_length_and_no_search_planner_collides() {
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = scenario(dir.path());
+    for planner in ["bk-pbs", "bk-mastar"] {
+        let out = dir.path().join(planner);
+        let o = bkpbs(&[
+            "episode",
+            "--sumocfg",
+            cfg.to_str().unwrap(),
+            "--planner",
+            planner,
+            "--alpha",
+            "0.8",
+            "--seed",
+            "5",
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{planner}: {}", stderr(&o));
+        let ep = &csv_rows(&std::fs::read(out.join("episode.csv")).unwrap())[0];
+        let n = |k: &str| ep[k].parse::<u64>().unwrap();
+        assert_eq!(n("inserted"), n("arrived") + n("present") + n("crashed"));
+        assert_eq!(n("controllable_crashed"), 0, "{planner}: {ep:?}");
+        let vehicles = csv_rows(&std::fs::read(out.join("vehicles.csv")).unwrap());
+        for truck in ["truck12", "truck16"] {
+            for origin in ["main", "ramp"] {
+                let driven = vehicles.iter().filter(|v| {
+                    v["type"] == truck && v["kind"] == "cav" && v["region_origin"] == origin
+                });
+                let arrived: Vec<_> = driven.filter(|v| v["outcome"] == "arrived").collect();
+                assert!(
+                    arrived.len() >= 2,
+                    "{planner}: {truck} CAVs from {origin} that crossed the merge"
+                );
+                // Planned at the carriageway's 33.33 m/s, they lost -2.7 s against their own
+                // top speed.
+                for v in arrived {
+                    let loss: f64 = v["time_loss_s"].parse().unwrap();
+                    assert!(
+                        loss >= 0.0,
+                        "{planner}: {} faster than its type: {loss}",
+                        v["id"]
+                    );
+                }
+            }
+        }
+    }
+}
