@@ -13,8 +13,8 @@ use bkpbs::campaign::worker::{self, Outcome, Request};
 use bkpbs::campaign::{tasks, CampaignError, Overrides, Settings, SettingsError};
 use bkpbs::report::{self as core_report, ReportError};
 
-use crate::episode::Slot;
 use crate::errors::bad_input;
+use crate::run_slot::Slot;
 
 fn campaign_error(e: CampaignError) -> PyErr {
     match e {

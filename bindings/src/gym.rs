@@ -12,8 +12,8 @@ use bkpbs::policy::observation::{feature_names, OBS_DIM};
 use bkpbs::train::ppo::env::{Agents, EnvError, MergeEnv};
 use bkpbs::train::ppo::reward::RewardSettings;
 
-use crate::episode::Slot;
 use crate::errors::{bad_input, episode_error};
+use crate::run_slot::Slot;
 
 /// The merge scenario stepped one decision at a time.
 #[pyclass(name = "MergeEnvCore", module = "bkpbs", unsendable)]
@@ -61,7 +61,7 @@ impl PyMergeEnv {
                 )))
             }
         };
-        let cell = crate::episode::cell_table(alpha, Some(lam), 0)?;
+        let cell = crate::run_slot::cell_table(alpha, Some(lam), 0)?;
         let config = crate::config::resolve(config, overrides, cell)?;
         Ok(PyMergeEnv {
             env: None,

@@ -8,6 +8,7 @@ mod episode;
 mod errors;
 mod gym;
 mod predict;
+mod run_slot;
 mod scenario;
 mod scene;
 

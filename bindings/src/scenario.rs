@@ -12,8 +12,8 @@ use bkpbs::episode::sumocfg::{self, ScenarioResult};
 use bkpbs::episode::EpisodeError;
 use bkpbs::sumo::sumocfg::SumoConfig;
 
-use crate::episode::{cells_dict, panic_message, Slot};
 use crate::errors::{bad_input, episode_error, SumoError};
+use crate::run_slot::{cell_table, cells_dict, panic_message, Slot};
 
 /// What a scenario episode is run with besides the configuration.
 pub struct ScenarioCall<'a, 'py> {
@@ -30,7 +30,7 @@ pub struct ScenarioCall<'a, 'py> {
 /// written from); `out` also writes its files there. The scenario's `begin`–`end` interval is
 /// the episode's length unless `steps=` shortens it.
 pub fn run<'py>(py: Python<'py>, call: ScenarioCall<'_, 'py>) -> PyResult<Bound<'py, PyDict>> {
-    let mut table = crate::episode::cell_table(call.alpha, None, call.seed)?;
+    let mut table = cell_table(call.alpha, None, call.seed)?;
     let path = call.sumocfg.display().to_string();
     table.insert("sumocfg".into(), toml::Value::String(path));
     let steps_given = call
