@@ -12,9 +12,9 @@
 //! region by an off-ramp, or that drives on a deceleration lane, is left to SUMO (the planners
 //! keep CAVs on the carriageway and plan only its lanes and the merge lanes).
 //!
-//! Not yet: each vehicle's own speed and acceleration limits and each lane's speed limit in the
-//! planner (CAVs are planned with `scenario.v_max`, capped at the region's entry limit);
-//! campaigns over scenarios.
+//! Each CAV is planned below its own type's `maxSpeed` and the region's entry limit. Not yet:
+//! each vehicle's own accelerations and each lane's speed limit in the planner; campaigns over
+//! scenarios.
 
 mod records;
 mod run;
