@@ -1,22 +1,20 @@
 //! `bkpbs.run_episode` (the core's episode loop, GIL released) and the scenario files a Python
 //! TraCI loop needs (`write_scenario`, `write_demand`).
 
-use std::panic::{self, AssertUnwindSafe};
 use std::path::{Path, PathBuf};
 
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use bkpbs::config::Config;
 use bkpbs::controller::{UnknownPlanner, PLANNERS};
 use bkpbs::episode::demand;
 use bkpbs::episode::output;
-use bkpbs::episode::{self, EpisodeError, EpisodeResult};
+use bkpbs::episode::{self, EpisodeResult};
 use bkpbs::model::road::EMBEDDED_NET;
 use bkpbs::sumo::files;
 
-use crate::errors::{bad_input, episode_error, SumoError};
-use crate::run_slot::{cell_table, cells_dict, panic_message, Slot};
+use crate::errors::bad_input;
+use crate::run_slot::{cell_table, cells_dict, run_detached};
 
 /// The `episode.csv` row as a dict: the values the row is written from, typed and at full
 /// precision (a float is the `f64` itself, not its CSV text; empty cells are `None`).
@@ -25,24 +23,6 @@ pub(crate) fn summary_dict<'py>(
     r: &EpisodeResult,
 ) -> PyResult<Bound<'py, PyDict>> {
     cells_dict(py, r.summary.cells())
-}
-
-/// Runs one episode in this thread with the GIL released; `Err` carries the Python exception.
-fn run_detached(py: Python<'_>, planner: &str, config: &Config) -> PyResult<EpisodeResult> {
-    let _slot = Slot::claim()?;
-    let outcome = py.detach(|| {
-        panic::catch_unwind(AssertUnwindSafe(
-            || -> Result<EpisodeResult, EpisodeError> { episode::run(config, planner) },
-        ))
-    });
-    match outcome {
-        Ok(Ok(result)) => Ok(result),
-        Ok(Err(e)) => Err(episode_error(&e)),
-        Err(payload) => Err(SumoError::new_err(format!(
-            "planner {planner} panicked: {}",
-            panic_message(payload.as_ref())
-        ))),
-    }
 }
 
 /// Runs one episode of `planner` at penetration `alpha`, arrival rate `lam` (veh/h) and
@@ -85,7 +65,7 @@ pub fn run_episode<'py>(
         return crate::scenario::run(py, call);
     }
     let config = crate::config::resolve(config, overrides, cell_table(alpha, lam, seed)?)?;
-    let result = run_detached(py, planner, &config)?;
+    let result = run_detached(py, planner, || episode::run(&config, planner))?;
     if let Some(dir) = out {
         result
             .write(&dir)

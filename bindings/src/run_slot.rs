@@ -2,14 +2,16 @@
 //! slot (libsumo holds one simulation per process), the message of a caught panic, the
 //! `scenario` table of a call's α, λ and seed, and a CSV row as a dict.
 
+use std::panic::{self, AssertUnwindSafe};
 use std::sync::atomic::{AtomicBool, Ordering};
 
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 use bkpbs::episode::cells::{Cell, Value};
+use bkpbs::episode::EpisodeError;
 
-use crate::errors::{bad_input, SimulationBusyError};
+use crate::errors::{bad_input, episode_error, SimulationBusyError, SumoError};
 
 /// Set while an episode runs in this process: libsumo holds one simulation per process.
 static RUNNING: AtomicBool = AtomicBool::new(false);
@@ -43,7 +45,7 @@ impl Drop for Slot {
 }
 
 /// The message of a caught panic.
-pub(crate) fn panic_message(payload: &(dyn std::any::Any + Send)) -> String {
+fn panic_message(payload: &(dyn std::any::Any + Send)) -> String {
     payload
         .downcast_ref::<&str>()
         .map(|s| s.to_string())
@@ -82,4 +84,23 @@ pub(crate) fn cells_dict(py: Python<'_>, row: Vec<Cell>) -> PyResult<Bound<'_, P
         }
     }
     Ok(d)
+}
+
+/// Runs `episode` (of `planner`) in this thread in the process's simulation slot with the GIL
+/// released; `Err` carries the Python exception, a panic included.
+pub(crate) fn run_detached<T: Send>(
+    py: Python<'_>,
+    planner: &str,
+    episode: impl FnOnce() -> Result<T, EpisodeError> + Send,
+) -> PyResult<T> {
+    let _slot = Slot::claim()?;
+    let outcome = py.detach(|| panic::catch_unwind(AssertUnwindSafe(episode)));
+    match outcome {
+        Ok(Ok(result)) => Ok(result),
+        Ok(Err(e)) => Err(episode_error(&e)),
+        Err(payload) => Err(SumoError::new_err(format!(
+            "planner {planner} panicked: {}",
+            panic_message(payload.as_ref())
+        ))),
+    }
 }

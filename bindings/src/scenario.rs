@@ -1,19 +1,17 @@
 //! `bkpbs.run_episode(..., sumocfg=FILE)`: an episode on the user's own SUMO scenario in the
 //! core's loop (SUMO in-process, GIL released), as `bkpbs episode --sumocfg` runs it.
 
-use std::panic::{self, AssertUnwindSafe};
 use std::path::PathBuf;
 
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 use bkpbs::episode::cells::cells;
-use bkpbs::episode::sumocfg::{self, ScenarioResult};
-use bkpbs::episode::EpisodeError;
+use bkpbs::episode::sumocfg;
 use bkpbs::sumo::sumocfg::SumoConfig;
 
-use crate::errors::{bad_input, episode_error, SumoError};
-use crate::run_slot::{cell_table, cells_dict, panic_message, Slot};
+use crate::errors::{bad_input, SumoError};
+use crate::run_slot::{cell_table, cells_dict, run_detached};
 
 /// What a scenario episode is run with besides the configuration.
 pub struct ScenarioCall<'a, 'py> {
@@ -42,35 +40,13 @@ pub fn run<'py>(py: Python<'py>, call: ScenarioCall<'_, 'py>) -> PyResult<Bound<
             config.scenario.steps = n;
         }
     }
-    let result = run_detached(py, call.planner, &config)?;
+    let result = run_detached(py, call.planner, || sumocfg::run(&config, call.planner))?;
     if let Some(dir) = call.out {
         sumocfg::write(&result, &dir)
             .map_err(|e| pyo3::exceptions::PyOSError::new_err(e.to_string()))?;
     }
     let row = cells(&result.summary).map_err(|e| SumoError::new_err(e.to_string()))?;
     cells_dict(py, row)
-}
-
-/// Runs the scenario in this thread with the GIL released.
-fn run_detached(
-    py: Python<'_>,
-    planner: &str,
-    config: &bkpbs::config::Config,
-) -> PyResult<ScenarioResult> {
-    let _slot = Slot::claim()?;
-    let outcome = py.detach(|| {
-        panic::catch_unwind(AssertUnwindSafe(
-            || -> Result<ScenarioResult, EpisodeError> { sumocfg::run(config, planner) },
-        ))
-    });
-    match outcome {
-        Ok(Ok(result)) => Ok(result),
-        Ok(Err(e)) => Err(episode_error(&e)),
-        Err(payload) => Err(SumoError::new_err(format!(
-            "planner {planner} panicked: {}",
-            panic_message(payload.as_ref())
-        ))),
-    }
 }
 
 /// The error for a paper-demand argument given with a scenario of the user's own.

@@ -103,13 +103,7 @@ pub fn is_cav(seed: u64, id: &str, alpha: f64) -> bool {
 /// region to plan, an unknown planner, or SUMO failing.
 pub fn run(config: &Config, planner: &str) -> Result<ScenarioResult, EpisodeError> {
     config.validate()?;
-    let path = config
-        .scenario
-        .sumocfg
-        .clone()
-        .expect("a scenario episode has a configuration");
-    let cfg = SumoConfig::read(&path)?;
-    cfg.check_step(config.scenario.dt)?;
+    let (path, cfg) = checked(config)?;
     let roads = frame::scenario_roads(&config.scenario)?;
     let dir = scratch_dir()?;
     let tripinfo = dir.path().join("tripinfo.xml");
@@ -147,6 +141,19 @@ pub fn run(config: &Config, planner: &str) -> Result<ScenarioResult, EpisodeErro
     Ok(result)
 }
 
+/// The path of the episode's SUMO configuration and the configuration, read and checked to run
+/// at the planners' step.
+fn checked(config: &Config) -> Result<(PathBuf, SumoConfig), EpisodeError> {
+    let path = config
+        .scenario
+        .sumocfg
+        .clone()
+        .expect("a scenario episode has a configuration");
+    let cfg = SumoConfig::read(&path)?;
+    cfg.check_step(config.scenario.dt)?;
+    Ok((path, cfg))
+}
+
 /// SUMO's command line: the user's configuration at `path`, then bkpbs's `options`.
 fn command_line(path: &std::path::Path, options: &[String]) -> Vec<String> {
     let mut args = vec!["sumo".to_string(), "-c".into(), path.display().to_string()];
@@ -174,13 +181,7 @@ fn scratch_dir() -> Result<tempfile::TempDir, EpisodeError> {
 /// # Errors
 /// As [`run`]'s before the first step, or SUMO failing.
 pub fn sumo_alone_ms_per_step(config: &Config) -> Result<f64, EpisodeError> {
-    let path = config
-        .scenario
-        .sumocfg
-        .clone()
-        .expect("a scenario episode has a configuration");
-    let cfg = SumoConfig::read(&path)?;
-    cfg.check_step(config.scenario.dt)?;
+    let (path, cfg) = checked(config)?;
     let dir = scratch_dir()?;
     let options = sumo_options(config, &dir.path().join("tripinfo.xml"));
     let capture = (!config.sumo.verbose).then(StderrCapture::start).flatten();
