@@ -172,7 +172,7 @@ plan_stats! {
 }
 
 /// A CAV controller, called once per step.
-pub trait Controller {
+pub trait Controller: Send {
     /// The name used on the command line and in CSV files.
     fn name(&self) -> &'static str;
 

@@ -21,7 +21,7 @@ use crate::predict::Predictor;
 
 /// How a search-based controller plans one round: a command per CAV of `scene` into `out`,
 /// each made by [`Round::command`].
-pub trait RoundPlanner {
+pub trait RoundPlanner: Send {
     /// The controller's name on the command line and in CSV files.
     const NAME: &'static str;
 

@@ -1,7 +1,7 @@
 //! The lock-step loop of an episode on a user's scenario: SUMO steps, departures get their
 //! CAV draw, collisions and arrivals are booked, and each merge region's vehicles are read into
-//! its own scene and planned by its own controller, regions one after the other in a fixed
-//! order (each deterministic, and none sees another's vehicles).
+//! its own scene and planned by its own controller, the regions in parallel (each
+//! deterministic, and none sees another's vehicles or state).
 
 use std::collections::HashMap;
 
@@ -217,15 +217,21 @@ impl<'a> ScenarioRun<'a> {
         Ok(())
     }
 
-    /// One planning round of every region, timed together: the step's planning time.
+    /// One planning round of every region, in parallel (each region's planner sees only its
+    /// own scene and keeps its own state, so the rounds are independent and each is
+    /// deterministic), timed together: the step's planning time.
     fn plan_regions(&mut self) {
+        use rayon::prelude::*;
         let start = std::time::Instant::now();
-        let mut shield_ms = 0.0;
-        for r in &mut self.regions {
+        self.regions.par_iter_mut().for_each(|r| {
             r.commands.clear();
             r.controller.plan(&r.scene.scene, &mut r.commands);
-            shield_ms += r.controller.last_shield_ms();
-        }
+        });
+        let shield_ms = self
+            .regions
+            .iter()
+            .map(|r| r.controller.last_shield_ms())
+            .sum();
         self.times
             .add_round(start.elapsed().as_secs_f64() * 1e3, shield_ms);
         self.occupancy.0 += 1;
