@@ -118,6 +118,45 @@ fn a_scenario_at_another_step_length_is_one_line() {
     assert!(!out.join("episode.csv").exists());
 }
 
+/// Liveness at the ramp game's lane end: every CAV that entered the region in the first 100 s
+/// has left it 40 s later. A 12 m CAV truck in lane 1 that came level with a ramp CAV waiting at
+/// the lane end used to stand beside it for good, closing lane 1 and the ramp (bk-pbs, α 0.5,
+/// seed 2: four CAVs still in the region at 140 s, 25 at 400 s).
+#[test]
+fn no_cav_stands_at_the_ramp_games_lane_end_for_good() {
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = game_copy(dir.path()).join("ramp.sumocfg");
+    let out = dir.path().join("out");
+    let o = bkpbs(&[
+        "episode",
+        "--sumocfg",
+        cfg.to_str().unwrap(),
+        "--planner",
+        "bk-pbs",
+        "--alpha",
+        "0.5",
+        "--seed",
+        "2",
+        "--steps",
+        "700",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let vehicles = csv_rows(&std::fs::read(out.join("vehicles.csv")).unwrap());
+    let early = |v: &&std::collections::BTreeMap<String, String>| {
+        v["kind"] == "cav" && v["region_enter_s"].parse::<f64>().is_ok_and(|t| t < 100.0)
+    };
+    let stuck: Vec<&String> = vehicles
+        .iter()
+        .filter(early)
+        .filter(|v| v["region_leave_s"] == "139.80")
+        .map(|v| &v["id"])
+        .collect();
+    assert!(vehicles.iter().filter(early).count() > 30);
+    assert!(stuck.is_empty(), "still in the region at 140 s: {stuck:?}");
+}
+
 /// A10KW at the planners' step: both carriageways' merges are planned in one episode, each by
 /// its own planner, and `network --sumocfg` agrees with the episode on what runs.
 #[test]

@@ -10,7 +10,8 @@
 //! can still stop at the comfortable deceleration with SUMO's minGap free behind the ramp CAV
 //! yields to it (and the walk ends there: those behind follow the one that yields); each one
 //! already too close for that passes first, and the ramp CAV plans around it. An HDV on lane 1
-//! ends the walk: SUMO's drivers cooperate with a merger on their own.
+//! ends the walk: SUMO's drivers cooperate with a merger on their own. A CAV level with the ramp
+//! CAV, its front already past the ramp CAV's, passes first as well.
 //!
 //! Liveness: the ramp CAV waits only for the CAVs that could not stop behind it when it came
 //! to the lane end, a finite set that drives on past it, and then for HDVs that SUMO's
@@ -64,8 +65,39 @@ pub fn held_up_at_lane_end(scene: &Scene, v: &VehicleState) -> bool {
         && end - v.front() < LANE_END_REACH
 }
 
-/// The order between ramp CAV `r` and the lane-1 vehicles coming up behind its front.
+/// The order between ramp CAV `r` and the lane-1 vehicles beside and behind it: those alongside
+/// it with their front past its front go first, then the walk back from its front.
 fn order_behind(scene: &Scene, r: usize, yield_gap: f64, decel: f64) -> Vec<(usize, usize)> {
+    let mut edges = alongside_ahead(scene, r);
+    edges.extend(walk_back(scene, r, yield_gap, decel));
+    edges
+}
+
+/// The lane-1 CAVs alongside ramp CAV `r`, their fronts past its front and their rears behind
+/// it: each passes first. The walk back from the merger's front does not reach them, and left
+/// to the search a 12 m CAV truck crawling level with a ramp CAV at the lane end stood with it
+/// for good: the merger's plan merged into the truck's body, the truck found no plan clear of
+/// it and braked, and neither could move (SUMO's `ramp` game, bk-pbs, α 0.5, seed 2: both
+/// standing for the last 280 s, lane 1 closed behind them).
+fn alongside_ahead(scene: &Scene, r: usize) -> Vec<(usize, usize)> {
+    let merger = &scene.vehicles[r];
+    scene
+        .vehicles
+        .iter()
+        .enumerate()
+        .filter(|(_, v)| {
+            v.kind == Kind::Cav
+                && v.lane == FIRST_MAIN_LANE
+                && v.front() >= merger.front()
+                && v.rear() < merger.front()
+        })
+        .map(|(f, _)| (f, r))
+        .collect()
+}
+
+/// The walk back along lane 1 from ramp CAV `r`'s front: each CAV too close to stop behind it
+/// passes first, the first that can stop yields and ends the walk, as does an HDV.
+fn walk_back(scene: &Scene, r: usize, yield_gap: f64, decel: f64) -> Vec<(usize, usize)> {
     let merger = &scene.vehicles[r];
     let mut behind: Vec<(usize, &VehicleState)> = scene
         .vehicles
@@ -146,5 +178,24 @@ mod tests {
             on_lane_1("cav", Kind::Cav, s - 60.0, 10.0),
         ]);
         assert!(merge_order(&moving, 5.0, 2.0).is_empty());
+    }
+
+    #[test]
+    fn a_cav_level_with_the_merger_and_ahead_of_its_front_passes_first() {
+        let r = at_lane_end(0.0);
+        let front = r.front();
+        let truck = |id: &str, kind: Kind, front_at: f64| VehicleState {
+            length: 12.0,
+            ..on_lane_1(id, kind, front_at - 6.0, 0.4)
+        };
+        let sc = scene(vec![
+            r,
+            truck("level", Kind::Cav, front + 0.3),
+            truck("beyond", Kind::Cav, front + 20.0),
+            truck("hdv level", Kind::Hdv, front + 0.5),
+        ]);
+        // The CAV wholly past the merger is no obstacle to it; an HDV level with it is left to
+        // SUMO's cooperation.
+        assert_eq!(merge_order(&sc, 5.0, 2.0), vec![(1, 0)]);
     }
 }

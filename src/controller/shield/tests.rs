@@ -273,7 +273,7 @@ fn the_end_of_the_acceleration_lane_stops_everyone_on_it() {
 /// Returns fixed commands and records the lane changes it is told were cancelled.
 struct Fixed {
     commands: Vec<Command>,
-    cancelled: std::rc::Rc<std::cell::RefCell<Vec<String>>>,
+    cancelled: std::sync::Arc<std::sync::Mutex<Vec<String>>>,
 }
 
 impl Controller for Fixed {
@@ -297,7 +297,7 @@ impl Controller for Fixed {
     }
 
     fn lane_change_cancelled(&mut self, id: &str) {
-        self.cancelled.borrow_mut().push(id.to_string());
+        self.cancelled.lock().unwrap().push(id.to_string());
     }
 }
 
@@ -324,14 +324,14 @@ fn the_wrapper_replaces_marks_and_counts() {
         maneuver,
         source: Source::PbsSolution,
     };
-    let cancelled = std::rc::Rc::default();
+    let cancelled = std::sync::Arc::default();
     let inner = Fixed {
         commands: vec![
             command(0, go(30.4, None)),
             command(2, go(25.0, Some(LaneChange::Left))),
             command(4, go(25.4, None)),
         ],
-        cancelled: std::rc::Rc::clone(&cancelled),
+        cancelled: std::sync::Arc::clone(&cancelled),
     };
     let mut shielded = Shielded::new(Box::new(inner), &Config::default());
     assert_eq!(shielded.name(), "bk-pbs");
@@ -346,7 +346,7 @@ fn the_wrapper_replaces_marks_and_counts() {
     assert!(out[0].maneuver.speed < 30.0);
     assert_eq!(out[1].maneuver, go(25.0, None));
     assert_eq!(out[2].maneuver, go(25.4, None));
-    assert_eq!(*cancelled.borrow(), ["merging"]);
+    assert_eq!(*cancelled.lock().unwrap(), ["merging"]);
     let stats = shielded.last_stats();
     assert_eq!((stats.shield_overrides, stats.searches), (2, 7));
     // Counts are per round, not cumulative.
