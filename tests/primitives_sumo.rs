@@ -6,8 +6,7 @@
 
 mod common;
 
-use std::cell::RefCell;
-use std::rc::Rc;
+use std::sync::{Arc, Mutex};
 
 use bkpbs::config::Config;
 use bkpbs::controller::{CavHandling, Command, Controller, LaneChange, Maneuver, Source};
@@ -30,7 +29,7 @@ struct Probe {
     next: usize,
     /// Rollout of the primitive under way and how far into it we are.
     running: Option<(Primitive, Vec<BicycleState>, usize)>,
-    errors: Rc<RefCell<Errors>>,
+    errors: Arc<Mutex<Errors>>,
 }
 
 impl Controller for Probe {
@@ -57,7 +56,8 @@ impl Controller for Probe {
             let pos_err = (want.pos - observed.pos).norm();
             let speed_err = (want.speed * want.heading.cos() - observed.speed).abs();
             self.errors
-                .borrow_mut()
+                .lock()
+                .unwrap()
                 .samples
                 .push((*p, *k, pos_err, speed_err));
             *k += 1;
@@ -137,7 +137,7 @@ fn agreement_on(mut config: Config, lane_width: f64) {
         Idle,
         Decelerate,
     ];
-    let errors = Rc::new(RefCell::new(Errors::default()));
+    let errors = Arc::new(Mutex::new(Errors::default()));
     let mut probe = Probe {
         lib,
         script: script.clone(),
@@ -158,7 +158,7 @@ fn agreement_on(mut config: Config, lane_width: f64) {
     }];
     let r = episode::run_with_demand(&config, &mut probe, &demand).unwrap();
     assert_eq!(r.summary.crashed, 0);
-    let e = errors.borrow();
+    let e = errors.lock().unwrap();
     // Every primitive of the script was executed and compared.
     for p in Primitive::ALL {
         assert!(e.samples.iter().any(|s| s.0 == p), "{p:?} never compared");

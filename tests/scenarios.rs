@@ -197,6 +197,23 @@ fn the_interchange_plans_both_carriageways_at_once() {
             .filter(|v| v["outcome"] != "crashed")
             .all(|v| !v["region_delay_s"].is_empty()));
     }
+    // regions.csv: one row per region, its vehicles those of vehicles.csv that entered it.
+    let rows = csv_rows(&std::fs::read(out.join("regions.csv")).unwrap());
+    let names: Vec<&str> = rows.iter().map(|r| r["region"].as_str()).collect();
+    assert_eq!(names, ["264308374", "4054057"]);
+    for row in &rows {
+        let there: Vec<_> = vehicles
+            .iter()
+            .filter(|v| v["region"] == row["region"])
+            .collect();
+        assert_eq!(row["vehicles"], there.len().to_string());
+        let delays: Vec<f64> = there
+            .iter()
+            .filter_map(|v| v["region_delay_s"].parse().ok())
+            .collect();
+        let mean: f64 = row["mean_delay_s"].parse().unwrap();
+        assert!((mean - delays.iter().sum::<f64>() / delays.len() as f64).abs() < 1e-3);
+    }
     // Few reach the on-ramps: the game's local streets jam at their junctions, in SUMO alone
     // as well; the first does within 40 s.
     assert!(vehicles.iter().any(|v| v["region_origin"] == "ramp"));

@@ -17,6 +17,7 @@
 //! scenarios.
 
 mod records;
+mod region_rows;
 mod run;
 
 use std::path::PathBuf;
@@ -33,6 +34,7 @@ use crate::sumo::sumocfg::SumoConfig;
 use crate::sumo::{Simulation, StderrCapture};
 
 pub use records::{csv_of, ScenarioSummary, ScenarioVehicle};
+pub use region_rows::RegionRow;
 
 /// What an episode on a user's scenario produced.
 #[derive(Debug, Clone)]
@@ -41,6 +43,8 @@ pub struct ScenarioResult {
     pub summary: ScenarioSummary,
     /// One row per vehicle SUMO inserted, in order of departure.
     pub vehicles: Vec<ScenarioVehicle>,
+    /// One row per merge region (`regions.csv`), in the order of `summary.regions`.
+    pub regions: Vec<RegionRow>,
     /// Every collision SUMO reported.
     pub collisions: Vec<CollisionEvent>,
     /// The options bkpbs gave SUMO beside the user's configuration.
@@ -229,6 +233,7 @@ pub fn write(
 ) -> Result<Vec<PathBuf>, crate::io::WriteError> {
     let episode = csv_of(std::slice::from_ref(&result.summary));
     let vehicles = csv_of(&result.vehicles);
+    let regions = csv_of(&result.regions);
     let collisions = crate::episode::output::collisions_csv(&result.collisions);
     let timing = crate::episode::output::timing_csv(&result.timing);
     let options = result.sumo_options.join(" ") + "\n";
@@ -239,6 +244,7 @@ pub fn write(
             ("sumo.log", log),
             ("sumo_options.txt", Some(options.as_bytes())),
             ("vehicles.csv", Some(&vehicles[..])),
+            ("regions.csv", Some(&regions[..])),
             ("collisions.csv", Some(&collisions[..])),
             ("timing.csv", Some(&timing[..])),
             ("episode.csv", Some(&episode[..])),

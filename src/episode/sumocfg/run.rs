@@ -17,6 +17,7 @@ use crate::sumo::frame::{self, SumoScene};
 use crate::sumo::{RawVehicleState, Simulation, SumoError, VehicleReadings};
 
 use super::records::{self, ScenarioSummary, ScenarioVehicle};
+use super::region_rows::{region_rows, RegionRow};
 use super::{is_cav, merge_edges, ScenarioResult};
 
 /// SUMO's defaults, restored when a CAV leaves the planned part of a region: every safety check
@@ -439,6 +440,7 @@ impl<'a> ScenarioRun<'a> {
             .collect();
         let sc = &self.config.scenario;
         let hdv_collisions = self.collisions.iter().filter(|c| !c.controllable()).count();
+        let names: Vec<String> = self.regions.iter().map(|r| r.name.clone()).collect();
         let head = ScenarioSummary {
             scenario: sc
                 .sumocfg
@@ -451,18 +453,21 @@ impl<'a> ScenarioRun<'a> {
             alpha: sc.alpha,
             seed: sc.seed,
             steps: sc.steps,
-            regions: self
-                .regions
-                .iter()
-                .map(|r| r.name.clone())
-                .collect::<Vec<_>>()
-                .join("; "),
+            regions: names.join("; "),
             ..ScenarioSummary::default()
         };
         let (steps, in_scenes, cavs) = self.occupancy;
         let per_step = |n: u64| n as f64 / steps.max(1) as f64;
+        let region_head = RegionRow {
+            scenario: head.scenario.clone(),
+            planner: head.planner.clone(),
+            alpha: head.alpha,
+            seed: head.seed,
+            ..RegionRow::default()
+        };
         Ok(ScenarioResult {
             summary: ScenarioSummary::of(head, &vehicles, hdv_collisions),
+            regions: region_rows(&region_head, &names, &vehicles),
             vehicles,
             collisions: self.collisions,
             sumo_options,
