@@ -118,6 +118,44 @@ fn a_scenario_at_another_step_length_is_one_line() {
     assert!(!out.join("episode.csv").exists());
 }
 
+/// `--cav-types`: the vehicles of the named types are the CAVs, all of them and no other; a
+/// type the scenario does not load is one error line naming it and the types it has.
+#[test]
+fn cavs_by_vehicle_type() {
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = game_copy(dir.path()).join("ramp.sumocfg");
+    let run = |types: &str, out: &Path| {
+        bkpbs(&[
+            "episode",
+            "--sumocfg",
+            cfg.to_str().unwrap(),
+            "--planner",
+            "bk-pbs",
+            "--cav-types",
+            types,
+            "--steps",
+            "300",
+            "--out",
+            out.to_str().unwrap(),
+        ])
+    };
+    let out = dir.path().join("trucks");
+    let o = run("truck", &out);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let vehicles = csv_rows(&std::fs::read(out.join("vehicles.csv")).unwrap());
+    let kinds: std::collections::BTreeSet<(String, String)> = vehicles
+        .iter()
+        .map(|v| (v["type"].clone(), v["kind"].clone()))
+        .collect();
+    let want = [("passenger", "hdv"), ("truck", "cav")].map(|(t, k)| (t.into(), k.into()));
+    assert_eq!(kinds, want.into_iter().collect());
+    let ep = &csv_rows(&std::fs::read(out.join("episode.csv")).unwrap())[0];
+    assert_eq!(ep["cav_types"], "truck");
+    let o = run("lorry", &dir.path().join("none"));
+    refused_naming(&o, &["'lorry'", "truck", "passenger"]);
+    assert!(!dir.path().join("none").join("episode.csv").exists());
+}
+
 /// Liveness at the ramp game's lane end: every CAV that entered the region in the first 100 s
 /// has left it 40 s later. A 12 m CAV truck in lane 1 that came level with a ramp CAV waiting at
 /// the lane end used to stand beside it for good, closing lane 1 and the ramp (bk-pbs, α 0.5,

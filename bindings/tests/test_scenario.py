@@ -51,3 +51,18 @@ def test_the_scenario_interval_is_the_default_length(tmp_path: Path) -> None:
 def test_a_demand_rate_with_a_scenario_of_your_own_is_refused(tmp_path: Path) -> None:
     with pytest.raises(bkpbs.BkpbsError, match="lam = 3000.*its own demand"):
         bkpbs.run_episode("bk-pbs", 0.5, 3000.0, 1, sumocfg=_ramp_game(tmp_path))
+
+
+def test_cavs_by_vehicle_type(tmp_path: Path) -> None:
+    """``cav_types=[...]``: every vehicle of those types is a CAV and no other."""
+    out = tmp_path / "trucks"
+    row = bkpbs.run_episode("bk-pbs", 0.5, seed=1, sumocfg=_ramp_game(tmp_path), steps=250,
+                            cav_types=["truck"], out=out)
+    assert row["cav_types"] == "truck"
+    lines = (out / "vehicles.csv").read_text().splitlines()
+    header = lines[0].split(",")
+    kinds = {tuple(r.split(",")[header.index(c)] for c in ("type", "kind")) for r in lines[1:]}
+    assert kinds == {("truck", "cav"), ("passenger", "hdv")}
+    with pytest.raises(bkpbs.BkpbsError, match="'lorry'.*its types: .*truck"):
+        bkpbs.run_episode("bk-pbs", 0.5, seed=1, sumocfg=_ramp_game(tmp_path / "b"), steps=50,
+                          cav_types=["lorry"])

@@ -123,11 +123,15 @@ fn run_scenario(e: &Episode) -> Result<()> {
     let s = &r.summary;
     let secs = |x: Option<f64>| x.map_or("-".into(), |x| format!("{x:.2} s"));
     let cfg = e.config.scenario.sumocfg.as_ref().expect("a scenario");
+    let cavs = if s.cav_types.is_empty() {
+        format!("α={}", s.alpha)
+    } else {
+        format!("CAVs of type {}", s.cav_types)
+    };
     println!(
-        "{} α={} seed={} on {} (regions {}): inserted {} ({} CAVs, share {:.3}), in a region {}, \
+        "{} {cavs} seed={} on {} (regions {}): inserted {} ({} CAVs, share {:.3}), in a region {}, \
          arrived {}, crashed {} (controllable {}), mean timeLoss {}, mean delay in its region {}",
         s.planner,
-        s.alpha,
         s.seed,
         cfg.display(),
         s.regions,

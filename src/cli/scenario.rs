@@ -52,6 +52,10 @@ pub struct ScenarioArgs {
     /// begin–end interval.
     #[arg(long, value_name = "FILE")]
     sumocfg: Option<PathBuf>,
+    /// With --sumocfg: the vehicle types whose vehicles are the CAVs (all of them, no other),
+    /// instead of the share α.
+    #[arg(long, value_delimiter = ',', value_name = "TYPE,...")]
+    cav_types: Option<Vec<String>>,
     /// HDV driver profile: sumo-safe (default), paper, heterogeneous, krauss, eidm, or one
     /// the config file defines under [hdv.profiles.NAME].
     #[arg(long, value_name = "NAME")]
@@ -105,6 +109,9 @@ impl ScenarioArgs {
             if let (None, Some(n)) = (self.steps, interval) {
                 s.steps = n;
             }
+        }
+        if let Some(t) = &self.cav_types {
+            s.cav_types = t.clone();
         }
         if let Some(p) = &self.hdv_profile {
             c.hdv.profile = p.clone();

@@ -179,6 +179,14 @@ pub(super) fn check_scenario(s: &Scenario) -> Result<(), ConfigError> {
         vehicle_width => Positive,
         lane_change_duration => AtLeast(s.dt, "must be at least one step"),
     ))?;
+    if let (None, Some(t)) = (&s.sumocfg, s.cav_types.first()) {
+        return Err(ConfigError::Invalid {
+            field: "scenario.cav_types",
+            value: t.clone(),
+            reason: "names vehicle types of a configuration of your own: set scenario.sumocfg \
+                     (--sumocfg) too (the paper's demand draws its CAVs by α)",
+        });
+    }
     if let (Some(cfg), Some(_)) = (&s.sumocfg, &s.net_file) {
         return Err(ConfigError::Invalid {
             field: "scenario.sumocfg",

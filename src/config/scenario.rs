@@ -43,6 +43,11 @@ pub struct Scenario {
     /// vehicle types and options (the network is its `net-file`; `net_file` must be unset).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub sumocfg: Option<PathBuf>,
+    /// On a configuration of your own: the vehicle types (SUMO vType ids, as `vehicles.csv`'s
+    /// `type`) whose vehicles are the CAVs, every one of them and no other, instead of a
+    /// share α drawn per vehicle. Empty: the draw.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub cav_types: Vec<String>,
 }
 
 impl Default for Scenario {
@@ -61,6 +66,7 @@ impl Default for Scenario {
             net_file: None,
             regions: Vec::new(),
             sumocfg: None,
+            cav_types: Vec::new(),
         }
     }
 }

@@ -78,6 +78,16 @@ fn alpha_outside_unit_interval_is_invalid() {
     assert!(e.contains("scenario.alpha"), "{e}");
 }
 
+#[test]
+fn cav_types_without_a_configuration_of_your_own_are_invalid() {
+    let mut c = Config::default();
+    c.scenario.cav_types = vec!["truck".into()];
+    let e = c.validate().unwrap_err().to_string();
+    assert!(e.contains("scenario.cav_types") && e.contains("sumocfg"), "{e}");
+    c.scenario.sumocfg = Some("ramp.sumocfg".into());
+    assert!(c.validate().is_ok());
+}
+
 /// One way to break the default config: the field, its bad value as the error prints it,
 /// the reason given, and the change.
 type Case = (&'static str, &'static str, &'static str, fn(&mut Config));

@@ -46,6 +46,7 @@ pub const LIST_DEPARTED: i32 = 1;
 pub const LIST_ARRIVED: i32 = 2;
 pub const LIST_LANES: i32 = 3;
 pub const LIST_EDGES: i32 = 4;
+pub const LIST_VEHICLE_TYPES: i32 = 5;
 
 /// Which shim the calls go to: libsumo (SUMO in this process) or libtraci (a sumo-gui process
 /// driven over TraCI). One simulation per process, so one switch for the process.

@@ -274,6 +274,11 @@ impl Simulation {
         self.id_list(ffi::LIST_EDGES, "edge.getIDList")
     }
 
+    /// Ids of the vehicle types loaded (those of every route and additional file read so far).
+    pub fn vehicle_type_ids(&self) -> Result<Vec<String>, SumoError> {
+        self.id_list(ffi::LIST_VEHICLE_TYPES, "vehicletype.getIDList")
+    }
+
     /// Chooses the edges that [`Simulation::read_vehicles`] reports by index
     /// (`RawVehicleState::edge_code`), so no edge name crosses the boundary each step.
     pub fn set_edge_codes(&mut self, edges: &[&str]) -> Result<(), SumoError> {

@@ -30,7 +30,7 @@ use crate::episode::error::EpisodeError;
 use crate::episode::metrics::{CollisionEvent, Timing};
 use crate::model::road::Road;
 use crate::sumo::frame;
-use crate::sumo::sumocfg::SumoConfig;
+use crate::sumo::sumocfg::{SumoConfig, SumoConfigError};
 use crate::sumo::{Simulation, StderrCapture};
 
 pub use records::{csv_of, ScenarioSummary, ScenarioVehicle};
@@ -99,6 +99,45 @@ pub fn is_cav(seed: u64, id: &str, alpha: f64) -> bool {
     rand_chacha::ChaCha8Rng::seed_from_u64(h).gen_bool(alpha.clamp(0.0, 1.0))
 }
 
+/// Whether vehicle `id` of SUMO type `sumo_type` is a CAV: one of `scenario.cav_types` when
+/// it names any, else the draw of [`is_cav`].
+pub fn becomes_cav(s: &crate::config::Scenario, id: &str, sumo_type: &str) -> bool {
+    if s.cav_types.is_empty() {
+        is_cav(s.seed, id, s.alpha)
+    } else {
+        s.cav_types.iter().any(|t| t == sumo_type)
+    }
+}
+
+/// Each of `scenario.cav_types` must be a vehicle type SUMO loaded: a misspelt one would make
+/// no CAV at all, and the episode would run as if nothing were wrong.
+fn check_cav_types(
+    sim: &Simulation,
+    config: &Config,
+    path: &std::path::Path,
+) -> Result<(), EpisodeError> {
+    let wanted = &config.scenario.cav_types;
+    if wanted.is_empty() {
+        return Ok(());
+    }
+    let loaded = sim.vehicle_type_ids().map_err(|cause| EpisodeError::Step {
+        step: 0,
+        time: 0.0,
+        cause,
+    })?;
+    match wanted.iter().find(|t| !loaded.contains(t)) {
+        None => Ok(()),
+        Some(t) => Err(SumoConfigError::Content {
+            path: path.to_path_buf(),
+            what: format!(
+                "cav_types names vehicle type '{t}', which it does not load (its types: {})",
+                loaded.join(", ")
+            ),
+        }
+        .into()),
+    }
+}
+
 /// Runs the scenario of `config.scenario.sumocfg` with `planner` driving the CAVs in each of
 /// its merge regions (those `scenario.regions` selects).
 ///
@@ -122,6 +161,7 @@ pub fn run(config: &Config, planner: &str) -> Result<ScenarioResult, EpisodeErro
                 cause,
             }
         })?;
+        check_cav_types(&sim, config, &path)?;
         let regions = roads
             .into_iter()
             .map(|road| {

@@ -82,8 +82,10 @@ pub struct ScenarioSummary {
     pub scenario: String,
     /// The controller's name.
     pub planner: String,
-    /// The share α of the scenario's vehicles made CAVs.
+    /// The share α of the scenario's vehicles made CAVs (unused with `cav_types`).
     pub alpha: f64,
+    /// The vehicle types whose vehicles are the CAVs instead (space-separated), or empty.
+    pub cav_types: String,
     /// The episode's seed (SUMO's, and the CAV draw's).
     pub seed: u64,
     /// The SUMO release that ran it.

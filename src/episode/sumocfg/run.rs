@@ -18,7 +18,7 @@ use crate::sumo::{RawVehicleState, Simulation, SumoError, VehicleReadings};
 
 use super::records::{self, ScenarioSummary, ScenarioVehicle};
 use super::region_rows::{region_rows, RegionRow};
-use super::{is_cav, merge_edges, ScenarioResult};
+use super::{becomes_cav, merge_edges, ScenarioResult};
 
 /// SUMO's defaults, restored when a CAV leaves the planned part of a region: every safety check
 /// on, and its own lane changes (SUMO's `speedMode` 31 and `laneChangeMode` 1621).
@@ -249,7 +249,7 @@ impl<'a> ScenarioRun<'a> {
             let sumo_type = sim.vehicle_type(&id)?;
             let size = sim.vehicle_size(&id)?;
             let max_speed = sim.vehicle_max_speed(&id)?;
-            let kind = if is_cav(s.seed, &id, s.alpha) {
+            let kind = if becomes_cav(s, &id, &sumo_type) {
                 Kind::Cav
             } else {
                 Kind::Hdv
@@ -451,6 +451,7 @@ impl<'a> ScenarioRun<'a> {
             planner: planner.into(),
             sumo_version: crate::sumo::version::BUILT.into(),
             alpha: sc.alpha,
+            cav_types: sc.cav_types.join(" "),
             seed: sc.seed,
             steps: sc.steps,
             regions: names.join("; "),
