@@ -132,6 +132,30 @@ case "$("$BIN" --version)" in
             --alphas 0.5 --lambdas 3000 --seeds 10 ;;
 esac
 
+# The version study's pairings, from the committed campaigns of both halves (whichever ran).
+if wanted sumo-versions-pairs; then
+    start=$SECONDS
+    mkdir -p "$scratch/pairs/seeds-0-9"
+    metrics=system_delay_s,mean_delay_s,arrived,stranded,controllable_crashed
+    python3 results/long-run/predictor_pairs.py results/sumo-versions/1.28 results/paper-grid \
+        $metrics > "$scratch/pairs/pairs.md"
+    python3 results/long-run/predictor_pairs.py results/sumo-versions/seeds-0-9/1.28 \
+        results/sumo-versions/seeds-0-9/1.15 $metrics > "$scratch/pairs/seeds-0-9/pairs.md"
+    bad=0
+    for f in pairs.md seeds-0-9/pairs.md; do
+        if [ $update = 1 ]; then
+            cp "$scratch/pairs/$f" "results/sumo-versions/$f"
+        elif ! cmp -s "$scratch/pairs/$f" "results/sumo-versions/$f"; then
+            echo "  differs: results/sumo-versions/$f"; bad=1
+        fi
+    done
+    if [ $bad = 0 ]; then
+        echo "sumo-versions-pairs: $(agreed) ($((SECONDS - start)) s)"
+    else
+        echo "sumo-versions-pairs: DIFFERS"; failed=1
+    fi
+fi
+
 # The long runs (~35 min on 2 cores): each campaign, then its paired report.
 long="--hdv-profiles sumo-safe,paper --alphas 0.4,0.6,0.8 --steps 1500"
 # shellcheck disable=SC2086
