@@ -83,7 +83,10 @@ fn cav_types_without_a_configuration_of_your_own_are_invalid() {
     let mut c = Config::default();
     c.scenario.cav_types = vec!["truck".into()];
     let e = c.validate().unwrap_err().to_string();
-    assert!(e.contains("scenario.cav_types") && e.contains("sumocfg"), "{e}");
+    assert!(
+        e.contains("scenario.cav_types") && e.contains("sumocfg"),
+        "{e}"
+    );
     c.scenario.sumocfg = Some("ramp.sumocfg".into());
     assert!(c.validate().is_ok());
 }

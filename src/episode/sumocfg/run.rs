@@ -438,25 +438,9 @@ impl<'a> ScenarioRun<'a> {
                 v
             })
             .collect();
-        let sc = &self.config.scenario;
         let hdv_collisions = self.collisions.iter().filter(|c| !c.controllable()).count();
         let names: Vec<String> = self.regions.iter().map(|r| r.name.clone()).collect();
-        let head = ScenarioSummary {
-            scenario: sc
-                .sumocfg
-                .as_deref()
-                .and_then(std::path::Path::file_name)
-                .map(|n| n.to_string_lossy().into_owned())
-                .unwrap_or_default(),
-            planner: planner.into(),
-            sumo_version: crate::sumo::version::BUILT.into(),
-            alpha: sc.alpha,
-            cav_types: sc.cav_types.join(" "),
-            seed: sc.seed,
-            steps: sc.steps,
-            regions: names.join("; "),
-            ..ScenarioSummary::default()
-        };
+        let head = summary_head(self.config, planner, &names);
         let (steps, in_scenes, cavs) = self.occupancy;
         let per_step = |n: u64| n as f64 / steps.max(1) as f64;
         let region_head = RegionRow {
@@ -477,6 +461,27 @@ impl<'a> ScenarioRun<'a> {
             vehicles_per_step: per_step(in_scenes),
             cavs_per_step: per_step(cavs),
         })
+    }
+}
+
+/// The episode's own columns of `episode.csv`: which scenario, planner, CAVs, seed and regions.
+fn summary_head(config: &Config, planner: &str, regions: &[String]) -> ScenarioSummary {
+    let sc = &config.scenario;
+    ScenarioSummary {
+        scenario: sc
+            .sumocfg
+            .as_deref()
+            .and_then(std::path::Path::file_name)
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default(),
+        planner: planner.into(),
+        sumo_version: crate::sumo::version::BUILT.into(),
+        alpha: sc.alpha,
+        cav_types: sc.cav_types.join(" "),
+        seed: sc.seed,
+        steps: sc.steps,
+        regions: regions.join("; "),
+        ..ScenarioSummary::default()
     }
 }
 
