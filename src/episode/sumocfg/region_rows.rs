@@ -7,7 +7,7 @@ use serde::Serialize;
 
 use super::records::ScenarioVehicle;
 use crate::episode::cells;
-use crate::episode::metrics::Outcome;
+use crate::episode::metrics::{mean, Outcome};
 use crate::model::scene::{Kind, Origin};
 
 /// The figures of one merge region (a `regions.csv` row).
@@ -114,12 +114,6 @@ fn row_of(head: RegionRow, mine: &[&ScenarioVehicle]) -> RegionRow {
         ),
         ..head
     }
-}
-
-/// The mean of `xs`, none when empty.
-fn mean(xs: impl Iterator<Item = f64>) -> Option<f64> {
-    let (n, sum) = xs.fold((0usize, 0.0), |(n, s), x| (n + 1, s + x));
-    (n > 0).then(|| sum / n as f64)
 }
 
 #[cfg(test)]
