@@ -46,6 +46,7 @@ pub fn episode_error(e: &EpisodeError) -> PyErr {
         | EpisodeError::Controller(_)
         | EpisodeError::Input(InputError::MissingNet(_))
         | EpisodeError::Scenario(_)
+        | EpisodeError::OutOfOrder(_)
         | EpisodeError::Road(_) => BkpbsError::new_err(message),
         EpisodeError::Input(InputError::Write { .. }) => PyOSError::new_err(message),
         // Only the bkpbs binary takes stop signals as requests; kept exhaustive all the same.

@@ -7,10 +7,12 @@ mod controller;
 mod episode;
 mod errors;
 mod gym;
+mod own_loop;
 mod predict;
 mod run_slot;
 mod scenario;
 mod scene;
+mod traci_client;
 
 use pyo3::prelude::*;
 

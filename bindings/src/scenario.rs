@@ -28,18 +28,8 @@ pub struct ScenarioCall<'a, 'py> {
 /// written from); `out` also writes its files there. The scenario's `begin`–`end` interval is
 /// the episode's length unless `steps=` shortens it.
 pub fn run<'py>(py: Python<'py>, call: ScenarioCall<'_, 'py>) -> PyResult<Bound<'py, PyDict>> {
-    let mut table = cell_table(call.alpha, None, call.seed)?;
-    let path = call.sumocfg.display().to_string();
-    table.insert("sumocfg".into(), toml::Value::String(path));
-    let steps_given = call
-        .overrides
-        .is_some_and(|o| o.contains("steps").unwrap_or(false));
-    let mut config = crate::config::resolve(call.config, call.overrides, table)?;
-    if !steps_given {
-        if let Some(n) = SumoConfig::steps_of(&call.sumocfg, config.scenario.dt) {
-            config.scenario.steps = n;
-        }
-    }
+    let table = cell_table(call.alpha, None, call.seed)?;
+    let config = resolve_with(&call.sumocfg, call.config, call.overrides, table)?;
     let result = run_detached(py, call.planner, || sumocfg::run(&config, call.planner))?;
     if let Some(dir) = call.out {
         sumocfg::write(&result, &dir)
@@ -54,4 +44,33 @@ pub fn lam_with_sumocfg(lam: f64) -> PyErr {
     bad_input(format!(
         "lam = {lam} was given with sumocfg: a scenario of your own brings its own demand"
     ))
+}
+
+/// The configuration of an episode on the scenario `sumocfg`: defaults ← `config` ←
+/// `overrides`, the scenario's `begin`–`end` interval its length unless `steps` is given.
+pub fn resolve(
+    sumocfg: &std::path::Path,
+    config: Option<&Bound<'_, PyAny>>,
+    overrides: Option<&Bound<'_, PyDict>>,
+) -> PyResult<bkpbs::config::Config> {
+    resolve_with(sumocfg, config, overrides, toml::Table::new())
+}
+
+/// [`resolve`], with the scenario settings `table` (α, the seed) over the overrides.
+fn resolve_with(
+    sumocfg: &std::path::Path,
+    config: Option<&Bound<'_, PyAny>>,
+    overrides: Option<&Bound<'_, PyDict>>,
+    mut table: toml::Table,
+) -> PyResult<bkpbs::config::Config> {
+    let path = sumocfg.display().to_string();
+    table.insert("sumocfg".into(), toml::Value::String(path));
+    let steps_given = overrides.is_some_and(|o| o.contains("steps").unwrap_or(false));
+    let mut config = crate::config::resolve(config, overrides, table)?;
+    if !steps_given {
+        if let Some(n) = SumoConfig::steps_of(sumocfg, config.scenario.dt) {
+            config.scenario.steps = n;
+        }
+    }
+    Ok(config)
 }

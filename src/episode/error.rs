@@ -62,6 +62,9 @@ pub enum EpisodeError {
     /// SUMO's own output of the episode could not be read back.
     #[error("{0}")]
     Output(String),
+    /// A caller's own loop asked for a step out of order (before the start, past the last).
+    #[error("{0}")]
+    OutOfOrder(String),
     /// A failure with SUMO's own reason: libsumo reports only "Process Error", the reason goes
     /// to SUMO's (captured) console.
     #[error("{cause}; SUMO said: {said}")]

@@ -26,7 +26,7 @@ use crate::model::road::Road;
 use crate::model::scene::{Kind, Origin};
 use crate::sumo::files::EpisodeInput;
 use crate::sumo::frame::{self, SumoScene};
-use crate::sumo::{Simulation, StderrCapture, SumoError, VehicleReadings};
+use crate::sumo::{Simulation, StderrCapture, SumoClient, SumoError, VehicleReadings};
 
 /// SUMO speed mode for commanded CAVs: no checks at all, the commanded speed is the speed.
 const SPEED_MODE_COMMANDED: i32 = 0;
@@ -440,16 +440,20 @@ impl<'a> Episode<'a> {
 /// Sends `commands` for the vehicles of `scene` to SUMO: speeds in one batch, then lane changes
 /// (into the SUMO lane of the target frame lane, where there is one).
 pub(crate) fn send_commands(
-    sim: &mut Simulation,
+    sim: &mut impl SumoClient,
     scene: &SumoScene,
     commands: &[Command],
     sc: &crate::config::Scenario,
 ) -> Result<(), SumoError> {
     let vehicles = &scene.scene.vehicles;
-    sim.set_speeds(commands.iter().map(|c| {
-        let speed = frame::commanded_speed(c.maneuver.speed, sc);
-        (&*vehicles[c.vehicle].id, speed)
-    }))?;
+    let speeds: Vec<(&str, f64)> = commands
+        .iter()
+        .map(|c| {
+            let speed = frame::commanded_speed(c.maneuver.speed, sc);
+            (&*vehicles[c.vehicle].id, speed)
+        })
+        .collect();
+    sim.set_speeds(&speeds)?;
     for c in commands {
         let v = &vehicles[c.vehicle];
         if let Some(dir) = c.maneuver.lane_change {

@@ -6,6 +6,7 @@
 //! (`shim.cpp`), which catches every C++ exception; `decode` turns the shim's status into a
 //! [`SumoError`] carrying SUMO's own message and the call that failed.
 
+pub mod client;
 pub mod files;
 pub mod frame;
 pub mod layout;
@@ -24,6 +25,7 @@ use std::os::raw::c_char;
 use std::sync::{Condvar, Mutex};
 use std::thread::{self, ThreadId};
 
+pub use client::SumoClient;
 pub use error::SumoError;
 pub use ffi::RawVehicleState;
 pub use quiet::StderrCapture;

@@ -42,7 +42,13 @@ class Maneuver:
     def sumo_lane_index(self) -> Optional[int]: ...
 
 class Controller:
-    """A core planner driven one step at a time by the caller's TraCI or libsumo loop."""
+    """A core planner driven one step at a time by the caller's TraCI or libsumo loop.
+
+    With ``sumocfg=`` (a SUMO configuration of the user's own) it is a whole episode on that
+    scenario instead, one planner per merge region: start SUMO with ``sumo_command``, call
+    ``start(traci)`` once, ``step(traci)`` after every ``simulationStep``, close SUMO, then
+    ``finish(out=...)`` for the row and files of ``bkpbs episode --sumocfg``.
+    """
 
     def __init__(
         self,
@@ -50,8 +56,21 @@ class Controller:
         config: _ConfigSource = None,
         model: Optional[_PathArg] = None,
         net_file: Optional[_PathArg] = None,
+        sumocfg: Optional[_PathArg] = None,
         **overrides: Any,
     ) -> None: ...
+    @property
+    def sumo_command(self) -> List[str]:
+        """SUMO's command line: the scenario's configuration, then bkpbs's options."""
+    @property
+    def steps(self) -> int:
+        """The episode's length in steps (the scenario's interval, or ``steps=``)."""
+    def start(self, traci: Any) -> None:
+        """Once SUMO runs, before its first step."""
+    def step(self, traci: Any) -> None:
+        """After each ``simulationStep``: books it, plans every region, commands the CAVs."""
+    def finish(self, out: Optional[_PathArg] = None) -> Dict[str, Any]:
+        """After SUMO is closed: the ``episode.csv`` row; its files into ``out`` if given."""
     def plan(
         self, vehicles: Iterable[Union[Mapping[str, Any], Any]], time: Optional[float] = None
     ) -> Dict[str, Maneuver]:

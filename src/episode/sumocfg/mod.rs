@@ -16,6 +16,7 @@
 //! each vehicle's own accelerations and each lane's speed limit in the planner; campaigns over
 //! scenarios.
 
+mod own_loop;
 mod records;
 mod region_rows;
 mod run;
@@ -33,6 +34,7 @@ use crate::sumo::frame;
 use crate::sumo::sumocfg::{SumoConfig, SumoConfigError};
 use crate::sumo::{Simulation, StderrCapture};
 
+pub use own_loop::OwnLoop;
 pub use records::{csv_of, ScenarioSummary, ScenarioVehicle};
 pub use region_rows::RegionRow;
 
@@ -112,7 +114,7 @@ pub fn becomes_cav(s: &crate::config::Scenario, id: &str, sumo_type: &str) -> bo
 /// Each of `scenario.cav_types` must be a vehicle type SUMO loaded: a misspelt one would make
 /// no CAV at all, and the episode would run as if nothing were wrong.
 fn check_cav_types(
-    sim: &Simulation,
+    sim: &impl crate::sumo::SumoClient,
     config: &Config,
     path: &std::path::Path,
 ) -> Result<(), EpisodeError> {
@@ -162,17 +164,7 @@ pub fn run(config: &Config, planner: &str) -> Result<ScenarioResult, EpisodeErro
             }
         })?;
         check_cav_types(&sim, config, &path)?;
-        let regions = roads
-            .into_iter()
-            .map(|road| {
-                // CAVs drive no faster than the carriageway allows where they enter it.
-                let mut c = config.clone();
-                c.scenario.v_max = c.scenario.v_max.min(road.entries[0].speed_limit);
-                let controller = controller::by_name(planner, &c, &road)?;
-                Ok(run::Region::new(c, road, controller))
-            })
-            .collect::<Result<Vec<_>, EpisodeError>>()?;
-        let mut run = run::ScenarioRun::new(config, regions);
+        let mut run = run::ScenarioRun::new(config, regions(config, roads, planner)?);
         run.run(sim)?;
         Ok::<_, EpisodeError>(run.finish(planner, &tripinfo, options.clone()))
     })();
@@ -183,6 +175,24 @@ pub fn run(config: &Config, planner: &str) -> Result<ScenarioResult, EpisodeErro
     result.sumo_log = sumo_log;
     result.timing.wall_s = wall.elapsed().as_secs_f64();
     Ok(result)
+}
+
+/// One region per road of `roads`, each with its own `planner`.
+fn regions(
+    config: &Config,
+    roads: Vec<Road>,
+    planner: &str,
+) -> Result<Vec<run::Region>, EpisodeError> {
+    roads
+        .into_iter()
+        .map(|road| {
+            // CAVs drive no faster than the carriageway allows where they enter it.
+            let mut c = config.clone();
+            c.scenario.v_max = c.scenario.v_max.min(road.entries[0].speed_limit);
+            let controller = controller::by_name(planner, &c, &road)?;
+            Ok(run::Region::new(c, road, controller))
+        })
+        .collect()
 }
 
 /// The path of the episode's SUMO configuration and the configuration, read and checked to run

@@ -14,7 +14,7 @@ use crate::model::kinematics::free_flow_time;
 use crate::model::road::Road;
 use crate::model::scene::{Kind, Origin, VehicleState};
 use crate::sumo::frame::{self, SumoScene};
-use crate::sumo::{RawVehicleState, Simulation, SumoError, VehicleReadings};
+use crate::sumo::{RawVehicleState, Simulation, SumoClient, SumoError, VehicleReadings};
 
 use super::records::{self, ScenarioSummary, ScenarioVehicle};
 use super::region_rows::{region_rows, RegionRow};
@@ -129,8 +129,8 @@ struct Entry {
 }
 
 /// The loop's state.
-pub struct ScenarioRun<'a> {
-    config: &'a Config,
+pub struct ScenarioRun {
+    config: Config,
     regions: Vec<Region>,
     lines: Vec<Line>,
     index: HashMap<String, usize>,
@@ -142,15 +142,15 @@ pub struct ScenarioRun<'a> {
     timing: Option<Timing>,
 }
 
-impl<'a> ScenarioRun<'a> {
-    pub fn new(config: &'a Config, mut regions: Vec<Region>) -> Self {
+impl ScenarioRun {
+    pub fn new(config: &Config, mut regions: Vec<Region>) -> Self {
         let mut offset = 0;
         for r in &mut regions {
             r.code_offset = offset;
             offset += r.road.edges.len() as i32;
         }
         ScenarioRun {
-            config,
+            config: config.clone(),
             regions,
             lines: Vec::new(),
             index: HashMap::new(),
@@ -162,33 +162,54 @@ impl<'a> ScenarioRun<'a> {
         }
     }
 
-    /// Runs the episode's steps, then closes SUMO (which writes the tripinfo output).
-    pub fn run(&mut self, mut sim: Simulation) -> Result<(), EpisodeError> {
-        let config = self.config;
-        let names: Vec<String> = self
-            .regions
+    /// The names of every region's edges, in the order of their codes in the readings.
+    pub fn edge_names(&self) -> Vec<String> {
+        self.regions
             .iter()
             .flat_map(|r| frame::edge_names(&r.road))
             .map(String::from)
-            .collect();
+            .collect()
+    }
+
+    /// Runs the episode's steps, then closes SUMO (which writes the tripinfo output).
+    pub fn run(&mut self, mut sim: Simulation) -> Result<(), EpisodeError> {
+        let config = self.config.clone();
+        let names = self.edge_names();
         let names: Vec<&str> = names.iter().map(String::as_str).collect();
         let start = std::time::Instant::now();
-        crate::episode::runner::lock_step(&mut sim, &names, config, |sim, plan| {
-            self.step(sim, plan)
+        crate::episode::runner::lock_step(&mut sim, &names, &config, |sim, plan| {
+            let now = sim.time()?;
+            self.times.sumo_step(sim)?;
+            self.after_step(sim, now, plan)
         })?;
-        let loop_s = start.elapsed().as_secs_f64();
+        self.close_timing(start.elapsed().as_secs_f64());
         let (dt, steps) = (config.scenario.dt, config.scenario.steps);
-        let times = std::mem::replace(&mut self.times, StepTimes::new(0));
-        self.timing = Some(times.timing(loop_s, steps));
         sim.close()
             .map_err(crate::episode::runner::step_error(dt, steps))?;
         Ok(())
     }
 
-    /// One SUMO step and, unless it is the last, one planning round per region.
-    fn step(&mut self, sim: &mut Simulation, plan: bool) -> Result<(), SumoError> {
-        let now = sim.time()?;
-        self.times.sumo_step(sim)?;
+    /// The episode ran `steps` steps (a caller's own loop may stop before the configured
+    /// number): the summary says so.
+    pub fn ran_steps(&mut self, steps: u32) {
+        self.config.scenario.steps = steps;
+    }
+
+    /// Ends the episode's timing, its loop having taken `loop_s` seconds.
+    pub fn close_timing(&mut self, loop_s: f64) {
+        let times = std::mem::replace(&mut self.times, StepTimes::new(0));
+        self.timing = Some(times.timing(loop_s, self.config.scenario.steps));
+    }
+
+    /// What follows a SUMO step that began at time `now`: departures, collisions and
+    /// arrivals booked, every region's scene read and, when `plan`, one planning round per
+    /// region with its commands sent.
+    pub fn after_step(
+        &mut self,
+        sim: &mut impl SumoClient,
+        now: f64,
+        plan: bool,
+    ) -> Result<(), SumoError> {
         self.book_departures(sim, now)?;
         sim.read_vehicles(&mut self.readings)?;
         self.book_collisions(sim, now)?;
@@ -243,8 +264,9 @@ impl<'a> ScenarioRun<'a> {
         }
     }
 
-    fn book_departures(&mut self, sim: &mut Simulation, now: f64) -> Result<(), SumoError> {
+    fn book_departures(&mut self, sim: &mut impl SumoClient, now: f64) -> Result<(), SumoError> {
         let s = &self.config.scenario;
+        let (index, lines) = (&mut self.index, &mut self.lines);
         for id in sim.departed()? {
             let sumo_type = sim.vehicle_type(&id)?;
             let size = sim.vehicle_size(&id)?;
@@ -254,8 +276,8 @@ impl<'a> ScenarioRun<'a> {
             } else {
                 Kind::Hdv
             };
-            self.index.insert(id.clone(), self.lines.len());
-            self.lines.push(Line {
+            index.insert(id.clone(), lines.len());
+            lines.push(Line {
                 record: ScenarioVehicle {
                     id,
                     sumo_type,
@@ -274,7 +296,7 @@ impl<'a> ScenarioRun<'a> {
 
     /// Removes both vehicles of each collision and books it (a CAV in it makes it
     /// controllable).
-    fn book_collisions(&mut self, sim: &mut Simulation, now: f64) -> Result<(), SumoError> {
+    fn book_collisions(&mut self, sim: &mut impl SumoClient, now: f64) -> Result<(), SumoError> {
         for c in sim.collisions()? {
             let kind = |id: &str| self.index.get(id).map(|&k| self.lines[k].record.kind);
             let event = CollisionEvent {
@@ -309,7 +331,7 @@ impl<'a> ScenarioRun<'a> {
 
     /// This step's scene of every region: each vehicle read on its edges, with its own size;
     /// a CAV entering the part a planner drives is taken over, one leaving it handed back.
-    fn build_scenes(&mut self, sim: &mut Simulation, now: f64) -> Result<(), SumoError> {
+    fn build_scenes(&mut self, sim: &mut impl SumoClient, now: f64) -> Result<(), SumoError> {
         for r in &mut self.regions {
             r.scene.clear(now);
         }
@@ -351,7 +373,7 @@ impl<'a> ScenarioRun<'a> {
     /// could brake in front of a follower it cannot see.
     fn place(
         &mut self,
-        sim: &mut Simulation,
+        sim: &mut impl SumoClient,
         k: usize,
         g: usize,
         raw: &RawVehicleState,
@@ -398,7 +420,7 @@ impl<'a> ScenarioRun<'a> {
     /// Hands every commanded CAV that no region's planner drives now back to SUMO.
     fn hand_back(
         &mut self,
-        sim: &mut Simulation,
+        sim: &mut impl SumoClient,
         planned_by: &[Option<usize>],
     ) -> Result<(), SumoError> {
         for (k, line) in self.lines.iter_mut().enumerate() {
@@ -440,7 +462,7 @@ impl<'a> ScenarioRun<'a> {
             .collect();
         let hdv_collisions = self.collisions.iter().filter(|c| !c.controllable()).count();
         let names: Vec<String> = self.regions.iter().map(|r| r.name.clone()).collect();
-        let head = summary_head(self.config, planner, &names);
+        let head = summary_head(&self.config, planner, &names);
         let (steps, in_scenes, cavs) = self.occupancy;
         let per_step = |n: u64| n as f64 / steps.max(1) as f64;
         let region_head = RegionRow {
@@ -489,7 +511,7 @@ fn summary_head(config: &Config, planner: &str, regions: &[String]) -> ScenarioS
 /// whether its route leaves the region early.
 fn enter(
     id: &str,
-    sim: &Simulation,
+    sim: &impl SumoClient,
     g: usize,
     region: &Region,
     raw: &RawVehicleState,
