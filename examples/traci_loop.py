@@ -19,6 +19,14 @@ from the route file itself and drives ramp HDVs with its own lane-change model.
     python examples/traci_loop.py --planner bk-pbs --steps 400 [--libsumo] [--timing]
         [--gui [--gui-delay MS]]
 
+With ``--sumocfg FILE`` the loop runs a SUMO scenario of your own instead: SUMO loads your
+configuration (net, routes, flows, vehicle types), a share α of its vehicles are CAVs, and
+``Controller(sumocfg=FILE)`` books every step, plans every merge region and commands the CAVs
+through the loop's module; at the end it prints the episode's row (``--out DIR``: its files,
+those of ``bkpbs episode --sumocfg``).
+
+    python examples/traci_loop.py --sumocfg my.sumocfg --alpha 0.3 --seed 1 [--steps N] [--out DIR]
+
 ``traci`` comes from ``$SUMO_HOME/tools`` (Debian: /usr/share/sumo/tools, package sumo-tools);
 ``--libsumo`` needs SUMO's Python libsumo, which Debian ships for its own ``/usr/bin/python3``.
 ``--timing`` also runs the same episode in bkpbs's Rust runner and prints both per-step costs.
@@ -134,6 +142,30 @@ def run(args: argparse.Namespace, sumo: Any, files: Dict[str, Any]) -> Dict[str,
     }
 
 
+def run_scenario(args: argparse.Namespace, sumo: Any) -> int:
+    """The loop on a scenario of your own: SUMO started with the controller's command (your
+    configuration, then the options bkpbs needs), stepped, closed; the episode's row printed."""
+    steps = {"steps": args.steps} if args.steps_given else {}
+    ctl = bkpbs.Controller(args.planner, sumocfg=args.sumocfg, alpha=args.alpha, seed=args.seed,
+                           **steps)
+    sumo.start(ctl.sumo_command)
+    try:
+        ctl.start(sumo)
+        for _ in range(ctl.steps):
+            sumo.simulationStep()
+            ctl.step(sumo)
+    finally:
+        sumo.close()
+    row = ctl.finish(out=args.out)
+    print(
+        f"{args.planner} via {sumo.__name__} on {row['scenario']}: α={args.alpha} seed={args.seed} "
+        f"steps={row['steps']}: {row['inserted']} inserted ({row['inserted_cav']} CAVs), "
+        f"{row['arrived']} arrived, {row['present']} still driving, {row['crashed']} crashed "
+        f"({row['controllable_crashed']} controllable), regions {row['regions']}"
+    )
+    return 0
+
+
 def net_override(args: argparse.Namespace) -> Dict[str, Any]:
     """The configuration override of ``--net``, if given."""
     return {"net_file": os.path.abspath(args.net)} if args.net else {}
@@ -153,7 +185,8 @@ def main() -> int:
     p.add_argument("--alpha", type=float, default=0.5, help="CAV penetration α")
     p.add_argument("--lambda", dest="lam", type=float, default=3000.0, help="arrivals (veh/h)")
     p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--steps", type=int, default=400, help="steps of 0.2 s")
+    p.add_argument("--steps", type=int, help="steps of 0.2 s (default 400; with --sumocfg the "
+                   "scenario's interval)")
     p.add_argument("--libsumo", action="store_true", help="libsumo in-process instead of traci")
     p.add_argument("--timing", action="store_true", help="per-step costs vs the Rust runner")
     p.add_argument("--files", help="directory for the scenario files (default: temporary)")
@@ -162,7 +195,15 @@ def main() -> int:
     p.add_argument("--gui", action="store_true", help="show the run in sumo-gui (traci only)")
     p.add_argument("--gui-delay", type=float, metavar="MS",
                    help="sumo-gui's pause per step (default: real time); implies --gui")
+    p.add_argument("--sumocfg", metavar="FILE", help="a SUMO scenario of your own (its demand)")
+    p.add_argument("--out", metavar="DIR", help="with --sumocfg: write the episode's files here")
     args = p.parse_args()
+    args.steps_given = args.steps is not None
+    args.steps = args.steps if args.steps_given else 400
+    if args.sumocfg and (args.net or args.gui or args.timing or args.gui_delay is not None):
+        sys.exit("error: --sumocfg runs your scenario as it is: without --net, --gui or --timing")
+    if args.sumocfg:
+        return run_scenario(args, import_sumo(args.libsumo))
     args.gui = args.gui or args.gui_delay is not None
     if args.gui and args.libsumo:
         sys.exit("error: --gui needs traci (sumo-gui is a process of its own), not --libsumo")

@@ -204,3 +204,39 @@ def test_traci_loop_bk_pbs_completes(tmp_path, backend):
         p = subprocess.run([exe, str(EXAMPLE), *args], capture_output=True, text=True, timeout=300, env=env)
         assert p.returncode == 0, f"seed {seed}: " + p.stdout + p.stderr
         assert " collisions" in p.stdout, p.stdout
+
+
+def _ramp_game(dest: Path) -> Path:
+    """SUMO's shipped ``ramp`` game, copied as a user would (its files name each other)."""
+    game = Path(os.environ.get("SUMO_HOME", "/usr/share/sumo")) / "tools" / "game"
+    shutil.copytree(game / "ramp", dest / "ramp")
+    for f in ("ramp.sumocfg", "input_additional.add.xml"):
+        shutil.copy(game / f, dest / f)
+    return dest / "ramp.sumocfg"
+
+
+@pytest.mark.parametrize("backend", ["traci", "libsumo"])
+def test_traci_loop_on_a_scenario_of_your_own(tmp_path, cli, backend):
+    # `--sumocfg`: the example's loop on SUMO's `ramp` game gives the files of the CLI.
+    cfg = _ramp_game(tmp_path)
+    args = ("--sumocfg", str(cfg), "--planner", "bk-pbs", "--alpha", "0.5", "--seed", "4",
+            "--steps", "200")
+    if backend == "libsumo":
+        if LIBSUMO_PYTHON is None:
+            pytest.skip("no Python interpreter with SUMO's libsumo")
+        p = subprocess.run(
+            [LIBSUMO_PYTHON, str(EXAMPLE), *args, "--libsumo", "--out", str(tmp_path / "loop")],
+            capture_output=True, text=True, timeout=300, env=_libsumo_env(tmp_path),
+        )
+        assert p.returncode == 0, p.stdout + p.stderr
+        out = p.stdout
+    else:
+        out = run_example(*args, "--out", str(tmp_path / "loop"))
+    assert f"bk-pbs via {backend} on ramp.sumocfg" in out and "(0 controllable)" in out, out
+    subprocess.run(
+        [str(cli), "episode", "--sumocfg", str(cfg), "--planner", "bk-pbs", "--alpha", "0.5",
+         "--seed", "4", "--steps", "200", "--out", str(tmp_path / "cli")],
+        check=True, capture_output=True,
+    )
+    for f in ("episode.csv", "vehicles.csv", "regions.csv", "collisions.csv"):
+        assert (tmp_path / "loop" / f).read_bytes() == (tmp_path / "cli" / f).read_bytes(), f
