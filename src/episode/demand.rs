@@ -438,6 +438,7 @@ mod tests {
             ramp_start: 600.0,
             start: 800.0,
             end: 1000.0,
+            weaving: false,
         });
         road.entries[1].name = "ramp1".into();
         road.entries.push(crate::model::road::Entry::new(

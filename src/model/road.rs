@@ -90,6 +90,9 @@ pub struct MergeZone {
     pub start: f64,
     /// Frame `s` where the acceleration lane ends: vehicles must have merged (m).
     pub end: f64,
+    /// Whether the lane runs on at `end` into an off-ramp (a weaving section): main-road
+    /// traffic then crosses the zone towards the exit, the other way from the ramp's.
+    pub weaving: bool,
 }
 
 /// Where vehicles enter the section: the main carriageway's source (entry 0), then each on-ramp
@@ -170,6 +173,12 @@ impl Road {
             .iter()
             .find(|z| z.end >= s)
             .unwrap_or_else(|| self.zones.last().expect("a road has a merge zone"))
+    }
+
+    /// Whether `s` lies in a weaving section's zone, where main-road vehicles may cross towards
+    /// the exit.
+    pub fn weaving_at(&self, s: f64) -> bool {
+        (self.zones.iter()).any(|z| z.weaving && (z.start..=z.end).contains(&s))
     }
 
     /// Where the first ramp begins (`s`), the lowest `s` of the section.
@@ -278,6 +287,7 @@ impl Road {
                 ramp_start,
                 start: 150.0,
                 end: 330.0,
+                weaving: false,
             }],
             section_end: 460.0,
             end_edge: (Arc::from("main_out"), 130.0),
@@ -312,6 +322,7 @@ mod tests {
             ramp_start: 800.0,
             start: 1000.0,
             end: 1200.0,
+            weaving: false,
         });
         assert_eq!(r.zone_ahead(100.0).end, 330.0);
         assert_eq!(r.zone_ahead(500.0).end, 1200.0);

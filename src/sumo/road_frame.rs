@@ -5,7 +5,8 @@
 //!
 //! Main lanes are numbered from the left edge of the carriageway: an edge with the
 //! carriageway's N lanes holds frame lanes 1..=N, an edge with one lane more also holds the
-//! auxiliary lane 0 (an acceleration or deceleration lane). The reference line is the centre
+//! auxiliary lane 0 (an acceleration or deceleration lane, or a weaving section's lane, whose
+//! merge zone ends where it turns off into the off-ramp). The reference line is the centre
 //! line of each edge's leftmost lane and of the junction lane joining it to the next: a lane
 //! position on an edge maps to the `s` of the same position on its leftmost lane, as SUMO
 //! itself aligns the lanes of an edge (a lane change keeps the position), and a position on a
@@ -318,6 +319,7 @@ fn ramp_frames(
         ramp_start: s_end,
         start: joined.0,
         end: joined.1,
+        weaving: ramp.weaves_into.is_some(),
     })
 }
 

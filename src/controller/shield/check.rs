@@ -22,7 +22,10 @@
 //! time; a main-road HDV beside the CAV may change into its lane in front of it wherever SUMO's
 //! lane-change model would let it, and then brake as hard as SUMO expects of it (`may_cut_in`,
 //! [`super::cut_in`]); under a gap-acceptance profile a ramp HDV may move over in front of a
-//! lane-1 CAV anywhere on the acceleration lane (`may_take_gap`). A CAV's maneuver is safe
+//! lane-1 CAV anywhere on the acceleration lane (`may_take_gap`); an HDV two lanes over may
+//! change into the lane a CAV changes into, in the same step: a middle lane of three or more, or,
+//! in a weaving section, lane 1 between the ramp's lane and lane 2 (`may_enter_from_beyond`). A
+//! CAV's maneuver is safe
 //! when, executed for one step and followed by braking at `planner.emergency_decel`, the CAV never
 //! comes closer than the margin to any vehicle ahead of it (by centre) in any lane it occupies,
 //! and, if it starts a lane change, the follower in the target lane stays clear of it braking at
@@ -341,7 +344,7 @@ pub fn clear_of_leaders(c: &Candidate) -> bool {
     let lanes_of = |j: usize, o: &VehicleState| {
         let merging = match target {
             Some(t) if into_lane_1 && on_acceleration_lane(o) => bit(t),
-            Some(t) if may_enter_from_beyond(me, t, o) => bit(t),
+            Some(t) if may_enter_from_beyond(&scene.road, me, t, o) => bit(t),
             _ => 0,
         };
         let lanes = lanes_of_other(scene, o, horizon, b) | c.entered(j) | merging;
@@ -460,13 +463,24 @@ fn cannot_cut_in(me: &VehicleState, o: &VehicleState, b: &WorstCase) -> bool {
 /// road of three or more main lanes: it may change into `target`, a middle lane, in the same
 /// second as the CAV (SUMO's LC2013 keeps right and overtakes on the left), and both would be
 /// in it at once. (A CAV in lane 3 changing right beside an HDV in lane 1 that was moving back
-/// left hit it on the corridor.) Never true on two main lanes: the lane beyond is then the
-/// acceleration lane, whose ramp HDVs [`on_acceleration_lane`] covers.
-pub(super) fn may_enter_from_beyond(me: &VehicleState, target: i32, o: &VehicleState) -> bool {
+/// left hit it on the corridor.) On an acceleration lane the lane beyond a ramp CAV's target is
+/// a main lane whose drivers have no reason to move right there, and assuming they may cost
+/// nothing it prevented, so a ramp CAV is not asked to; in a weaving section they have one,
+/// the exit beyond the ramp's lane. (A ramp CAV changing into lane 1 of the weaving test net and
+/// an HDV standing in lane 2 near the zone's end, waiting to cross to the off-ramp, moved into
+/// lane 1 in the same step, the HDV 4 m ahead: bk-mastar, λ 2500, `demand.exit_share` 0.4,
+/// seed 4.)
+pub(super) fn may_enter_from_beyond(
+    road: &Road,
+    me: &VehicleState,
+    target: i32,
+    o: &VehicleState,
+) -> bool {
     let beyond = 2 * target - me.lane;
+    let weaving = me.lane == MERGE_LANE && road.weaving_at(o.front());
     o.kind == Kind::Hdv
         && !o.on_ramp
-        && me.lane >= FIRST_MAIN_LANE
+        && (me.lane >= FIRST_MAIN_LANE || weaving)
         && beyond >= FIRST_MAIN_LANE
         && o.lane == beyond
 }
@@ -481,7 +495,7 @@ pub fn clear_of_new_follower(c: &Candidate) -> bool {
     let follower = c
         .others()
         .filter(|&(j, o)| {
-            let beyond = may_enter_from_beyond(me, target, o);
+            let beyond = may_enter_from_beyond(&c.scene.road, me, target, o);
             let lanes = lanes_now(&c.scene.road, o) | c.entered(j);
             o.s <= me.s && (lanes & bit(target) != 0 || beyond)
         })

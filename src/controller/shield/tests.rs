@@ -44,7 +44,37 @@ fn a_middle_lane_is_not_entered_beside_an_hdv_on_its_other_side() {
     assert!(!is_safe(&scene(2712.0, 34.0), 0, &right, &b, &[]));
     assert!(is_safe(&scene(2712.0, 23.4), 0, &right, &b, &[]));
     let me = cav(100.0, 2, 30.0);
-    assert!(!may_enter_from_beyond(&me, 1, &hdv("h", 100.0, 0, 30.0)));
+    assert!(!may_enter_from_beyond(
+        &Road::paper_default(),
+        &me,
+        1,
+        &hdv("h", 100.0, 0, 30.0)
+    ));
+}
+
+/// In a weaving section an HDV in lane 2 may cross lane 1 towards the exit at any moment: a
+/// ramp CAV may not change into lane 1 beside one, as one once did, 4 m behind an HDV standing
+/// in lane 2 near the zone's end that moved into lane 1 in the same step (bk-mastar on the
+/// weaving test net, λ 2500, exit share 0.4, seed 4: a controllable crash). Ahead of it, the
+/// CAV may. On an acceleration lane the rule does not fire.
+#[test]
+fn a_ramp_cav_does_not_weave_into_lane_1_beside_a_crossing_hdv() {
+    let b = worst_case();
+    let left = go(12.6, Some(LaneChange::Left));
+    let scene = |weaving: bool, hdv_s: f64| {
+        let mut road = Road::paper_default();
+        road.zones[0].weaving = weaving;
+        let ramp_cav = VehicleState::on_lane("cav", Kind::Cav, Origin::Ramp, 300.0, 0, 12.6);
+        Scene {
+            time: 0.0,
+            road,
+            vehicles: vec![ramp_cav, hdv("h", hdv_s, 2, 0.0)],
+        }
+    };
+    assert!(!is_safe(&scene(true, 304.0), 0, &left, &b, &[]));
+    assert!(is_safe(&scene(true, 304.0), 0, &go(12.6, None), &b, &[]));
+    assert!(is_safe(&scene(true, 290.0), 0, &left, &b, &[]));
+    assert!(is_safe(&scene(false, 304.0), 0, &left, &b, &[]));
 }
 
 #[test]

@@ -19,11 +19,14 @@ impl Layout {
             );
         }
         for (k, r) in self.on_ramps.iter().enumerate() {
-            let on = if r.ends_on == r.joins {
+            let mut on = if r.ends_on == r.joins {
                 String::new()
             } else {
                 format!(" on '{}'", r.ends_on)
             };
+            if let Some(exit) = &r.weaves_into {
+                on += &format!("; weaving: its lane runs on into off-ramp '{exit}'");
+            }
             out += &format!(
                 "on-ramp {}: {} → {} lane {}: from s {:.2} m, ends at s {:.2} m{on}\n",
                 k + 1,

@@ -1,9 +1,17 @@
 //! Where an on-ramp's traffic must join a carriageway, found edge by edge in any network: an
 //! edge fed by two roads, the one on the left (the carriageway) feeding its left lanes and the
-//! one on the right (the ramp) feeding only lanes right of them, where the ramp's lane ends,
-//! on that edge or further down the carriageway (a lane gain followed by a lane drop). A ramp
-//! lane that never ends is a lane gain and one that runs on into an off-ramp a weaving
-//! section: neither is a merge bkpbs plans, and each is reported with why.
+//! one on the right (the ramp) feeding only lanes right of them, where the ramp's lane does not
+//! run on along the carriageway for good. It ends, on that edge or further down the carriageway
+//! (an acceleration lane; a lane gain followed by a lane drop), or it turns off into an
+//! off-ramp (a weaving section). In a weaving section the ramp traffic that stays on the
+//! carriageway must have left the lane before it turns off, just as it must have left an
+//! acceleration lane before its end: so the merge's lane ends, for the planners, at the end of
+//! the auxiliary lane on the last carriageway edge before the off-ramp, and the traffic that
+//! weaves the other way (into the off-ramp) leaves the region there. A ramp lane that never
+//! ends is a lane gain, no merge to plan; one that turns off after less than
+//! [`MIN_WEAVING_LANE`], or after passing another road that joins or leaves the carriageway, is
+//! a junction's turning lane (on SUMO's A10KW, both are local streets), not planned either.
+//! Each is reported with why.
 //!
 //! The carriageway through a merge is followed by its leftmost lane, upstream and downstream,
 //! so that a net with several roads (two carriageways, an interchange, local streets) gives
@@ -13,9 +21,16 @@ use std::collections::BTreeSet;
 
 use crate::sumo::network::Net;
 
+/// The shortest lane a ramp may feed and an off-ramp take off again for the two to be a weaving
+/// section (m), measured along the lanes: the length a driver at 50 km/h covers in 3.6 s, about
+/// the least a lane change needs. A shorter one is a junction's turning lane (on SUMO's A10KW a
+/// street joins another for 7.81 m before turning off), where SUMO's own drivers sort
+/// themselves out.
+pub const MIN_WEAVING_LANE: f64 = 50.0;
+
 /// A merge found: ramp edge `ramp` feeds lane `lane` of edge `joins`, and that lane ends at the
 /// end of lane `end_lane` of edge `ends_on` (`joins` itself, or an edge downstream on the same
-/// carriageway).
+/// carriageway), or, in a weaving section, turns off there into off-ramp `weaves_into`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Merge {
     /// The ramp's last edge.
@@ -24,10 +39,13 @@ pub struct Merge {
     pub joins: String,
     /// The lane of `joins` it feeds.
     pub lane: u32,
-    /// The carriageway edge on which that lane ends.
+    /// The carriageway edge on which that lane ends, for the traffic staying on the
+    /// carriageway.
     pub ends_on: String,
     /// Its lane index there.
     pub end_lane: u32,
+    /// In a weaving section, the off-ramp edge the lane runs on into; `None` where it ends.
+    pub weaves_into: Option<String>,
 }
 
 /// An edge where a ramp joins but no merge is planned, and why.
@@ -60,29 +78,9 @@ pub fn find(net: &Net) -> (Vec<Merge>, Vec<NotAMerge>) {
                 continue; // joins beside or left of the carriageway: a junction, not a ramp
             }
             let lane = *fed.last().expect("a predecessor feeds a lane");
-            match follow_lane(net, &e.id, lane) {
-                LaneEnd::Ends(ends_on, end_lane) => merges.push(Merge {
-                    ramp: ramp.to_string(),
-                    joins: e.id.clone(),
-                    lane,
-                    ends_on,
-                    end_lane,
-                }),
-                LaneEnd::Gain => not.push(NotAMerge {
-                    ramp: ramp.to_string(),
-                    why: format!(
-                        "joins '{}' as a lane gain (its lane never ends): no merge to plan",
-                        e.id
-                    ),
-                }),
-                LaneEnd::Exit(exit) => not.push(NotAMerge {
-                    ramp: ramp.to_string(),
-                    why: format!(
-                        "joins '{}' on a lane that runs on into off-ramp '{exit}' (a weaving \
-                         section): not planned",
-                        e.id
-                    ),
-                }),
+            match classify(ramp, &e.id, lane, follow_lane(net, &e.id, lane)) {
+                Ok(m) => merges.push(m),
+                Err(n) => not.push(n),
             }
         }
     }
@@ -99,14 +97,72 @@ fn lanes_fed(net: &Net, from: &str, to: &str) -> Vec<u32> {
     set.into_iter().collect()
 }
 
+/// The merge of `ramp` onto lane `lane` of `joins`, whose lane leads to `end`, or why it is none.
+fn classify(ramp: &str, joins: &str, lane: u32, end: LaneEnd) -> Result<Merge, NotAMerge> {
+    let merge = |ends_on: String, end_lane, weaves_into| Merge {
+        ramp: ramp.to_string(),
+        joins: joins.to_string(),
+        lane,
+        ends_on,
+        end_lane,
+        weaves_into,
+    };
+    let not = |why: String| NotAMerge {
+        ramp: ramp.to_string(),
+        why,
+    };
+    match end {
+        LaneEnd::Ends(ends_on, end_lane) => Ok(merge(ends_on, end_lane, None)),
+        LaneEnd::Gain => Err(not(format!(
+            "joins '{joins}' as a lane gain (its lane never ends): no merge to plan"
+        ))),
+        LaneEnd::Exit(w) => match w.why_no_weave() {
+            Some(why) => Err(not(format!(
+                "joins '{joins}' on a lane that turns off into '{}' {why}: a junction, not planned",
+                w.exit
+            ))),
+            None => Ok(merge(w.ends_on, w.end_lane, Some(w.exit))),
+        },
+    }
+}
+
 /// Where a lane that a ramp feeds leads.
 enum LaneEnd {
     /// It ends at the end of this lane of this edge.
     Ends(String, u32),
     /// It never ends: the carriageway has gained a lane.
     Gain,
-    /// It runs on into this off-ramp edge.
-    Exit(String),
+    /// It leaves the carriageway into an off-ramp.
+    Exit(TurnOff),
+}
+
+/// A ramp's lane that leaves the carriageway at the end of lane `end_lane` of edge `ends_on`,
+/// into off-ramp edge `exit`.
+struct TurnOff {
+    ends_on: String,
+    end_lane: u32,
+    exit: String,
+    /// Metres of lane from where the ramp joined.
+    length: f64,
+    /// The first carriageway edge before `ends_on` at whose end another road leaves or joins.
+    crossed: Option<String>,
+}
+
+impl TurnOff {
+    /// Why it is no weaving section (the lane is too short, or passes a junction on its way,
+    /// whose traffic the planners do not see), or `None` if it is one.
+    fn why_no_weave(&self) -> Option<String> {
+        if let Some(at) = &self.crossed {
+            Some(format!("past the junction at '{at}'"))
+        } else if self.length < MIN_WEAVING_LANE {
+            Some(format!(
+                "after {:.2} m, shorter than a weaving section ({MIN_WEAVING_LANE} m)",
+                self.length
+            ))
+        } else {
+            None
+        }
+    }
 }
 
 /// Follows lane `lane` of `edge` down the carriageway until it ends, leaves it, or the
@@ -114,10 +170,16 @@ enum LaneEnd {
 fn follow_lane(net: &Net, edge: &str, lane: u32) -> LaneEnd {
     let (mut edge, mut lane) = (edge.to_string(), lane);
     let mut seen = BTreeSet::new();
+    let (mut length, mut crossed) = (0.0, None);
     loop {
         if !seen.insert(edge.clone()) {
             return LaneEnd::Gain; // round a loop: it never ends
         }
+        length += net
+            .edge(&edge)
+            .lanes
+            .get(lane as usize)
+            .map_or(0.0, |l| l.length);
         let next: Vec<_> = net
             .outgoing(&edge)
             .filter(|c| c.from_lane == lane)
@@ -131,8 +193,19 @@ fn follow_lane(net: &Net, edge: &str, lane: u32) -> LaneEnd {
         };
         let on = successor(net, &edge);
         let Some(c) = next.iter().find(|c| Some(c.to.as_str()) == on) else {
-            return LaneEnd::Exit(first.to.clone());
+            return LaneEnd::Exit(TurnOff {
+                exit: first.to.clone(),
+                ends_on: edge,
+                end_lane: lane,
+                length,
+                crossed,
+            });
         };
+        if crossed.is_none()
+            && (net.successors(&edge).len() > 1 || net.predecessors(&c.to).len() > 1)
+        {
+            crossed = Some(edge.clone());
+        }
         (edge, lane) = (c.to.clone(), c.to_lane);
     }
 }

@@ -18,7 +18,7 @@ use crate::model::math::Point;
 use crate::model::reference_line::ReferenceLine;
 use crate::sumo::network::Net;
 
-pub use merges::{Merge, NotAMerge};
+pub use merges::{Merge, NotAMerge, MIN_WEAVING_LANE};
 
 /// How far upstream of its first merge a region begins (m): longer than the planners'
 /// horizon at the speed limit, so that a CAV is planned before it reaches the merge.
@@ -50,15 +50,19 @@ pub struct OnRamp {
     pub joins: String,
     /// Lane index on `joins`.
     pub lane: u32,
-    /// The main edge on which that lane ends (`joins`, or one downstream after a lane gain).
+    /// The main edge on which that lane ends (`joins`, or one downstream after a lane gain; in
+    /// a weaving section, the last before the lane turns off into the off-ramp).
     pub ends_on: String,
     /// Its lane index there.
     pub end_lane: u32,
-    /// Where that lane ends along the carriageway (m): the acceleration lane's end, by which a
-    /// ramp vehicle must have merged.
+    /// Where that lane ends along the carriageway (m): the acceleration lane's end (in a
+    /// weaving section, where it turns off), by which a ramp vehicle must have merged.
     pub merge_end: f64,
     /// Where that lane starts along the carriageway (m): merging may begin here.
     pub merge_start: f64,
+    /// In a weaving section, the off-ramp edge the lane runs on into at `merge_end` (one of the
+    /// region's off-ramps); `None` where the lane ends there.
+    pub weaves_into: Option<String>,
 }
 
 /// An off-ramp: the main edge it leaves and its edges.
@@ -261,6 +265,7 @@ fn on_ramp(net: &Net, merge: &Merge, on_main: &BTreeSet<&str>, line: &ReferenceL
         end_lane: merge.end_lane,
         merge_start: at(start.shape.first()),
         merge_end: at(end.shape.last()),
+        weaves_into: merge.weaves_into.clone(),
     }
 }
 

@@ -170,3 +170,111 @@ fn footways_and_turnarounds_are_left_out() {
         ]
     );
 }
+
+/// A weaving section as net XML: a carriageway of two lanes, `a` then `w` then `b`; ramp `r`
+/// joins `w` as its lane 0, which after `weave` metres turns off into off-ramp `off`. With
+/// `street`, a side street `s` leaves `w` halfway, splitting it into `w` and `w2`.
+fn weaving(weave: f64, street: bool) -> String {
+    // Lanes aligned on the left, the carriageway's leftmost at y = 6.4, ramps right of it.
+    let lane = |id: &str, k: u32, n: u32, x0: f64, x1: f64| {
+        let y = if id == "r" || id == "off" {
+            -3.2
+        } else {
+            3.2 * f64::from(k + 3 - n)
+        };
+        format!(
+            r#"<lane id="{id}_{k}" index="{k}" length="{len}" width="3.2" shape="{x0},{y} {x1},{y}"/>"#,
+            len = x1 - x0
+        )
+    };
+    let edge = |id: &str, n: u32, x0: f64, x1: f64| {
+        let lanes: String = (0..n).map(|k| lane(id, k, n, x0, x1)).collect();
+        format!(r#"<edge id="{id}">{lanes}</edge>"#)
+    };
+    let c = |f: &str, fl: u32, t: &str, tl: u32| {
+        format!(r#"<connection from="{f}" to="{t}" fromLane="{fl}" toLane="{tl}" dir="s"/>"#)
+    };
+    let (w_end, end) = (100.0 + weave, 200.0 + weave);
+    let mut xml = vec![
+        "<net>".to_string(),
+        edge("a", 2, 0.0, 100.0),
+        edge("b", 2, w_end, end),
+        edge("r", 1, 0.0, 100.0),
+        edge("off", 1, w_end, end),
+        c("a", 0, "w", 1),
+        c("a", 1, "w", 2),
+        c("r", 0, "w", 0),
+    ];
+    let last = if street {
+        let mid = 100.0 + weave / 2.0;
+        xml.extend([edge("w", 3, 100.0, mid), edge("w2", 3, mid, w_end)]);
+        xml.extend([edge("s", 1, mid, end), c("w", 2, "s", 0)]);
+        xml.extend((0..3).map(|k| c("w", k, "w2", k)));
+        "w2"
+    } else {
+        xml.push(edge("w", 3, 100.0, w_end));
+        "w"
+    };
+    xml.extend([c(last, 1, "b", 0), c(last, 2, "b", 1), c(last, 0, "off", 0)]);
+    xml.push("</net>".into());
+    xml.concat()
+}
+
+/// A ramp's lane that runs on into an off-ramp is a merge: the ramp's traffic staying on the
+/// carriageway must leave it before it turns off, so its lane ends there, and the off-ramp is
+/// the region's. Before weaving sections were planned, this net had no region.
+#[test]
+fn a_weaving_section_is_a_merge_whose_lane_ends_where_it_turns_off() {
+    let net = Net::parse(Path::new("w.net.xml"), &weaving(300.0, false)).unwrap();
+    let found = Discovery::of(&net);
+    assert!(found.not_merges.is_empty(), "{:?}", found.not_merges);
+    assert_eq!(found.regions.len(), 1);
+    let l = &found.regions[0];
+    assert_eq!(ids(l), ["a", "w", "b"]);
+    let r = &l.on_ramps[0];
+    assert_eq!(
+        (r.joins.as_str(), r.ends_on.as_str(), r.end_lane),
+        ("w", "w", 0)
+    );
+    assert_eq!(r.weaves_into.as_deref(), Some("off"));
+    assert!((r.merge_start - 100.0).abs() < 1e-6, "{r:?}");
+    assert!((r.merge_end - 400.0).abs() < 1e-6, "{r:?}");
+    assert_eq!(l.off_ramps.len(), 1);
+    assert_eq!(
+        (l.off_ramps[0].leaves.as_str(), &l.off_ramps[0].edges[..]),
+        ("w", &["off".to_string()][..])
+    );
+    assert!(l
+        .describe()
+        .contains("weaving: its lane runs on into off-ramp 'off'"));
+    // Its frame: the auxiliary lane is lane 0 of the merge zone, which ends where it turns off.
+    let road = crate::sumo::road_frame::road(&net, l).unwrap();
+    let z = road.zones[0];
+    assert!(
+        (z.start - 100.0).abs() < 1e-6 && (z.end - 400.0).abs() < 1e-6,
+        "{z:?}"
+    );
+    assert_eq!(road.exits.len(), 1);
+    assert!(road.edge("off").is_none(), "the off-ramp leaves the frame");
+}
+
+/// A turning lane is no weaving section: too short for a lane change, or past a side street
+/// whose traffic the region would not see. Each is reported with why.
+#[test]
+fn short_or_crossed_turning_lanes_are_not_weaving_sections() {
+    for (weave, street, why) in [
+        (
+            20.0,
+            false,
+            "after 20.00 m, shorter than a weaving section (50 m)",
+        ),
+        (300.0, true, "past the junction at 'w'"),
+    ] {
+        let net = Net::parse(Path::new("w.net.xml"), &weaving(weave, street)).unwrap();
+        let found = Discovery::of(&net);
+        assert!(found.regions.is_empty(), "{weave} {street}");
+        assert_eq!(found.not_merges.len(), 1);
+        let n = &found.not_merges[0];
+        assert!(n.ramp == "r" && n.why.contains(why), "{n:?}");
+    }
+}
