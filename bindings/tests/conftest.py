@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import shutil
 import subprocess
 from pathlib import Path
 from typing import Any, Dict, List
@@ -78,3 +79,12 @@ def csv_text(value: Any, like: str) -> str:
         decimals = len(like.partition(".")[2])
         return f"{value:.{decimals}f}"
     return str(value)
+
+
+def ramp_game(dest: Path) -> Path:
+    """SUMO's shipped ``ramp`` game, copied as a user would (its files name each other)."""
+    game = Path(os.environ.get("SUMO_HOME", "/usr/share/sumo")) / "tools" / "game"
+    shutil.copytree(game / "ramp", dest / "ramp")
+    for f in ("ramp.sumocfg", "input_additional.add.xml"):
+        shutil.copy(game / f, dest / f)
+    return dest / "ramp.sumocfg"

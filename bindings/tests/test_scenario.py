@@ -4,27 +4,19 @@ the core's loop and returns the same ``episode.csv`` row, byte for byte in its f
 
 from __future__ import annotations
 
-import os
-import shutil
 import subprocess
 from pathlib import Path
 
 import pytest
 
 import bkpbs
+from conftest import ramp_game
 
 
-def _ramp_game(dest: Path) -> Path:
-    """SUMO's shipped ``ramp`` game, copied as a user would (its files name each other)."""
-    game = Path(os.environ.get("SUMO_HOME", "/usr/share/sumo")) / "tools" / "game"
-    shutil.copytree(game / "ramp", dest / "ramp")
-    for f in ("ramp.sumocfg", "input_additional.add.xml"):
-        shutil.copy(game / f, dest / f)
-    return dest / "ramp.sumocfg"
 
 
 def test_a_scenario_of_your_own_gives_the_clis_row(tmp_path: Path, cli: Path) -> None:
-    cfg = _ramp_game(tmp_path)
+    cfg = ramp_game(tmp_path)
     row = bkpbs.run_episode("bk-pbs", 0.5, seed=2, sumocfg=cfg, steps=250, out=tmp_path / "py")
     subprocess.run(
         [str(cli), "episode", "--sumocfg", str(cfg), "--planner", "bk-pbs", "--alpha", "0.5",
@@ -42,7 +34,7 @@ def test_a_scenario_of_your_own_gives_the_clis_row(tmp_path: Path, cli: Path) ->
 
 def test_the_scenario_interval_is_the_default_length(tmp_path: Path) -> None:
     cfg = tmp_path / "short.sumocfg"
-    text = _ramp_game(tmp_path).read_text().replace('<end value="400"/>', '<end value="30"/>')
+    text = ramp_game(tmp_path).read_text().replace('<end value="400"/>', '<end value="30"/>')
     cfg.write_text(text)
     row = bkpbs.run_episode("idm-mobil", 0.3, seed=0, sumocfg=cfg)
     assert row["steps"] == 150
@@ -50,13 +42,13 @@ def test_the_scenario_interval_is_the_default_length(tmp_path: Path) -> None:
 
 def test_a_demand_rate_with_a_scenario_of_your_own_is_refused(tmp_path: Path) -> None:
     with pytest.raises(bkpbs.BkpbsError, match="lam = 3000.*its own demand"):
-        bkpbs.run_episode("bk-pbs", 0.5, 3000.0, 1, sumocfg=_ramp_game(tmp_path))
+        bkpbs.run_episode("bk-pbs", 0.5, 3000.0, 1, sumocfg=ramp_game(tmp_path))
 
 
 def test_cavs_by_vehicle_type(tmp_path: Path) -> None:
     """``cav_types=[...]``: every vehicle of those types is a CAV and no other."""
     out = tmp_path / "trucks"
-    row = bkpbs.run_episode("bk-pbs", 0.5, seed=1, sumocfg=_ramp_game(tmp_path), steps=250,
+    row = bkpbs.run_episode("bk-pbs", 0.5, seed=1, sumocfg=ramp_game(tmp_path), steps=250,
                             cav_types=["truck"], out=out)
     assert row["cav_types"] == "truck"
     lines = (out / "vehicles.csv").read_text().splitlines()
@@ -64,5 +56,5 @@ def test_cavs_by_vehicle_type(tmp_path: Path) -> None:
     kinds = {tuple(r.split(",")[header.index(c)] for c in ("type", "kind")) for r in lines[1:]}
     assert kinds == {("truck", "cav"), ("passenger", "hdv")}
     with pytest.raises(bkpbs.BkpbsError, match="'lorry'.*its types: .*truck"):
-        bkpbs.run_episode("bk-pbs", 0.5, seed=1, sumocfg=_ramp_game(tmp_path / "b"), steps=50,
+        bkpbs.run_episode("bk-pbs", 0.5, seed=1, sumocfg=ramp_game(tmp_path / "b"), steps=50,
                           cav_types=["lorry"])

@@ -13,7 +13,7 @@ from pathlib import Path
 import pytest
 
 import bkpbs
-from conftest import REPO
+from conftest import REPO, ramp_game
 
 EXAMPLE = REPO / "examples" / "traci_loop.py"
 
@@ -206,19 +206,12 @@ def test_traci_loop_bk_pbs_completes(tmp_path, backend):
         assert " collisions" in p.stdout, p.stdout
 
 
-def _ramp_game(dest: Path) -> Path:
-    """SUMO's shipped ``ramp`` game, copied as a user would (its files name each other)."""
-    game = Path(os.environ.get("SUMO_HOME", "/usr/share/sumo")) / "tools" / "game"
-    shutil.copytree(game / "ramp", dest / "ramp")
-    for f in ("ramp.sumocfg", "input_additional.add.xml"):
-        shutil.copy(game / f, dest / f)
-    return dest / "ramp.sumocfg"
 
 
 @pytest.mark.parametrize("backend", ["traci", "libsumo"])
 def test_traci_loop_on_a_scenario_of_your_own(tmp_path, cli, backend):
     # `--sumocfg`: the example's loop on SUMO's `ramp` game gives the files of the CLI.
-    cfg = _ramp_game(tmp_path)
+    cfg = ramp_game(tmp_path)
     args = ("--sumocfg", str(cfg), "--planner", "bk-pbs", "--alpha", "0.5", "--seed", "4",
             "--steps", "200")
     if backend == "libsumo":
