@@ -8,7 +8,7 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use common::netconvert::{build, through};
-use common::{bkpbs, csv_rows, refused_naming, stderr};
+use common::{bkpbs, csv_rows, refused_naming, scenario_episode, stderr};
 
 /// Two carriageways in opposite directions on shared nodes (netconvert adds U-turns at their
 /// ends), each with an on-ramp, and a footway beside the eastbound ramp.
@@ -326,19 +326,7 @@ fn a_weaving_scenario_runs_under_every_planner() {
     .unwrap();
     for planner in ["bk-pbs", "bk-mastar", "idm-mobil", "sumo"] {
         let out = dir.path().join(planner);
-        let o = bkpbs(&[
-            "episode",
-            "--sumocfg",
-            cfg.to_str().unwrap(),
-            "--planner",
-            planner,
-            "--alpha",
-            "0.5",
-            "--seed",
-            "3",
-            "--out",
-            out.to_str().unwrap(),
-        ]);
+        let o = scenario_episode(&cfg, planner, "0.5", "3", &out);
         assert!(o.status.success(), "{planner}: {}", stderr(&o));
         let ep = &csv_rows(&std::fs::read(out.join("episode.csv")).unwrap())[0];
         let n = |k: &str| ep[k].parse::<usize>().unwrap();

@@ -9,7 +9,7 @@ mod common;
 use std::path::{Path, PathBuf};
 
 use common::netconvert::{build, through};
-use common::{bkpbs, csv_rows, stderr};
+use common::{csv_rows, scenario_episode, stderr};
 
 /// A two-lane motorway with a 200 m acceleration lane that ends, fed by a one-lane ramp.
 fn merge(dir: &Path) -> PathBuf {
@@ -68,19 +68,7 @@ fn cav_trucks_are_planned_with_their_own_length_and_no_search_planner_collides()
     let cfg = scenario(dir.path());
     for planner in ["bk-pbs", "bk-mastar"] {
         let out = dir.path().join(planner);
-        let o = bkpbs(&[
-            "episode",
-            "--sumocfg",
-            cfg.to_str().unwrap(),
-            "--planner",
-            planner,
-            "--alpha",
-            "0.8",
-            "--seed",
-            "5",
-            "--out",
-            out.to_str().unwrap(),
-        ]);
+        let o = scenario_episode(&cfg, planner, "0.8", "5", &out);
         assert!(o.status.success(), "{planner}: {}", stderr(&o));
         let ep = &csv_rows(&std::fs::read(out.join("episode.csv")).unwrap())[0];
         let n = |k: &str| ep[k].parse::<u64>().unwrap();

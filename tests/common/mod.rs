@@ -60,6 +60,30 @@ pub fn bkpbs(args: &[&str]) -> Output {
         .expect("the binary runs")
 }
 
+/// `bkpbs episode --sumocfg cfg --planner planner --alpha alpha --seed seed --out out`: an
+/// episode on a scenario of the user's own, over the scenario's interval.
+pub fn scenario_episode(
+    cfg: &std::path::Path,
+    planner: &str,
+    alpha: &str,
+    seed: &str,
+    out: &std::path::Path,
+) -> Output {
+    bkpbs(&[
+        "episode",
+        "--sumocfg",
+        cfg.to_str().unwrap(),
+        "--planner",
+        planner,
+        "--alpha",
+        alpha,
+        "--seed",
+        seed,
+        "--out",
+        out.to_str().unwrap(),
+    ])
+}
+
 /// What a run printed to stderr.
 pub fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
