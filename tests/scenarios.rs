@@ -5,22 +5,10 @@
 
 mod common;
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::Command;
 
-use common::{bkpbs, csv_rows, refused_naming, stderr};
-
-/// SUMO's `game` directory copied into `dir` (its configurations name files beside them).
-fn game_copy(dir: &Path) -> PathBuf {
-    let game = common::sumo_game_dir();
-    let out = dir.join("game");
-    let status = Command::new("cp")
-        .args(["-r", game.to_str().unwrap(), out.to_str().unwrap()])
-        .status()
-        .unwrap();
-    assert!(status.success());
-    out
-}
+use common::{bkpbs, csv_rows, game_copy, refused_naming, stderr};
 
 fn scenario(cfg: &Path, planner: &str, steps: &str, out: &Path) -> std::process::Output {
     bkpbs(&[

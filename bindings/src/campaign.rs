@@ -91,6 +91,7 @@ impl PyCampaign {
             trajectories: None,
             hdv_profiles: None,
             shard,
+            sumocfg: None,
         };
         let settings = Settings::resolve(config.as_deref(), &overrides).map_err(settings_error)?;
         Ok(PyCampaign { settings, out })

@@ -4,7 +4,7 @@
 use crate::config::Config;
 
 /// Scenario keys a campaign sets itself, per cell.
-pub(super) const PER_CELL_KEYS: [&str; 4] = ["alpha", "lambda", "seed", "steps"];
+pub(super) const PER_CELL_KEYS: [&str; 5] = ["alpha", "lambda", "seed", "steps", "sumocfg"];
 
 /// The configuration without how SUMO is watched (its console output, sumo-gui, the stall
 /// bound), which does not change what SUMO computes.

@@ -18,6 +18,7 @@
 //! [`pool`] (the two ends of the worker processes), [`collect`] (resume state, gathering),
 //! [`results`] (the collected files), [`tasks`] (the same run for other schedulers).
 
+mod checks;
 pub mod claim;
 pub mod collect;
 pub mod comparison;
@@ -25,6 +26,7 @@ pub mod grid;
 #[doc(hidden)] // worker-process plumbing: the campaign runs it, a library user never does
 pub mod pool;
 pub mod results;
+pub mod scenarios;
 pub mod settings;
 pub mod table;
 pub mod tasks;
@@ -134,7 +136,17 @@ pub fn run(settings: &Settings, out: &Path, exe: &Path) -> Result<RunSummary, Ca
     announce(settings, &plan);
     let (shard_size, already_done) = (plan.shard_size, plan.already_done);
     let _claim = plan.claim.clone();
-    let (ran, failed_now) = run_requests(settings, exe, plan.requests);
+    let names: Vec<String> = settings
+        .grid
+        .cells()
+        .iter()
+        .map(|c| c.to_string())
+        .collect();
+    let options = pool::PoolOptions {
+        workers: settings.workers,
+        episode_timeout: settings.episode_timeout,
+    };
+    let (ran, failed_now) = run_requests(&names, options, exe, plan.requests);
     let results = tasks::collect(settings, out)?;
     let summary = RunSummary {
         grid: settings.grid.len(),
@@ -180,23 +192,24 @@ fn announce(settings: &Settings, plan: &tasks::Plan) {
 }
 
 /// Runs the episodes in the worker pool with a progress bar, naming each failure as it
-/// happens; returns how many ran and how many of them failed.
-fn run_requests(settings: &Settings, exe: &Path, requests: Vec<worker::Request>) -> (usize, usize) {
-    let cells = settings.grid.cells();
+/// happens (`names` are the cells' by grid position); returns how many ran and how many of
+/// them failed.
+fn run_requests(
+    names: &[String],
+    options: pool::PoolOptions,
+    exe: &Path,
+    requests: Vec<worker::Request>,
+) -> (usize, usize) {
     let bar = progress_bar(requests.len() as u64);
     let mut failed_now = 0;
     let mut ran = 0;
-    let options = pool::PoolOptions {
-        workers: settings.workers,
-        episode_timeout: settings.episode_timeout,
-    };
     pool::run(exe, requests, options, |reply| {
         ran += 1;
         if let Outcome::Failed { error } = &reply.outcome {
             failed_now += 1;
             let line = format!(
                 "campaign: episode {} failed: {error}",
-                cells[reply.position]
+                names[reply.position]
             );
             if bar.is_hidden() {
                 eprintln!("{line}");

@@ -21,86 +21,20 @@
 //! `scenario.alpha`, `lambda`, `seed` and `steps` vary per cell or come from the campaign table,
 //! so a campaign file must not set them.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::time::Duration;
 
 use serde::{Deserialize, Serialize};
 
-use super::comparison::{first_difference, scenario_table, unwatched, PER_CELL_KEYS};
-use super::grid::{Cell, Grid, Shard, ShardError};
+pub use super::checks::SettingsError;
+use super::checks::{
+    at_least_one, check_planners, check_values, episode_timeout, origin, parse_list, read_doc,
+    read_parts, worker_count,
+};
+use super::comparison::{first_difference, scenario_table, unwatched};
+use super::grid::{Cell, Grid, Shard};
 use crate::config::{Config, ConfigError, TrajectoryFormat};
-use crate::controller::{PlannerKind, UnknownPlanner, PLANNERS};
-
-/// Why campaign settings cannot be used.
-#[derive(Debug, thiserror::Error)]
-pub enum SettingsError {
-    /// The campaign file could not be read.
-    #[error("cannot read campaign file {path}: {error}")]
-    Read {
-        /// The file asked for.
-        path: PathBuf,
-        /// What the file system said.
-        error: std::io::Error,
-    },
-    /// The campaign file is not TOML of the expected shape (syntax, wrong type, unknown key).
-    #[error("malformed campaign file {path}: {message}")]
-    Parse {
-        /// The file read.
-        path: PathBuf,
-        /// The TOML parser's message (with the table or byte offset where known).
-        message: String,
-    },
-    /// The file sets a scenario key that the campaign sets per cell.
-    #[error("scenario.{key} in {path} is set by the campaign (use campaign.{replacement})")]
-    PerCellKey {
-        /// The campaign file.
-        path: PathBuf,
-        /// The `[scenario]` key set (`alpha`, `lambda`, `seed` or `steps`).
-        key: String,
-        /// The `[campaign]` key to use instead.
-        replacement: &'static str,
-    },
-    /// The scenario settings fail validation for some cell of the grid.
-    #[error(transparent)]
-    Config(#[from] ConfigError),
-    /// A planner name is not a known controller.
-    #[error("{origin}: {planner}")]
-    Planner {
-        /// Where the list came from: the flag, or the key and its file.
-        origin: String,
-        /// The unknown name, with the known ones.
-        planner: UnknownPlanner,
-    },
-    /// An entry of a numeric list flag does not parse.
-    #[error("{origin}: '{value}' is not a number")]
-    NotANumber {
-        /// The flag (`--alphas`, …).
-        origin: String,
-        /// The entry as given.
-        value: String,
-    },
-    /// A value lies outside what a campaign accepts.
-    #[error("{origin}: {what} {value} {reason}")]
-    OutOfRange {
-        /// Where the value came from: the flag, or the key and its file.
-        origin: String,
-        /// What the value is (`alpha`, `workers`, `episode timeout`, …).
-        what: &'static str,
-        /// The value, as text.
-        value: String,
-        /// The rule it breaks.
-        reason: &'static str,
-    },
-    /// A list setting (planners, α, λ) has no entry.
-    #[error("{origin}: the list is empty")]
-    Empty {
-        /// Where the list came from: the flag, or the key and its file.
-        origin: String,
-    },
-    /// The `--shard` value is not `k/n`.
-    #[error(transparent)]
-    Shard(#[from] ShardError),
-}
+use crate::controller::PLANNERS;
 
 /// The `[campaign]` table: the grid and how to run it.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -177,6 +111,9 @@ pub struct Overrides {
     pub trajectories: Option<TrajectoryFormat>,
     /// `--hdv-profiles`, comma-separated.
     pub hdv_profiles: Option<String>,
+    /// `--sumocfg`, comma-separated: a campaign over these scenarios of the user's own
+    /// ([`super::scenarios`]).
+    pub sumocfg: Option<String>,
 }
 
 /// Validated settings of one campaign run.
@@ -203,70 +140,9 @@ struct FileParts {
     config: Config,
 }
 
-fn parse_error(path: &Path, message: impl Into<String>) -> SettingsError {
-    SettingsError::Parse {
-        path: path.to_path_buf(),
-        message: message.into(),
-    }
-}
-
 fn read_file(path: &Path) -> Result<FileParts, SettingsError> {
-    let text = crate::io::bounded::read_text(path, crate::io::bounded::FileKind::Config).map_err(
-        |error| SettingsError::Read {
-            path: path.to_path_buf(),
-            error,
-        },
-    )?;
-    let mut doc: toml::Table = toml::from_str(&text).map_err(|e| {
-        parse_error(
-            path,
-            e.message().to_string()
-                + &e.span()
-                    .map(|s| format!(" (at byte {})", s.start))
-                    .unwrap_or_default(),
-        )
-    })?;
-    let table = match doc.remove("campaign") {
-        Some(v) => v
-            .try_into::<CampaignTable>()
-            .map_err(|e| parse_error(path, format!("[campaign]: {}", e.message())))?,
-        None => CampaignTable::default(),
-    };
-    if let Some(toml::Value::Table(s)) = doc.get("scenario") {
-        for key in PER_CELL_KEYS {
-            if s.contains_key(key) {
-                return Err(SettingsError::PerCellKey {
-                    path: path.to_path_buf(),
-                    key: key.to_string(),
-                    replacement: match key {
-                        "alpha" => "alphas",
-                        "lambda" => "lambdas",
-                        "seed" => "seed_base",
-                        _ => "steps",
-                    },
-                });
-            }
-        }
-    }
-    let config = toml::Value::Table(doc)
-        .try_into::<Config>()
-        .map_err(|e| parse_error(path, e.message().to_string()))?;
+    let (table, config) = read_parts(read_doc(path)?, path)?;
     Ok(FileParts { table, config })
-}
-
-/// The entries of a comma-separated flag, trimmed, empty ones skipped. Text entries (planner
-/// names) always parse; only a numeric list can fail, hence the error's wording.
-fn parse_list<T: std::str::FromStr>(origin: &str, text: &str) -> Result<Vec<T>, SettingsError> {
-    text.split(',')
-        .map(str::trim)
-        .filter(|s| !s.is_empty())
-        .map(|s| {
-            s.parse().map_err(|_| SettingsError::NotANumber {
-                origin: origin.to_string(),
-                value: s.to_string(),
-            })
-        })
-        .collect()
 }
 
 /// Replaces the table's values by the flags that are set.
@@ -289,15 +165,6 @@ fn apply_overrides(table: &mut CampaignTable, o: &Overrides) -> Result<(), Setti
     table.workers = o.workers.or(table.workers);
     table.episode_timeout = o.episode_timeout.or(table.episode_timeout);
     Ok(())
-}
-
-/// Where a value came from, for error messages: the flag, or the key and its file.
-fn origin(flag_set: bool, flag: &str, key: &str, file: Option<&Path>) -> String {
-    match (flag_set, file) {
-        (true, _) => flag.to_string(),
-        (false, Some(p)) => format!("campaign.{key} in {}", p.display()),
-        (false, None) => format!("campaign.{key} (default)"),
-    }
 }
 
 impl Settings {
@@ -329,8 +196,9 @@ impl Settings {
             None => Shard::ALL,
         };
         check_table(&table, o, file)?;
-        let workers = worker_count(&table, o, file)?;
-        let episode_timeout = episode_timeout(&table, o, file)?;
+        let workers = worker_count(table.workers, o.workers.is_some(), file)?;
+        let episode_timeout =
+            episode_timeout(table.episode_timeout, o.episode_timeout.is_some(), file)?;
         config.scenario.steps = table.steps;
         if let Some(format) = o.trajectories {
             config.output.trajectories = format;
@@ -450,79 +318,6 @@ fn check_table(
     )
 }
 
-/// The planner list must name at least one controller, and only known ones.
-fn check_planners(planners: &[String], origin: String) -> Result<(), SettingsError> {
-    if planners.is_empty() {
-        return Err(SettingsError::Empty { origin });
-    }
-    match planners.iter().find_map(|p| p.parse::<PlannerKind>().err()) {
-        Some(planner) => Err(SettingsError::Planner { origin, planner }),
-        None => Ok(()),
-    }
-}
-
-/// A count must be at least 1; `what` names it in the error.
-fn at_least_one(origin: String, what: &'static str, n: u64) -> Result<(), SettingsError> {
-    if n == 0 {
-        Err(SettingsError::OutOfRange {
-            origin,
-            what,
-            value: "0".into(),
-            reason: "must be at least 1",
-        })
-    } else {
-        Ok(())
-    }
-}
-
-/// The table's worker count, else one per core.
-fn worker_count(
-    table: &CampaignTable,
-    o: &Overrides,
-    file: Option<&Path>,
-) -> Result<usize, SettingsError> {
-    match table.workers {
-        Some(w) => {
-            let origin = origin(o.workers.is_some(), "--workers", "workers", file);
-            at_least_one(origin.clone(), "workers", w as u64)?;
-            if w > crate::io::cores::max_parallel() {
-                return Err(SettingsError::OutOfRange {
-                    origin,
-                    what: "workers",
-                    value: w.to_string(),
-                    reason: "is more than four per core of this machine",
-                });
-            }
-            Ok(w)
-        }
-        None => Ok(crate::io::cores::available()),
-    }
-}
-
-/// Longest accepted episode timeout: a week, far beyond any episode, and small enough to be a
-/// valid `Duration`.
-pub const MAX_EPISODE_TIMEOUT_S: f64 = 7.0 * 24.0 * 3600.0;
-
-/// The table's episode timeout, checked: positive seconds, at most [`MAX_EPISODE_TIMEOUT_S`].
-fn episode_timeout(
-    table: &CampaignTable,
-    o: &Overrides,
-    file: Option<&Path>,
-) -> Result<Option<Duration>, SettingsError> {
-    let Some(t) = table.episode_timeout else {
-        return Ok(None);
-    };
-    let flag_set = o.episode_timeout.is_some();
-    check_values(
-        &origin(flag_set, "--episode-timeout", "episode_timeout", file),
-        "episode timeout",
-        &[t],
-        |t| t > 0.0 && t <= MAX_EPISODE_TIMEOUT_S,
-        "must lie in (0, 604800] seconds (a week)",
-    )?;
-    Ok(Some(Duration::from_secs_f64(t)))
-}
-
 /// Every (α, λ) of the grid must make a valid episode configuration, so that no cell fails on
 /// its settings halfway through the campaign.
 fn check_cells(config: &Config, grid: &Grid) -> Result<(), ConfigError> {
@@ -538,29 +333,6 @@ fn check_cells(config: &Config, grid: &Grid) -> Result<(), ConfigError> {
         }
     }
     Ok(())
-}
-
-fn check_values(
-    origin: &str,
-    what: &'static str,
-    values: &[f64],
-    ok: impl Fn(f64) -> bool,
-    reason: &'static str,
-) -> Result<(), SettingsError> {
-    if values.is_empty() {
-        return Err(SettingsError::Empty {
-            origin: origin.to_string(),
-        });
-    }
-    match values.iter().find(|&&v| !ok(v)) {
-        Some(v) => Err(SettingsError::OutOfRange {
-            origin: origin.to_string(),
-            what,
-            value: v.to_string(),
-            reason,
-        }),
-        None => Ok(()),
-    }
 }
 
 #[cfg(test)]

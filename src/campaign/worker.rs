@@ -188,7 +188,7 @@ pub(crate) fn run_cell(req: &Request) -> Result<(), String> {
     IN_EPISODE.store(true, Ordering::SeqCst);
     let run = panic::catch_unwind(AssertUnwindSafe(|| {
         injected_fault(req);
-        episode::run(&req.config, &req.planner).map_err(|e| e.to_string())
+        Ran::run(req)
     }));
     IN_EPISODE.store(false, Ordering::SeqCst);
     let result = match run {
@@ -207,8 +207,34 @@ pub(crate) fn run_cell(req: &Request) -> Result<(), String> {
     };
     let record = super::comparison::results_settings(&req.config);
     io::write_atomic(&req.dir.join(SETTINGS_RECORD), record.as_bytes())
-        .and_then(|()| result.write(&req.dir).map(drop))
+        .and_then(|()| result.write(&req.dir))
         .map_err(|e| e.to_string())
+}
+
+/// A finished episode of either kind of campaign: on the paper's demand, or on a scenario of
+/// the user's own (`scenario.sumocfg` set), whose files differ.
+enum Ran {
+    Demand(Box<episode::EpisodeResult>),
+    Scenario(Box<episode::sumocfg::ScenarioResult>),
+}
+
+impl Ran {
+    fn run(req: &Request) -> Result<Ran, String> {
+        let (config, planner) = (&req.config, &req.planner);
+        let ran = match config.scenario.sumocfg {
+            Some(_) => episode::sumocfg::run(config, planner).map(|r| Ran::Scenario(Box::new(r))),
+            None => episode::run(config, planner).map(|r| Ran::Demand(Box::new(r))),
+        };
+        ran.map_err(|e| e.to_string())
+    }
+
+    /// Writes the episode's files into `dir`, `episode.csv` last.
+    fn write(&self, dir: &Path) -> Result<(), crate::io::WriteError> {
+        match self {
+            Ran::Demand(r) => r.write(dir).map(drop),
+            Ran::Scenario(r) => episode::sumocfg::write(r, dir).map(drop),
+        }
+    }
 }
 
 /// Removes the temporary files an earlier, killed write left in `dir`: those whose writer

@@ -5,6 +5,7 @@ use std::path::PathBuf;
 use anyhow::{Context, Result};
 use clap::Args;
 
+use bkpbs::campaign::scenarios::{is_scenario_campaign, ScenarioSettings};
 use bkpbs::campaign::{self, Overrides, Settings};
 use bkpbs::config::TrajectoryFormat;
 use bkpbs::report::episode_plots;
@@ -26,6 +27,10 @@ pub struct CampaignArgs {
     /// CAV penetrations α, comma-separated [default: 0.4,0.5,0.6,0.7,0.8].
     #[arg(long, allow_hyphen_values = true)]
     alphas: Option<String>,
+    /// Scenarios of your own (.sumocfg), comma-separated: a campaign over them (planners ×
+    /// scenarios × α × seeds; each brings its demand, and runs its own interval unless --steps).
+    #[arg(long, value_name = "FILES")]
+    sumocfg: Option<String>,
     /// Arrival rates λ (veh/h), comma-separated [default: 2500,3000].
     #[arg(long, allow_hyphen_values = true)]
     lambdas: Option<String>,
@@ -62,9 +67,15 @@ pub struct CampaignArgs {
 
 /// A checked campaign: the grid, shard and scenario settings, and where results go.
 pub struct Campaign {
-    settings: Settings,
+    settings: Grid,
     out: PathBuf,
     plots: bool,
+}
+
+/// Which kind of campaign: the paper's demand, or scenarios of the user's own.
+enum Grid {
+    Demand(Box<Settings>),
+    Scenarios(Box<ScenarioSettings>),
 }
 
 impl CampaignArgs {
@@ -86,15 +97,27 @@ impl CampaignArgs {
                 .trajectories
                 .format()
                 .or(self.plots.then_some(TrajectoryFormat::Csv)),
+            sumocfg: self.sumocfg,
         };
-        let settings = Settings::resolve(self.config.as_deref(), &overrides)?;
+        let file = self.config.as_deref();
+        if is_scenario_campaign(file, &overrides)? {
+            if self.plots {
+                anyhow::bail!("--plots: a campaign over scenarios of your own draws no plots yet");
+            }
+            return Ok(Campaign {
+                settings: Grid::Scenarios(Box::new(ScenarioSettings::resolve(file, &overrides)?)),
+                out: self.out,
+                plots: false,
+            });
+        }
+        let settings = Settings::resolve(file, &overrides)?;
         if self.plots && settings.config.output.trajectories != TrajectoryFormat::Csv {
             anyhow::bail!(
                 "--plots draws from trajectories.csv: it needs --trajectories-format csv"
             );
         }
         Ok(Campaign {
-            settings,
+            settings: Grid::Demand(Box::new(settings)),
             out: self.out,
             plots: self.plots,
         })
@@ -105,12 +128,15 @@ impl CampaignArgs {
 /// any episode failed (after the report, so the finished ones are not lost from view).
 pub fn run(c: Campaign) -> Result<()> {
     let exe = std::env::current_exe().context("cannot locate the bkpbs binary")?;
-    let done = campaign::run(&c.settings, &c.out, &exe)?;
+    let done = match &c.settings {
+        Grid::Demand(s) => campaign::run(s, &c.out, &exe)?,
+        Grid::Scenarios(s) => campaign::scenarios::run(s, &c.out, &exe)?,
+    };
     if done.collected > 0 {
         print_report(std::slice::from_ref(&c.out), None, false, &[])?;
     }
-    if c.plots && done.interrupted.is_none() {
-        let drawn = episode_plots::plot_cells(&c.out, &c.settings)?;
+    if let (true, None, Grid::Demand(settings)) = (c.plots, done.interrupted, &c.settings) {
+        let drawn = episode_plots::plot_cells(&c.out, settings)?;
         println!(
             "plots: time–space diagram and speed field of {} cells (in each cell's directory){}",
             drawn.plotted,

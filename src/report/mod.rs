@@ -19,6 +19,7 @@ pub mod paired;
 pub mod paired_tables;
 pub mod plot;
 pub mod raster;
+pub mod scenarios;
 pub mod signif;
 pub mod stats;
 pub mod summary;
@@ -103,6 +104,30 @@ pub enum ReportError {
     /// The paired comparisons could not be made (an unknown reference, a damaged column).
     #[error(transparent)]
     Paired(#[from] PairedError),
+    /// Several directories given, one of them a campaign over scenarios.
+    #[error(
+        "{dir} holds a campaign over scenarios of your own: its report is made alone (merging \
+         it with other directories is not done yet)"
+    )]
+    ScenarioMerge {
+        /// That directory.
+        dir: PathBuf,
+    },
+    /// A reference planner of a campaign over scenarios did not run in it.
+    #[error(transparent)]
+    Reference(#[from] scenarios::UnknownReference),
+}
+
+/// Does `dir` hold a campaign over scenarios of the user's own (its `campaign.toml` lists
+/// `scenarios`)? Its report is [`scenarios::report`]; merging several is not done yet.
+fn is_scenario_campaign(dir: &Path) -> bool {
+    let file = dir.join(crate::campaign::SETTINGS_FILE);
+    file.exists()
+        && crate::campaign::scenarios::is_scenario_campaign(
+            Some(&file),
+            &crate::campaign::Overrides::default(),
+        )
+        .unwrap_or(false)
 }
 
 /// What a report produced.
@@ -192,6 +217,12 @@ pub fn run_versus(
     versus: &[String],
 ) -> Result<Report, ReportError> {
     let first = dirs.first().ok_or(ReportError::NoDirs)?;
+    if let Some(dir) = dirs.iter().find(|d| is_scenario_campaign(d)) {
+        if dirs.len() > 1 {
+            return Err(ReportError::ScenarioMerge { dir: dir.clone() });
+        }
+        return scenarios::report(dir, out.unwrap_or(dir), versus);
+    }
     if !allow_mixed {
         same_settings(dirs)?;
     }

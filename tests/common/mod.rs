@@ -150,6 +150,22 @@ pub fn sumo_game_dir() -> std::path::PathBuf {
     game
 }
 
+/// SUMO's `game` directory copied into `dir` as a user would (its configurations name files
+/// beside them, and write outputs there); the copy's path.
+pub fn game_copy(dir: &std::path::Path) -> std::path::PathBuf {
+    let out = dir.join("game");
+    let status = Command::new("cp")
+        .args([
+            "-r",
+            sumo_game_dir().to_str().unwrap(),
+            out.to_str().unwrap(),
+        ])
+        .status()
+        .unwrap();
+    assert!(status.success());
+    out
+}
+
 /// Runs `cmd` (its output piped), killed with SIGKILL if it outlives `bound`; its output and
 /// how long it took.
 pub fn output_within(

@@ -1,0 +1,294 @@
+//! Resume state and collection of a campaign over scenarios.
+//!
+//! A cell is finished exactly when its files are whole and this campaign's: `episode.csv` (the
+//! worker writes it last) holds the one row of this cell — its scenario, planner, α, seed, the
+//! campaign's steps, this SUMO — `vehicles.csv` a row per vehicle inserted, `regions.csv` a
+//! row per region, and `settings.toml` the very settings the campaign would run it with. A
+//! damaged, foreign or edited cell runs again, with the reason printed.
+//!
+//! The collected files, in grid order: `episodes.csv` and `regions.csv` (their rows name
+//! their scenario, planner, α and seed already), `vehicles.csv` and `timings.csv` (each row
+//! led by those four), `failures.csv`.
+
+use std::path::{Path, PathBuf};
+
+use super::grid::ScenarioCell;
+use super::settings::ScenarioSettings;
+use crate::campaign::collect::EPISODES_DIR;
+use crate::campaign::comparison::results_settings;
+use crate::campaign::results::{read_records, ResultsError};
+use crate::campaign::worker::{DONE_FILE, ERROR_FILE, SETTINGS_RECORD};
+use crate::episode::output::TIMING_COLUMNS;
+use crate::episode::sumocfg::{RegionRow, ScenarioSummary, ScenarioVehicle};
+use crate::io::WriteError;
+
+/// The columns that lead the collected vehicle and timing rows.
+pub const CELL_COLUMNS: [&str; 4] = ["scenario", "planner", "alpha", "seed"];
+
+/// A cell's directory: `<out>/episodes/<planner>/<scenario>/a<α>_s<seed>`.
+pub fn cell_dir(out: &Path, cell: &ScenarioCell) -> PathBuf {
+    out.join(EPISODES_DIR).join(cell.dir_name())
+}
+
+/// The header `T`'s rows are written with.
+pub fn header_of<T: serde::Serialize + Default>() -> Vec<String> {
+    let text = crate::episode::sumocfg::csv_of::<T>(&[]);
+    let line = String::from_utf8_lossy(&text);
+    let mut r = csv::Reader::from_reader(line.as_bytes());
+    r.headers()
+        .expect("a header written by csv")
+        .iter()
+        .map(String::from)
+        .collect()
+}
+
+/// A finished cell's files, for the collection.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Finished {
+    /// Its `episode.csv` row.
+    pub episode: csv::StringRecord,
+    /// Its `regions.csv` rows.
+    pub regions: Vec<csv::StringRecord>,
+    /// Its `vehicles.csv` rows.
+    pub vehicles: Vec<csv::StringRecord>,
+    /// Its `timing.csv` row.
+    pub timing: Vec<csv::StringRecord>,
+}
+
+/// Where a cell stands.
+#[derive(Debug, Clone, PartialEq)]
+pub enum CellState {
+    /// Finished, with its files.
+    Done(Box<Finished>),
+    /// No `episode.csv`.
+    NotRun,
+    /// An `episode.csv` that is not this campaign's finished cell: why.
+    Stale(String),
+}
+
+/// Where `cell` stands in `out`.
+pub fn cell_state(out: &Path, settings: &ScenarioSettings, cell: &ScenarioCell) -> CellState {
+    let dir = cell_dir(out, cell);
+    if !dir.join(DONE_FILE).exists() {
+        return CellState::NotRun;
+    }
+    match finished(&dir, settings, cell) {
+        Ok(f) => CellState::Done(Box::new(f)),
+        Err(why) => CellState::Stale(why),
+    }
+}
+
+fn finished(
+    dir: &Path,
+    settings: &ScenarioSettings,
+    cell: &ScenarioCell,
+) -> Result<Finished, String> {
+    let header = header_of::<ScenarioSummary>();
+    let rows = read_records(&dir.join(DONE_FILE), &header).map_err(|e| e.to_string())?;
+    let [row] = rows.as_slice() else {
+        return Err(format!("{DONE_FILE} holds {} rows, not 1", rows.len()));
+    };
+    let column = |name: &str| {
+        let i = header.iter().position(|c| c == name);
+        i.and_then(|i| row.get(i)).unwrap_or("").to_string()
+    };
+    let config = settings.episode_config(cell);
+    is_this_cell(&column, cell, config.scenario.steps)?;
+    let regions = match column("regions") {
+        r if r.is_empty() => 0,
+        r => r.split("; ").count(),
+    };
+    let inserted = column("inserted").parse().unwrap_or(usize::MAX);
+    let vehicles = rows_counted(
+        dir,
+        "vehicles.csv",
+        &header_of::<ScenarioVehicle>(),
+        inserted,
+    )?;
+    let region_rows = rows_counted(dir, "regions.csv", &header_of::<RegionRow>(), regions)?;
+    let timing_header: Vec<String> = TIMING_COLUMNS.iter().map(|s| s.to_string()).collect();
+    let timing = rows_counted(dir, "timing.csv", &timing_header, 1)?;
+    let recorded = crate::io::bounded::read_text(
+        &dir.join(SETTINGS_RECORD),
+        crate::io::bounded::FileKind::Config,
+    )
+    .map_err(|_| format!("{SETTINGS_RECORD} is missing or unreadable"))?;
+    if recorded != results_settings(&config) {
+        return Err(format!("{SETTINGS_RECORD} records other settings"));
+    }
+    Ok(Finished {
+        episode: row.clone(),
+        regions: region_rows,
+        vehicles,
+        timing,
+    })
+}
+
+/// Does the `episode.csv` row (its `column`s) belong to `cell`, run for `steps` by this SUMO?
+fn is_this_cell(
+    column: &dyn Fn(&str) -> String,
+    cell: &ScenarioCell,
+    steps: u32,
+) -> Result<(), String> {
+    let own = [
+        ("scenario", file_name(cell)),
+        ("planner", cell.planner.clone()),
+        ("alpha", cell.alpha.to_string()),
+        ("seed", cell.seed.to_string()),
+    ];
+    if own.iter().any(|(name, value)| column(name) != *value) {
+        return Err(format!("{DONE_FILE} belongs to another cell"));
+    }
+    if column("steps") != steps.to_string() {
+        let found = column("steps");
+        return Err(format!(
+            "{DONE_FILE} has steps {found}, the campaign {steps}"
+        ));
+    }
+    let version = crate::sumo::version::BUILT;
+    if column("sumo_version") != version {
+        let found = column("sumo_version");
+        return Err(format!("SUMO {found} ran it, this is SUMO {version}"));
+    }
+    Ok(())
+}
+
+/// The cell's configuration file name, as `episode.csv` names its scenario.
+fn file_name(cell: &ScenarioCell) -> String {
+    cell.sumocfg
+        .file_name()
+        .map(|f| f.to_string_lossy().to_string())
+        .unwrap_or_default()
+}
+
+fn rows_counted(
+    dir: &Path,
+    name: &str,
+    header: &[String],
+    expected: usize,
+) -> Result<Vec<csv::StringRecord>, String> {
+    let rows = read_records(&dir.join(name), header).map_err(|e| e.to_string())?;
+    if rows.len() != expected {
+        return Err(format!("{name} has {} rows, not {expected}", rows.len()));
+    }
+    Ok(rows)
+}
+
+/// The collected files of a campaign over scenarios, each a header and its rows.
+#[derive(Debug, Clone, Default)]
+pub struct ScenarioResults {
+    /// `episodes.csv`.
+    pub episodes: Vec<csv::StringRecord>,
+    /// `regions.csv`.
+    pub regions: Vec<csv::StringRecord>,
+    /// `vehicles.csv`, each row led by [`CELL_COLUMNS`].
+    pub vehicles: Vec<csv::StringRecord>,
+    /// `timings.csv`, each row led by [`CELL_COLUMNS`].
+    pub timings: Vec<csv::StringRecord>,
+    /// `failures.csv`: planner, scenario, α, seed, error.
+    pub failures: Vec<csv::StringRecord>,
+}
+
+/// The header of `failures.csv`.
+pub const FAILURE_COLUMNS: [&str; 5] = ["planner", "scenario", "alpha", "seed", "error"];
+
+/// Gathers every finished cell in grid order; the unfinished cells of this run's shard are
+/// failures, with their `error.txt`.
+pub fn collect(out: &Path, settings: &ScenarioSettings) -> ScenarioResults {
+    let mut res = ScenarioResults::default();
+    for (position, cell) in settings.grid.cells().iter().enumerate() {
+        let lead = [
+            file_name(cell),
+            cell.planner.clone(),
+            cell.alpha.to_string(),
+            cell.seed.to_string(),
+        ];
+        match cell_state(out, settings, cell) {
+            CellState::Done(done) => {
+                res.episodes.push(done.episode);
+                res.regions.extend(done.regions);
+                for (rows, into) in [
+                    (&done.vehicles, &mut res.vehicles),
+                    (&done.timing, &mut res.timings),
+                ] {
+                    for r in rows {
+                        let mut fields = csv::StringRecord::from(lead.to_vec());
+                        fields.extend(r.iter());
+                        into.push(fields);
+                    }
+                }
+            }
+            _ if settings.shard.contains(position) => {
+                let error = crate::io::bounded::read_text(
+                    &cell_dir(out, cell).join(ERROR_FILE),
+                    crate::io::bounded::FileKind::Data,
+                )
+                .map(|s| s.trim().to_string())
+                .unwrap_or_else(|_| "not run".into());
+                let [scenario, planner, alpha, seed] = lead;
+                res.failures.push(csv::StringRecord::from(vec![
+                    planner, scenario, alpha, seed, error,
+                ]));
+            }
+            _ => {}
+        }
+    }
+    res
+}
+
+impl ScenarioResults {
+    /// Writes the five files into `dir`, each atomically; their paths.
+    pub fn write(&self, dir: &Path) -> Result<Vec<PathBuf>, WriteError> {
+        let led = |cols: Vec<String>| {
+            let mut h: Vec<String> = CELL_COLUMNS.iter().map(|s| s.to_string()).collect();
+            h.extend(cols);
+            h
+        };
+        let timing: Vec<String> = TIMING_COLUMNS.iter().map(|s| s.to_string()).collect();
+        let failures: Vec<String> = FAILURE_COLUMNS.iter().map(|s| s.to_string()).collect();
+        let files = [
+            (
+                "episodes.csv",
+                header_of::<ScenarioSummary>(),
+                &self.episodes,
+            ),
+            ("regions.csv", header_of::<RegionRow>(), &self.regions),
+            (
+                "vehicles.csv",
+                led(header_of::<ScenarioVehicle>()),
+                &self.vehicles,
+            ),
+            ("timings.csv", led(timing), &self.timings),
+            ("failures.csv", failures, &self.failures),
+        ];
+        let mut paths = Vec::new();
+        for (name, header, rows) in files {
+            let path = dir.join(name);
+            crate::io::write_atomic(&path, &to_csv(&header, rows))?;
+            paths.push(path);
+        }
+        Ok(paths)
+    }
+
+    /// Reads the collected files of a campaign directory (as [`ScenarioResults::write`] wrote
+    /// them).
+    ///
+    /// # Errors
+    /// A file is missing, unreadable or has other columns.
+    pub fn read(dir: &Path) -> Result<ScenarioResults, ResultsError> {
+        Ok(ScenarioResults {
+            episodes: read_records(&dir.join("episodes.csv"), &header_of::<ScenarioSummary>())?,
+            regions: read_records(&dir.join("regions.csv"), &header_of::<RegionRow>())?,
+            ..ScenarioResults::default()
+        })
+    }
+}
+
+fn to_csv(header: &[String], rows: &[csv::StringRecord]) -> Vec<u8> {
+    let mut w = csv::Writer::from_writer(Vec::new());
+    w.write_record(header).expect("writing to memory");
+    for r in rows {
+        w.write_record(r).expect("writing to memory");
+    }
+    w.into_inner().expect("writing to memory")
+}

@@ -1,0 +1,353 @@
+//! Settings of a campaign over scenarios of the user's own: the `[campaign]` table with a
+//! `scenarios` list (or `--sumocfg A,B`), overridden by flags, validated before any episode.
+//!
+//! ```toml
+//! [campaign]
+//! scenarios = ["game/A10KW.sumocfg", "game/ramp.sumocfg"]
+//! planners = ["bk-pbs", "idm-mobil"]
+//! alphas = [0.3, 0.6]
+//! seeds = 3
+//! # steps = 1500      # optional: shortens every scenario's own interval
+//! ```
+//!
+//! The scenarios bring their demand and drivers, so `lambdas` and `hdv_profiles` have no
+//! place here; each scenario runs its own `begin`–`end` unless `steps` shortens it. Every
+//! scenario is read and its step length checked before the first episode starts.
+
+use std::path::{Path, PathBuf};
+use std::time::Duration;
+
+use serde::{Deserialize, Serialize};
+
+use super::grid::{scenario_name, ScenarioCell, ScenarioGrid};
+use crate::campaign::checks::{
+    at_least_one, check_planners, check_values, episode_timeout, origin, parse_list, read_doc,
+    read_parts, worker_count,
+};
+use crate::campaign::comparison::{first_difference, scenario_table, unwatched};
+use crate::campaign::grid::Shard;
+use crate::campaign::settings::{CampaignTable, Overrides, SettingsError};
+use crate::config::{Config, TrajectoryFormat};
+use crate::sumo::sumocfg::SumoConfig;
+
+/// The `[campaign]` table of a campaign over scenarios.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct ScenarioTable {
+    /// The scenarios' configuration files (`.sumocfg`), a grid axis.
+    pub scenarios: Vec<PathBuf>,
+    /// Controllers to compare; default: every one.
+    pub planners: Vec<String>,
+    /// CAV shares α of each scenario's vehicles.
+    pub alphas: Vec<f64>,
+    /// Seeds per (planner, scenario, α).
+    pub seeds: u64,
+    /// First seed.
+    pub seed_base: u64,
+    /// Steps of every episode; default: each scenario's own interval.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub steps: Option<u32>,
+    /// Worker processes; default: one per core. Does not change results.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub workers: Option<usize>,
+    /// Wall-clock limit of one episode (s); default: none.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub episode_timeout: Option<f64>,
+    /// The SUMO version that runs the campaign (a record, as for the paper's campaigns).
+    pub sumo_version: String,
+}
+
+impl Default for ScenarioTable {
+    /// The paper campaign's planners, α, seeds; no scenario.
+    fn default() -> Self {
+        let paper = CampaignTable::default();
+        ScenarioTable {
+            scenarios: Vec::new(),
+            planners: paper.planners,
+            alphas: paper.alphas,
+            seeds: paper.seeds,
+            seed_base: paper.seed_base,
+            steps: None,
+            workers: None,
+            episode_timeout: None,
+            sumo_version: paper.sumo_version,
+        }
+    }
+}
+
+/// Validated settings of a campaign over scenarios.
+#[derive(Debug, Clone)]
+pub struct ScenarioSettings {
+    /// The `[campaign]` table as resolved.
+    pub table: ScenarioTable,
+    /// Every episode, normalised.
+    pub grid: ScenarioGrid,
+    /// The slice of the grid this run runs.
+    pub shard: Shard,
+    /// Worker processes, at least 1.
+    pub workers: usize,
+    /// Wall-clock limit of one episode, if any.
+    pub episode_timeout: Option<Duration>,
+    /// Settings shared by every cell (planner parameters, SUMO options, `scenario.regions`).
+    pub config: Config,
+    /// Each scenario's steps, in the order of `grid.scenarios`.
+    steps: Vec<u32>,
+}
+
+/// Is this campaign one over scenarios of the user's own: `--sumocfg` given, or a file whose
+/// `[campaign]` table lists `scenarios`?
+pub fn is_scenario_campaign(file: Option<&Path>, o: &Overrides) -> Result<bool, SettingsError> {
+    if o.sumocfg.is_some() {
+        return Ok(true);
+    }
+    let Some(path) = file else { return Ok(false) };
+    let doc = read_doc(path)?;
+    Ok(matches!(doc.get("campaign"), Some(toml::Value::Table(t)) if t.contains_key("scenarios")))
+}
+
+/// Refuses what the paper's demand has and a scenario brings itself.
+fn refuse_demand_settings(
+    doc: &toml::Table,
+    o: &Overrides,
+    file: Option<&Path>,
+) -> Result<(), SettingsError> {
+    let keys = match doc.get("campaign") {
+        Some(toml::Value::Table(t)) => t.keys().cloned().collect(),
+        _ => Vec::new(),
+    };
+    for (flag, key, set, what) in [
+        ("--lambdas", "lambdas", o.lambdas.is_some(), "its demand"),
+        (
+            "--hdv-profiles",
+            "hdv_profiles",
+            o.hdv_profiles.is_some(),
+            "its drivers",
+        ),
+    ] {
+        if set || keys.iter().any(|k| k == key) {
+            return Err(SettingsError::NotWithScenarios {
+                origin: origin(set, flag, key, file),
+                what,
+            });
+        }
+    }
+    if o.trajectories.is_some_and(|t| t != TrajectoryFormat::None) {
+        return Err(SettingsError::NotWithScenarios {
+            origin: "--trajectories".into(),
+            what: "no trajectories yet (a scenario's episode writes none)",
+        });
+    }
+    Ok(())
+}
+
+fn apply_overrides(t: &mut ScenarioTable, o: &Overrides) -> Result<(), SettingsError> {
+    if let Some(text) = &o.sumocfg {
+        t.scenarios = text
+            .split(',')
+            .map(str::trim)
+            .filter(|s| !s.is_empty())
+            .map(PathBuf::from)
+            .collect();
+    }
+    if let Some(text) = &o.planners {
+        t.planners = parse_list("--planners", text)?;
+    }
+    if let Some(text) = &o.alphas {
+        t.alphas = parse_list("--alphas", text)?;
+    }
+    t.seeds = o.seeds.unwrap_or(t.seeds);
+    t.seed_base = o.seed_base.unwrap_or(t.seed_base);
+    t.steps = o.steps.or(t.steps);
+    t.workers = o.workers.or(t.workers);
+    t.episode_timeout = o.episode_timeout.or(t.episode_timeout);
+    t.sumo_version = crate::sumo::version::BUILT.to_string();
+    Ok(())
+}
+
+impl ScenarioSettings {
+    /// Reads the campaign file (if any), applies the flags and checks every value, every
+    /// scenario (readable, the planners' step length, an interval) and every cell's
+    /// configuration.
+    ///
+    /// # Errors
+    /// The first problem found, naming its flag or key and file.
+    pub fn resolve(file: Option<&Path>, o: &Overrides) -> Result<ScenarioSettings, SettingsError> {
+        let doc = match file {
+            Some(p) => read_doc(p)?,
+            None => toml::Table::new(),
+        };
+        refuse_demand_settings(&doc, o, file)?;
+        let (mut table, config): (ScenarioTable, Config) = match file {
+            Some(p) => read_parts(doc, p)?,
+            None => Default::default(),
+        };
+        apply_overrides(&mut table, o)?;
+        let shard = match &o.shard {
+            Some(s) => s.parse()?,
+            None => Shard::ALL,
+        };
+        let workers = worker_count(table.workers, o.workers.is_some(), file)?;
+        let timeout = episode_timeout(table.episode_timeout, o.episode_timeout.is_some(), file)?;
+        let grid = checked_grid(&table, o, file)?;
+        let steps = scenario_steps(&grid.scenarios, table.steps, config.scenario.dt)?;
+        let settings = ScenarioSettings {
+            table,
+            grid,
+            shard,
+            workers,
+            episode_timeout: timeout,
+            config,
+            steps,
+        };
+        for cell in settings.grid.cells() {
+            settings.episode_config(&cell).validate()?;
+        }
+        Ok(settings)
+    }
+
+    /// A cell's whole configuration: the shared settings with its scenario, α, seed and steps.
+    pub fn episode_config(&self, cell: &ScenarioCell) -> Config {
+        let mut c = self.config.clone();
+        let i = self.grid.scenarios.iter().position(|s| *s == cell.sumocfg);
+        c.scenario.sumocfg = Some(cell.sumocfg.clone());
+        c.scenario.alpha = cell.alpha;
+        c.scenario.seed = cell.seed;
+        c.scenario.steps = i.map_or(c.scenario.steps, |i| self.steps[i]);
+        c
+    }
+
+    /// `campaign.toml`: the shared settings and the table (without workers and timeout, which
+    /// do not change results).
+    pub fn to_toml(&self) -> String {
+        let mut table = self.table.clone();
+        table.workers = None;
+        table.episode_timeout = None;
+        let mut doc = scenario_table(&self.config);
+        doc.insert(
+            "campaign".into(),
+            toml::Value::try_from(&table).expect("campaign table serialises"),
+        );
+        format!(
+            "# bkpbs campaign over scenarios; rerun with: bkpbs campaign --config campaign.toml --out DIR\n{}",
+            toml::to_string_pretty(&doc).expect("campaign file serialises")
+        )
+    }
+
+    /// The settings recorded in a campaign directory's `campaign.toml`, with the SUMO version
+    /// that ran it.
+    ///
+    /// # Errors
+    /// As [`ScenarioSettings::resolve`].
+    pub fn from_campaign_file(path: &Path) -> Result<ScenarioSettings, SettingsError> {
+        let mut s = ScenarioSettings::resolve(Some(path), &Overrides::default())?;
+        let (recorded, _): (ScenarioTable, Config) = read_parts(read_doc(path)?, path)?;
+        s.table.sumo_version = recorded.sumo_version;
+        Ok(s)
+    }
+
+    /// The first setting, dotted, in which `earlier` runs a cell differently: the shared
+    /// settings, the steps, the SUMO version. Other axes may differ: a grid may grow.
+    pub fn difference(&self, earlier: &ScenarioSettings) -> Option<String> {
+        let table =
+            |s: &ScenarioSettings| toml::Value::Table(scenario_table(&unwatched(&s.config)));
+        first_difference(&table(self), &table(earlier), "")
+            .or_else(|| (self.table.steps != earlier.table.steps).then(|| "campaign.steps".into()))
+            .or_else(|| {
+                (self.table.sumo_version != earlier.table.sumo_version)
+                    .then(|| "campaign.sumo_version".into())
+            })
+    }
+}
+
+/// The grid, after checking planners, scenarios, α and seeds.
+fn checked_grid(
+    t: &ScenarioTable,
+    o: &Overrides,
+    file: Option<&Path>,
+) -> Result<ScenarioGrid, SettingsError> {
+    check_planners(
+        &t.planners,
+        origin(o.planners.is_some(), "--planners", "planners", file),
+    )?;
+    check_values(
+        &origin(o.alphas.is_some(), "--alphas", "alphas", file),
+        "α",
+        &t.alphas,
+        |a| (0.0..=1.0).contains(&a),
+        "must lie in [0, 1]",
+    )?;
+    at_least_one(
+        origin(o.seeds.is_some(), "--seeds", "seeds", file),
+        "seed count",
+        t.seeds,
+    )?;
+    if let Some(n) = t.steps {
+        at_least_one(
+            origin(o.steps.is_some(), "--steps", "steps", file),
+            "steps",
+            n.into(),
+        )?;
+    }
+    let scenarios = unique_scenarios(&t.scenarios)?;
+    if scenarios.is_empty() {
+        return Err(SettingsError::Empty {
+            origin: origin(o.sumocfg.is_some(), "--sumocfg", "scenarios", file),
+        });
+    }
+    let mut alphas = t.alphas.clone();
+    alphas.sort_by(f64::total_cmp);
+    alphas.dedup();
+    let mut planners: Vec<String> = Vec::new();
+    for p in &t.planners {
+        if !planners.contains(p) {
+            planners.push(p.clone());
+        }
+    }
+    Ok(ScenarioGrid {
+        planners,
+        scenarios,
+        alphas,
+        seeds: (0..t.seeds)
+            .map(|i| t.seed_base.saturating_add(i))
+            .collect(),
+    })
+}
+
+/// The scenarios each once, in order; two different files of one name are refused.
+fn unique_scenarios(given: &[PathBuf]) -> Result<Vec<PathBuf>, SettingsError> {
+    let mut out: Vec<PathBuf> = Vec::new();
+    for s in given {
+        if out.contains(s) {
+            continue;
+        }
+        if let Some(first) = out.iter().find(|o| scenario_name(o) == scenario_name(s)) {
+            return Err(SettingsError::SameName {
+                name: scenario_name(s),
+                first: first.clone(),
+                second: s.clone(),
+            });
+        }
+        out.push(s.clone());
+    }
+    Ok(out)
+}
+
+/// Each scenario's steps: `steps` if given, else its own interval; each read and its step
+/// length checked against the planners' `dt`.
+fn scenario_steps(
+    scenarios: &[PathBuf],
+    steps: Option<u32>,
+    dt: f64,
+) -> Result<Vec<u32>, SettingsError> {
+    scenarios
+        .iter()
+        .map(|path| {
+            let cfg = SumoConfig::read(path)?;
+            cfg.check_step(dt)?;
+            match (steps, cfg.steps(dt)) {
+                (Some(n), _) | (None, Some(n)) => Ok(n),
+                (None, None) => Err(SettingsError::NoInterval { path: path.clone() }),
+            }
+        })
+        .collect()
+}

@@ -1,0 +1,192 @@
+//! Campaigns over scenarios of the user's own (`bkpbs campaign --sumocfg A,B`), on copies of
+//! SUMO's shipped `ramp` and `A10KW` games, with real SUMO: each cell is the very episode
+//! `bkpbs episode --sumocfg` runs, a re-run resumes, shards and another worker count collect
+//! to the same bytes, and the report pairs the planners per region over the seeds.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+
+use common::{assert_ok, bkpbs, csv_rows, game_copy, refused_naming};
+
+/// The game copied, with an A10KW configuration at the planners' step of 0.2 s.
+fn games(dir: &Path) -> (PathBuf, PathBuf) {
+    let game = game_copy(dir);
+    let text = std::fs::read_to_string(game.join("A10KW.sumocfg")).unwrap();
+    let a10kw = game.join("A10KW-0.2.sumocfg");
+    std::fs::write(&a10kw, text.replace("value=\"0.5\"", "value=\"0.2\"")).unwrap();
+    (game.join("ramp.sumocfg"), a10kw)
+}
+
+fn campaign(scenarios: &str, out: &Path, extra: &[&str]) -> std::process::Output {
+    let mut args = vec![
+        "campaign",
+        "--sumocfg",
+        scenarios,
+        "--planners",
+        "bk-pbs,sumo",
+        "--alphas",
+        "0.5",
+        "--seeds",
+        "2",
+        "--steps",
+        "100",
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    args.extend_from_slice(extra);
+    bkpbs(&args)
+}
+
+fn read(dir: &Path, name: &str) -> Vec<u8> {
+    std::fs::read(dir.join(name)).unwrap_or_else(|e| panic!("{}: {e}", dir.join(name).display()))
+}
+
+#[test]
+fn a_campaign_over_scenarios_resumes_and_collects_the_same_bytes_however_it_is_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let (ramp, a10kw) = games(dir.path());
+    let scenarios = format!("{},{}", ramp.display(), a10kw.display());
+    let a = dir.path().join("a");
+    let o = campaign(&scenarios, &a, &["--workers", "2"]);
+    assert_ok(&o);
+
+    // Grid order: planner, scenario, α, seed; every vehicle inserted is a collected row.
+    let episodes = csv_rows(&read(&a, "episodes.csv"));
+    let order: Vec<(&str, &str, &str)> = episodes
+        .iter()
+        .map(|r| {
+            (
+                r["planner"].as_str(),
+                r["scenario"].as_str(),
+                r["seed"].as_str(),
+            )
+        })
+        .collect();
+    assert_eq!(
+        order,
+        [
+            ("bk-pbs", "ramp.sumocfg", "0"),
+            ("bk-pbs", "ramp.sumocfg", "1"),
+            ("bk-pbs", "A10KW-0.2.sumocfg", "0"),
+            ("bk-pbs", "A10KW-0.2.sumocfg", "1"),
+            ("sumo", "ramp.sumocfg", "0"),
+            ("sumo", "ramp.sumocfg", "1"),
+            ("sumo", "A10KW-0.2.sumocfg", "0"),
+            ("sumo", "A10KW-0.2.sumocfg", "1"),
+        ]
+    );
+    let inserted: usize = episodes
+        .iter()
+        .map(|r| r["inserted"].parse::<usize>().unwrap())
+        .sum();
+    assert!(inserted > 0);
+    assert_eq!(csv_rows(&read(&a, "vehicles.csv")).len(), inserted);
+    let regions = csv_rows(&read(&a, "regions.csv"));
+    assert_eq!(
+        regions.len(),
+        2 * 2 * (1 + 2),
+        "ramp has one region, A10KW two"
+    );
+
+    // A cell is the episode `bkpbs episode --sumocfg` runs, byte for byte.
+    let single = dir.path().join("single");
+    let o = bkpbs(&[
+        "episode",
+        "--sumocfg",
+        a10kw.to_str().unwrap(),
+        "--planner",
+        "bk-pbs",
+        "--alpha",
+        "0.5",
+        "--seed",
+        "1",
+        "--steps",
+        "100",
+        "--out",
+        single.to_str().unwrap(),
+    ]);
+    assert_ok(&o);
+    let cell = a.join("episodes/bk-pbs/A10KW-0.2/a0.5_s1");
+    for f in [
+        "episode.csv",
+        "vehicles.csv",
+        "regions.csv",
+        "collisions.csv",
+    ] {
+        assert_eq!(read(&cell, f), read(&single, f), "{f}");
+    }
+
+    // A re-run finds everything done.
+    let o = campaign(&scenarios, &a, &["--workers", "2"]);
+    assert_ok(&o);
+    let said = String::from_utf8_lossy(&o.stdout);
+    assert!(said.contains("already done: 8; to run: 0"), "{said}");
+
+    // Two shards of one worker each collect what the whole grid on two workers did.
+    let b = dir.path().join("b");
+    for shard in ["2/2", "1/2"] {
+        assert_ok(&campaign(
+            &scenarios,
+            &b,
+            &["--workers", "1", "--shard", shard],
+        ));
+    }
+    for f in ["episodes.csv", "regions.csv", "vehicles.csv"] {
+        assert_eq!(read(&a, f), read(&b, f), "{f}");
+    }
+
+    // The report pairs bk-pbs with sumo per region over the two seeds.
+    let paired = csv_rows(&read(&a, "report/paired_regions.csv"));
+    assert_eq!(paired.len(), 3, "{paired:?}");
+    for row in &paired {
+        assert_eq!(
+            (row["reference"].as_str(), row["planner"].as_str()),
+            ("bk-pbs", "sumo")
+        );
+        assert_eq!(row["pairs"], "2");
+    }
+    let o = bkpbs(&["report", a.to_str().unwrap(), "--versus", "idm-mobil"]);
+    refused_naming(&o, &["idm-mobil", "bk-pbs, sumo"]);
+}
+
+#[test]
+fn a_campaign_over_scenarios_refuses_bad_settings_before_any_episode() {
+    let dir = tempfile::tempdir().unwrap();
+    let (ramp, _) = games(dir.path());
+    let out = dir.path().join("out");
+    let ramp = ramp.to_str().unwrap();
+
+    let o = campaign(ramp, &out, &["--lambdas", "2500"]);
+    refused_naming(&o, &["--lambdas", "its demand"]);
+    let game = dir.path().join("game");
+    let o = campaign(game.join("A10KW.sumocfg").to_str().unwrap(), &out, &[]);
+    refused_naming(&o, &["A10KW.sumocfg", "step-length 0.5"]);
+    let o = campaign(
+        &format!("{ramp},{}", game.join("nowhere.sumocfg").display()),
+        &out,
+        &[],
+    );
+    refused_naming(&o, &["nowhere.sumocfg"]);
+    let other = dir.path().join("ramp.sumocfg");
+    std::fs::copy(ramp, &other).unwrap();
+    let o = campaign(&format!("{ramp},{}", other.display()), &out, &[]);
+    refused_naming(&o, &["two scenarios are named 'ramp'"]);
+    assert!(!out.join("episodes").exists(), "no episode ran");
+
+    // A campaign file with a scenario list is one too, and its paper keys are refused.
+    let file = dir.path().join("c.toml");
+    std::fs::write(
+        &file,
+        format!("[campaign]\nscenarios = [\"{ramp}\"]\nlambdas = [2500.0]\n"),
+    )
+    .unwrap();
+    let o = bkpbs(&[
+        "campaign",
+        "--config",
+        file.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    refused_naming(&o, &["campaign.lambdas", "c.toml"]);
+}
