@@ -123,6 +123,25 @@ fn a_campaign_over_scenarios_resumes_and_collects_the_same_bytes_however_it_is_r
     let said = String::from_utf8_lossy(&o.stdout);
     assert!(said.contains("already done: 8; to run: 0"), "{said}");
 
+    // A narrower grid would drop collected episodes: refused, nothing lost.
+    let o = bkpbs(&[
+        "campaign",
+        "--sumocfg",
+        &scenarios,
+        "--planners",
+        "sumo",
+        "--alphas",
+        "0.5",
+        "--seeds",
+        "2",
+        "--steps",
+        "100",
+        "--out",
+        a.to_str().unwrap(),
+    ]);
+    refused_naming(&o, &["4 episodes outside this grid", "bk-pbs ramp.sumocfg"]);
+    assert_eq!(csv_rows(&read(&a, "episodes.csv")).len(), 8);
+
     // Two shards of one worker each collect what the whole grid on two workers did.
     let b = dir.path().join("b");
     for shard in ["2/2", "1/2"] {

@@ -1,7 +1,8 @@
 //! Campaigns for other schedulers (Ray, `python -m bkpbs.campaign`): `Campaign` lists the grid
 //! and its unfinished episodes and collects the directory; a `CampaignTask` runs one episode in
-//! the calling process. All of it is the core's `campaign::tasks`, so the directory is the
-//! one `bkpbs campaign` writes and `bkpbs report` reads.
+//! the calling process. All of it is the core's `campaign::tasks` (or, over scenarios of the
+//! user's own, `campaign::scenarios`), so the directory is the one `bkpbs campaign` writes and
+//! `bkpbs report` reads.
 
 use std::path::PathBuf;
 
@@ -9,6 +10,7 @@ use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList, PyString, PyTuple};
 
 use bkpbs::campaign::collect::cell_dir;
+use bkpbs::campaign::scenarios::{self, is_scenario_campaign, ScenarioSettings};
 use bkpbs::campaign::worker::{self, Outcome, Request};
 use bkpbs::campaign::{tasks, CampaignError, Overrides, Settings, SettingsError};
 use bkpbs::report::{self as core_report, ReportError};
@@ -27,7 +29,8 @@ fn settings_error(e: SettingsError) -> PyErr {
     bad_input(e)
 }
 
-/// A grid axis given as a list (or a comma-separated string), as the flag's text.
+/// A grid axis given as a list (or a comma-separated string), as the flag's text; entries are
+/// strings, numbers or paths.
 fn axis(v: Option<&Bound<'_, PyAny>>) -> PyResult<Option<String>> {
     let Some(v) = v.filter(|v| !v.is_none()) else {
         return Ok(None);
@@ -42,9 +45,12 @@ fn axis(v: Option<&Bound<'_, PyAny>>) -> PyResult<Option<String>> {
             parts.push(s.to_cow()?.to_string());
         } else if let Ok(x) = item.extract::<f64>() {
             parts.push(format!("{x}"));
+        } else if let Ok(path) = item.extract::<PathBuf>() {
+            // A scenario given as a `pathlib.Path` (or any `os.PathLike`).
+            parts.push(path.display().to_string());
         } else {
             return Err(bad_input(format!(
-                "grid values must be strings or numbers, got {}",
+                "grid values must be strings, numbers or paths, got {}",
                 item.repr()?
             )));
         }
@@ -52,11 +58,34 @@ fn axis(v: Option<&Bound<'_, PyAny>>) -> PyResult<Option<String>> {
     Ok(Some(parts.join(",")))
 }
 
-/// A planners × α × λ × seeds campaign in directory `out`.
+/// Which kind of campaign: on the paper's demand, or over scenarios of the user's own.
+enum Grid {
+    Demand(Box<Settings>),
+    Scenarios(Box<ScenarioSettings>),
+}
+
+/// A planners × α × λ × seeds campaign in directory `out`, or planners × scenarios × α ×
+/// seeds with `sumocfg`.
 #[pyclass(name = "Campaign", module = "bkpbs", frozen)]
 pub struct PyCampaign {
-    settings: Settings,
+    settings: Grid,
     out: PathBuf,
+}
+
+impl PyCampaign {
+    fn grid_len(&self) -> usize {
+        match &self.settings {
+            Grid::Demand(s) => s.grid.len(),
+            Grid::Scenarios(s) => s.grid.len(),
+        }
+    }
+
+    fn shard_text(&self) -> String {
+        match &self.settings {
+            Grid::Demand(s) => s.shard.to_string(),
+            Grid::Scenarios(s) => s.shard.to_string(),
+        }
+    }
 }
 
 #[pymethods]
@@ -64,7 +93,7 @@ impl PyCampaign {
     /// The settings of `bkpbs campaign`: `config` is a campaign TOML file, the keywords its
     /// flags (lists or comma-separated strings; `shard` is `"k/n"`). Everything is checked now.
     #[new]
-    #[pyo3(signature = (out, *, config = None, planners = None, alphas = None, lambdas = None, seeds = None, seed_base = None, steps = None, shard = None))]
+    #[pyo3(signature = (out, *, config = None, planners = None, alphas = None, lambdas = None, seeds = None, seed_base = None, steps = None, shard = None, sumocfg = None))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         out: PathBuf,
@@ -76,6 +105,7 @@ impl PyCampaign {
         seed_base: Option<u64>,
         steps: Option<u32>,
         shard: Option<String>,
+        sumocfg: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<Self> {
         let overrides = Overrides {
             planners: axis(planners)?,
@@ -91,9 +121,16 @@ impl PyCampaign {
             trajectories: None,
             hdv_profiles: None,
             shard,
-            sumocfg: None,
+            sumocfg: axis(sumocfg)?,
         };
-        let settings = Settings::resolve(config.as_deref(), &overrides).map_err(settings_error)?;
+        let file = config.as_deref();
+        let settings = if is_scenario_campaign(file, &overrides).map_err(settings_error)? {
+            let s = ScenarioSettings::resolve(file, &overrides).map_err(settings_error)?;
+            Grid::Scenarios(Box::new(s))
+        } else {
+            let s = Settings::resolve(file, &overrides).map_err(settings_error)?;
+            Grid::Demand(Box::new(s))
+        };
         Ok(PyCampaign { settings, out })
     }
 
@@ -106,33 +143,53 @@ impl PyCampaign {
     /// Episodes in the whole grid.
     #[getter]
     fn grid_size(&self) -> usize {
-        self.settings.grid.len()
+        self.grid_len()
     }
 
     /// This run's shard, `"k/n"`.
     #[getter]
     fn shard(&self) -> String {
-        self.settings.shard.to_string()
+        self.shard_text()
     }
 
     /// The settings as `campaign.toml` holds them.
     fn settings_toml(&self) -> String {
-        self.settings.to_toml()
+        match &self.settings {
+            Grid::Demand(s) => s.to_toml(),
+            Grid::Scenarios(s) => s.to_toml(),
+        }
     }
 
-    /// Every cell of the grid in grid order (planner, then α, λ, seed ascending), each with
-    /// its directory.
+    /// Every cell of the grid in grid order, each with its directory: planner, α, λ, seed
+    /// (planner, then α, λ, seed ascending); over scenarios planner, scenario (its file), α,
+    /// seed.
     fn cells<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyList>> {
         let out = PyList::empty(py);
-        for (position, c) in self.settings.grid.cells().iter().enumerate() {
-            let d = PyDict::new(py);
-            d.set_item("position", position)?;
-            d.set_item("planner", &c.planner)?;
-            d.set_item("alpha", c.alpha)?;
-            d.set_item("lambda", c.lambda)?;
-            d.set_item("seed", c.seed)?;
-            d.set_item("dir", cell_dir(&self.out, c))?;
-            out.append(d)?;
+        match &self.settings {
+            Grid::Demand(s) => {
+                for (position, c) in s.grid.cells().iter().enumerate() {
+                    let d = PyDict::new(py);
+                    d.set_item("position", position)?;
+                    d.set_item("planner", &c.planner)?;
+                    d.set_item("alpha", c.alpha)?;
+                    d.set_item("lambda", c.lambda)?;
+                    d.set_item("seed", c.seed)?;
+                    d.set_item("dir", cell_dir(&self.out, c))?;
+                    out.append(d)?;
+                }
+            }
+            Grid::Scenarios(s) => {
+                for (position, c) in s.grid.cells().iter().enumerate() {
+                    let d = PyDict::new(py);
+                    d.set_item("position", position)?;
+                    d.set_item("planner", &c.planner)?;
+                    d.set_item("scenario", &c.sumocfg)?;
+                    d.set_item("alpha", c.alpha)?;
+                    d.set_item("seed", c.seed)?;
+                    d.set_item("dir", scenarios::collect::cell_dir(&self.out, c))?;
+                    out.append(d)?;
+                }
+            }
         }
         Ok(out)
     }
@@ -140,22 +197,34 @@ impl PyCampaign {
     /// Readies the directory (checks an earlier run's settings, writes `campaign.toml`) and
     /// returns the unfinished episodes of this shard as tasks, in grid order.
     fn prepare(&self) -> PyResult<Vec<PyCampaignTask>> {
-        let plan = tasks::prepare(&self.settings, &self.out).map_err(campaign_error)?;
-        Ok(plan
-            .requests
+        let requests = match &self.settings {
+            Grid::Demand(s) => tasks::prepare(s, &self.out).map(|p| p.requests),
+            Grid::Scenarios(s) => scenarios::prepare(s, &self.out).map(|p| p.requests),
+        }
+        .map_err(campaign_error)?;
+        Ok(requests
             .into_iter()
             .map(|request| PyCampaignTask { request })
             .collect())
     }
 
-    /// Gathers every finished episode into `episodes.csv`, `vehicles.csv`, `timings.csv` and
-    /// `failures.csv` (grid order) and says how many there are.
+    /// Gathers every finished episode into the collected files (grid order: `episodes.csv`,
+    /// `vehicles.csv`, `timings.csv`, `failures.csv`, and over scenarios `regions.csv`) and
+    /// says how many there are.
     fn collect<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        let r = tasks::collect(&self.settings, &self.out).map_err(campaign_error)?;
+        let (collected, failed) = match &self.settings {
+            Grid::Demand(s) => {
+                tasks::collect(s, &self.out).map(|r| (r.episodes.rows.len(), r.failures.rows.len()))
+            }
+            Grid::Scenarios(s) => {
+                scenarios::collect(s, &self.out).map(|r| (r.episodes.len(), r.failures.len()))
+            }
+        }
+        .map_err(campaign_error)?;
         let d = PyDict::new(py);
-        d.set_item("grid", self.settings.grid.len())?;
-        d.set_item("collected", r.episodes.rows.len())?;
-        d.set_item("failed", r.failures.rows.len())?;
+        d.set_item("grid", self.grid_len())?;
+        d.set_item("collected", collected)?;
+        d.set_item("failed", failed)?;
         d.set_item("episodes_csv", self.out.join("episodes.csv"))?;
         Ok(d)
     }
@@ -164,8 +233,8 @@ impl PyCampaign {
         format!(
             "Campaign(out='{}', episodes={}, shard='{}')",
             self.out.display(),
-            self.settings.grid.len(),
-            self.settings.shard
+            self.grid_len(),
+            self.shard_text()
         )
     }
 }
@@ -223,6 +292,13 @@ impl PyCampaignTask {
         self.request.config.scenario.seed
     }
 
+    /// The scenario of the user's own the episode runs (its `.sumocfg`), or `None` on the
+    /// paper's demand.
+    #[getter]
+    fn scenario(&self) -> Option<PathBuf> {
+        self.request.config.scenario.sumocfg.clone()
+    }
+
     /// The cell directory the episode's files go to.
     #[getter]
     fn dir(&self) -> PathBuf {
@@ -247,10 +323,19 @@ impl PyCampaignTask {
 
     fn __repr__(&self) -> String {
         let s = &self.request.config.scenario;
-        format!(
-            "CampaignTask({} α={} λ={} seed={})",
-            self.request.planner, s.alpha, s.lambda, s.seed
-        )
+        match &s.sumocfg {
+            Some(cfg) => format!(
+                "CampaignTask({} {} α={} seed={})",
+                self.request.planner,
+                cfg.display(),
+                s.alpha,
+                s.seed
+            ),
+            None => format!(
+                "CampaignTask({} α={} λ={} seed={})",
+                self.request.planner, s.alpha, s.lambda, s.seed
+            ),
+        }
     }
 }
 

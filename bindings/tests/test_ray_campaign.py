@@ -9,6 +9,7 @@ import sys
 import pytest
 
 import bkpbs
+from conftest import ramp_game
 
 GRID = ["--planners", "idm-mobil,sumo", "--alphas", "0.5", "--lambdas", "3000", "--seeds", "2",
         "--steps", "25"]
@@ -87,3 +88,26 @@ def test_campaign_cells_and_tasks(tmp_path):
     summary = c.collect()
     assert summary["collected"] == 1 and summary["failed"] == 3
     assert len(c.prepare()) == 3
+
+
+def test_a_ray_campaign_over_a_scenario_of_your_own_matches_the_rust_one(tmp_path, cli):
+    cfg = ramp_game(tmp_path)
+    grid = ["--sumocfg", str(cfg), "--planners", "bk-pbs,sumo", "--alphas", "0.5", "--seeds", "2",
+            "--steps", "100"]
+    rust = tmp_path / "rust"
+    subprocess.run([str(cli), "campaign", "--out", str(rust), "--workers", "2", *grid],
+                   check=True, capture_output=True)
+    out = tmp_path / "ray"
+    p = campaign("--ray", "--num-cpus", "2", "--out", str(out), *grid)
+    assert "to run: 4 on Ray" in p.stdout and "4 episodes collected" in p.stdout
+    for name in ("episodes.csv", "regions.csv", "vehicles.csv", "failures.csv", "campaign.toml"):
+        assert (out / name).read_bytes() == (rust / name).read_bytes(), name
+    assert (out / "report" / "paired_regions.csv").is_file()
+    c = bkpbs.Campaign(out, sumocfg=[cfg], planners="bk-pbs,sumo", alphas=[0.5], seeds=2,
+                       steps=100)
+    assert [(x["planner"], x["scenario"], x["seed"]) for x in c.cells()][-1] == ("sumo", cfg, 1)
+    assert c.prepare() == []
+    # A narrower grid would drop collected episodes from episodes.csv: refused.
+    with pytest.raises(bkpbs.BkpbsError, match="outside this grid"):
+        bkpbs.Campaign(out, sumocfg=[cfg], planners="sumo", alphas=[0.5], seeds=2,
+                       steps=100).prepare()

@@ -166,13 +166,18 @@ class CampaignTask:
     @property
     def seed(self) -> int: ...
     @property
+    def scenario(self) -> Optional[Path]:
+        """The scenario of your own the episode runs (its ``.sumocfg``), ``None`` on the paper's demand."""
+    @property
     def dir(self) -> Path: ...
     def run(self) -> Optional[str]:
         """Runs the episode in this process; ``None`` when done, else the error message."""
     def record_failure(self, message: str) -> None: ...
 
 class Campaign:
-    """A planners × α × λ × seeds campaign in directory ``out`` (``bkpbs campaign``'s layout)."""
+    """A planners × α × λ × seeds campaign in directory ``out`` (``bkpbs campaign``'s layout); with
+    ``sumocfg`` (a list or comma-separated string of ``.sumocfg`` files) planners × scenarios × α ×
+    seeds over scenarios of your own, as ``bkpbs campaign --sumocfg``."""
 
     def __init__(
         self,
@@ -186,6 +191,7 @@ class Campaign:
         seed_base: Optional[int] = None,
         steps: Optional[int] = None,
         shard: Optional[str] = None,
+        sumocfg: Union[str, Sequence[_PathArg], None] = None,
     ) -> None: ...
     @property
     def out(self) -> Path: ...
@@ -195,7 +201,8 @@ class Campaign:
     def shard(self) -> str: ...
     def settings_toml(self) -> str: ...
     def cells(self) -> List[Dict[str, Any]]:
-        """Every cell in grid order: position, planner, alpha, lambda, seed, dir."""
+        """Every cell in grid order: position, planner, alpha, lambda, seed, dir (over scenarios:
+        position, planner, scenario, alpha, seed, dir)."""
     def prepare(self) -> List[CampaignTask]:
         """Writes ``campaign.toml`` and returns the unfinished episodes of the shard."""
     def collect(self) -> Dict[str, Any]:

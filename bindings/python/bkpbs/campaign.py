@@ -2,6 +2,7 @@
 
     python -m bkpbs.campaign --ray [--address ADDR] --out DIR [--planners a,b] [--alphas 0.4,0.8]
         [--lambdas 2500,3000] [--seeds N] [--seed-base S] [--steps H] [--config FILE] [--shard k/n]
+    python -m bkpbs.campaign --ray --out DIR --sumocfg A.sumocfg,B.sumocfg [--planners ...] ...
 
 One task per episode. libsumo allows one simulation per process, so on Ray every task runs in a
 worker process of its own (``max_calls=1``); locally (without ``--ray``) each of ``--workers``
@@ -9,7 +10,9 @@ processes runs its episodes one after another, as ``bkpbs campaign`` does. The g
 resume state (finished cells are skipped), the per-episode files and the collected
 ``episodes.csv``/``vehicles.csv``/``timings.csv``/``failures.csv`` all come from the Rust core
 (:class:`bkpbs.Campaign`), so the directory is the one ``bkpbs campaign`` writes and
-``bkpbs report DIR`` reads. On a Ray cluster every node needs SUMO and this package.
+``bkpbs report DIR`` reads. With ``--sumocfg`` the grid is planners × scenarios of your own ×
+α × seeds, as ``bkpbs campaign --sumocfg``. On a Ray cluster every node needs SUMO and this
+package (and the scenarios' files, at the same paths).
 """
 
 from __future__ import annotations
@@ -34,6 +37,8 @@ def _run_task(task: CampaignTask) -> Optional[str]:
 
 
 def _describe(task: CampaignTask) -> str:
+    if task.scenario is not None:
+        return f"{task.planner} {task.scenario} α={task.alpha} seed={task.seed}"
     return f"{task.planner} α={task.alpha} λ={task.lam} seed={task.seed}"
 
 
@@ -115,6 +120,9 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument("--planners", help="comma-separated planners [default: all]")
     p.add_argument("--alphas", help="comma-separated CAV penetrations α")
     p.add_argument("--lambdas", help="comma-separated arrival rates λ (veh/h)")
+    p.add_argument(
+        "--sumocfg", help="comma-separated scenarios of your own (.sumocfg): a grid over them"
+    )
     p.add_argument("--seeds", type=int, help="seeds per cell")
     p.add_argument("--seed-base", type=int, help="first seed")
     p.add_argument("--steps", type=int, help="episode length in steps")
@@ -138,6 +146,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
             seed_base=args.seed_base,
             steps=args.steps,
             shard=args.shard,
+            sumocfg=args.sumocfg,
         )
         tasks = campaign.prepare()
     except (BkpbsError, OSError) as e:

@@ -12,7 +12,7 @@
 
 use std::path::{Path, PathBuf};
 
-use super::grid::ScenarioCell;
+use super::grid::{ScenarioCell, ScenarioGrid};
 use super::settings::ScenarioSettings;
 use crate::campaign::collect::EPISODES_DIR;
 use crate::campaign::comparison::results_settings;
@@ -172,6 +172,36 @@ fn rows_counted(
         return Err(format!("{name} has {} rows, not {expected}", rows.len()));
     }
     Ok(rows)
+}
+
+/// The episodes `out`'s collected `episodes.csv` records outside `grid` (a larger grid run
+/// there before), as cells are displayed; collecting this grid would drop them. An unreadable
+/// file records nothing.
+pub fn recorded_outside(out: &Path, grid: &ScenarioGrid) -> Vec<String> {
+    let header = header_of::<ScenarioSummary>();
+    let Ok(rows) = read_records(&out.join("episodes.csv"), &header) else {
+        return Vec::new();
+    };
+    let at = |name: &str| header.iter().position(|c| c == name).expect("a column");
+    let (s, p, a, seed) = (at("scenario"), at("planner"), at("alpha"), at("seed"));
+    let key = |r: &csv::StringRecord, i: usize| r.get(i).unwrap_or("").to_string();
+    let in_grid: std::collections::HashSet<[String; 4]> = grid
+        .cells()
+        .iter()
+        .map(|c| {
+            [
+                file_name(c),
+                c.planner.clone(),
+                c.alpha.to_string(),
+                c.seed.to_string(),
+            ]
+        })
+        .collect();
+    rows.iter()
+        .map(|r| [key(r, s), key(r, p), key(r, a), key(r, seed)])
+        .filter(|k| !in_grid.contains(k))
+        .map(|[s, p, a, seed]| format!("{p} {s} α={a} seed={seed}"))
+        .collect()
 }
 
 /// The collected files of a campaign over scenarios, each a header and its rows.

@@ -45,7 +45,8 @@ pub struct ScenarioPlan {
 /// lists the shard's unfinished episodes.
 ///
 /// # Errors
-/// `out` holds a campaign of other settings, or `campaign.toml` cannot be written.
+/// `out` holds a campaign of other settings, or collected episodes outside this grid (which
+/// collecting it would drop), or `campaign.toml` cannot be written.
 pub fn prepare(settings: &ScenarioSettings, out: &Path) -> Result<ScenarioPlan, CampaignError> {
     let path = out.join(SETTINGS_FILE);
     if path.exists() {
@@ -56,6 +57,14 @@ pub fn prepare(settings: &ScenarioSettings, out: &Path) -> Result<ScenarioPlan, 
                 key,
             });
         }
+    }
+    let dropped = collect::recorded_outside(out, &settings.grid);
+    if let Some(first) = dropped.first() {
+        return Err(CampaignError::WouldDrop {
+            dir: out.to_path_buf(),
+            count: dropped.len(),
+            first: first.clone(),
+        });
     }
     crate::io::ensure_writable_dir(out)?;
     crate::io::write_atomic(&path, settings.to_toml().as_bytes())?;
