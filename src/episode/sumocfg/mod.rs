@@ -13,8 +13,8 @@
 //! keep CAVs on the carriageway and plan only its lanes and the merge lanes).
 //!
 //! Each CAV is planned below its own type's `maxSpeed` and the region's entry limit. Not yet:
-//! each vehicle's own accelerations and each lane's speed limit in the planner; campaigns over
-//! scenarios.
+//! each vehicle's own accelerations and each lane's speed limit in the planner. Campaigns over
+//! scenarios run these episodes in worker processes (`campaign::scenarios`).
 
 mod own_loop;
 mod records;
