@@ -244,3 +244,57 @@ fn the_interchange_plans_both_carriageways_at_once() {
     // as well; the first does within 40 s.
     assert!(vehicles.iter().any(|v| v["region_origin"] == "ramp"));
 }
+
+/// Trajectories on a scenario of your own: each region's, in its own road frame, beside a copy
+/// of the episode's collisions, drawn by `bkpbs plot`; recording them changes no result.
+#[test]
+fn each_regions_trajectories_are_written_and_drawn_and_change_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = game_copy(dir.path()).join("ramp.sumocfg");
+    let (plain, traced) = (dir.path().join("plain"), dir.path().join("traced"));
+    common::assert_ok(&scenario(&cfg, "bk-pbs", "150", &plain));
+    let mut args = vec![
+        "episode",
+        "--sumocfg",
+        cfg.to_str().unwrap(),
+        "--planner",
+        "bk-pbs",
+    ];
+    args.extend(["--steps", "150", "--seed", "3", "--trajectories"]);
+    args.extend(["--out", traced.to_str().unwrap()]);
+    common::assert_ok(&bkpbs(&args));
+    for f in [
+        "episode.csv",
+        "vehicles.csv",
+        "regions.csv",
+        "collisions.csv",
+    ] {
+        assert_eq!(
+            std::fs::read(plain.join(f)).unwrap(),
+            std::fs::read(traced.join(f)).unwrap(),
+            "{f}"
+        );
+    }
+    let region = traced.join("trajectories/gneE7");
+    let rows = csv_rows(&std::fs::read(region.join("trajectories.csv")).unwrap());
+    let in_region: std::collections::BTreeSet<String> =
+        csv_rows(&std::fs::read(traced.join("vehicles.csv")).unwrap())
+            .into_iter()
+            .filter(|v| v["region"] == "gneE7")
+            .map(|v| v["id"].clone())
+            .collect();
+    let seen: std::collections::BTreeSet<String> = rows.iter().map(|r| r["id"].clone()).collect();
+    assert_eq!(
+        seen, in_region,
+        "every vehicle of the region, and only those"
+    );
+    assert!(rows
+        .iter()
+        .any(|r| r["source"] == "pbs-solution" && r["type"] == "cav"));
+    assert!(region.join("collisions.csv").is_file());
+    common::assert_ok(&bkpbs(&["plot", region.to_str().unwrap()]));
+    assert!(region.join("time_space.png").is_file());
+    // A run without trajectories into the same directory leaves none of the old ones.
+    common::assert_ok(&scenario(&cfg, "bk-pbs", "150", &traced));
+    assert!(!traced.join("trajectories").exists());
+}

@@ -106,11 +106,10 @@ fn keep_sumo_log(err: episode::EpisodeError, out: &std::path::Path) -> anyhow::E
 
 /// Runs the user's scenario, writes its files and prints its summary.
 fn run_scenario(e: &Episode) -> Result<()> {
-    if e.trace
-        || e.config.output.trajectories != bkpbs::config::TrajectoryFormat::None
-        || e.config.sumo.gui
-    {
-        anyhow::bail!("--sumocfg: --trace, --trajectories and --gui are not available for a scenario of your own yet");
+    if e.trace || e.config.sumo.gui {
+        anyhow::bail!(
+            "--sumocfg: --trace and --gui are not available for a scenario of your own yet"
+        );
     }
     let r = episode::sumocfg::run(&e.config, e.planner.name())
         .map_err(|err| keep_sumo_log(err, &e.out))?;
@@ -146,6 +145,14 @@ fn run_scenario(e: &Episode) -> Result<()> {
         secs(s.mean_region_delay_s)
     );
     println!("SUMO options bkpbs set: {}", r.sumo_options.join(" "));
+    for (region, _) in &r.trajectories {
+        let d = episode::sumocfg::region_dir(&e.out, region);
+        println!(
+            "trajectories of region {region}: {} (`bkpbs plot {}` draws them)",
+            d.display(),
+            d.display()
+        );
+    }
     println!("results: {}", e.out.join("episode.csv").display());
     Ok(())
 }

@@ -89,22 +89,13 @@ pub fn plot_dir(dir: &Path) -> Result<EpisodePlots, EpisodePlotError> {
     Ok(out)
 }
 
-/// "bk-pbs, α = 0.5, λ = 3000 veh/h, seed 0" from the directory's `episode.csv`; the
-/// directory's name without one.
+/// "bk-pbs, α = 0.5, λ = 3000 veh/h, seed 0" from the directory's `episode.csv`; for a region's
+/// trajectories of an episode on a scenario of the user's own (`<episode>/trajectories/<region>`)
+/// "bk-pbs on ramp.sumocfg, region gneE7, α = 0.5, seed 1" from the episode's; the directory's
+/// name without either.
 fn episode_title(dir: &Path) -> String {
-    let from_csv = || -> Option<String> {
-        let mut r = csv::Reader::from_reader(
-            crate::io::bounded::open(&dir.join("episode.csv"), crate::io::bounded::FileKind::Data)
-                .ok()?,
-        );
-        let header = r.headers().ok()?.clone();
-        let row = r.records().next()?.ok()?;
-        let get = |name: &str| {
-            header
-                .iter()
-                .position(|h| h == name)
-                .and_then(|i| row.get(i))
-        };
+    let demand = || -> Option<String> {
+        let get = episode_row(dir)?;
         Some(format!(
             "{}, α = {}, λ = {} veh/h, seed {}",
             get("planner")?,
@@ -113,7 +104,34 @@ fn episode_title(dir: &Path) -> String {
             get("seed")?
         ))
     };
-    from_csv().unwrap_or_else(|| dir.display().to_string())
+    let region = || -> Option<String> {
+        let get = episode_row(dir.parent()?.parent()?)?;
+        Some(format!(
+            "{} on {}, region {}, α = {}, seed {}",
+            get("planner")?,
+            get("scenario")?,
+            dir.file_name()?.to_string_lossy().replace('+', " "),
+            get("alpha")?,
+            get("seed")?
+        ))
+    };
+    demand()
+        .or_else(region)
+        .unwrap_or_else(|| dir.display().to_string())
+}
+
+/// The columns of `dir`'s one-row `episode.csv`, by name.
+fn episode_row(dir: &Path) -> Option<impl Fn(&str) -> Option<String>> {
+    let mut r = csv::Reader::from_reader(
+        crate::io::bounded::open(&dir.join("episode.csv"), crate::io::bounded::FileKind::Data)
+            .ok()?,
+    );
+    let header = r.headers().ok()?.clone();
+    let row = r.records().next()?.ok()?;
+    Some(move |name: &str| {
+        let i = header.iter().position(|h| h == name)?;
+        row.get(i).map(String::from)
+    })
 }
 
 /// What `campaign --plots` drew.

@@ -27,7 +27,7 @@ use crate::campaign::checks::{
 use crate::campaign::comparison::{first_difference, scenario_table, unwatched};
 use crate::campaign::grid::Shard;
 use crate::campaign::settings::{CampaignTable, Overrides, SettingsError};
-use crate::config::{Config, TrajectoryFormat};
+use crate::config::Config;
 use crate::sumo::sumocfg::SumoConfig;
 
 /// The `[campaign]` table of a campaign over scenarios.
@@ -131,12 +131,6 @@ fn refuse_demand_settings(
             });
         }
     }
-    if o.trajectories.is_some_and(|t| t != TrajectoryFormat::None) {
-        return Err(SettingsError::NotWithScenarios {
-            origin: "--trajectories".into(),
-            what: "no trajectories yet (a scenario's episode writes none)",
-        });
-    }
     Ok(())
 }
 
@@ -177,10 +171,13 @@ impl ScenarioSettings {
             None => toml::Table::new(),
         };
         refuse_demand_settings(&doc, o, file)?;
-        let (mut table, config): (ScenarioTable, Config) = match file {
+        let (mut table, mut config): (ScenarioTable, Config) = match file {
             Some(p) => read_parts(doc, p)?,
             None => Default::default(),
         };
+        if let Some(format) = o.trajectories {
+            config.output.trajectories = format;
+        }
         apply_overrides(&mut table, o)?;
         let shard = match &o.shard {
             Some(s) => s.parse()?,

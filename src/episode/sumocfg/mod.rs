@@ -18,6 +18,7 @@
 
 mod own_loop;
 mod records;
+mod region;
 mod region_rows;
 mod run;
 
@@ -59,6 +60,19 @@ pub struct ScenarioResult {
     pub vehicles_per_step: f64,
     /// CAVs the planners drove per planning step, on average.
     pub cavs_per_step: f64,
+    /// Each region's trajectories in its own road frame (region name, file), when
+    /// `output.trajectories` is `csv`.
+    pub trajectories: Vec<(String, crate::episode::trajectories::TrajectoryFile)>,
+}
+
+/// The directory below an episode's where each region's trajectories go
+/// (`trajectories/<region>/`, the region's edges joined by `+`), each with the episode's
+/// `collisions.csv` beside them, so that `bkpbs plot` draws the region's time–space diagram.
+pub const TRAJECTORIES_DIR: &str = "trajectories";
+
+/// A region's trajectory directory below an episode's `dir`.
+pub fn region_dir(dir: &std::path::Path, region: &str) -> PathBuf {
+    dir.join(TRAJECTORIES_DIR).join(region.replace(' ', "+"))
 }
 
 /// The SUMO command line: the user's configuration, then what bkpbs must set — collisions
@@ -286,6 +300,7 @@ pub fn write(
     let regions = csv_of(&result.regions);
     let collisions = crate::episode::output::collisions_csv(&result.collisions);
     let timing = crate::episode::output::timing_csv(&result.timing);
+    write_trajectories(result, dir, &collisions)?;
     let options = result.sumo_options.join(" ") + "\n";
     let log = (!result.sumo_log.is_empty()).then_some(result.sumo_log.as_bytes());
     crate::io::replace_together(
@@ -300,4 +315,25 @@ pub fn write(
             ("episode.csv", Some(&episode[..])),
         ],
     )
+}
+
+/// Replaces the episode's region trajectories in `dir` with `result`'s (none: removed, so that
+/// a directory never holds an earlier run's).
+fn write_trajectories(
+    result: &ScenarioResult,
+    dir: &std::path::Path,
+    collisions: &[u8],
+) -> Result<(), crate::io::WriteError> {
+    let root = dir.join(TRAJECTORIES_DIR);
+    match std::fs::remove_dir_all(&root) {
+        Ok(()) => {}
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
+        Err(cause) => return Err(crate::io::WriteError { path: root, cause }),
+    }
+    for (region, file) in &result.trajectories {
+        let d = region_dir(dir, region);
+        crate::io::write_atomic(&d.join(file.name), &file.bytes)?;
+        crate::io::write_atomic(&d.join("collisions.csv"), collisions)?;
+    }
+    Ok(())
 }

@@ -6,99 +6,24 @@
 use std::collections::HashMap;
 
 use crate::config::Config;
-use crate::controller::{CavHandling, Command, Controller};
+use crate::controller::CavHandling;
 use crate::episode::error::EpisodeError;
 use crate::episode::metrics::{CollisionEvent, Outcome, Timing};
 use crate::episode::step_times::StepTimes;
 use crate::model::kinematics::free_flow_time;
-use crate::model::road::Road;
 use crate::model::scene::{Kind, Origin, VehicleState};
-use crate::sumo::frame::{self, SumoScene};
+use crate::sumo::frame;
 use crate::sumo::{RawVehicleState, Simulation, SumoClient, SumoError, VehicleReadings};
 
 use super::records::{self, ScenarioSummary, ScenarioVehicle};
+pub use super::region::Region;
 use super::region_rows::{region_rows, RegionRow};
-use super::{becomes_cav, merge_edges, ScenarioResult};
+use super::{becomes_cav, ScenarioResult};
 
 /// SUMO's defaults, restored when a CAV leaves the planned part of a region: every safety check
 /// on, and its own lane changes (SUMO's `speedMode` 31 and `laneChangeMode` 1621).
 const SPEED_MODE_SUMO: i32 = 31;
 const LC_MODE_SUMO: i32 = 0b110_0101_0101;
-
-/// One merge region: its frame, its planner, this step's scene and commands.
-pub struct Region {
-    /// The region's configuration: the episode's, `v_max` capped at the region's limit.
-    pub config: Config,
-    pub road: Road,
-    pub controller: Box<dyn Controller>,
-    scene: SumoScene,
-    commands: Vec<Command>,
-    /// Frame `s` from which the planner drives CAVs: the end of the region's first edge.
-    control_start: f64,
-    /// Frame `s` up to which it drives them (their fronts): the start of the region's last
-    /// edge, or the region's end where that edge holds a merge zone's end.
-    control_end: f64,
-    /// Its edges' codes start here in the codes registered with SUMO.
-    code_offset: i32,
-    /// The edges its on-ramps join, its name in the results.
-    name: String,
-}
-
-impl Region {
-    /// The region of `road`, planned by `controller` under `config`.
-    pub fn new(config: Config, road: Road, controller: Box<dyn Controller>) -> Region {
-        // The main edges come first in the frame: the second one starts where the first ends.
-        let control_start = road
-            .edges
-            .get(1)
-            .filter(|e| !e.on_ramp)
-            .and_then(|e| e.lanes.iter().flatten().map(|l| l.s0).reduce(f64::min))
-            .unwrap_or(0.0);
-        let control_end = control_end(&road);
-        Region {
-            control_end,
-            scene: SumoScene::new(&road),
-            name: merge_edges(&road).join(" "),
-            config,
-            road,
-            controller,
-            commands: Vec::new(),
-            control_start,
-            code_offset: 0,
-        }
-    }
-
-    /// The reading with its edge code counted within this region, if it is on one of its edges.
-    fn local(&self, raw: &RawVehicleState) -> Option<RawVehicleState> {
-        let code = raw.edge_code - self.code_offset;
-        (raw.edge_code >= 0 && (0..self.road.edges.len() as i32).contains(&code)).then_some({
-            RawVehicleState {
-                edge_code: code,
-                ..*raw
-            }
-        })
-    }
-}
-
-/// Where the planner of `road`'s region stops driving CAVs: the start of its last edge, so that
-/// SUMO takes a CAV back while the vehicles ahead of it are still in the region's scene. The
-/// planner sees nobody past the region's end: a CAV planned up to there drove on, planning as if
-/// the road ahead were empty, into a truck that had just left the region (SUMO's `ramp` game,
-/// bk-mastar, seed 2: a controllable crash 12 m past the end, 0.6 s after the hand-back).
-/// Where that edge holds the end of a merge zone, the region's end.
-fn control_end(road: &Road) -> f64 {
-    let region_end = road.section_end;
-    let last_start = road
-        .edge(&road.end_edge.0)
-        .and_then(|e| e.lanes.iter().flatten().map(|l| l.s0).reduce(f64::min))
-        .unwrap_or(region_end);
-    let merges_end = road.zones.iter().map(|z| z.end).fold(f64::MIN, f64::max);
-    if last_start >= merges_end {
-        last_start
-    } else {
-        region_end
-    }
-}
 
 /// A vehicle of the scenario, as far as bkpbs follows it.
 struct Line {
@@ -225,7 +150,7 @@ impl ScenarioRun {
         self.build_scenes(sim, now)?;
         if plan {
             self.plan_regions();
-            for r in &self.regions {
+            for r in &mut self.regions {
                 if r.controller.handling() == CavHandling::Commanded {
                     crate::episode::runner::send_commands(
                         sim,
@@ -233,6 +158,7 @@ impl ScenarioRun {
                         &r.commands,
                         &r.config.scenario,
                     )?;
+                    r.record_sent();
                 }
             }
         }
@@ -334,6 +260,10 @@ impl ScenarioRun {
     fn build_scenes(&mut self, sim: &mut impl SumoClient, now: f64) -> Result<(), SumoError> {
         for r in &mut self.regions {
             r.scene.clear(now);
+            r.log_rows.clear();
+            if let Some(log) = &mut r.log {
+                log.begin_step(now);
+            }
         }
         let mut planned_by: Vec<Option<usize>> = vec![None; self.lines.len()];
         // Taken out for the loop, which places vehicles into `self`, and put back after it.
@@ -414,6 +344,7 @@ impl ScenarioRun {
             ..frame::state_sized(&region.road, who, raw, (front, lane), line.size)
         };
         region.scene.push(vehicle, raw.edge_code);
+        region.record(raw, line.record.kind);
         Ok(planned)
     }
 
@@ -439,12 +370,17 @@ impl ScenarioRun {
     /// The records with SUMO's trip figures and each vehicle's delay in its region, and the
     /// summary.
     pub fn finish(
-        self,
+        mut self,
         planner: &str,
         tripinfo: &std::path::Path,
         sumo_options: Vec<String>,
     ) -> Result<ScenarioResult, String> {
         let trips = records::read_trips(tripinfo)?;
+        let trajectories = self
+            .regions
+            .iter_mut()
+            .filter_map(|r| Some((r.name.clone(), r.log.take()?.finish())))
+            .collect();
         let vehicles: Vec<ScenarioVehicle> = self
             .lines
             .into_iter()
@@ -482,6 +418,7 @@ impl ScenarioRun {
             timing: self.timing.expect("timed when the episode ran"),
             vehicles_per_step: per_step(in_scenes),
             cavs_per_step: per_step(cavs),
+            trajectories,
         })
     }
 }

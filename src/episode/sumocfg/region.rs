@@ -1,0 +1,145 @@
+//! One merge region of a scenario: its road frame, its planner, this step's scene and the
+//! commands for it, where the planner takes CAVs over and hands them back, and its
+//! trajectories.
+
+use crate::config::Config;
+use crate::controller::{Command, Controller};
+use crate::episode::trajectories::{FrameState, Sent, TrajectoryLog, TrajectoryRow};
+use crate::model::road::Road;
+use crate::model::scene::Kind;
+use crate::sumo::frame::{self, SumoScene};
+use crate::sumo::RawVehicleState;
+
+use super::merge_edges;
+
+/// One merge region: its frame, its planner, this step's scene and commands.
+pub struct Region {
+    /// The region's configuration: the episode's, `v_max` capped at the region's limit.
+    pub config: Config,
+    pub road: Road,
+    pub controller: Box<dyn Controller>,
+    pub(super) scene: SumoScene,
+    pub(super) commands: Vec<Command>,
+    /// Frame `s` from which the planner drives CAVs: the end of the region's first edge.
+    pub(super) control_start: f64,
+    /// Frame `s` up to which it drives them (their fronts): the start of the region's last
+    /// edge, or the region's end where that edge holds a merge zone's end.
+    pub(super) control_end: f64,
+    /// Its edges' codes start here in the codes registered with SUMO.
+    pub(super) code_offset: i32,
+    /// The edges its on-ramps join, its name in the results.
+    pub(super) name: String,
+    /// Its vehicles' trajectories, in its own road frame, when `output.trajectories` asks.
+    pub(super) log: Option<TrajectoryLog>,
+    /// The trajectory row of each scene vehicle in the current step.
+    pub(super) log_rows: Vec<usize>,
+}
+
+impl Region {
+    /// The region of `road`, planned by `controller` under `config`.
+    pub fn new(config: Config, road: Road, controller: Box<dyn Controller>) -> Region {
+        // The main edges come first in the frame: the second one starts where the first ends.
+        let control_start = road
+            .edges
+            .get(1)
+            .filter(|e| !e.on_ramp)
+            .and_then(|e| e.lanes.iter().flatten().map(|l| l.s0).reduce(f64::min))
+            .unwrap_or(0.0);
+        let control_end = control_end(&road);
+        let log = TrajectoryLog::new(config.output.trajectories);
+        Region {
+            control_end,
+            scene: SumoScene::new(&road),
+            name: merge_edges(&road).join(" "),
+            config,
+            road,
+            controller,
+            commands: Vec::new(),
+            control_start,
+            code_offset: 0,
+            log,
+            log_rows: Vec::new(),
+        }
+    }
+
+    /// Records the vehicle just pushed into the scene: its reading and frame state, its own
+    /// kind (a CAV SUMO drives is still a CAV here).
+    pub(super) fn record(&mut self, raw: &RawVehicleState, kind: Kind) {
+        let Some(log) = &mut self.log else {
+            return;
+        };
+        let v = self.scene.scene.vehicles.last().expect("just pushed");
+        let row = TrajectoryRow {
+            id: v.id.clone(),
+            kind,
+            origin: v.origin,
+            edge: usize::try_from(raw.edge_code)
+                .ok()
+                .and_then(|c| self.road.edges.get(c))
+                .map(|e| e.name.clone()),
+            sumo_lane: raw.lane_index,
+            pos: raw.lane_position,
+            x: raw.x,
+            y: raw.y,
+            angle: raw.angle,
+            frame: Some(FrameState {
+                s: v.s,
+                lane: v.lane,
+                lateral: v.lateral,
+                heading: v.heading,
+            }),
+            speed: raw.speed,
+            accel: raw.acceleration,
+            sent: None,
+        };
+        self.log_rows.push(log.push(row));
+    }
+
+    /// The maneuvers just sent, into the trajectory rows of their CAVs.
+    pub(super) fn record_sent(&mut self) {
+        let Some(log) = &mut self.log else {
+            return;
+        };
+        for c in &self.commands {
+            log.set_sent(
+                self.log_rows[c.vehicle],
+                Sent {
+                    speed: frame::commanded_speed(c.maneuver.speed, &self.config.scenario),
+                    lane_change: c.maneuver.lane_change,
+                    source: c.source,
+                },
+            );
+        }
+    }
+
+    /// The reading with its edge code counted within this region, if it is on one of its edges.
+    pub(super) fn local(&self, raw: &RawVehicleState) -> Option<RawVehicleState> {
+        let code = raw.edge_code - self.code_offset;
+        (raw.edge_code >= 0 && (0..self.road.edges.len() as i32).contains(&code)).then_some({
+            RawVehicleState {
+                edge_code: code,
+                ..*raw
+            }
+        })
+    }
+}
+
+/// Where the planner of `road`'s region stops driving CAVs: the start of its last edge, so that
+/// SUMO takes a CAV back while the vehicles ahead of it are still in the region's scene. The
+/// planner sees nobody past the region's end: a CAV planned up to there drove on, planning as if
+/// the road ahead were empty, into a truck that had just left the region (SUMO's `ramp` game,
+/// bk-mastar, seed 2: a controllable crash 12 m past the end, 0.6 s after the hand-back).
+/// Where that edge holds the end of a merge zone, the region's end.
+fn control_end(road: &Road) -> f64 {
+    let region_end = road.section_end;
+    let last_start = road
+        .edge(&road.end_edge.0)
+        .and_then(|e| e.lanes.iter().flatten().map(|l| l.s0).reduce(f64::min))
+        .unwrap_or(region_end);
+    let merges_end = road.zones.iter().map(|z| z.end).fold(f64::MIN, f64::max);
+    if last_start >= merges_end {
+        last_start
+    } else {
+        region_end
+    }
+}
