@@ -171,6 +171,28 @@ result_versus long-run-fresh results/long-run/fresh idm-mobil,bk-mastar "$BIN" c
 result_versus long-run-unseen results/long-run/unseen idm-mobil,bk-mastar "$BIN" campaign --config results/long-run/long-run.toml \
     --planners idm-mobil,bk-mastar,bk-pbs $long --lambdas 3000 --seeds 30 --seed-base 50000
 
+# The study on SUMO's own game scenarios (results/scenarios, ~60 min on 2 cores): copies of the
+# games as a user brings them, then the campaign over A10KW and ramp, then one merge's figures.
+if wanted scenarios || wanted scenarios-plots; then
+    scripts/scenario-games.sh target/scenario-games
+fi
+games=target/scenario-games
+result scenarios results/scenarios "$BIN" campaign --sumocfg $games/A10KW.sumocfg,$games/ramp.sumocfg \
+    --planners bk-pbs,bk-mastar,idm-mobil,sumo,rl-ppo --alphas 0.3,0.6 --seeds 3 --seed-base 100
+if wanted scenarios-plots; then
+    start=$SECONDS
+    plots="$scratch/scenario-plots/bk-pbs_ramp_a0.6_s100"
+    if "$BIN" episode --sumocfg $games/ramp.sumocfg --planner bk-pbs --alpha 0.6 --seed 100 \
+            --trajectories --out "$plots" >/dev/null 2>&1 \
+        && "$BIN" plot "$plots/trajectories/gneE7" >/dev/null 2>&1 \
+        && rm "$plots/trajectories/gneE7/trajectories.csv" "$plots/timing.csv" "$plots/sumo_options.txt" \
+        && compare results/scenarios/plots "$scratch/scenario-plots"; then
+        echo "scenarios-plots: $(agreed) ($((SECONDS - start)) s)"
+    else
+        echo "scenarios-plots: DIFFERS"; failed=1
+    fi
+fi
+
 # The paper grid's traced episode and its figures.
 if wanted paper-grid-plots; then
     start=$SECONDS

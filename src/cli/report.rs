@@ -39,10 +39,17 @@ pub fn print_report(
 ) -> Result<()> {
     let r = report::run_versus(dirs, out, allow_mixed, versus)?;
     print!("{}", r.markdown);
-    println!(
-        "results in {}: episodes.csv, vehicles.csv, timings.csv, failures.csv",
-        r.out.display()
-    );
+    let collected: Vec<&str> = [
+        "episodes.csv",
+        "regions.csv",
+        "vehicles.csv",
+        "timings.csv",
+        "failures.csv",
+    ]
+    .into_iter()
+    .filter(|f| r.out.join(f).is_file())
+    .collect();
+    println!("results in {}: {}", r.out.display(), collected.join(", "));
     println!("tables and figures:");
     for p in report::highlights(&r) {
         println!("  {}", p.display());
