@@ -11,6 +11,7 @@ use crate::episode::error::EpisodeError;
 use crate::episode::metrics::{CollisionEvent, Outcome, Timing};
 use crate::episode::step_times::StepTimes;
 use crate::model::kinematics::free_flow_time;
+use crate::model::road::MERGE_LANE;
 use crate::model::scene::{Kind, Origin, VehicleState};
 use crate::sumo::frame;
 use crate::sumo::{RawVehicleState, Simulation, SumoClient, SumoError, VehicleReadings};
@@ -333,10 +334,20 @@ impl ScenarioRun {
             sim.set_lane_change_mode(&line.record.id, 0)?;
             line.commanded = Some(g);
         }
+        // On an acceleration lane every vehicle must merge, wherever it came from: one SUMO
+        // inserted there (A10KW's boundary routes depart on it) was seen as a main-road car,
+        // which the planners never merge and the shield never expects to move over (A10KW,
+        // bk-mastar, α 0.6, seed 102: such an HDV, standing at the lane end, moved into lane 1
+        // as a CAV from lane 2 did, 25 m behind it at 27.6 m/s; a controllable crash).
+        let merging = lane == MERGE_LANE && region.road.lanes_at(front).contains(&MERGE_LANE);
         let who = frame::Identity {
             id: line.record.id.as_str().into(),
             kind: if planned { Kind::Cav } else { Kind::Hdv },
-            origin: if first { entry.origin } else { Origin::Main },
+            origin: if merging || (first && entry.origin == Origin::Ramp) {
+                Origin::Ramp
+            } else {
+                Origin::Main
+            },
             desired_speed: region.config.scenario.v_max.min(line.max_speed),
         };
         let vehicle = VehicleState {

@@ -1,0 +1,95 @@
+//! Vehicles SUMO inserts on an acceleration lane (a scenario's routes may depart there, as
+//! A10KW's boundary routes do): each must merge like a ramp vehicle, wherever its route began.
+//! Seen as main-road cars, such CAVs were never merged by the planners, and such an HDV,
+//! standing at the lane end, was not expected to move over by the shield.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+
+use common::netconvert::{build, through};
+use common::{bkpbs, csv_rows, stderr};
+
+/// A two-lane motorway with a 300 m acceleration lane that ends, fed by a one-lane ramp; main
+/// traffic, and vehicles departing on the acceleration lane itself, for 200 s.
+fn scenario(dir: &Path) -> PathBuf {
+    let nodes = [
+        ("a", 0.0, 0.0),
+        ("b", 400.0, 0.0),
+        ("c", 700.0, 0.0),
+        ("d", 1100.0, 0.0),
+        ("r", 250.0, -40.0),
+    ];
+    let edges = [
+        ("up", "a", "b", 2, ""),
+        ("acc", "b", "c", 3, ""),
+        ("down", "c", "d", 2, ""),
+        ("on", "r", "b", 1, ""),
+    ];
+    let mut cons = through("up", 2, "acc", 3);
+    cons.extend(through("acc", 3, "down", 2).into_iter().filter(|c| c.1 > 0));
+    cons.push(("on", 0, "acc", 0));
+    let net = build(dir, &nodes, &edges, &cons);
+    let routes = r#"<routes>
+    <vType id="car" length="5" maxSpeed="33.33"/>
+    <vType id="starter" length="5" maxSpeed="33.33" color="1,0,0"/>
+    <route id="main" edges="up acc down"/>
+    <route id="onacc" edges="acc down"/>
+    <flow id="m" type="car" route="main" begin="0" end="200" vehsPerHour="2400" departSpeed="max" departLane="best"/>
+    <flow id="s" type="starter" route="onacc" begin="0" end="200" vehsPerHour="300" departLane="0" departPos="20" departSpeed="10"/>
+</routes>
+"#;
+    std::fs::write(dir.join("acc.rou.xml"), routes).unwrap();
+    let cfg = format!(
+        r#"<configuration>
+    <input><net-file value="{}"/><route-files value="acc.rou.xml"/></input>
+    <time><begin value="0"/><end value="200"/><step-length value="0.2"/></time>
+</configuration>
+"#,
+        net.file_name().unwrap().to_str().unwrap()
+    );
+    let path = dir.join("acc.sumocfg");
+    std::fs::write(&path, cfg).unwrap();
+    path
+}
+
+#[test]
+fn cavs_inserted_on_the_acceleration_lane_merge_and_arrive() {
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = scenario(dir.path());
+    for planner in ["bk-pbs", "bk-mastar"] {
+        let out = dir.path().join(planner);
+        let o = bkpbs(&[
+            "episode",
+            "--sumocfg",
+            cfg.to_str().unwrap(),
+            "--planner",
+            planner,
+            "--cav-types",
+            "starter",
+            "--seed",
+            "2",
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{planner}: {}", stderr(&o));
+        let ep = &csv_rows(&std::fs::read(out.join("episode.csv")).unwrap())[0];
+        assert_eq!(ep["controllable_crashed"], "0", "{planner}: {ep:?}");
+        let vehicles = csv_rows(&std::fs::read(out.join("vehicles.csv")).unwrap());
+        let starters: Vec<_> = vehicles.iter().filter(|v| v["type"] == "starter").collect();
+        assert!(
+            starters.len() >= 10,
+            "{planner}: {} starters",
+            starters.len()
+        );
+        // Every starter that departed in the first 150 s reached the end of its route (1 km
+        // at most, well within the 50 s left): none stands at the lane end.
+        for v in starters
+            .iter()
+            .filter(|v| v["depart_s"].parse::<f64>().unwrap() < 150.0)
+        {
+            assert_eq!(v["kind"], "cav");
+            assert_eq!(v["outcome"], "arrived", "{planner}: {v:?}");
+        }
+    }
+}
