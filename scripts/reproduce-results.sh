@@ -185,7 +185,8 @@ if wanted scenarios-plots; then
     if "$BIN" episode --sumocfg $games/ramp.sumocfg --planner bk-pbs --alpha 0.6 --seed 100 \
             --trajectories --out "$plots" >/dev/null 2>&1 \
         && "$BIN" plot "$plots/trajectories/gneE7" >/dev/null 2>&1 \
-        && rm "$plots/trajectories/gneE7/trajectories.csv" "$plots/timing.csv" "$plots/sumo_options.txt" \
+        && rm "$plots/trajectories/gneE7/trajectories.csv" "$plots/trajectories/gneE7/"*.svg \
+            "$plots/timing.csv" "$plots/sumo_options.txt" \
         && compare results/scenarios/plots "$scratch/scenario-plots"; then
         echo "scenarios-plots: $(agreed) ($((SECONDS - start)) s)"
     else
