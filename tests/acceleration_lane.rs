@@ -7,29 +7,13 @@ mod common;
 
 use std::path::{Path, PathBuf};
 
-use common::netconvert::{build, through};
+use common::netconvert::merge;
 use common::{bkpbs, csv_rows, stderr};
 
 /// A two-lane motorway with a 300 m acceleration lane that ends, fed by a one-lane ramp; main
 /// traffic, and vehicles departing on the acceleration lane itself, for 200 s.
 fn scenario(dir: &Path) -> PathBuf {
-    let nodes = [
-        ("a", 0.0, 0.0),
-        ("b", 400.0, 0.0),
-        ("c", 700.0, 0.0),
-        ("d", 1100.0, 0.0),
-        ("r", 250.0, -40.0),
-    ];
-    let edges = [
-        ("up", "a", "b", 2, ""),
-        ("acc", "b", "c", 3, ""),
-        ("down", "c", "d", 2, ""),
-        ("on", "r", "b", 1, ""),
-    ];
-    let mut cons = through("up", 2, "acc", 3);
-    cons.extend(through("acc", 3, "down", 2).into_iter().filter(|c| c.1 > 0));
-    cons.push(("on", 0, "acc", 0));
-    let net = build(dir, &nodes, &edges, &cons);
+    let net = merge(dir, 300.0);
     let routes = r#"<routes>
     <vType id="car" length="5" maxSpeed="33.33"/>
     <vType id="starter" length="5" maxSpeed="33.33" color="1,0,0"/>

@@ -8,34 +8,13 @@ mod common;
 
 use std::path::{Path, PathBuf};
 
-use common::netconvert::{build, through};
+use common::netconvert::merge;
 use common::{csv_rows, scenario_episode, stderr};
-
-/// A two-lane motorway with a 200 m acceleration lane that ends, fed by a one-lane ramp.
-fn merge(dir: &Path) -> PathBuf {
-    let nodes = [
-        ("a", 0.0, 0.0),
-        ("b", 500.0, 0.0),
-        ("c", 700.0, 0.0),
-        ("d", 1100.0, 0.0),
-        ("r", 350.0, -40.0),
-    ];
-    let edges = [
-        ("up", "a", "b", 2, ""),
-        ("acc", "b", "c", 3, ""),
-        ("down", "c", "d", 2, ""),
-        ("on", "r", "b", 1, ""),
-    ];
-    let mut cons = through("up", 2, "acc", 3);
-    cons.extend(through("acc", 3, "down", 2).into_iter().filter(|c| c.1 > 0));
-    cons.push(("on", 0, "acc", 0));
-    build(dir, &nodes, &edges, &cons)
-}
 
 /// Cars, 12 m trucks and 16.5 m trucks with their own accelerations and top speeds, on the
 /// main road and the ramp, for 300 s at the planners' step.
 fn scenario(dir: &Path) -> PathBuf {
-    let net = merge(dir);
+    let net = merge(dir, 200.0);
     let routes = r#"<routes>
     <vTypeDistribution id="mix">
         <vType id="car" probability="0.5" length="5" maxSpeed="33.33"/>

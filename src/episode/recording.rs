@@ -10,9 +10,7 @@
 use crate::config::{Scenario, TrajectoryFormat};
 use crate::controller::Command;
 use crate::episode::ledger::Tracked;
-use crate::episode::trajectories::{
-    FrameState, Sent, TrajectoryFile, TrajectoryLog, TrajectoryRow,
-};
+use crate::episode::trajectories::{Sent, TrajectoryFile, TrajectoryLog, TrajectoryRow};
 use crate::model::road::Road;
 use crate::model::scene::VehicleState;
 use crate::sumo::{frame, RawVehicleState};
@@ -98,27 +96,6 @@ fn trajectory_row(
     state: Option<&VehicleState>,
 ) -> TrajectoryRow {
     let record = &who.record;
-    TrajectoryRow {
-        id: who.id.clone(),
-        kind: record.kind,
-        origin: record.origin,
-        edge: usize::try_from(raw.edge_code)
-            .ok()
-            .and_then(|c| road.edges.get(c))
-            .map(|e| e.name.clone()),
-        sumo_lane: raw.lane_index,
-        pos: raw.lane_position,
-        x: raw.x,
-        y: raw.y,
-        angle: raw.angle,
-        frame: state.map(|v| FrameState {
-            s: v.s,
-            lane: v.lane,
-            lateral: v.lateral,
-            heading: v.heading,
-        }),
-        speed: raw.speed,
-        accel: raw.acceleration,
-        sent: None,
-    }
+    let identity = (who.id.clone(), record.kind, record.origin);
+    TrajectoryRow::of_reading(road, identity, raw, state)
 }

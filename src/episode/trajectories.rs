@@ -20,7 +20,9 @@ use flate2::Compression;
 
 use crate::config::TrajectoryFormat;
 use crate::controller::{LaneChange, Source};
-use crate::model::scene::{Kind, Origin};
+use crate::model::road::Road;
+use crate::model::scene::{Kind, Origin, VehicleState};
+use crate::sumo::RawVehicleState;
 
 /// Uncompressed size past which trajectories are gzip-compressed (16 MiB: a 400-step episode
 /// of the paper's scenario stays plain, a long corridor run does not).
@@ -102,6 +104,42 @@ pub struct Sent {
     pub lane_change: Option<LaneChange>,
     /// Where the maneuver came from.
     pub source: Source,
+}
+
+impl TrajectoryRow {
+    /// The row of SUMO's reading `raw` of vehicle `id` (edge codes counted in `road`), with
+    /// its state in the road frame (`None` off the section); no maneuver yet (one is sent after
+    /// planning).
+    pub fn of_reading(
+        road: &Road,
+        (id, kind, origin): (Arc<str>, Kind, Origin),
+        raw: &RawVehicleState,
+        state: Option<&VehicleState>,
+    ) -> TrajectoryRow {
+        TrajectoryRow {
+            id,
+            kind,
+            origin,
+            edge: usize::try_from(raw.edge_code)
+                .ok()
+                .and_then(|c| road.edges.get(c))
+                .map(|e| e.name.clone()),
+            sumo_lane: raw.lane_index,
+            pos: raw.lane_position,
+            x: raw.x,
+            y: raw.y,
+            angle: raw.angle,
+            frame: state.map(|v| FrameState {
+                s: v.s,
+                lane: v.lane,
+                lateral: v.lateral,
+                heading: v.heading,
+            }),
+            speed: raw.speed,
+            accel: raw.acceleration,
+            sent: None,
+        }
+    }
 }
 
 /// Text that is compressed once it grows large.

@@ -60,3 +60,26 @@ pub fn through(
         .map(|k| (from, from_lanes - n + k, to, to_lanes - n + k))
         .collect()
 }
+
+/// A two-lane motorway (`up`, `acc`, `down`) with an acceleration lane of `acc_length` metres
+/// on `acc` that ends, fed by the one-lane ramp `on`.
+pub fn merge(dir: &Path, acc_length: f64) -> PathBuf {
+    let (b, c) = (500.0, 500.0 + acc_length);
+    let nodes = [
+        ("a", 0.0, 0.0),
+        ("b", b, 0.0),
+        ("c", c, 0.0),
+        ("d", c + 400.0, 0.0),
+        ("r", b - 150.0, -40.0),
+    ];
+    let edges = [
+        ("up", "a", "b", 2, ""),
+        ("acc", "b", "c", 3, ""),
+        ("down", "c", "d", 2, ""),
+        ("on", "r", "b", 1, ""),
+    ];
+    let mut cons = through("up", 2, "acc", 3);
+    cons.extend(through("acc", 3, "down", 2).into_iter().filter(|c| c.1 > 0));
+    cons.push(("on", 0, "acc", 0));
+    build(dir, &nodes, &edges, &cons)
+}

@@ -4,7 +4,7 @@
 
 use crate::config::Config;
 use crate::controller::{Command, Controller};
-use crate::episode::trajectories::{FrameState, Sent, TrajectoryLog, TrajectoryRow};
+use crate::episode::trajectories::{Sent, TrajectoryLog, TrajectoryRow};
 use crate::model::road::Road;
 use crate::model::scene::Kind;
 use crate::sumo::frame::{self, SumoScene};
@@ -69,29 +69,8 @@ impl Region {
             return;
         };
         let v = self.scene.scene.vehicles.last().expect("just pushed");
-        let row = TrajectoryRow {
-            id: v.id.clone(),
-            kind,
-            origin: v.origin,
-            edge: usize::try_from(raw.edge_code)
-                .ok()
-                .and_then(|c| self.road.edges.get(c))
-                .map(|e| e.name.clone()),
-            sumo_lane: raw.lane_index,
-            pos: raw.lane_position,
-            x: raw.x,
-            y: raw.y,
-            angle: raw.angle,
-            frame: Some(FrameState {
-                s: v.s,
-                lane: v.lane,
-                lateral: v.lateral,
-                heading: v.heading,
-            }),
-            speed: raw.speed,
-            accel: raw.acceleration,
-            sent: None,
-        };
+        let identity = (v.id.clone(), kind, v.origin);
+        let row = TrajectoryRow::of_reading(&self.road, identity, raw, Some(v));
         self.log_rows.push(log.push(row));
     }
 
