@@ -209,3 +209,33 @@ fn a_campaign_over_scenarios_refuses_bad_settings_before_any_episode() {
     ]);
     refused_naming(&o, &["campaign.lambdas", "c.toml"]);
 }
+
+#[test]
+fn plots_draw_each_cells_merge_regions() {
+    let dir = tempfile::tempdir().unwrap();
+    let (ramp, _) = games(dir.path());
+    let out = dir.path().join("plots");
+    let o = bkpbs(&[
+        "campaign",
+        "--sumocfg",
+        ramp.to_str().unwrap(),
+        "--planners",
+        "bk-pbs",
+        "--alphas",
+        "0.5",
+        "--seeds",
+        "1",
+        "--steps",
+        "100",
+        "--plots",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_ok(&o);
+    let region = out.join("episodes/bk-pbs/ramp/a0.5_s0/trajectories/gneE7");
+    for f in ["trajectories.csv", "time_space.png", "speed_field.png"] {
+        assert!(region.join(f).is_file(), "{f}");
+    }
+    let said = String::from_utf8_lossy(&o.stdout);
+    assert!(said.contains("speed field of 1 cells"), "{said}");
+}

@@ -101,13 +101,16 @@ impl CampaignArgs {
         };
         let file = self.config.as_deref();
         if is_scenario_campaign(file, &overrides)? {
-            if self.plots {
-                anyhow::bail!("--plots: a campaign over scenarios of your own draws no plots yet");
+            let settings = ScenarioSettings::resolve(file, &overrides)?;
+            if self.plots && settings.config.output.trajectories != TrajectoryFormat::Csv {
+                anyhow::bail!(
+                    "--plots draws from trajectories.csv: it needs --trajectories-format csv"
+                );
             }
             return Ok(Campaign {
-                settings: Grid::Scenarios(Box::new(ScenarioSettings::resolve(file, &overrides)?)),
+                settings: Grid::Scenarios(Box::new(settings)),
                 out: self.out,
-                plots: false,
+                plots: self.plots,
             });
         }
         let settings = Settings::resolve(file, &overrides)?;
@@ -135,8 +138,11 @@ pub fn run(c: Campaign) -> Result<()> {
     if done.collected > 0 {
         print_report(std::slice::from_ref(&c.out), None, false, &[])?;
     }
-    if let (true, None, Grid::Demand(settings)) = (c.plots, done.interrupted, &c.settings) {
-        let drawn = episode_plots::plot_cells(&c.out, settings)?;
+    if c.plots && done.interrupted.is_none() {
+        let drawn = match &c.settings {
+            Grid::Demand(s) => episode_plots::plot_cells(&c.out, s)?,
+            Grid::Scenarios(s) => episode_plots::plot_scenario_cells(&c.out, s)?,
+        };
         println!(
             "plots: time–space diagram and speed field of {} cells (in each cell's directory){}",
             drawn.plotted,

@@ -143,6 +143,50 @@ pub struct CellPlots {
     pub without_trajectories: usize,
 }
 
+/// Draws the figures of every finished cell of a campaign run over scenarios of the user's own
+/// (its shard), each region's in its trajectory directory (`trajectories/<region>/`), in
+/// parallel.
+pub fn plot_scenario_cells(
+    out: &Path,
+    settings: &crate::campaign::scenarios::ScenarioSettings,
+) -> Result<CellPlots, EpisodePlotError> {
+    use crate::campaign::scenarios::collect::{cell_dir, cell_state, CellState};
+    use rayon::prelude::*;
+    let cells = settings.grid.cells();
+    let finished: Vec<PathBuf> = cells
+        .iter()
+        .enumerate()
+        .filter(|(i, c)| {
+            settings.shard.contains(*i)
+                && matches!(cell_state(out, settings, c), CellState::Done(_))
+        })
+        .map(|(_, c)| cell_dir(out, c))
+        .collect();
+    let mut summary = CellPlots::default();
+    let mut regions = Vec::new();
+    for dir in &finished {
+        let root = dir.join(crate::episode::sumocfg::TRAJECTORIES_DIR);
+        let mut found: Vec<PathBuf> = std::fs::read_dir(&root)
+            .map(|d| {
+                d.flatten()
+                    .map(|e| e.path())
+                    .filter(|p| p.is_dir())
+                    .collect()
+            })
+            .unwrap_or_default();
+        found.sort();
+        if found.is_empty() {
+            summary.without_trajectories += 1;
+        } else {
+            summary.plotted += 1;
+        }
+        regions.extend(found);
+    }
+    let drawn: Result<Vec<_>, EpisodePlotError> = regions.par_iter().map(|d| plot_dir(d)).collect();
+    drawn?;
+    Ok(summary)
+}
+
 /// Draws the figures of every finished cell of a campaign run (its shard), in parallel.
 pub fn plot_cells(
     out: &Path,

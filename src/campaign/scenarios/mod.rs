@@ -15,9 +15,9 @@
 //!
 //! Modules: [`grid`] (cells and their order), [`settings`] (file and flags), [`collect`]
 //! (resume state, gathering). `--trajectories` writes each cell's region trajectories
-//! (`trajectories/<region>/`, as `bkpbs episode --sumocfg`). Not yet: the claim that lets two
-//! runs with other settings share a directory safely (run one such campaign per directory at a
-//! time), and `--plots`.
+//! (`trajectories/<region>/`, as `bkpbs episode --sumocfg`), which `--plots` draws. Not yet: the
+//! claim that lets two runs with other settings share a directory safely (run one such campaign
+//! per directory at a time).
 
 pub mod collect;
 pub mod grid;
