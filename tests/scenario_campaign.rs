@@ -155,6 +155,35 @@ fn a_campaign_over_scenarios_resumes_and_collects_the_same_bytes_however_it_is_r
         assert_eq!(read(&a, f), read(&b, f), "{f}");
     }
 
+    // Shards run apart (other machines) and merged by `report` collect the same bytes.
+    let (c1, c2, merged) = (
+        dir.path().join("c1"),
+        dir.path().join("c2"),
+        dir.path().join("m"),
+    );
+    assert_ok(&campaign(&scenarios, &c1, &["--shard", "1/2"]));
+    assert_ok(&campaign(&scenarios, &c2, &["--shard", "2/2"]));
+    let o = bkpbs(&[
+        "report",
+        c2.to_str().unwrap(),
+        c1.to_str().unwrap(),
+        "--out",
+        merged.to_str().unwrap(),
+    ]);
+    assert_ok(&o);
+    for f in [
+        "episodes.csv",
+        "regions.csv",
+        "vehicles.csv",
+        "failures.csv",
+    ] {
+        assert_eq!(read(&a, f), read(&merged, f), "{f}");
+    }
+    assert_eq!(
+        read(&a, "report/paired_regions.csv"),
+        read(&merged, "report/paired_regions.csv")
+    );
+
     // The report pairs bk-pbs with sumo per region over the two seeds.
     let paired = csv_rows(&read(&a, "report/paired_regions.csv"));
     assert_eq!(paired.len(), 3, "{paired:?}");

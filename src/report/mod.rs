@@ -104,15 +104,18 @@ pub enum ReportError {
     /// The paired comparisons could not be made (an unknown reference, a damaged column).
     #[error(transparent)]
     Paired(#[from] PairedError),
-    /// Several directories given, one of them a campaign over scenarios.
+    /// Campaigns over scenarios given with one on the paper's demand.
     #[error(
-        "{dir} holds a campaign over scenarios of your own: its report is made alone (merging \
-         it with other directories is not done yet)"
+        "{dir} is not a campaign over scenarios of your own like the others: the two kinds of \
+         campaign have other columns and are not merged"
     )]
     ScenarioMerge {
-        /// That directory.
+        /// The directory of the other kind.
         dir: PathBuf,
     },
+    /// Directories of a campaign over scenarios could not be merged.
+    #[error(transparent)]
+    ScenarioMerging(#[from] crate::campaign::scenarios::merge::MergeError),
     /// A reference planner of a campaign over scenarios did not run in it.
     #[error(transparent)]
     Reference(#[from] scenarios::UnknownReference),
@@ -128,6 +131,34 @@ fn is_scenario_campaign(dir: &Path) -> bool {
             &crate::campaign::Overrides::default(),
         )
         .unwrap_or(false)
+}
+
+/// Merges the collected files of several directories of one campaign over scenarios into
+/// `out`, with the first one's `campaign.toml` when `out` has none (so that `bkpbs report OUT`
+/// reads it again).
+fn merge_scenario_campaigns(
+    dirs: &[PathBuf],
+    out: &Path,
+    allow_mixed: bool,
+) -> Result<(), ReportError> {
+    for dir in dirs {
+        if !dir.join("episodes.csv").is_file() {
+            return Err(ReportError::NotACampaign { dir: dir.clone() });
+        }
+    }
+    let merged = crate::campaign::scenarios::merge::merge(dirs, allow_mixed)?;
+    merged.write(out)?;
+    let settings = out.join(crate::campaign::SETTINGS_FILE);
+    if !settings.exists() {
+        let first = dirs[0].join(crate::campaign::SETTINGS_FILE);
+        let text = crate::io::bounded::read_bytes(&first, crate::io::bounded::FileKind::Config)
+            .map_err(|e| ReportError::Settings {
+                path: first.clone(),
+                message: e.to_string(),
+            })?;
+        output::write_atomic(&settings, &text)?;
+    }
+    Ok(())
 }
 
 /// What a report produced.
@@ -218,10 +249,14 @@ pub fn run_versus(
 ) -> Result<Report, ReportError> {
     let first = dirs.first().ok_or(ReportError::NoDirs)?;
     if let Some(dir) = dirs.iter().find(|d| is_scenario_campaign(d)) {
-        if dirs.len() > 1 {
-            return Err(ReportError::ScenarioMerge { dir: dir.clone() });
+        if let Some(other) = dirs.iter().find(|d| !is_scenario_campaign(d)) {
+            return Err(ReportError::ScenarioMerge { dir: other.clone() });
         }
-        return scenarios::report(dir, out.unwrap_or(dir), versus);
+        let out = out.unwrap_or(first);
+        if dirs.len() > 1 {
+            merge_scenario_campaigns(dirs, out, allow_mixed)?;
+        }
+        return scenarios::report(if dirs.len() > 1 { out } else { dir }, out, versus);
     }
     if !allow_mixed {
         same_settings(dirs)?;

@@ -155,10 +155,7 @@ fn is_this_cell(
 
 /// The cell's configuration file name, as `episode.csv` names its scenario.
 fn file_name(cell: &ScenarioCell) -> String {
-    cell.sumocfg
-        .file_name()
-        .map(|f| f.to_string_lossy().to_string())
-        .unwrap_or_default()
+    super::grid::file_name_of(&cell.sumocfg)
 }
 
 fn rows_counted(

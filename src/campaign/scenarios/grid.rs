@@ -25,6 +25,14 @@ pub fn scenario_name(sumocfg: &Path) -> String {
     file.strip_suffix(".sumocfg").unwrap_or(&file).to_string()
 }
 
+/// A configuration's file name, as `episode.csv` names its scenario (`A10KW.sumocfg`).
+pub fn file_name_of(sumocfg: &Path) -> String {
+    sumocfg
+        .file_name()
+        .map(|f| f.to_string_lossy().to_string())
+        .unwrap_or_default()
+}
+
 impl ScenarioCell {
     /// The scenario's name ([`scenario_name`]).
     pub fn scenario(&self) -> String {

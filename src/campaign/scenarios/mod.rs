@@ -21,6 +21,7 @@
 
 pub mod collect;
 pub mod grid;
+pub mod merge;
 pub mod settings;
 
 use std::path::Path;
