@@ -9,7 +9,7 @@ use pyo3::types::{PyBytes, PyDict};
 use bkpbs::config::Config;
 use bkpbs::planner::primitives::Primitive;
 use bkpbs::policy::observation::{feature_names, OBS_DIM};
-use bkpbs::train::ppo::env::{Agents, EnvError, MergeEnv};
+use bkpbs::train::ppo::env::{Agents, EnvError, Finished, MergeEnv};
 use bkpbs::train::ppo::reward::RewardSettings;
 
 use crate::errors::{bad_input, episode_error};
@@ -42,14 +42,17 @@ impl PyMergeEnv {
 #[pymethods]
 impl PyMergeEnv {
     /// `agents`: "single" (one CAV among HDVs, the paper's training set-up) or "all" (every
-    /// CAV). α, λ (veh/h), `config` and keyword overrides as for `run_episode`.
+    /// CAV). α, λ (veh/h; 3000 unless given), `config` and keyword overrides as for
+    /// `run_episode`; with `sumocfg` the episode is the user's own scenario (no `lam`), its
+    /// interval the episode's length unless `steps=` shortens it.
     #[new]
-    #[pyo3(signature = (agents = "single", alpha = 0.5, lam = 3000.0, config = None, **overrides))]
+    #[pyo3(signature = (agents = "single", alpha = 0.5, lam = None, config = None, sumocfg = None, **overrides))]
     fn new(
         agents: &str,
         alpha: f64,
-        lam: f64,
+        lam: Option<f64>,
         config: Option<&Bound<'_, PyAny>>,
+        sumocfg: Option<std::path::PathBuf>,
         overrides: Option<&Bound<'_, PyDict>>,
     ) -> PyResult<Self> {
         let agents = match agents {
@@ -61,8 +64,19 @@ impl PyMergeEnv {
                 )))
             }
         };
-        let cell = crate::run_slot::cell_table(alpha, Some(lam), 0)?;
-        let config = crate::config::resolve(config, overrides, cell)?;
+        let config = match sumocfg {
+            Some(path) => {
+                if let Some(lam) = lam {
+                    return Err(crate::scenario::lam_with_sumocfg(lam));
+                }
+                let cell = crate::run_slot::cell_table(alpha, None, 0)?;
+                crate::scenario::resolve_with(&path, config, overrides, cell)?
+            }
+            None => {
+                let cell = crate::run_slot::cell_table(alpha, Some(lam.unwrap_or(3000.0)), 0)?;
+                crate::config::resolve(config, overrides, cell)?
+            }
+        };
         Ok(PyMergeEnv {
             env: None,
             slot: None,
@@ -75,6 +89,7 @@ impl PyMergeEnv {
     /// first step with an agent.
     fn reset(&mut self, py: Python<'_>, seed: u64) -> PyResult<()> {
         self.close();
+        self.env = None;
         self.slot = Some(Slot::claim()?);
         let mut config = self.config.clone();
         config.scenario.seed = seed;
@@ -176,14 +191,16 @@ impl PyMergeEnv {
     /// The finished episode's summary (the values of `episode.csv`, at full precision), once done.
     fn summary<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyDict>>> {
         match self.env.as_ref().and_then(|e| e.result()) {
-            Some(r) => crate::episode::summary_dict(py, r).map(Some),
+            Some(Finished::Merge(r)) => crate::episode::summary_dict(py, r).map(Some),
+            Some(Finished::Scenario(r)) => crate::scenario::summary_dict(py, r).map(Some),
             None => Ok(None),
         }
     }
 
-    /// Ends the running episode (its agents idle to the end) and frees the simulation.
+    /// Ends the running episode (its agents idle to the end) and frees the simulation; the
+    /// episode's `summary` stays readable until the next `reset`.
     fn close(&mut self) {
-        if let Some(mut env) = self.env.take() {
+        if let Some(env) = &mut self.env {
             env.close();
         }
         self.slot = None;

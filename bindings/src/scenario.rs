@@ -35,6 +35,14 @@ pub fn run<'py>(py: Python<'py>, call: ScenarioCall<'_, 'py>) -> PyResult<Bound<
         sumocfg::write(&result, &dir)
             .map_err(|e| pyo3::exceptions::PyOSError::new_err(e.to_string()))?;
     }
+    summary_dict(py, &result)
+}
+
+/// A scenario episode's `episode.csv` row as a dict of its typed, full-precision values.
+pub fn summary_dict<'py>(
+    py: Python<'py>,
+    result: &sumocfg::ScenarioResult,
+) -> PyResult<Bound<'py, PyDict>> {
     let row = cells(&result.summary).map_err(|e| SumoError::new_err(e.to_string()))?;
     cells_dict(py, row)
 }
@@ -57,7 +65,7 @@ pub fn resolve(
 }
 
 /// [`resolve`], with the scenario settings `table` (α, the seed) over the overrides.
-fn resolve_with(
+pub fn resolve_with(
     sumocfg: &std::path::Path,
     config: Option<&Bound<'_, PyAny>>,
     overrides: Option<&Bound<'_, PyDict>>,

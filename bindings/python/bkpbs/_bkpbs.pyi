@@ -124,11 +124,13 @@ class MergeEnvCore:
         self,
         agents: str = "single",
         alpha: float = 0.5,
-        lam: float = 3000.0,
+        lam: Optional[float] = None,
         config: Optional[Union[Mapping[str, Any], str, "os.PathLike[str]"]] = None,
+        sumocfg: Optional[Union[str, "os.PathLike[str]"]] = None,
         **overrides: Any,
     ) -> None:
-        """``agents``: "single" (one CAV among HDVs) or "all" (every CAV)."""
+        """``agents``: "single" (one CAV among HDVs) or "all" (every CAV); ``lam`` 3000 veh/h
+        unless given; ``sumocfg``: a SUMO scenario of your own instead (no ``lam``)."""
     def reset(self, seed: int) -> None:
         """Starts a new episode (ending the running one) and runs to the first agent's step."""
     def agents(self) -> List[str]: ...
@@ -142,7 +144,8 @@ class MergeEnvCore:
     def render_rgb(self, width: int = 600, height: int = 150) -> bytes:
         """height × width × 3 RGB bytes of the current step."""
     def summary(self) -> Optional[Dict[str, Any]]:
-        """The finished episode's ``episode.csv`` values (as ``run_episode`` returns them), once done."""
+        """The finished episode's ``episode.csv`` values (as ``run_episode`` returns them), once
+        it has ended or been closed (its agents idled to the end); ``None`` before."""
     def close(self) -> None: ...
     @staticmethod
     def feature_names() -> List[str]: ...

@@ -14,6 +14,15 @@ An action must be an integer in ``range(6)`` (a fractional or out-of-range one i
 ``masked_actions="idle"``, which executes it as idle (for learners that do not mask, such as
 Stable-Baselines3's PPO, and for Gymnasium's ``check_env``, which samples actions at random).
 
+With ``sumocfg=FILE`` either environment runs a SUMO scenario of your own instead of the paper's
+merge (no ``lam``: it brings its own demand), as ``bkpbs episode --sumocfg`` runs it: every merge
+region's CAVs are the agents of one step, each observed in its own region's frame, and SUMO
+drives them outside the regions. :class:`MergeEnv`'s agent is the first CAV of the scenario's
+draw (``alpha`` or ``cav_types=[...]``) that departs after the warm-up on a route through a
+region, every other vehicle an HDV; :class:`MergeParallelEnv`'s ``possible_agents`` grows as
+the scenario's flows bring CAVs. A scenario's episode is its whole interval: ``steps=N``
+shortens it (closing or resetting an environment runs the rest of the episode to its end).
+
 ``reset(seed=s)`` alone decides what follows, whatever ran before. A demand seed whose episode
 never has a controllable CAV is skipped: the next seed is tried, and ``info["demand_seed"]``
 says which seed the episode runs. SUMO runs in-process (libsumo): one environment per process
@@ -38,8 +47,10 @@ except ImportError:  # pragma: no cover - exercised only without pettingzoo
 
 OBS_DIM: int = MergeEnvCore.OBS_DIM
 N_ACTIONS: int = len(MergeEnvCore.action_names())
-# How many demand seeds a reset tries for one with a controllable CAV before it gives up.
+# How many demand seeds a reset tries for one with a controllable CAV before it gives up (on a
+# scenario of your own, whose every try runs the scenario to its end, fewer).
 MAX_SKIPPED_SEEDS = 100
+MAX_SKIPPED_SCENARIO_SEEDS = 3
 # Every feature is scaled by a fixed constant and clipped well inside this range.
 OBS_BOUND = 4.0
 
@@ -84,22 +95,26 @@ def _action_index(action: Any, mask: np.ndarray, agent: Any, masked_actions: str
 def _reset_to_an_agent(core: "_Core", seed: int) -> Tuple[int, List[str], np.ndarray, np.ndarray]:
     """Resets ``core`` with demand seed ``seed``, or the next seeds if an episode never has a
     controllable CAV; the seed used and the first step's agents, observations and masks."""
-    for demand_seed in range(seed, seed + MAX_SKIPPED_SEEDS):
+    tries = MAX_SKIPPED_SCENARIO_SEEDS if core.scenario else MAX_SKIPPED_SEEDS
+    for demand_seed in range(seed, seed + tries):
         core.env.reset(demand_seed)
         ids, obs, masks = core.arrays()
         if ids:
             return demand_seed, ids, obs, masks
+    hint = "raise alpha, name cav_types" if core.scenario else "raise alpha or lam"
     raise RuntimeError(
-        f"demand seeds {seed}..{seed + MAX_SKIPPED_SEEDS - 1} all give episodes without a "
-        "controllable CAV: raise alpha or lam, or lengthen steps"
+        f"demand seeds {seed}..{seed + tries - 1} all give episodes without a "
+        f"controllable CAV: {hint}, or lengthen steps"
     )
 
 
 class _Core:
     """The core environment's current step as numpy arrays."""
 
-    def __init__(self, agents: str, alpha: float, lam: float, config: Any, overrides: Dict[str, Any]):
-        self.env = MergeEnvCore(agents, alpha, lam, config, **overrides)
+    def __init__(self, agents: str, alpha: float, lam: Optional[float], config: Any,
+                 sumocfg: Any, overrides: Dict[str, Any]):
+        self.env = MergeEnvCore(agents, alpha, lam, config, sumocfg, **overrides)
+        self.scenario = sumocfg is not None
 
     def arrays(self) -> Tuple[List[str], np.ndarray, np.ndarray]:
         ids = self.env.agents()
@@ -112,7 +127,8 @@ class _Core:
 
 
 class MergeEnv(gymnasium.Env):
-    """One CAV (the first inserted after a 10 s warm-up) among HDVs on the merge section."""
+    """One CAV (the first inserted after a 10 s warm-up) among HDVs on the merge section, or on
+    the merges of a scenario of your own (``sumocfg=``)."""
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 5}
     feature_names = MergeEnvCore.feature_names()
@@ -121,11 +137,12 @@ class MergeEnv(gymnasium.Env):
     def __init__(
         self,
         alpha: float = 0.5,
-        lam: float = 3000.0,
+        lam: Optional[float] = None,
         config: Any = None,
         render_mode: Optional[str] = None,
         render_size: Tuple[int, int] = (600, 150),
         masked_actions: str = "raise",
+        sumocfg: Any = None,
         **overrides: Any,
     ):
         _check_render_mode(render_mode)
@@ -134,7 +151,7 @@ class MergeEnv(gymnasium.Env):
         self.masked_actions = masked_actions
         self.observation_space = _observation_space()
         self.action_space = spaces.Discrete(N_ACTIONS)
-        self._core = _Core("single", alpha, lam, config, overrides)
+        self._core = _Core("single", alpha, lam, config, sumocfg, overrides)
         self._obs = np.zeros(OBS_DIM, dtype=np.float32)
         self._mask = np.ones(N_ACTIONS, dtype=np.int8)
         self._ego: Optional[str] = None
@@ -177,25 +194,27 @@ class MergeEnv(gymnasium.Env):
 
 
 class MergeParallelEnv(_ParallelBase):
-    """Every CAV an agent, all acting at once (PettingZoo ``ParallelEnv``)."""
+    """Every CAV an agent, all acting at once (PettingZoo ``ParallelEnv``), on the merge
+    section or on every merge of a scenario of your own (``sumocfg=``)."""
 
     metadata = {"name": "bkpbs_merge_v0", "render_modes": ["rgb_array"], "render_fps": 5}
 
     def __init__(
         self,
         alpha: float = 0.5,
-        lam: float = 3000.0,
+        lam: Optional[float] = None,
         config: Any = None,
         render_mode: Optional[str] = None,
         render_size: Tuple[int, int] = (600, 150),
         masked_actions: str = "raise",
+        sumocfg: Any = None,
         **overrides: Any,
     ):
         _check_render_mode(render_mode)
         _check_masked_actions(masked_actions)
         self.render_mode, self.render_size = render_mode, render_size
         self.masked_actions = masked_actions
-        self._core = _Core("all", alpha, lam, config, overrides)
+        self._core = _Core("all", alpha, lam, config, sumocfg, overrides)
         self._rng = np.random.default_rng()
         self.agents: List[str] = []
         self.possible_agents: List[str] = []
@@ -213,6 +232,8 @@ class MergeParallelEnv(_ParallelBase):
     def _observe(self) -> Tuple[Dict[str, np.ndarray], Dict[str, Dict[str, Any]]]:
         ids, obs, masks = self._core.arrays()
         self.agents = list(ids)
+        if self._core.scenario:
+            self.possible_agents = self._core.env.possible_agents()
         observations = {a: obs[k] for k, a in enumerate(ids)}
         self._last_obs.update(observations)
         self._masks = {a: masks[k] for k, a in enumerate(ids)}

@@ -4,7 +4,8 @@
 //! inserts are CAVs, each decided when it departs on a random stream of its own (flows decide
 //! their vehicles at run time, so the share is realised, not exact; `episode.csv` reports it).
 //! Inside each merge region (all of the network's, or those `scenario.regions` selects) the
-//! chosen planner drives the CAVs, one planner per region; outside, SUMO drives every vehicle
+//! chosen planner drives the CAVs, one planner per region (or one [`Round`] over every region:
+//! the stepped RL environment's); outside, SUMO drives every vehicle
 //! on its type's own model, and the HDVs everywhere (no merge rule: the user's drivers are the
 //! user's).
 //!
@@ -20,6 +21,7 @@ mod own_loop;
 mod records;
 mod region;
 mod region_rows;
+mod round;
 mod run;
 
 use std::path::PathBuf;
@@ -38,6 +40,7 @@ use crate::sumo::{Simulation, StderrCapture};
 pub use own_loop::OwnLoop;
 pub use records::{csv_of, ScenarioSummary, ScenarioVehicle};
 pub use region_rows::RegionRow;
+pub use round::{Fleet, Round};
 
 /// What an episode on a user's scenario produced.
 #[derive(Debug, Clone)]
@@ -161,6 +164,43 @@ fn check_cav_types(
 /// An unreadable configuration, a step length other than the planners', a network without a
 /// region to plan, an unknown planner, or SUMO failing.
 pub fn run(config: &Config, planner: &str) -> Result<ScenarioResult, EpisodeError> {
+    run_planned(config, planner, |roads| {
+        Ok(run::ScenarioRun::new(
+            config,
+            regions(config, roads, planner)?,
+        ))
+    })
+}
+
+/// Runs the scenario of `config.scenario.sumocfg` with `round` planning every merge region
+/// at once and `fleet` choosing the CAVs; `name` is the planner column of its rows.
+///
+/// # Errors
+/// As [`run`]'s.
+pub fn run_together(
+    config: &Config,
+    name: &str,
+    round: Box<dyn Round>,
+    fleet: Fleet,
+) -> Result<ScenarioResult, EpisodeError> {
+    run_planned(config, name, |roads| {
+        let regions = roads
+            .into_iter()
+            .map(|road| run::Region::new(region_config(config, &road), road, None))
+            .collect();
+        Ok(run::ScenarioRun::planned_together(
+            config, regions, round, fleet,
+        ))
+    })
+}
+
+/// The episode of `config`, its loop made by `make` from the regions' roads; `planner` names
+/// it in the rows.
+fn run_planned(
+    config: &Config,
+    planner: &str,
+    make: impl FnOnce(Vec<Road>) -> Result<run::ScenarioRun, EpisodeError>,
+) -> Result<ScenarioResult, EpisodeError> {
     config.validate()?;
     let (path, cfg) = checked(config)?;
     let roads = frame::scenario_roads(&config.scenario)?;
@@ -178,7 +218,7 @@ pub fn run(config: &Config, planner: &str) -> Result<ScenarioResult, EpisodeErro
             }
         })?;
         check_cav_types(&sim, config, &path)?;
-        let mut run = run::ScenarioRun::new(config, regions(config, roads, planner)?);
+        let mut run = make(roads)?;
         run.run(sim)?;
         Ok::<_, EpisodeError>(run.finish(planner, &tripinfo, options.clone()))
     })();
@@ -200,13 +240,19 @@ fn regions(
     roads
         .into_iter()
         .map(|road| {
-            // CAVs drive no faster than the carriageway allows where they enter it.
-            let mut c = config.clone();
-            c.scenario.v_max = c.scenario.v_max.min(road.entries[0].speed_limit);
+            let c = region_config(config, &road);
             let controller = controller::by_name(planner, &c, &road)?;
-            Ok(run::Region::new(c, road, controller))
+            Ok(run::Region::new(c, road, Some(controller)))
         })
         .collect()
+}
+
+/// The configuration of `road`'s region: the episode's, CAVs driving no faster than the
+/// carriageway allows where they enter it.
+fn region_config(config: &Config, road: &Road) -> Config {
+    let mut c = config.clone();
+    c.scenario.v_max = c.scenario.v_max.min(road.entries[0].speed_limit);
+    c
 }
 
 /// The path of the episode's SUMO configuration and the configuration, read and checked to run

@@ -3,7 +3,7 @@
 //! trajectories.
 
 use crate::config::Config;
-use crate::controller::{Command, Controller};
+use crate::controller::{CavHandling, Command, Controller};
 use crate::episode::trajectories::{Sent, TrajectoryLog, TrajectoryRow};
 use crate::model::road::Road;
 use crate::model::scene::Kind;
@@ -17,7 +17,9 @@ pub struct Region {
     /// The region's configuration: the episode's, `v_max` capped at the region's limit.
     pub config: Config,
     pub road: Road,
-    pub controller: Box<dyn Controller>,
+    /// Its own planner; `None` when the episode's [`super::round::Round`] plans every region
+    /// together.
+    pub controller: Option<Box<dyn Controller>>,
     pub(super) scene: SumoScene,
     pub(super) commands: Vec<Command>,
     /// Frame `s` from which the planner drives CAVs: the end of the region's first edge.
@@ -36,8 +38,8 @@ pub struct Region {
 }
 
 impl Region {
-    /// The region of `road`, planned by `controller` under `config`.
-    pub fn new(config: Config, road: Road, controller: Box<dyn Controller>) -> Region {
+    /// The region of `road`, planned by `controller` (or the episode's round) under `config`.
+    pub fn new(config: Config, road: Road, controller: Option<Box<dyn Controller>>) -> Region {
         // The main edges come first in the frame: the second one starts where the first ends.
         let control_start = road
             .edges
@@ -60,6 +62,14 @@ impl Region {
             log,
             log_rows: Vec::new(),
         }
+    }
+
+    /// Whether a planner commands the region's CAVs (rather than leaving them to SUMO): a
+    /// round's always do.
+    pub(super) fn commanded(&self) -> bool {
+        self.controller
+            .as_ref()
+            .map_or(true, |c| c.handling() == CavHandling::Commanded)
     }
 
     /// Records the vehicle just pushed into the scene: its reading and frame state, its own

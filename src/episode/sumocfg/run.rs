@@ -4,21 +4,23 @@
 //! deterministic, and none sees another's vehicles or state).
 
 use std::collections::HashMap;
+use std::sync::Arc;
 
 use crate::config::Config;
-use crate::controller::CavHandling;
+use crate::controller::Command;
 use crate::episode::error::EpisodeError;
 use crate::episode::metrics::{CollisionEvent, Outcome, Timing};
 use crate::episode::step_times::StepTimes;
 use crate::model::kinematics::free_flow_time;
 use crate::model::road::MERGE_LANE;
-use crate::model::scene::{Kind, Origin, VehicleState};
+use crate::model::scene::{Kind, Origin, Scene, VehicleState};
 use crate::sumo::frame;
 use crate::sumo::{RawVehicleState, Simulation, SumoClient, SumoError, VehicleReadings};
 
 use super::records::{self, ScenarioSummary, ScenarioVehicle};
 pub use super::region::Region;
 use super::region_rows::{region_rows, RegionRow};
+use super::round::{Fleet, Round};
 use super::{becomes_cav, ScenarioResult};
 
 /// SUMO's defaults, restored when a CAV leaves the planned part of a region: every safety check
@@ -66,6 +68,12 @@ pub struct ScenarioRun {
     /// Steps seen, and the vehicles and planned CAVs in the regions' scenes over them.
     occupancy: (u64, u64, u64),
     timing: Option<Timing>,
+    /// Plans every region at once in place of their own planners, when given.
+    round: Option<Box<dyn Round>>,
+    /// Which departing vehicles are CAVs.
+    fleet: Fleet,
+    /// The vehicles removed in collisions since the last planning round.
+    crashed: Vec<Arc<str>>,
 }
 
 impl ScenarioRun {
@@ -85,6 +93,24 @@ impl ScenarioRun {
             times: StepTimes::new(config.scenario.steps),
             occupancy: (0, 0, 0),
             timing: None,
+            round: None,
+            fleet: Fleet::Drawn,
+            crashed: Vec::new(),
+        }
+    }
+
+    /// The episode with `round` planning every region (theirs without planners) and `fleet`
+    /// deciding the CAVs.
+    pub fn planned_together(
+        config: &Config,
+        regions: Vec<Region>,
+        round: Box<dyn Round>,
+        fleet: Fleet,
+    ) -> Self {
+        ScenarioRun {
+            round: Some(round),
+            fleet,
+            ..ScenarioRun::new(config, regions)
         }
     }
 
@@ -152,7 +178,7 @@ impl ScenarioRun {
         if plan {
             self.plan_regions();
             for r in &mut self.regions {
-                if r.controller.handling() == CavHandling::Commanded {
+                if r.commanded() {
                     crate::episode::runner::send_commands(
                         sim,
                         &r.scene,
@@ -172,14 +198,21 @@ impl ScenarioRun {
     fn plan_regions(&mut self) {
         use rayon::prelude::*;
         let start = std::time::Instant::now();
+        let crashed = std::mem::take(&mut self.crashed);
+        if let Some(round) = &mut self.round {
+            plan_together(round.as_mut(), &mut self.regions, &crashed);
+        }
         self.regions.par_iter_mut().for_each(|r| {
-            r.commands.clear();
-            r.controller.plan(&r.scene.scene, &mut r.commands);
+            if let Some(c) = &mut r.controller {
+                r.commands.clear();
+                c.plan(&r.scene.scene, &mut r.commands);
+            }
         });
         let shield_ms = self
             .regions
             .iter()
-            .map(|r| r.controller.last_shield_ms())
+            .filter_map(|r| r.controller.as_ref())
+            .map(|c| c.last_shield_ms())
             .sum();
         self.times
             .add_round(start.elapsed().as_secs_f64() * 1e3, shield_ms);
@@ -193,12 +226,14 @@ impl ScenarioRun {
 
     fn book_departures(&mut self, sim: &mut impl SumoClient, now: f64) -> Result<(), SumoError> {
         let s = &self.config.scenario;
-        let (index, lines) = (&mut self.index, &mut self.lines);
+        let (index, lines, regions) = (&mut self.index, &mut self.lines, &self.regions);
         for id in sim.departed()? {
             let sumo_type = sim.vehicle_type(&id)?;
             let size = sim.vehicle_size(&id)?;
             let max_speed = sim.vehicle_max_speed(&id)?;
-            let kind = if becomes_cav(s, &id, &sumo_type) {
+            let drawn = becomes_cav(s, &id, &sumo_type);
+            let crosses = || crosses_a_region(sim, &id, regions);
+            let kind = if self.fleet.is_cav(&id, now, drawn, crosses)? {
                 Kind::Cav
             } else {
                 Kind::Hdv
@@ -244,6 +279,7 @@ impl ScenarioRun {
                     sim.remove_vehicle(me)?;
                     r.outcome = Outcome::Crashed;
                     r.crash_time_s = Some(now);
+                    self.crashed.push(Arc::from(me.as_str()));
                 }
                 if !r.crashed_with.is_empty() {
                     r.crashed_with.push(' ');
@@ -328,7 +364,7 @@ impl ScenarioRun {
             && front >= region.control_start
             && front < region.control_end
             && region.road.lanes_at(front).contains(&lane);
-        let commanded = region.controller.handling() == CavHandling::Commanded;
+        let commanded = region.commanded();
         if planned && commanded && line.commanded != Some(g) {
             sim.set_speed_mode(&line.record.id, 0)?;
             sim.set_lane_change_mode(&line.record.id, 0)?;
@@ -432,6 +468,42 @@ impl ScenarioRun {
             trajectories,
         })
     }
+}
+
+/// One round of `round` over every region, each region's commands replaced by the round's.
+fn plan_together(round: &mut dyn Round, regions: &mut [Region], crashed: &[Arc<str>]) {
+    let mut commands: Vec<Vec<Command>> = regions
+        .iter_mut()
+        .map(|r| {
+            let mut c = std::mem::take(&mut r.commands);
+            c.clear();
+            c
+        })
+        .collect();
+    let views: Vec<(&Config, &Scene)> = regions
+        .iter()
+        .map(|r| (&r.config, &r.scene.scene))
+        .collect();
+    round.plan(&views, crashed, &mut commands);
+    for (r, c) in regions.iter_mut().zip(commands) {
+        r.commands = c;
+    }
+}
+
+/// Whether vehicle `id`'s route runs through the end of one of `regions` (SUMO answers a
+/// negative distance for an edge off its route).
+fn crosses_a_region(
+    sim: &impl SumoClient,
+    id: &str,
+    regions: &[Region],
+) -> Result<bool, SumoError> {
+    for r in regions {
+        let (end, pos) = (&r.road.end_edge.0, r.road.end_edge.1);
+        if sim.driving_distance(id, end, pos)? >= 0.0 {
+            return Ok(true);
+        }
+    }
+    Ok(false)
 }
 
 /// The episode's own columns of `episode.csv`: which scenario, planner, CAVs, seed and regions.

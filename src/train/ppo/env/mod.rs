@@ -9,22 +9,28 @@
 //! Two agent sets: every CAV (PettingZoo), or one CAV among HDVs (Gymnasium; the paper trains
 //! its RL-PPO "in a single CAV environment"): the first CAV of the demand inserted after the
 //! warm-up, every other vehicle an HDV.
+//!
+//! On a user's scenario (`scenario.sumocfg`) the episode is `bkpbs episode --sumocfg`'s, every
+//! merge region's CAVs the agents of one decision per step (each observed and executed in its
+//! own region's frame); outside the regions SUMO drives them. The single agent is the first
+//! CAV of the scenario's draw that departs after the warm-up with a route through a region.
 
 use std::collections::HashMap;
 use std::sync::mpsc::{self, Receiver, Sender, SyncSender};
 use std::sync::{Arc, Mutex};
 use std::thread::JoinHandle;
 
+mod remote;
+
 use super::reward::RewardSettings;
 use crate::config::Config;
-use crate::controller::rl_ppo::{merge_progress, Executor};
-use crate::controller::{CavHandling, Command, Controller};
 use crate::episode::demand::PlannedVehicle;
+use crate::episode::sumocfg::{self, Fleet, ScenarioResult};
 use crate::episode::{self, Driver, EpisodeError, EpisodeResult, Observer};
 use crate::model::scene::{Kind, Scene};
 use crate::planner::primitives::Primitive;
 use crate::policy::actions::{Mask, IDLE};
-use crate::policy::observation::{observe, OBS_DIM};
+use remote::{MergeRemote, Remote};
 
 /// Which vehicles are agents.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -102,13 +108,23 @@ struct Decision {
 /// A step of the episode thread: agents to decide, or the end.
 enum Event {
     Decide(Box<Decision>),
-    Finished(Box<Result<EpisodeResult, EpisodeError>>),
+    Finished(Box<Result<Finished, EpisodeError>>),
+}
+
+/// A finished episode's results.
+#[derive(Debug, Clone)]
+pub enum Finished {
+    /// On the paper's merge: its metrics and vehicles.
+    Merge(EpisodeResult),
+    /// On a user's scenario: its rows, as `bkpbs episode --sumocfg` writes them.
+    Scenario(ScenarioResult),
 }
 
 /// A running episode stepped from outside.
 pub struct MergeEnv {
     events: Receiver<Event>,
-    actions: SyncSender<Vec<usize>>,
+    /// Dropped when the environment closes: the episode thread then idles its agents.
+    actions: Option<SyncSender<Vec<usize>>>,
     thread: Option<JoinHandle<()>>,
     agents: Vec<Agent>,
     scene: Option<Scene>,
@@ -116,7 +132,7 @@ pub struct MergeEnv {
     reward: RewardSettings,
     single: bool,
     done: bool,
-    result: Option<EpisodeResult>,
+    result: Option<Finished>,
 }
 
 impl MergeEnv {
@@ -127,20 +143,28 @@ impl MergeEnv {
         reward: RewardSettings,
     ) -> Result<Self, EnvError> {
         config.validate().map_err(EpisodeError::from)?;
-        let demand = agent_demand(config, agents)?;
-        let possible = demand
-            .iter()
-            .filter(|v| v.kind == Kind::Cav)
-            .map(|v| Arc::from(v.id.as_str()))
-            .collect();
         let (event_tx, events) = mpsc::channel();
         let (actions, action_rx) = mpsc::sync_channel(1);
-        let config = config.clone();
-        let thread =
-            std::thread::spawn(move || episode_thread(config, demand, event_tx, action_rx));
+        let (thread, possible) = if config.scenario.sumocfg.is_some() {
+            let config = config.clone();
+            let run = move || scenario_thread(config, agents, event_tx, action_rx);
+            // A scenario's flows decide their vehicles as it runs: its agents are known as
+            // they come.
+            (std::thread::spawn(run), Vec::new())
+        } else {
+            let demand = agent_demand(config, agents)?;
+            let possible = demand
+                .iter()
+                .filter(|v| v.kind == Kind::Cav)
+                .map(|v| Arc::from(v.id.as_str()))
+                .collect();
+            let config = config.clone();
+            let run = move || episode_thread(config, demand, event_tx, action_rx);
+            (std::thread::spawn(run), possible)
+        };
         let mut env = MergeEnv {
             events,
-            actions,
+            actions: Some(actions),
             thread: Some(thread),
             agents: Vec::new(),
             scene: None,
@@ -154,7 +178,9 @@ impl MergeEnv {
         Ok(env)
     }
 
-    /// Every vehicle that may become an agent (the demand's CAVs), in order of insertion.
+    /// Every vehicle that may become an agent (the demand's CAVs), in order of insertion; on a
+    /// user's scenario, whose flows decide their vehicles as it runs, those that have been
+    /// agents so far.
     pub fn possible_agents(&self) -> &[Arc<str>] {
         &self.possible
     }
@@ -170,7 +196,7 @@ impl MergeEnv {
     }
 
     /// The finished episode's results (metrics, vehicles), once done.
-    pub fn result(&self) -> Option<&EpisodeResult> {
+    pub fn result(&self) -> Option<&Finished> {
         self.result.as_ref()
     }
 
@@ -194,9 +220,7 @@ impl MergeEnv {
             .zip(&self.agents)
             .map(|(&a, ag)| if ag.forced || !ag.mask[a] { IDLE } else { a })
             .collect();
-        self.actions
-            .send(chosen.clone())
-            .map_err(|_| EnvError::Lost)?;
+        self.send(chosen.clone())?;
         self.advance(&chosen)
     }
 
@@ -217,9 +241,10 @@ impl MergeEnv {
                     self.scene = Some(scene);
                     if agents.is_empty() {
                         // Only news of a collision: nobody to ask, the episode goes on.
-                        self.actions.send(Vec::new()).map_err(|_| EnvError::Lost)?;
+                        self.send(Vec::new())?;
                         continue;
                     }
+                    self.learn_agents(&agents);
                     self.agents = agents;
                 }
                 Event::Finished(result) => {
@@ -238,6 +263,15 @@ impl MergeEnv {
         }
         out.done = self.done;
         Ok(out)
+    }
+
+    /// Adds the agents not seen before to the possible ones (a scenario's, as they come).
+    fn learn_agents(&mut self, agents: &[Agent]) {
+        for a in agents {
+            if !self.possible.contains(&a.id) {
+                self.possible.push(a.id.clone());
+            }
+        }
     }
 
     /// Rewards of the agents `before` for their `chosen` actions, given the next step's agents
@@ -273,16 +307,25 @@ impl MergeEnv {
         }
     }
 
+    fn send(&self, actions: Vec<usize>) -> Result<(), EnvError> {
+        let to = self.actions.as_ref().ok_or(EnvError::Done)?;
+        to.send(actions).map_err(|_| EnvError::Lost)
+    }
+
     /// Ends the episode early: every agent idles to its end (the simulation must close before
-    /// another can start in this process).
+    /// another can start in this process); the episode's result stays readable. Also after a
+    /// single agent has left, when the thread may be waiting for the actions of an agent that
+    /// came back (a scenario's next region) or for news of a collision to be taken.
     pub fn close(&mut self) {
-        while !self.done {
-            let idle = vec![IDLE; self.agents.len()];
-            if self.step(&idle).is_err() {
-                break;
+        self.actions = None;
+        self.join();
+        while let Ok(event) = self.events.try_recv() {
+            if let Event::Finished(result) = event {
+                self.result = self.result.take().or((*result).ok());
             }
         }
-        self.join();
+        self.done = true;
+        self.agents.clear();
     }
 
     fn join(&mut self) {
@@ -298,12 +341,14 @@ impl Drop for MergeEnv {
     }
 }
 
+/// How long a single agent's episode runs before its agent may depart (s).
+const WARMUP_S: f64 = 10.0;
+
 /// The demand of the episode: as drawn, or with one agent CAV among HDVs (the first CAV
 /// inserted after a 10 s warm-up; every other vehicle an HDV).
 pub fn agent_demand(config: &Config, agents: Agents) -> Result<Vec<PlannedVehicle>, EpisodeError> {
     let mut demand = episode::demand::generate_for(config)?;
     if agents == Agents::Single {
-        const WARMUP_S: f64 = 10.0;
         let ego = demand
             .iter()
             .position(|v| v.kind == Kind::Cav && v.depart >= WARMUP_S)
@@ -323,17 +368,31 @@ fn episode_thread(
     actions: Receiver<Vec<usize>>,
 ) {
     let crashed = Arc::new(Mutex::new(Vec::new()));
-    let mut ctl = Remote {
-        executor: Executor::new(&config),
-        events: events.clone(),
-        actions,
+    let mut ctl = MergeRemote {
+        remote: Remote::new(events.clone(), actions),
+        config: config.clone(),
         crashed: crashed.clone(),
-        v_max: config.scenario.v_max,
-        detached: false,
     };
     let mut observer = CrashLog(crashed);
     let result = episode::run_observed(&config, Driver::Given(&mut ctl), &demand, &mut observer);
-    let _ = events.send(Event::Finished(Box::new(result)));
+    let _ = events.send(Event::Finished(Box::new(result.map(Finished::Merge))));
+}
+
+/// The episode on the user's scenario of `config`, every region's CAVs (or one among HDVs)
+/// the agents of one round per step.
+fn scenario_thread(
+    config: Config,
+    agents: Agents,
+    events: Sender<Event>,
+    actions: Receiver<Vec<usize>>,
+) {
+    let fleet = match agents {
+        Agents::Single => Fleet::single(WARMUP_S),
+        Agents::AllCavs => Fleet::Drawn,
+    };
+    let round = Box::new(Remote::new(events.clone(), actions));
+    let result = sumocfg::run_together(&config, "rl-env", round, fleet);
+    let _ = events.send(Event::Finished(Box::new(result.map(Finished::Scenario))));
 }
 
 /// Records the vehicles removed in collisions, for the controller to report.
@@ -347,76 +406,5 @@ impl Observer for CrashLog {
             .lock()
             .unwrap_or_else(|e| e.into_inner())
             .push(Arc::from(id));
-    }
-}
-
-/// The controller on the episode thread: sends the agents' observations, waits for actions.
-struct Remote {
-    executor: Executor,
-    events: Sender<Event>,
-    actions: Receiver<Vec<usize>>,
-    crashed: Arc<Mutex<Vec<Arc<str>>>>,
-    v_max: f64,
-    /// The environment is gone: idle to the end.
-    detached: bool,
-}
-
-impl Controller for Remote {
-    fn name(&self) -> &'static str {
-        "rl-env"
-    }
-
-    fn handling(&self) -> CavHandling {
-        CavHandling::Commanded
-    }
-
-    fn plan(&mut self, scene: &Scene, out: &mut Vec<Command>) {
-        self.executor.forget_finished(scene.time);
-        let cavs = scene.cav_indices();
-        let crashed = std::mem::take(&mut *self.crashed.lock().unwrap_or_else(|e| e.into_inner()));
-        if cavs.is_empty() && crashed.is_empty() {
-            return;
-        }
-        let agents: Vec<Agent> = cavs.iter().map(|&i| self.agent(scene, i)).collect();
-        let forced: Vec<bool> = agents.iter().map(|a| a.forced).collect();
-        let chosen = if self.detached {
-            None
-        } else {
-            let event = Event::Decide(Box::new(Decision {
-                scene: scene.clone(),
-                agents,
-                crashed,
-            }));
-            self.events
-                .send(event)
-                .ok()
-                .and_then(|()| self.actions.recv().ok())
-        };
-        self.detached |= chosen.is_none();
-        let chosen = chosen.unwrap_or_else(|| vec![IDLE; cavs.len()]);
-        for ((&i, a), f) in cavs.iter().zip(chosen).zip(forced) {
-            out.push(self.executor.command(scene, i, a, f));
-        }
-    }
-
-    fn lane_change_cancelled(&mut self, id: &str) {
-        self.executor.lane_changes.cancel(id);
-    }
-}
-
-impl Remote {
-    fn agent(&self, scene: &Scene, i: usize) -> Agent {
-        let v = &scene.vehicles[i];
-        let forced = self.executor.changing(scene, i);
-        let mut obs = vec![0.0; OBS_DIM];
-        observe(scene, i, forced, self.v_max, &mut obs);
-        Agent {
-            id: v.id.clone(),
-            obs,
-            mask: self.executor.rules.mask(scene, i),
-            forced,
-            speed: v.speed,
-            merge_progress: merge_progress(scene, i),
-        }
     }
 }
