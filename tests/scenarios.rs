@@ -298,3 +298,39 @@ fn each_regions_trajectories_are_written_and_drawn_and_change_nothing() {
     common::assert_ok(&scenario(&cfg, "bk-pbs", "150", &traced));
     assert!(!traced.join("trajectories").exists());
 }
+
+/// The planners keep each CAV to the speed limit of the lane it drives on: on the ramp game's
+/// `gneE14`, a 13.89 m/s on-ramp between lanes of 33.33, no CAV is told to go faster than that
+/// (or than it drove, along its path, as it came onto it: it may hold its speed).
+#[test]
+fn cavs_keep_to_each_lanes_speed_limit() {
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = game_copy(dir.path()).join("ramp.sumocfg");
+    let out = dir.path().join("limits");
+    let mut args = vec!["episode", "--sumocfg", cfg.to_str().unwrap()];
+    args.extend(["--planner", "bk-pbs", "--alpha", "0.6", "--steps", "1000"]);
+    args.extend([
+        "--seed",
+        "8",
+        "--trajectories",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    common::assert_ok(&bkpbs(&args));
+    let rows = csv_rows(&std::fs::read(out.join("trajectories/gneE7/trajectories.csv")).unwrap());
+    let mut on_slow_lane = 0;
+    for r in rows.iter().filter(|r| !r["speed_sent"].is_empty()) {
+        let num = |k: &str| r[k].parse::<f64>().unwrap();
+        let limit: f64 = if r["edge"] == "gneE14" { 13.89 } else { 33.33 };
+        let path_speed = num("speed") / num("heading").cos();
+        assert!(
+            num("speed_sent") <= limit.max(path_speed) + 1e-3,
+            "{} on {} told {} (limit {limit}): {r:?}",
+            r["id"],
+            r["edge"],
+            r["speed_sent"]
+        );
+        on_slow_lane += usize::from(r["edge"] == "gneE14");
+    }
+    assert!(on_slow_lane > 50, "{on_slow_lane} commands on gneE14");
+}

@@ -1,15 +1,15 @@
 //! Trucks of 12 and 16.5 m among the CAVs, on a merge the test builds with netconvert and a
 //! scenario of its own (`--sumocfg`): the planners see each vehicle with its own type's
-//! length and top speed, so a CAV truck is planned as a truck (never faster than its type
-//! allows: its SUMO timeLoss is never negative), and neither search planner takes part in a
-//! collision.
+//! length, top speed and acceleration, so a CAV truck is planned as a truck (never faster than
+//! its type allows: its SUMO timeLoss is never negative; never told to accelerate harder than
+//! its type can), and neither search planner takes part in a collision.
 
 mod common;
 
 use std::path::{Path, PathBuf};
 
 use common::netconvert::merge;
-use common::{csv_rows, scenario_episode, stderr};
+use common::{bkpbs, csv_rows, stderr};
 
 /// Cars, 12 m trucks and 16.5 m trucks with their own accelerations and top speeds, on the
 /// main road and the ramp, for 300 s at the planners' step.
@@ -47,7 +47,20 @@ fn cav_trucks_are_planned_with_their_own_length_and_no_search_planner_collides()
     let cfg = scenario(dir.path());
     for planner in ["bk-pbs", "bk-mastar"] {
         let out = dir.path().join(planner);
-        let o = scenario_episode(&cfg, planner, "0.8", "5", &out);
+        let o = bkpbs(&[
+            "episode",
+            "--sumocfg",
+            cfg.to_str().unwrap(),
+            "--planner",
+            planner,
+            "--alpha",
+            "0.8",
+            "--seed",
+            "5",
+            "--trajectories",
+            "--out",
+            out.to_str().unwrap(),
+        ]);
         assert!(o.status.success(), "{planner}: {}", stderr(&o));
         let ep = &csv_rows(&std::fs::read(out.join("episode.csv")).unwrap())[0];
         let n = |k: &str| ep[k].parse::<u64>().unwrap();
@@ -76,5 +89,47 @@ fn cav_trucks_are_planned_with_their_own_length_and_no_search_planner_collides()
                 }
             }
         }
+        within_their_accelerations(planner, &out, &vehicles);
     }
+}
+
+/// Every speed the planner sent a CAV truck is reachable at its type's `accel` (1.3 and 1 m/s²,
+/// below the planner's 2) from the speed it drove at along its path: the planner asked no more
+/// of it.
+fn within_their_accelerations(
+    planner: &str,
+    out: &Path,
+    vehicles: &[std::collections::BTreeMap<String, String>],
+) {
+    let accel = |t: &str| match t {
+        "truck12" => Some(1.3),
+        "truck16" => Some(1.0),
+        _ => None,
+    };
+    let of: std::collections::HashMap<&str, f64> = vehicles
+        .iter()
+        .filter_map(|v| Some((v["id"].as_str(), accel(&v["type"])?)))
+        .collect();
+    let region = std::fs::read_dir(out.join("trajectories"))
+        .unwrap()
+        .next()
+        .unwrap();
+    let rows = csv_rows(&std::fs::read(region.unwrap().path().join("trajectories.csv")).unwrap());
+    let mut checked = 0;
+    for r in rows.iter().filter(|r| !r["speed_sent"].is_empty()) {
+        let Some(a) = of.get(r["id"].as_str()) else {
+            continue;
+        };
+        let num = |k: &str| r[k].parse::<f64>().unwrap();
+        // Planned from its speed along its path (mid lane change, it heads off the road).
+        let (sent, speed) = (num("speed_sent"), num("speed") / num("heading").cos());
+        assert!(
+            sent - speed <= a * 0.2 + 0.02,
+            "{planner}: {} at {} told {sent} from {speed} (accel {a}): {r:?}",
+            r["id"],
+            r["time"]
+        );
+        checked += 1;
+    }
+    assert!(checked > 500, "{planner}: {checked} commands to CAV trucks");
 }

@@ -9,6 +9,7 @@ use std::collections::HashMap;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
+use bkpbs::model::scene::Limits;
 use bkpbs::sumo::{Collision, RawVehicleState, SumoClient, SumoError, VehicleReadings};
 
 /// The caller's module, and the codes of the edges whose vehicles are read by index.
@@ -172,6 +173,13 @@ impl SumoClient for TraciClient<'_> {
     }
     fn vehicle_max_speed(&self, id: &str) -> Result<f64, SumoError> {
         self.call("vehicle.getMaxSpeed", (id,))
+    }
+    fn vehicle_limits(&self, id: &str) -> Result<Limits, SumoError> {
+        Ok(Limits {
+            accel: self.call("vehicle.getAccel", (id,))?,
+            decel: self.call("vehicle.getDecel", (id,))?,
+            emergency_decel: self.call("vehicle.getEmergencyDecel", (id,))?,
+        })
     }
     fn driving_distance(&self, id: &str, edge: &str, pos: f64) -> Result<f64, SumoError> {
         self.call("vehicle.getDrivingDistance", (id, edge, pos))

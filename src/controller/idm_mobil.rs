@@ -103,6 +103,8 @@ impl Controller for IdmMobil {
                     }
                 }
             }
+            // No more than the vehicle can (a truck's type accelerates at 1.3 m/s², below IDM's).
+            let a = a.clamp(-v.limits.emergency_decel, v.limits.accel);
             let lane_change = self.lane_change(scene, i);
             if lane_change.is_some() {
                 self.last_change.insert(v.id.clone(), scene.time);

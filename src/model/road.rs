@@ -41,6 +41,8 @@ pub struct LaneFrame {
     pub scale: f64,
     /// `(pos, s)` pairs (m) of a lane mapped piecewise linearly; `None`: linear by `s0`, `scale`.
     pub knots: Option<Arc<[(f64, f64)]>>,
+    /// The SUMO lane's speed limit (m/s; infinite on a frame built by hand).
+    pub speed_limit: f64,
 }
 
 impl LaneFrame {
@@ -51,6 +53,15 @@ impl LaneFrame {
             s0,
             scale: 1.0,
             knots: None,
+            speed_limit: f64::INFINITY,
+        }
+    }
+
+    /// The same lane, its SUMO lane limited to `speed_limit` (m/s).
+    pub fn limited(self, speed_limit: f64) -> LaneFrame {
+        LaneFrame {
+            speed_limit,
+            ..self
         }
     }
 

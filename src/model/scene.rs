@@ -80,12 +80,39 @@ pub struct VehicleState {
     pub length: f64,
     /// Body width (m).
     pub width: f64,
-    /// Its own top speed (m/s; its SUMO type's `maxSpeed` on a scenario of the user's own):
+    /// Its own top speed (m/s; on a scenario of the user's own its SUMO type's `maxSpeed`, or the
+    /// limit of the lane it drives on where that is lower):
     /// a CAV's plans stay below it. Infinite where the planners' `v_max` is the only limit (the
     /// paper's demand, whose CAV type's `maxSpeed` is `v_max`).
     pub max_speed: f64,
+    /// Its own acceleration and braking limits: a CAV's plans ask no more of it.
+    pub limits: Limits,
     /// Still on the ramp edge (cannot change lanes yet).
     pub on_ramp: bool,
+}
+
+/// What a vehicle can do longitudinally (m/s², positive): its SUMO type's `accel`, `decel` and
+/// `emergencyDecel` on a scenario of the user's own. A planner's own accelerations apply where
+/// they are lower (the paper's: 2, 2 and 6 m/s², below every SUMO default but a truck's or a
+/// bus's `accel`, 1.3 and 1.2).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Limits {
+    /// Greatest acceleration.
+    pub accel: f64,
+    /// Comfortable deceleration.
+    pub decel: f64,
+    /// Greatest deceleration.
+    pub emergency_decel: f64,
+}
+
+impl Limits {
+    /// No limit of the vehicle's own: the planners' accelerations alone (the paper's demand,
+    /// whose types can do more than they ask).
+    pub const NONE: Limits = Limits {
+        accel: f64::INFINITY,
+        decel: f64::INFINITY,
+        emergency_decel: f64::INFINITY,
+    };
 }
 
 impl VehicleState {
@@ -106,6 +133,7 @@ impl VehicleState {
             length: 5.0,
             width: 2.0,
             max_speed: f64::INFINITY,
+            limits: Limits::NONE,
             on_ramp: false,
         }
     }

@@ -97,6 +97,7 @@ impl LaneChanges {
             length: v.length,
             width: v.width,
             max_speed: v.max_speed,
+            limits: v.limits,
             obstacles,
             guard: guard.map(|check| Guard {
                 check,

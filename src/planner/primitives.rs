@@ -18,6 +18,7 @@
 use crate::config::Scenario;
 use crate::model::kinematics::{Bicycle, BicycleState, Input};
 use crate::model::math::{wrap_angle, Point};
+use crate::model::scene::Limits;
 
 /// A maneuver of the library.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -140,6 +141,23 @@ impl Library {
         };
         lib.build_table();
         lib
+    }
+
+    /// The library of a vehicle that can do no more than `limits`: its primitives'
+    /// accelerations lowered to the vehicle's where they are lower (`None`: none is; the
+    /// lane-change table, at constant speed, is the same).
+    pub fn limited(&self, limits: &Limits) -> Option<Library> {
+        let accel = self.accel.min(limits.accel);
+        let decel = self.decel.min(limits.decel);
+        let emergency_decel = self.emergency_decel.min(limits.emergency_decel);
+        let same =
+            (accel, decel, emergency_decel) == (self.accel, self.decel, self.emergency_decel);
+        (!same).then(|| Library {
+            accel,
+            decel,
+            emergency_decel,
+            ..self.clone()
+        })
     }
 
     /// The same library after its parameters were changed: the table is rebuilt.

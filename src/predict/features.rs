@@ -527,6 +527,7 @@ mod tests {
             length: 5.0,
             width: 2.0,
             max_speed: f64::INFINITY,
+            limits: crate::model::scene::Limits::NONE,
             on_ramp: false,
         }
     }

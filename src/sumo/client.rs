@@ -3,6 +3,7 @@
 //! loop (the Python `Controller(sumocfg=…)`), so that both keep one set of books and plan alike.
 
 use super::{Collision, RawVehicleState, Simulation, SumoError, VehicleReadings};
+use crate::model::scene::Limits;
 
 /// What an episode on a user's scenario asks of SUMO between two steps. The caller steps SUMO;
 /// every call here reads or commands the state after a step.
@@ -27,6 +28,8 @@ pub trait SumoClient {
     fn vehicle_size(&self, id: &str) -> Result<(f64, f64), SumoError>;
     /// A vehicle's own top speed (m/s).
     fn vehicle_max_speed(&self, id: &str) -> Result<f64, SumoError>;
+    /// A vehicle's own acceleration, deceleration and emergency deceleration (m/s²).
+    fn vehicle_limits(&self, id: &str) -> Result<Limits, SumoError>;
     /// Driving distance along the vehicle's route to `pos` on `edge` (negative: off it).
     fn driving_distance(&self, id: &str, edge: &str, pos: f64) -> Result<f64, SumoError>;
     /// Speeds for the next step (m/s; negative hands speed back to SUMO).
@@ -73,6 +76,9 @@ impl SumoClient for Simulation {
     }
     fn vehicle_max_speed(&self, id: &str) -> Result<f64, SumoError> {
         Simulation::vehicle_max_speed(self, id)
+    }
+    fn vehicle_limits(&self, id: &str) -> Result<Limits, SumoError> {
+        Simulation::vehicle_limits(self, id)
     }
     fn driving_distance(&self, id: &str, edge: &str, pos: f64) -> Result<f64, SumoError> {
         Simulation::driving_distance(self, id, edge, pos)

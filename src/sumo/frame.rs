@@ -267,6 +267,12 @@ fn lane_frame(
     e.lanes.get(usize::try_from(lane_index).ok()?)?.as_ref()
 }
 
+/// The speed limit (m/s) of SUMO lane `lane_index` on the edge of code `edge_code`; infinite
+/// off the frame or on a lane built by hand.
+pub fn speed_limit(road: &Road, edge_code: i32, lane_index: i32) -> f64 {
+    lane_frame(road, edge_code, lane_index).map_or(f64::INFINITY, |f| f.speed_limit)
+}
+
 /// Frame `s` and lane of a SUMO (edge code, lane index, lane position); `None` off the section.
 pub fn to_frame(
     road: &Road,
@@ -434,6 +440,7 @@ pub fn state_sized(
         length,
         width,
         max_speed: f64::INFINITY,
+        limits: crate::model::scene::Limits::NONE,
         on_ramp: is_on_ramp(road, raw.edge_code),
     }
 }

@@ -108,6 +108,7 @@ fn main_edges<'n>(
             s0: m.s_start,
             scale: shape_length(left) / left.length,
             knots: None,
+            speed_limit: f64::INFINITY,
         };
         let lanes = edge
             .lanes
@@ -116,6 +117,7 @@ fn main_edges<'n>(
                 Some(LaneFrame {
                     lane: offset + l.index as i32,
                     knots: knots(l, left, m.s_start),
+                    speed_limit: l.speed,
                     ..span.clone()
                 })
             })
@@ -151,6 +153,7 @@ fn main_junctions(net: &Net, layout: &Layout, main: &MainFrames<'_>) -> Internal
                         1.0
                     },
                     knots: None,
+                    speed_limit: via.speed,
                 };
                 internal.put(via, frame, false);
             }
@@ -305,12 +308,15 @@ fn ramp_frames(
             .and_then(|v| net.internal.get(v));
         if let Some(via) = via {
             s_end -= via.length;
-            internal.put(via, LaneFrame::straight(MERGE_LANE, s_end), true);
+            let frame = LaneFrame::straight(MERGE_LANE, s_end).limited(via.speed);
+            internal.put(via, frame, true);
         }
         s_end -= e.lanes[0].length;
         edges.push(EdgeFrame {
             name: Arc::from(id.as_str()),
-            lanes: vec![Some(LaneFrame::straight(MERGE_LANE, s_end))],
+            lanes: vec![Some(
+                LaneFrame::straight(MERGE_LANE, s_end).limited(e.lanes[0].speed),
+            )],
             on_ramp: true,
         });
         next = id;

@@ -289,6 +289,14 @@ int BK(vehicle_max_speed)(const char* id, double* out) {
     return guarded([&] { *out = api::Vehicle::getMaxSpeed(id); });
 }
 
+int BK(vehicle_limits)(const char* id, double* accel, double* decel, double* emergency) {
+    return guarded([&] {
+        *accel = api::Vehicle::getAccel(id);
+        *decel = api::Vehicle::getDecel(id);
+        *emergency = api::Vehicle::getEmergencyDecel(id);
+    });
+}
+
 int BK(vehicle_driving_distance)(const char* id, const char* edge, double pos, double* out) {
     return guarded([&] { *out = api::Vehicle::getDrivingDistance(id, edge, pos); });
 }

@@ -13,9 +13,11 @@
 //! region by an off-ramp, or that drives on a deceleration lane, is left to SUMO (the planners
 //! keep CAVs on the carriageway and plan only its lanes and the merge lanes).
 //!
-//! Each CAV is planned below its own type's `maxSpeed` and the region's entry limit. Not yet:
-//! each vehicle's own accelerations and each lane's speed limit in the planner. Campaigns over
-//! scenarios run these episodes in worker processes (`campaign::scenarios`).
+//! Each CAV is planned below its own type's `maxSpeed`, the region's entry limit and the limit
+//! of the lane it drives on, and within its type's `accel`, `decel` and `emergencyDecel` (the
+//! search planners' primitives and IDM+MOBIL's accelerations; the `rl-ppo` policy's primitives
+//! are its trained action space). Campaigns over scenarios run these episodes in worker
+//! processes (`campaign::scenarios`).
 
 mod own_loop;
 mod records;

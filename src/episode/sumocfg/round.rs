@@ -8,9 +8,11 @@
 
 use std::sync::Arc;
 
+use super::region::Region;
 use crate::config::Config;
 use crate::controller::Command;
 use crate::model::scene::Scene;
+use crate::sumo::{SumoClient, SumoError};
 
 /// One planning round over every region at once.
 pub trait Round: Send {
@@ -70,4 +72,40 @@ impl Fleet {
             }
         }
     }
+}
+
+/// One round of `round` over every region, each region's commands replaced by the round's.
+pub(super) fn plan_together(round: &mut dyn Round, regions: &mut [Region], crashed: &[Arc<str>]) {
+    let mut commands: Vec<Vec<Command>> = regions
+        .iter_mut()
+        .map(|r| {
+            let mut c = std::mem::take(&mut r.commands);
+            c.clear();
+            c
+        })
+        .collect();
+    let views: Vec<(&Config, &Scene)> = regions
+        .iter()
+        .map(|r| (&r.config, &r.scene.scene))
+        .collect();
+    round.plan(&views, crashed, &mut commands);
+    for (r, c) in regions.iter_mut().zip(commands) {
+        r.commands = c;
+    }
+}
+
+/// Whether vehicle `id`'s route runs through the end of one of `regions` (SUMO answers a
+/// negative distance for an edge off its route).
+pub(super) fn crosses_a_region(
+    sim: &impl SumoClient,
+    id: &str,
+    regions: &[Region],
+) -> Result<bool, SumoError> {
+    for r in regions {
+        let (end, pos) = (&r.road.end_edge.0, r.road.end_edge.1);
+        if sim.driving_distance(id, end, pos)? >= 0.0 {
+            return Ok(true);
+        }
+    }
+    Ok(false)
 }

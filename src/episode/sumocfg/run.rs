@@ -7,20 +7,19 @@ use std::collections::HashMap;
 use std::sync::Arc;
 
 use crate::config::Config;
-use crate::controller::Command;
 use crate::episode::error::EpisodeError;
 use crate::episode::metrics::{CollisionEvent, Outcome, Timing};
 use crate::episode::step_times::StepTimes;
 use crate::model::kinematics::free_flow_time;
 use crate::model::road::MERGE_LANE;
-use crate::model::scene::{Kind, Origin, Scene, VehicleState};
+use crate::model::scene::{Kind, Limits, Origin, VehicleState};
 use crate::sumo::frame;
 use crate::sumo::{RawVehicleState, Simulation, SumoClient, SumoError, VehicleReadings};
 
 use super::records::{self, ScenarioSummary, ScenarioVehicle};
 pub use super::region::Region;
 use super::region_rows::{region_rows, RegionRow};
-use super::round::{Fleet, Round};
+use super::round::{crosses_a_region, plan_together, Fleet, Round};
 use super::{becomes_cav, ScenarioResult};
 
 /// SUMO's defaults, restored when a CAV leaves the planned part of a region: every safety check
@@ -35,6 +34,8 @@ struct Line {
     size: (f64, f64),
     /// Its own top speed (m/s), from its SUMO type.
     max_speed: f64,
+    /// Its own accelerations, from its SUMO type.
+    limits: Limits,
     /// The region it entered first, and where and how: its frame position and speed then.
     entry: Option<Entry>,
     /// The region whose planner commands it now.
@@ -231,6 +232,7 @@ impl ScenarioRun {
             let sumo_type = sim.vehicle_type(&id)?;
             let size = sim.vehicle_size(&id)?;
             let max_speed = sim.vehicle_max_speed(&id)?;
+            let limits = sim.vehicle_limits(&id)?;
             let drawn = becomes_cav(s, &id, &sumo_type);
             let crosses = || crosses_a_region(sim, &id, regions);
             let kind = if self.fleet.is_cav(&id, now, drawn, crosses)? {
@@ -249,6 +251,7 @@ impl ScenarioRun {
                 },
                 size,
                 max_speed,
+                limits,
                 entry: None,
                 commanded: None,
             });
@@ -370,26 +373,8 @@ impl ScenarioRun {
             sim.set_lane_change_mode(&line.record.id, 0)?;
             line.commanded = Some(g);
         }
-        // On an acceleration lane every vehicle must merge, wherever it came from: one SUMO
-        // inserted there (A10KW's boundary routes depart on it) was seen as a main-road car,
-        // which the planners never merge and the shield never expects to move over (A10KW,
-        // bk-mastar, α 0.6, seed 102: such an HDV, standing at the lane end, moved into lane 1
-        // as a CAV from lane 2 did, 25 m behind it at 27.6 m/s; a controllable crash).
-        let merging = lane == MERGE_LANE && region.road.lanes_at(front).contains(&MERGE_LANE);
-        let who = frame::Identity {
-            id: line.record.id.as_str().into(),
-            kind: if planned { Kind::Cav } else { Kind::Hdv },
-            origin: if merging || (first && entry.origin == Origin::Ramp) {
-                Origin::Ramp
-            } else {
-                Origin::Main
-            },
-            desired_speed: region.config.scenario.v_max.min(line.max_speed),
-        };
-        let vehicle = VehicleState {
-            max_speed: line.max_speed,
-            ..frame::state_sized(&region.road, who, raw, (front, lane), line.size)
-        };
+        let ramp = first && entry.origin == Origin::Ramp;
+        let vehicle = scene_vehicle(region, line, raw, (front, lane), planned, ramp);
         region.scene.push(vehicle, raw.edge_code);
         region.record(raw, line.record.kind);
         Ok(planned)
@@ -470,40 +455,45 @@ impl ScenarioRun {
     }
 }
 
-/// One round of `round` over every region, each region's commands replaced by the round's.
-fn plan_together(round: &mut dyn Round, regions: &mut [Region], crashed: &[Arc<str>]) {
-    let mut commands: Vec<Vec<Command>> = regions
-        .iter_mut()
-        .map(|r| {
-            let mut c = std::mem::take(&mut r.commands);
-            c.clear();
-            c
-        })
-        .collect();
-    let views: Vec<(&Config, &Scene)> = regions
-        .iter()
-        .map(|r| (&r.config, &r.scene.scene))
-        .collect();
-    round.plan(&views, crashed, &mut commands);
-    for (r, c) in regions.iter_mut().zip(commands) {
-        r.commands = c;
+/// Vehicle `line` read at `raw`, `(front, lane)` in `region`'s frame, as its planner sees it: a
+/// CAV when `planned`, else a vehicle SUMO drives; from the ramp when it entered the region there
+/// (`ramp`) or drives on an acceleration lane.
+fn scene_vehicle(
+    region: &Region,
+    line: &Line,
+    raw: &RawVehicleState,
+    (front, lane): (f64, i32),
+    planned: bool,
+    ramp: bool,
+) -> VehicleState {
+    // On an acceleration lane every vehicle must merge, wherever it came from: one SUMO
+    // inserted there (A10KW's boundary routes depart on it) was seen as a main-road car,
+    // which the planners never merge and the shield never expects to move over (A10KW,
+    // bk-mastar, α 0.6, seed 102: such an HDV, standing at the lane end, moved into lane 1
+    // as a CAV from lane 2 did, 25 m behind it at 27.6 m/s; a controllable crash).
+    let merging = lane == MERGE_LANE && region.road.lanes_at(front).contains(&MERGE_LANE);
+    // No faster than its type, nor than the lane it drives on allows (a CAV above that, as
+    // it entered a slower lane, may hold its speed: it does not brake ahead of one).
+    let top = line.max_speed.min(frame::speed_limit(
+        &region.road,
+        raw.edge_code,
+        raw.lane_index,
+    ));
+    let who = frame::Identity {
+        id: line.record.id.as_str().into(),
+        kind: if planned { Kind::Cav } else { Kind::Hdv },
+        origin: if merging || ramp {
+            Origin::Ramp
+        } else {
+            Origin::Main
+        },
+        desired_speed: region.config.scenario.v_max.min(top),
+    };
+    VehicleState {
+        max_speed: top,
+        limits: line.limits,
+        ..frame::state_sized(&region.road, who, raw, (front, lane), line.size)
     }
-}
-
-/// Whether vehicle `id`'s route runs through the end of one of `regions` (SUMO answers a
-/// negative distance for an edge off its route).
-fn crosses_a_region(
-    sim: &impl SumoClient,
-    id: &str,
-    regions: &[Region],
-) -> Result<bool, SumoError> {
-    for r in regions {
-        let (end, pos) = (&r.road.end_edge.0, r.road.end_edge.1);
-        if sim.driving_distance(id, end, pos)? >= 0.0 {
-            return Ok(true);
-        }
-    }
-    Ok(false)
 }
 
 /// The episode's own columns of `episode.csv`: which scenario, planner, CAVs, seed and regions.

@@ -27,6 +27,7 @@ use crate::config::{LowSpeedLaneChanges, PlannerSettings};
 use crate::model::kinematics::BicycleState;
 use crate::model::math::Point;
 use crate::model::road::Road;
+use crate::model::scene::Limits;
 use crate::model::trajectory::{Pose, Trajectory};
 use crate::planner::guard::Guard;
 use crate::planner::mastar::obstacles::Obstacles;
@@ -88,6 +89,8 @@ pub struct Request<'a> {
     /// The CAV's own top speed (m/s): no move accelerates it past this (infinite: only the
     /// planner's `v_max` limits it).
     pub max_speed: f64,
+    /// The CAV's own accelerations: its moves ask no more of it than these and the library's.
+    pub limits: Limits,
     /// Other vehicles' trajectories, step 0 = now.
     pub obstacles: &'a [&'a Trajectory],
     /// The check a lane change started now must pass (none: every start the search finds free).
@@ -212,9 +215,11 @@ impl Mastar {
             self.check_horizon(),
             self.library.dt,
         );
+        let own = self.library.limited(&req.limits);
+        let library = own.as_ref().unwrap_or(&self.library);
         let mut expanded = 0;
         for phase in [Phase::Forward, Phase::Fallback] {
-            match self.search(req, &near, phase) {
+            match self.search(req, library, &near, phase) {
                 Ok(mut plan) => {
                     plan.expanded += expanded;
                     return Ok(plan);
@@ -227,9 +232,15 @@ impl Mastar {
 
     /// One phase of M-A*: A* from the CAV's state to the phase's goal or horizon. Returns the
     /// nodes expanded when it finds no plan.
-    fn search(&self, req: &Request, obstacles: &Obstacles, phase: Phase) -> Result<Plan, usize> {
+    fn search(
+        &self,
+        req: &Request,
+        library: &Library,
+        obstacles: &Obstacles,
+        phase: Phase,
+    ) -> Result<Plan, usize> {
         let spec = PhaseSpec::of(phase, &self.settings);
-        let problem = PhaseSearch::new(self, req, obstacles, spec);
+        let problem = PhaseSearch::new(self, library, req, obstacles, spec);
         let result = astar(
             problem.root(),
             |n| problem.successors(n),
@@ -256,7 +267,7 @@ impl Mastar {
             ),
             None => (y0, 0.0),
         };
-        let brake = Throttle::Accel(-self.library.emergency_decel);
+        let brake = Throttle::Accel(-self.library.emergency_decel.min(req.limits.emergency_decel));
         let seg = self
             .library
             .track(&req.start, brake, horizon, lateral_path(y0, y1, total));

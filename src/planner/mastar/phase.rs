@@ -15,7 +15,7 @@ use crate::planner::mastar::obstacles::Obstacles;
 use crate::planner::mastar::{
     lateral_path, pose, FirstMove, Mastar, OngoingLaneChange, Phase, Plan, Request,
 };
-use crate::planner::primitives::{Primitive, Throttle};
+use crate::planner::primitives::{Library, Primitive, Throttle};
 use crate::planner::safety::Body;
 use crate::planner::search::Search;
 
@@ -105,6 +105,8 @@ impl PhaseSpec {
 /// search. Keeping them together lets [`Mastar::search`] read as the algorithm.
 pub(super) struct PhaseSearch<'p> {
     planner: &'p Mastar,
+    /// The primitives of this CAV: the planner's, within the CAV's own limits.
+    library: &'p Library,
     req: &'p Request<'p>,
     obstacles: &'p Obstacles,
     /// The CAV's body at the start.
@@ -125,6 +127,7 @@ impl<'p> PhaseSearch<'p> {
     /// The search of phase `spec` for `req` among `obstacles`.
     pub(super) fn new(
         planner: &'p Mastar,
+        library: &'p Library,
         req: &'p Request<'p>,
         obstacles: &'p Obstacles,
         spec: PhaseSpec,
@@ -132,12 +135,13 @@ impl<'p> PhaseSearch<'p> {
         let horizon = planner.settings.horizon;
         PhaseSearch {
             planner,
+            library,
             req,
             obstacles,
             me_now: Body::new(pose(&req.start), req.length, req.width, None),
             spec,
             s0: req.start.pos.x,
-            dt: planner.library.dt,
+            dt: library.dt,
             horizon,
             check_horizon: planner.check_horizon(),
         }
@@ -158,7 +162,7 @@ impl<'p> PhaseSearch<'p> {
 
     /// Steps to cover `remaining` metres from speed `v` at full throttle up to v_max.
     fn steps_for(&self, remaining: f64, v: f64) -> f64 {
-        free_flow_time(remaining, v, self.planner.library.accel, self.planner.v_max) / self.dt
+        free_flow_time(remaining, v, self.library.accel, self.planner.v_max) / self.dt
     }
 
     /// Steps the CAV at `n` still lacks to its goal distance, at free flow.
@@ -223,8 +227,7 @@ impl<'p> PhaseSearch<'p> {
             let road = &self.planner.road;
             let rear = n.state.pos.x - 0.5 * self.req.length;
             let approach = (road.zone_ahead(rear).start - rear).max(0.0);
-            approach / (self.planner.v_max * self.dt)
-                + self.planner.library.lane_change_steps as f64
+            approach / (self.planner.v_max * self.dt) + self.library.lane_change_steps as f64
         } else {
             self.lacking_steps(n)
         };
@@ -284,7 +287,7 @@ impl<'p> PhaseSearch<'p> {
                 vec![(FirstMove::Continue, lc.target_lane, seg)]
             }
             _ => {
-                let library = &self.planner.library;
+                let library = self.library;
                 let mut moves = Vec::new();
                 for &p in self.spec.primitives {
                     if !library.available(p, &n.state) {
@@ -343,7 +346,7 @@ impl<'p> PhaseSearch<'p> {
         let y0 = st.pos.y;
         let y1 = self.planner.lane_y(lc.target_lane);
         let total = lc.steps_left as f64 * self.dt;
-        self.planner.library.track(
+        self.library.track(
             st,
             Throttle::HoldForwardSpeed(st.speed * st.heading.cos()),
             lc.steps_left,

@@ -32,6 +32,7 @@ fn request<'a>(
         length: 5.0,
         width: 2.0,
         max_speed: f64::INFINITY,
+        limits: crate::model::scene::Limits::NONE,
         obstacles,
         guard: None,
         first_moves: None,
@@ -348,4 +349,40 @@ fn a_cav_is_planned_within_its_own_top_speed() {
     };
     let plan = m.plan(&above).unwrap();
     assert!(plan.trajectory.poses.iter().all(|p| p.speed <= 25.0 + 1e-6));
+}
+
+/// A CAV's own accelerations bound its plan where they are below the planner's: a truck type's
+/// 1.3 m/s² is all its plan accelerates at, and a car's 2.6 leaves the planner's 2 as it is.
+#[test]
+fn a_cav_is_planned_within_its_own_accelerations() {
+    let m = Mastar::on_paper_road();
+    let free = request(&m, 100.0, 2, 20.0, false, &[]);
+    let rate = |plan: &Plan| {
+        let poses = &plan.trajectory.poses;
+        poses
+            .windows(2)
+            .map(|w| (w[1].speed - w[0].speed) / 0.2)
+            .fold(f64::MIN, f64::max)
+    };
+    let car = m.plan(&free).unwrap();
+    assert!((rate(&car) - 2.0).abs() < 1e-9, "{}", rate(&car));
+    let limits = |accel| crate::model::scene::Limits {
+        accel,
+        decel: 4.0,
+        emergency_decel: 7.0,
+    };
+    let as_car = m
+        .plan(&Request {
+            limits: limits(2.6),
+            ..free.clone()
+        })
+        .unwrap();
+    assert_eq!(as_car.trajectory, car.trajectory);
+    let truck = m
+        .plan(&Request {
+            limits: limits(1.3),
+            ..free.clone()
+        })
+        .unwrap();
+    assert!((rate(&truck) - 1.3).abs() < 1e-9, "{}", rate(&truck));
 }
