@@ -8,7 +8,7 @@ mod common;
 use std::path::{Path, PathBuf};
 
 use common::netconvert::merge;
-use common::{bkpbs, csv_rows, stderr};
+use common::{csv_rows, scenario_run, stderr};
 
 /// A two-lane motorway with a 300 m acceleration lane that ends, fed by a one-lane ramp; main
 /// traffic, and vehicles departing on the acceleration lane itself, for 200 s.
@@ -43,19 +43,12 @@ fn cavs_inserted_on_the_acceleration_lane_merge_and_arrive() {
     let cfg = scenario(dir.path());
     for planner in ["bk-pbs", "bk-mastar"] {
         let out = dir.path().join(planner);
-        let o = bkpbs(&[
-            "episode",
-            "--sumocfg",
-            cfg.to_str().unwrap(),
-            "--planner",
+        let o = scenario_run(
+            &cfg,
             planner,
-            "--cav-types",
-            "starter",
-            "--seed",
-            "2",
-            "--out",
-            out.to_str().unwrap(),
-        ]);
+            &["--cav-types", "starter", "--seed", "2"],
+            &out,
+        );
         assert!(o.status.success(), "{planner}: {}", stderr(&o));
         let ep = &csv_rows(&std::fs::read(out.join("episode.csv")).unwrap())[0];
         assert_eq!(ep["controllable_crashed"], "0", "{planner}: {ep:?}");

@@ -9,7 +9,7 @@ mod common;
 use std::path::{Path, PathBuf};
 
 use common::netconvert::merge;
-use common::{bkpbs, csv_rows, stderr};
+use common::{csv_rows, scenario_run, stderr};
 
 /// Cars, 12 m trucks and 16.5 m trucks with their own accelerations and top speeds, on the
 /// main road and the ramp, for 300 s at the planners' step.
@@ -47,20 +47,8 @@ fn cav_trucks_are_planned_with_their_own_length_and_no_search_planner_collides()
     let cfg = scenario(dir.path());
     for planner in ["bk-pbs", "bk-mastar"] {
         let out = dir.path().join(planner);
-        let o = bkpbs(&[
-            "episode",
-            "--sumocfg",
-            cfg.to_str().unwrap(),
-            "--planner",
-            planner,
-            "--alpha",
-            "0.8",
-            "--seed",
-            "5",
-            "--trajectories",
-            "--out",
-            out.to_str().unwrap(),
-        ]);
+        let flags = ["--alpha", "0.8", "--seed", "5", "--trajectories"];
+        let o = scenario_run(&cfg, planner, &flags, &out);
         assert!(o.status.success(), "{planner}: {}", stderr(&o));
         let ep = &csv_rows(&std::fs::read(out.join("episode.csv")).unwrap())[0];
         let n = |k: &str| ep[k].parse::<u64>().unwrap();

@@ -84,6 +84,25 @@ pub fn scenario_episode(
     ])
 }
 
+/// `bkpbs episode --sumocfg cfg --planner planner FLAGS… --out out`.
+pub fn scenario_run(
+    cfg: &std::path::Path,
+    planner: &str,
+    flags: &[&str],
+    out: &std::path::Path,
+) -> Output {
+    let mut args = vec![
+        "episode",
+        "--sumocfg",
+        cfg.to_str().unwrap(),
+        "--planner",
+        planner,
+    ];
+    args.extend_from_slice(flags);
+    args.extend(["--out", out.to_str().unwrap()]);
+    bkpbs(&args)
+}
+
 /// What a run printed to stderr.
 pub fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
