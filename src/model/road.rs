@@ -282,8 +282,11 @@ impl Road {
             lanes,
             on_ramp,
         };
+        // Every lane of the shipped network is limited to 40 m/s.
         let straight = |lanes: std::ops::Range<i32>, s0| {
-            lanes.map(|l| Some(LaneFrame::straight(l, s0))).collect()
+            lanes
+                .map(|l| Some(LaneFrame::straight(l, s0).limited(40.0)))
+                .collect()
         };
         Road {
             edges: vec![
