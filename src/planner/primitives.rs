@@ -112,7 +112,8 @@ pub struct Library {
     pub control_substeps: u32,
     /// Left lane changes from a settled state at speeds `min_lane_change_speed + k·TABLE_DV`:
     /// per step, the displacement, heading and path speed.
-    table: Vec<Vec<BicycleState>>,
+    /// Shared: a vehicle's own library ([`Library::limited`]) keeps the planner's table.
+    table: std::sync::Arc<[Vec<BicycleState>]>,
 }
 
 /// Speed spacing of the lane-change table (m/s).
@@ -137,7 +138,7 @@ impl Library {
             min_lane_change_speed: 10.0,
             slides_below_min_speed: false,
             control_substeps: 10,
-            table: Vec::new(),
+            table: std::sync::Arc::from(Vec::new()),
         };
         lib.build_table();
         lib
@@ -180,7 +181,7 @@ impl Library {
             table.push(self.rollout(Primitive::LaneChangeLeft, &start, 0.0));
             v += TABLE_DV;
         }
-        self.table = table;
+        self.table = table.into();
     }
 
     /// Like [`Library::rollout`], for a *settled* start (on its lane's centre line, heading along

@@ -15,7 +15,7 @@
 //! own region's frame); outside the regions SUMO drives them. The single agent is the first
 //! CAV of the scenario's draw that departs after the warm-up with a route through a region.
 
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 use std::sync::mpsc::{self, Receiver, Sender, SyncSender};
 use std::sync::{Arc, Mutex};
 use std::thread::JoinHandle;
@@ -129,6 +129,8 @@ pub struct MergeEnv {
     agents: Vec<Agent>,
     scene: Option<Scene>,
     possible: Vec<Arc<str>>,
+    /// The same ids, to tell a new one at once.
+    known: HashSet<Arc<str>>,
     reward: RewardSettings,
     single: bool,
     done: bool,
@@ -168,6 +170,7 @@ impl MergeEnv {
             thread: Some(thread),
             agents: Vec::new(),
             scene: None,
+            known: possible.iter().cloned().collect(),
             possible,
             reward,
             single: agents == Agents::Single,
@@ -268,7 +271,7 @@ impl MergeEnv {
     /// Adds the agents not seen before to the possible ones (a scenario's, as they come).
     fn learn_agents(&mut self, agents: &[Agent]) {
         for a in agents {
-            if !self.possible.contains(&a.id) {
+            if self.known.insert(a.id.clone()) {
                 self.possible.push(a.id.clone());
             }
         }
@@ -321,7 +324,7 @@ impl MergeEnv {
         self.join();
         while let Ok(event) = self.events.try_recv() {
             if let Event::Finished(result) = event {
-                self.result = self.result.take().or((*result).ok());
+                self.result = self.result.take().or_else(|| (*result).ok());
             }
         }
         self.done = true;
