@@ -12,7 +12,7 @@ use pyo3::types::{PyDict, PyList, PyString, PyTuple};
 use bkpbs::campaign::collect::cell_dir;
 use bkpbs::campaign::scenarios::{self, is_scenario_campaign, ScenarioSettings};
 use bkpbs::campaign::worker::{self, Outcome, Request};
-use bkpbs::campaign::{tasks, CampaignError, Overrides, Settings, SettingsError};
+use bkpbs::campaign::{tasks, CampaignError, CampaignSpec, Overrides, Settings, SettingsError};
 use bkpbs::report::{self as core_report, ReportError};
 
 use crate::errors::bad_input;
@@ -198,8 +198,8 @@ impl PyCampaign {
     /// returns the unfinished episodes of this shard as tasks, in grid order.
     fn prepare(&self) -> PyResult<Vec<PyCampaignTask>> {
         let requests = match &self.settings {
-            Grid::Demand(s) => tasks::prepare(s, &self.out).map(|p| p.requests),
-            Grid::Scenarios(s) => scenarios::prepare(s, &self.out).map(|p| p.requests),
+            Grid::Demand(s) => tasks::prepare(s.as_ref(), &self.out).map(|p| p.requests),
+            Grid::Scenarios(s) => tasks::prepare(s.as_ref(), &self.out).map(|p| p.requests),
         }
         .map_err(campaign_error)?;
         Ok(requests
@@ -212,15 +212,12 @@ impl PyCampaign {
     /// `vehicles.csv`, `timings.csv`, `failures.csv`, and over scenarios `regions.csv`) and
     /// says how many there are.
     fn collect<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        let (collected, failed) = match &self.settings {
-            Grid::Demand(s) => {
-                tasks::collect(s, &self.out).map(|r| (r.episodes.rows.len(), r.failures.rows.len()))
-            }
-            Grid::Scenarios(s) => {
-                scenarios::collect(s, &self.out).map(|r| (r.episodes.len(), r.failures.len()))
-            }
+        let collected = match &self.settings {
+            Grid::Demand(s) => CampaignSpec::collect(s.as_ref(), &self.out),
+            Grid::Scenarios(s) => CampaignSpec::collect(s.as_ref(), &self.out),
         }
         .map_err(campaign_error)?;
+        let (collected, failed) = (collected.episodes, collected.failures);
         let d = PyDict::new(py);
         d.set_item("grid", self.grid_len())?;
         d.set_item("collected", collected)?;

@@ -17,7 +17,8 @@ use std::os::fd::AsRawFd;
 use std::path::Path;
 use std::time::{Duration, Instant};
 
-use super::{CampaignError, Settings, SETTINGS_FILE};
+use super::spec::CampaignSpec;
+use super::{CampaignError, SETTINGS_FILE};
 
 /// How long a run waits for another's exclusive phase (a settings check and one write).
 const WAIT: Duration = Duration::from_secs(30);
@@ -35,8 +36,8 @@ pub struct Claim {
 /// # Errors
 /// The directory is held by a running campaign with other settings, or `check` fails, or the
 /// directory cannot be made or opened.
-pub fn claim(
-    settings: &Settings,
+pub fn claim<S: CampaignSpec>(
+    settings: &S,
     out: &Path,
     check: impl FnOnce() -> Result<(), CampaignError>,
 ) -> Result<Claim, CampaignError> {
@@ -84,15 +85,16 @@ fn try_lock(file: &File, op: libc::c_int) -> std::io::Result<bool> {
 }
 
 /// A run that found the directory in use proceeds only with exactly the running settings.
-fn join_running(settings: &Settings, out: &Path) -> Result<(), CampaignError> {
+fn join_running<S: CampaignSpec>(settings: &S, out: &Path) -> Result<(), CampaignError> {
     let path = out.join(SETTINGS_FILE);
     let running = crate::io::bounded::read_text(&path, crate::io::bounded::FileKind::Config).ok();
     if running.as_deref() == Some(settings.to_toml().as_str()) {
         return Ok(());
     }
-    let key = Settings::from_campaign_file(&path)
+    let key = settings
+        .difference_from_file(&path)
         .ok()
-        .and_then(|earlier| settings.scenario_difference(&earlier))
+        .flatten()
         .unwrap_or_else(|| "the campaign grid".into());
     Err(CampaignError::HeldByOther {
         dir: out.to_path_buf(),

@@ -28,6 +28,7 @@ pub mod pool;
 pub mod results;
 pub mod scenarios;
 pub mod settings;
+pub mod spec;
 pub mod table;
 pub mod tasks;
 pub mod validate;
@@ -43,6 +44,7 @@ use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use crate::io::WriteError;
 use results::ResultsError;
 pub use settings::{Overrides, Settings, SettingsError};
+pub use spec::{CampaignSpec, Collected, Readiness};
 use worker::Outcome;
 
 /// Name of the settings file in a campaign directory.
@@ -128,33 +130,47 @@ pub struct RunSummary {
 }
 
 /// Runs (or resumes) a campaign in `out` with worker processes of `exe` (the `bkpbs` binary),
-/// then collects the results. Prints one status line before and one after; draws a progress
-/// bar on stderr only when stderr is a terminal.
-pub fn run(settings: &Settings, out: &Path, exe: &Path) -> Result<RunSummary, CampaignError> {
+/// then collects the results: the paper's demand ([`Settings`]) or scenarios of the user's own
+/// ([`scenarios::ScenarioSettings`]) alike. Prints one status line before and one after; draws a
+/// progress bar on stderr only when stderr is a terminal.
+///
+/// # Errors
+/// As [`tasks::prepare`] and [`CampaignSpec::collect`]; failed episodes are counted in the
+/// summary, not errors.
+pub fn run<S: CampaignSpec>(
+    settings: &S,
+    out: &Path,
+    exe: &Path,
+) -> Result<RunSummary, CampaignError> {
     let start = Instant::now();
     let plan = tasks::prepare(settings, out)?;
-    announce(settings, &plan);
+    let cells = settings.cells();
+    println!(
+        "campaign: {} = {} episodes; shard {}: {}; already done: {}; to run: {}; workers: {}",
+        settings.axes(),
+        cells.len(),
+        settings.shard(),
+        plan.shard_size,
+        plan.already_done,
+        plan.requests.len(),
+        settings.workers().min(plan.requests.len()),
+    );
     let (shard_size, already_done) = (plan.shard_size, plan.already_done);
     let _claim = plan.claim.clone();
-    let names: Vec<String> = settings
-        .grid
-        .cells()
-        .iter()
-        .map(|c| c.to_string())
-        .collect();
+    let names: Vec<String> = cells.iter().map(|c| c.to_string()).collect();
     let options = pool::PoolOptions {
-        workers: settings.workers,
-        episode_timeout: settings.episode_timeout,
+        workers: settings.workers(),
+        episode_timeout: settings.episode_timeout(),
     };
     let (ran, failed_now) = run_requests(&names, options, exe, plan.requests);
-    let results = tasks::collect(settings, out)?;
+    let collected = settings.collect(out)?;
     let summary = RunSummary {
-        grid: settings.grid.len(),
+        grid: cells.len(),
         shard: shard_size,
         already_done,
         ran,
-        failed: results.failures.rows.len(),
-        collected: results.episodes.rows.len(),
+        failed: collected.failures,
+        collected: collected.episodes,
         wall_s: start.elapsed().as_secs_f64(),
         interrupted: crate::io::interrupt::requested(),
     };
@@ -167,28 +183,6 @@ pub fn run(settings: &Settings, out: &Path, exe: &Path) -> Result<RunSummary, Ca
         out.join("episodes.csv").display()
     );
     Ok(summary)
-}
-
-/// The status line before a run: the grid, the shard, what is done and what will run.
-fn announce(settings: &Settings, plan: &tasks::Plan) {
-    let g = &settings.grid;
-    let profiles = match g.profiles.len() {
-        1 => String::new(),
-        n => format!(" × {n} HDV profiles"),
-    };
-    println!(
-        "campaign: {} planners{profiles} × {} α × {} λ × {} seeds = {} episodes; shard {}: {}; already done: {}; to run: {}; workers: {}",
-        g.planners.len(),
-        g.alphas.len(),
-        g.lambdas.len(),
-        g.seeds.len(),
-        g.len(),
-        settings.shard,
-        plan.shard_size,
-        plan.already_done,
-        plan.requests.len(),
-        settings.workers.min(plan.requests.len()),
-    );
 }
 
 /// Runs the episodes in the worker pool with a progress bar, naming each failure as it

@@ -9,10 +9,9 @@ use std::path::Path;
 use std::sync::Arc;
 
 use super::claim::{self, Claim};
-use super::collect::{self, cell_dir};
-use super::results::Results;
+use super::spec::{CampaignSpec, Readiness};
 use super::worker::{self, Outcome, Request};
-use super::{CampaignError, Settings, SETTINGS_FILE};
+use super::{CampaignError, SETTINGS_FILE};
 use crate::episode::output;
 
 /// The episodes of a campaign run that still need running.
@@ -28,35 +27,36 @@ pub struct Plan {
     pub claim: Arc<Claim>,
 }
 
-/// Readies `out` for a run of `settings` and lists its unfinished episodes.
+/// Readies `out` for a run of `settings` and lists its unfinished episodes, printing why a
+/// cell found there runs again.
 ///
 /// # Errors
-/// `out` holds a campaign with other scenario settings, or is in use by a running one with
-/// other settings, or `campaign.toml` cannot be written.
-pub fn prepare(settings: &Settings, out: &Path) -> Result<Plan, CampaignError> {
+/// `out` holds a campaign with other settings, or is in use by a running one with other
+/// settings, or `campaign.toml` cannot be written.
+pub fn prepare<S: CampaignSpec>(settings: &S, out: &Path) -> Result<Plan, CampaignError> {
     let claim = claim::claim(settings, out, || check_and_record(settings, out))?;
     // Left by a campaign killed while collecting.
     worker::remove_stale_temporaries(out);
 
+    let shard = settings.shard();
     let mut shard_size = 0;
     let mut requests = Vec::new();
-    for (position, cell) in settings.grid.cells().iter().enumerate() {
-        if !settings.shard.contains(position) {
+    for (position, cell) in settings.cells().iter().enumerate() {
+        if !shard.contains(position) {
             continue;
         }
         shard_size += 1;
-        let state = collect::cell_state(out, settings, cell);
-        if let collect::CellState::Stale(why) = &state {
-            println!("campaign: {cell} runs again: {why}");
+        match settings.readiness(out, cell) {
+            Readiness::Done => continue,
+            Readiness::Stale(why) => println!("campaign: {cell} runs again: {why}"),
+            Readiness::NotRun => {}
         }
-        if !matches!(state, collect::CellState::Done(_)) {
-            requests.push(Request {
-                position,
-                planner: cell.planner.clone(),
-                dir: cell_dir(out, cell),
-                config: settings.episode_config(cell),
-            });
-        }
+        requests.push(Request {
+            position,
+            planner: settings.planner(cell).to_string(),
+            dir: settings.cell_dir(out, cell),
+            config: settings.episode_config(cell),
+        });
     }
     Ok(Plan {
         already_done: shard_size - requests.len(),
@@ -66,25 +66,24 @@ pub fn prepare(settings: &Settings, out: &Path) -> Result<Plan, CampaignError> {
     })
 }
 
-/// The first run's part of the claim: `out` must not hold a campaign of other scenario
-/// settings, nor recorded episodes this grid would drop; then this run's settings are written.
-fn check_and_record(settings: &Settings, out: &Path) -> Result<(), CampaignError> {
+/// The first run's part of the claim: `out` must not hold a campaign of other settings, nor
+/// recorded episodes this grid would drop; then this run's settings are written.
+fn check_and_record<S: CampaignSpec>(settings: &S, out: &Path) -> Result<(), CampaignError> {
     let settings_path = out.join(SETTINGS_FILE);
     if settings_path.exists() {
-        let earlier = Settings::from_campaign_file(&settings_path)?;
-        if let Some(key) = settings.scenario_difference(&earlier) {
+        if let Some(key) = settings.difference_from_file(&settings_path)? {
             return Err(CampaignError::OtherSettings {
                 dir: out.to_path_buf(),
                 key,
             });
         }
     }
-    let dropped = collect::recorded_outside(out, &settings.grid);
+    let dropped = settings.recorded_outside(out);
     if let Some(first) = dropped.first() {
         return Err(CampaignError::WouldDrop {
             dir: out.to_path_buf(),
             count: dropped.len(),
-            first: first.to_string(),
+            first: first.clone(),
         });
     }
     output::write_atomic(&settings_path, settings.to_toml().as_bytes())?;
@@ -102,16 +101,4 @@ pub fn run_request(req: &Request) -> Outcome {
             Outcome::Failed { error }
         }
     }
-}
-
-/// Gathers the finished cells found in `out` into its collected files (grid order) and
-/// returns them.
-///
-/// # Errors
-/// A cell's files are unreadable or belong to another cell, or the collected files cannot be
-/// written.
-pub fn collect(settings: &Settings, out: &Path) -> Result<Results, CampaignError> {
-    let results = collect::collect(out, settings)?;
-    results.write(out)?;
-    Ok(results)
 }

@@ -132,8 +132,8 @@ impl CampaignArgs {
 pub fn run(c: Campaign) -> Result<()> {
     let exe = std::env::current_exe().context("cannot locate the bkpbs binary")?;
     let done = match &c.settings {
-        Grid::Demand(s) => campaign::run(s, &c.out, &exe)?,
-        Grid::Scenarios(s) => campaign::scenarios::run(s, &c.out, &exe)?,
+        Grid::Demand(s) => campaign::run(s.as_ref(), &c.out, &exe)?,
+        Grid::Scenarios(s) => campaign::run(s.as_ref(), &c.out, &exe)?,
     };
     if done.collected > 0 {
         print_report(std::slice::from_ref(&c.out), None, false, &[])?;

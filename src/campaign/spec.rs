@@ -1,0 +1,203 @@
+//! What the one campaign runner asks of a campaign's settings, whatever traffic its cells run:
+//! the paper's generated demand ([`super::Settings`]) or scenarios of the user's own
+//! ([`super::scenarios::ScenarioSettings`]). The claim, the resume check, the preparation of
+//! the requests, the run and the collection are written once, over this trait.
+
+use std::fmt;
+use std::path::{Path, PathBuf};
+use std::time::Duration;
+
+use super::grid::Shard;
+use super::{CampaignError, SettingsError};
+use crate::config::Config;
+
+/// Where a cell of a campaign directory stands, for the resume check.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Readiness {
+    /// Finished as this campaign's.
+    Done,
+    /// No `episode.csv`: not run, or stopped before it was written.
+    NotRun,
+    /// An `episode.csv` is there but the cell is not finished as this campaign's: why.
+    Stale(String),
+}
+
+/// How many rows a collection gathered.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Collected {
+    /// Rows of the collected `episodes.csv`.
+    pub episodes: usize,
+    /// Rows of the collected `failures.csv`.
+    pub failures: usize,
+}
+
+/// A campaign's validated settings, as the one runner uses them.
+pub trait CampaignSpec {
+    /// One episode of the grid, displayed as the status lines name it.
+    type Cell: fmt::Display;
+
+    /// Every cell, in grid order (the order of every collected file).
+    fn cells(&self) -> Vec<Self::Cell>;
+    /// The slice of the grid this run runs.
+    fn shard(&self) -> Shard;
+    /// Worker processes, at least 1.
+    fn workers(&self) -> usize;
+    /// Wall-clock limit of one episode, if any.
+    fn episode_timeout(&self) -> Option<Duration>;
+    /// The axes as the status line names them (`2 planners × 3 α × 2 λ × 5 seeds`).
+    fn axes(&self) -> String;
+    /// The settings as `campaign.toml` records them.
+    fn to_toml(&self) -> String;
+    /// The first setting (dotted) in which the campaign recorded in `file` runs a cell
+    /// differently, if any: campaigns that agree may share a directory.
+    ///
+    /// # Errors
+    /// The recorded file is unreadable or invalid.
+    fn difference_from_file(&self, file: &Path) -> Result<Option<String>, SettingsError>;
+    /// The episodes `out`'s collected `episodes.csv` records outside this grid, as cells are
+    /// displayed.
+    fn recorded_outside(&self, out: &Path) -> Vec<String>;
+    /// The directory of `cell`'s files below `out`.
+    fn cell_dir(&self, out: &Path, cell: &Self::Cell) -> PathBuf;
+    /// Where `cell` stands in `out`.
+    fn readiness(&self, out: &Path, cell: &Self::Cell) -> Readiness;
+    /// The planner `cell` runs.
+    fn planner<'a>(&self, cell: &'a Self::Cell) -> &'a str;
+    /// The full configuration `cell`'s episode runs with.
+    fn episode_config(&self, cell: &Self::Cell) -> Config;
+    /// Gathers the finished cells found in `out` into its collected files.
+    ///
+    /// # Errors
+    /// A cell's files are unreadable or belong to another cell, or the collected files cannot
+    /// be written.
+    fn collect(&self, out: &Path) -> Result<Collected, CampaignError>;
+}
+
+impl CampaignSpec for super::Settings {
+    type Cell = super::grid::Cell;
+
+    fn cells(&self) -> Vec<Self::Cell> {
+        self.grid.cells()
+    }
+    fn shard(&self) -> Shard {
+        self.shard
+    }
+    fn workers(&self) -> usize {
+        self.workers
+    }
+    fn episode_timeout(&self) -> Option<Duration> {
+        self.episode_timeout
+    }
+    fn axes(&self) -> String {
+        let g = &self.grid;
+        let profiles = match g.profiles.len() {
+            1 => String::new(),
+            n => format!(" × {n} HDV profiles"),
+        };
+        format!(
+            "{} planners{profiles} × {} α × {} λ × {} seeds",
+            g.planners.len(),
+            g.alphas.len(),
+            g.lambdas.len(),
+            g.seeds.len(),
+        )
+    }
+    fn to_toml(&self) -> String {
+        super::Settings::to_toml(self)
+    }
+    fn difference_from_file(&self, file: &Path) -> Result<Option<String>, SettingsError> {
+        let earlier = super::Settings::from_campaign_file(file)?;
+        Ok(self.scenario_difference(&earlier))
+    }
+    fn recorded_outside(&self, out: &Path) -> Vec<String> {
+        let cells = super::collect::recorded_outside(out, &self.grid);
+        cells.iter().map(ToString::to_string).collect()
+    }
+    fn cell_dir(&self, out: &Path, cell: &Self::Cell) -> PathBuf {
+        super::collect::cell_dir(out, cell)
+    }
+    fn readiness(&self, out: &Path, cell: &Self::Cell) -> Readiness {
+        use super::collect::CellState;
+        match super::collect::cell_state(out, self, cell) {
+            CellState::Done(_) => Readiness::Done,
+            CellState::NotRun => Readiness::NotRun,
+            CellState::Stale(why) => Readiness::Stale(why),
+        }
+    }
+    fn planner<'a>(&self, cell: &'a Self::Cell) -> &'a str {
+        &cell.planner
+    }
+    fn episode_config(&self, cell: &Self::Cell) -> Config {
+        super::Settings::episode_config(self, cell)
+    }
+    fn collect(&self, out: &Path) -> Result<Collected, CampaignError> {
+        let results = super::collect::collect(out, self)?;
+        results.write(out)?;
+        Ok(Collected {
+            episodes: results.episodes.rows.len(),
+            failures: results.failures.rows.len(),
+        })
+    }
+}
+
+impl CampaignSpec for super::scenarios::ScenarioSettings {
+    type Cell = super::scenarios::ScenarioCell;
+
+    fn cells(&self) -> Vec<Self::Cell> {
+        self.grid.cells()
+    }
+    fn shard(&self) -> Shard {
+        self.shard
+    }
+    fn workers(&self) -> usize {
+        self.workers
+    }
+    fn episode_timeout(&self) -> Option<Duration> {
+        self.episode_timeout
+    }
+    fn axes(&self) -> String {
+        let g = &self.grid;
+        format!(
+            "{} planners × {} scenarios × {} α × {} seeds",
+            g.planners.len(),
+            g.scenarios.len(),
+            g.alphas.len(),
+            g.seeds.len(),
+        )
+    }
+    fn to_toml(&self) -> String {
+        super::scenarios::ScenarioSettings::to_toml(self)
+    }
+    fn difference_from_file(&self, file: &Path) -> Result<Option<String>, SettingsError> {
+        let earlier = super::scenarios::ScenarioSettings::from_campaign_file(file)?;
+        Ok(self.difference(&earlier))
+    }
+    fn recorded_outside(&self, out: &Path) -> Vec<String> {
+        super::scenarios::collect::recorded_outside(out, &self.grid)
+    }
+    fn cell_dir(&self, out: &Path, cell: &Self::Cell) -> PathBuf {
+        super::scenarios::collect::cell_dir(out, cell)
+    }
+    fn readiness(&self, out: &Path, cell: &Self::Cell) -> Readiness {
+        use super::scenarios::collect::CellState;
+        match super::scenarios::collect::cell_state(out, self, cell) {
+            CellState::Done(_) => Readiness::Done,
+            CellState::NotRun => Readiness::NotRun,
+            CellState::Stale(why) => Readiness::Stale(why),
+        }
+    }
+    fn planner<'a>(&self, cell: &'a Self::Cell) -> &'a str {
+        &cell.planner
+    }
+    fn episode_config(&self, cell: &Self::Cell) -> Config {
+        super::scenarios::ScenarioSettings::episode_config(self, cell)
+    }
+    fn collect(&self, out: &Path) -> Result<Collected, CampaignError> {
+        let results = super::scenarios::collect::collect(out, self);
+        results.write(out)?;
+        Ok(Collected {
+            episodes: results.episodes.len(),
+            failures: results.failures.len(),
+        })
+    }
+}
