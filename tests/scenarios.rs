@@ -275,6 +275,19 @@ fn each_regions_trajectories_are_written_and_drawn_and_change_nothing() {
             "{f}"
         );
     }
+    // The planner's effort is in the episode's row, as for the paper's demand.
+    let episode = &csv_rows(&std::fs::read(traced.join("episode.csv")).unwrap())[0];
+    for effort in [
+        "plan_searches",
+        "plan_nodes_expanded",
+        "pbs_nodes",
+        "predictions",
+    ] {
+        assert!(
+            episode[effort].parse::<u64>().unwrap() > 0,
+            "{effort}: {episode:?}"
+        );
+    }
     let region = traced.join("trajectories/gneE7");
     let rows = csv_rows(&std::fs::read(region.join("trajectories.csv")).unwrap());
     let in_region: std::collections::BTreeSet<String> =
@@ -294,6 +307,12 @@ fn each_regions_trajectories_are_written_and_drawn_and_change_nothing() {
     assert!(region.join("collisions.csv").is_file());
     common::assert_ok(&bkpbs(&["plot", region.to_str().unwrap()]));
     assert!(region.join("time_space.png").is_file());
+    // The episode's own directory finds its regions (before, "no trajectories" there).
+    std::fs::remove_file(region.join("time_space.png")).unwrap();
+    let o = bkpbs(&["plot", traced.to_str().unwrap()]);
+    common::assert_ok(&o);
+    assert!(region.join("time_space.png").is_file());
+    assert!(String::from_utf8_lossy(&o.stdout).contains("trajectories/gneE7/speed_field.png"));
     // A run without trajectories into the same directory leaves none of the old ones.
     common::assert_ok(&scenario(&cfg, "bk-pbs", "150", &traced));
     assert!(!traced.join("trajectories").exists());
@@ -333,4 +352,83 @@ fn cavs_keep_to_each_lanes_speed_limit() {
         on_slow_lane += usize::from(r["edge"] == "gneE14");
     }
     assert!(on_slow_lane > 50, "{on_slow_lane} commands on gneE14");
+}
+
+/// `never_inserted` is SUMO's own count of the vehicles whose departure time came but which it
+/// could not insert (its statistic output's `waiting` at the end): on the ramp game with 300
+/// vehicles of a flow asked onto the on-ramp within 100 s, the episode's count equals that of
+/// `sumo -c` given the same options, and `inserted` equals SUMO's too.
+#[test]
+fn vehicles_never_inserted_are_counted_as_sumo_counts_them() {
+    let dir = tempfile::tempdir().unwrap();
+    let game = game_copy(dir.path());
+    let routes = std::fs::read_to_string(game.join("ramp/ramp.rou.xml")).unwrap();
+    let at = routes.find("<flow").unwrap();
+    let dense = format!(
+        "{}<flow id=\"jam\" route=\"onramp\" begin=\"0\" end=\"100\" number=\"300\" departSpeed=\"max\"/>\n</routes>\n",
+        &routes[..at]
+    );
+    std::fs::write(game.join("ramp/dense.rou.xml"), dense).unwrap();
+    let cfg = game.join("dense.sumocfg");
+    let text = std::fs::read_to_string(game.join("ramp.sumocfg")).unwrap();
+    std::fs::write(
+        &cfg,
+        text.replace("ramp/ramp.rou.xml", "ramp/dense.rou.xml"),
+    )
+    .unwrap();
+    let out = dir.path().join("episode");
+    let o = bkpbs(&[
+        "episode",
+        "--sumocfg",
+        cfg.to_str().unwrap(),
+        "--planner",
+        "sumo",
+        "--alpha",
+        "0",
+        "--steps",
+        "300",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    common::assert_ok(&o);
+    let stdout = String::from_utf8_lossy(&o.stdout).to_string();
+    let options = stdout
+        .lines()
+        .find_map(|l| l.strip_prefix("SUMO options bkpbs set: "))
+        .expect("the options line");
+    // The same run by SUMO alone, its tripinfo elsewhere, with its statistics.
+    let mut args: Vec<String> = options.split(' ').map(String::from).collect();
+    let i = args.iter().position(|a| a == "--tripinfo-output").unwrap();
+    args[i + 1] = dir.path().join("trips.xml").display().to_string();
+    let stats = dir.path().join("stats.xml");
+    let status = std::process::Command::new("sumo")
+        .arg("-c")
+        .arg(&cfg)
+        .args(&args)
+        .args(["--end", "60", "--statistic-output", stats.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(
+        status.status.success(),
+        "{}",
+        String::from_utf8_lossy(&status.stderr)
+    );
+    let xml = std::fs::read_to_string(&stats).unwrap();
+    let doc = roxmltree::Document::parse(&xml).unwrap();
+    let vehicles = doc
+        .descendants()
+        .find(|n| n.has_tag_name("vehicles"))
+        .unwrap();
+    let sumo = |k: &str| vehicles.attribute(k).unwrap().to_string();
+    let row = &csv_rows(&std::fs::read(out.join("episode.csv")).unwrap())[0];
+    assert_eq!(row["inserted"], sumo("inserted"), "{xml}");
+    assert_eq!(row["never_inserted"], sumo("waiting"), "{xml}");
+    assert!(
+        row["never_inserted"].parse::<usize>().unwrap() > 50,
+        "{row:?}"
+    );
+    assert!(
+        stdout.contains(&format!("never inserted {}", sumo("waiting"))),
+        "{stdout}"
+    );
 }

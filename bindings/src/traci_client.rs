@@ -110,6 +110,9 @@ impl SumoClient for TraciClient<'_> {
     fn arrived(&self) -> Result<Vec<String>, SumoError> {
         self.call("simulation.getArrivedIDList", ())
     }
+    fn pending(&self) -> Result<Vec<String>, SumoError> {
+        self.call("simulation.getPendingVehicles", ())
+    }
     fn vehicle_type_ids(&self) -> Result<Vec<String>, SumoError> {
         self.call("vehicletype.getIDList", ())
     }

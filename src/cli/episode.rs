@@ -128,8 +128,9 @@ fn run_scenario(e: &Episode) -> Result<()> {
         format!("CAVs of type {}", s.cav_types)
     };
     println!(
-        "{} {cavs} seed={} on {} (regions {}): inserted {} ({} CAVs, share {:.3}), in a region {}, \
-         arrived {}, crashed {} (controllable {}), mean timeLoss {}, mean delay in its region {}",
+        "{} {cavs} seed={} on {} (regions {}): inserted {} ({} CAVs, share {:.3}), never \
+         inserted {}, in a region {}, arrived {}, crashed {} (controllable {}), mean timeLoss {}, mean delay in \
+         its region {}",
         s.planner,
         s.seed,
         cfg.display(),
@@ -137,6 +138,7 @@ fn run_scenario(e: &Episode) -> Result<()> {
         s.inserted,
         s.inserted_cav,
         s.cav_share,
+        s.never_inserted,
         s.in_region,
         s.arrived,
         s.crashed,

@@ -11,7 +11,8 @@ use bkpbs::report::episode_plots;
 #[derive(Args)]
 pub struct PlotArgs {
     /// Episode directory written with `--trajectories` (by `bkpbs episode`, or a campaign
-    /// cell).
+    /// cell); of an episode on a scenario of your own, each merge region's figures are drawn
+    /// into its `trajectories/<region>/`.
     dir: PathBuf,
 }
 

@@ -50,13 +50,46 @@ pub struct EpisodePlots {
     pub close_ups: bool,
 }
 
-/// Draws the figures of episode directory `dir` into it.
+/// Draws the figures of episode directory `dir` into it: of an episode on a scenario of the
+/// user's own, each merge region's into its trajectory directory (`trajectories/<region>/`).
 pub fn plot_dir(dir: &Path) -> Result<EpisodePlots, EpisodePlotError> {
     if !dir.is_dir() {
         return Err(EpisodePlotError::NotADirectory {
             dir: dir.to_path_buf(),
         });
     }
+    let regions = region_dirs(dir);
+    if regions.is_empty() {
+        return plot_tracks(dir);
+    }
+    let mut out = EpisodePlots::default();
+    for region in &regions {
+        let drawn = plot_tracks(region)?;
+        out.files.extend(drawn.files);
+        out.collisions += drawn.collisions;
+        out.close_ups |= drawn.close_ups;
+    }
+    Ok(out)
+}
+
+/// The trajectory directories of an episode on a scenario of the user's own
+/// (`<dir>/trajectories/<region>/`), in name order; none for any other directory.
+fn region_dirs(dir: &Path) -> Vec<PathBuf> {
+    let root = dir.join(crate::episode::sumocfg::TRAJECTORIES_DIR);
+    let mut found: Vec<PathBuf> = std::fs::read_dir(root)
+        .map(|d| {
+            d.flatten()
+                .map(|e| e.path())
+                .filter(|p| p.is_dir())
+                .collect()
+        })
+        .unwrap_or_default();
+    found.sort();
+    found
+}
+
+/// Draws the figures of the trajectories in `dir` into it.
+fn plot_tracks(dir: &Path) -> Result<EpisodePlots, EpisodePlotError> {
     let tracks = lane_tracks::read(dir)?;
     let title = episode_title(dir);
     let mut out = EpisodePlots {
@@ -165,16 +198,7 @@ pub fn plot_scenario_cells(
     let mut summary = CellPlots::default();
     let mut regions = Vec::new();
     for dir in &finished {
-        let root = dir.join(crate::episode::sumocfg::TRAJECTORIES_DIR);
-        let mut found: Vec<PathBuf> = std::fs::read_dir(&root)
-            .map(|d| {
-                d.flatten()
-                    .map(|e| e.path())
-                    .filter(|p| p.is_dir())
-                    .collect()
-            })
-            .unwrap_or_default();
-        found.sort();
+        let found = region_dirs(dir);
         if found.is_empty() {
             summary.without_trajectories += 1;
         } else {
@@ -182,7 +206,8 @@ pub fn plot_scenario_cells(
         }
         regions.extend(found);
     }
-    let drawn: Result<Vec<_>, EpisodePlotError> = regions.par_iter().map(|d| plot_dir(d)).collect();
+    let drawn: Result<Vec<_>, EpisodePlotError> =
+        regions.par_iter().map(|d| plot_tracks(d)).collect();
     drawn?;
     Ok(summary)
 }

@@ -14,6 +14,8 @@ pub trait SumoClient {
     fn departed(&self) -> Result<Vec<String>, SumoError>;
     /// Vehicles that reached their destination (or were removed) in the last step.
     fn arrived(&self) -> Result<Vec<String>, SumoError>;
+    /// Vehicles whose departure time has come but which SUMO has not inserted.
+    fn pending(&self) -> Result<Vec<String>, SumoError>;
     /// Ids of the vehicle types loaded.
     fn vehicle_type_ids(&self) -> Result<Vec<String>, SumoError>;
     /// The edges whose vehicles [`SumoClient::read_vehicles`] reports by their index here.
@@ -55,6 +57,9 @@ impl SumoClient for Simulation {
     }
     fn arrived(&self) -> Result<Vec<String>, SumoError> {
         Simulation::arrived(self)
+    }
+    fn pending(&self) -> Result<Vec<String>, SumoError> {
+        Simulation::pending(self)
     }
     fn vehicle_type_ids(&self) -> Result<Vec<String>, SumoError> {
         Simulation::vehicle_type_ids(self)

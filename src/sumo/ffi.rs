@@ -47,6 +47,7 @@ pub const LIST_ARRIVED: i32 = 2;
 pub const LIST_LANES: i32 = 3;
 pub const LIST_EDGES: i32 = 4;
 pub const LIST_VEHICLE_TYPES: i32 = 5;
+pub const LIST_PENDING: i32 = 6;
 
 /// Which shim the calls go to: libsumo (SUMO in this process) or libtraci (a sumo-gui process
 /// driven over TraCI). One simulation per process, so one switch for the process.

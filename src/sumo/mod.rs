@@ -261,6 +261,12 @@ impl Simulation {
         self.id_list(ffi::LIST_DEPARTED, "getDepartedIDList")
     }
 
+    /// Vehicles whose departure time has come but which SUMO has not inserted (yet): no room
+    /// at their departure position, or held back by the insertion order.
+    pub fn pending(&self) -> Result<Vec<String>, SumoError> {
+        self.id_list(ffi::LIST_PENDING, "getPendingVehicles")
+    }
+
     /// Vehicles that left the network during the last step (in SUMO 1.15 this includes vehicles
     /// removed after a collision, one step after the collision).
     pub fn arrived(&self) -> Result<Vec<String>, SumoError> {

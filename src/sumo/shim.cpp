@@ -129,7 +129,8 @@ int BK(min_expected_number)(int32_t* out) {
 }
 
 // Id lists: 0 = vehicles now in the net, 1 = departed in the last step, 2 = arrived in the last step,
-// 3 = lanes of the net, 4 = edges of the net, 5 = vehicle types loaded.
+// 3 = lanes of the net, 4 = edges of the net, 5 = vehicle types loaded, 6 = vehicles whose departure
+// time has come but which SUMO has not inserted yet (pending).
 int BK(id_list)(int32_t which, const char** buf, size_t* len) {
     return guarded([&] {
         std::vector<std::string> ids;
@@ -140,6 +141,7 @@ int BK(id_list)(int32_t which, const char** buf, size_t* len) {
             case 3: ids = api::Lane::getIDList(); break;
             case 4: ids = api::Edge::getIDList(); break;
             case 5: ids = api::VehicleType::getIDList(); break;
+            case 6: ids = api::Simulation::getPendingVehicles(); break;
             default: throw std::runtime_error("unknown id list selector");
         }
         join(ids, g_list);

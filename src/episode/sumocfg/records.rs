@@ -9,6 +9,7 @@ use std::path::Path;
 
 use serde::Serialize;
 
+use crate::controller::PlanStats;
 use crate::episode::cells::{self, cells};
 use crate::episode::metrics::Outcome;
 use crate::model::scene::Kind;
@@ -96,6 +97,9 @@ pub struct ScenarioSummary {
     pub regions: String,
     /// Vehicles SUMO inserted.
     pub inserted: usize,
+    /// Vehicles whose departure time had come by the episode's end but which SUMO never
+    /// inserted (no room at their departure position): SUMO's pending vehicles at the end.
+    pub never_inserted: usize,
     /// CAVs among them.
     pub inserted_cav: usize,
     /// The realised CAV share.
@@ -125,6 +129,9 @@ pub struct ScenarioSummary {
     /// Mean system delay in its region over the vehicles that were in one, not crashed (s).
     #[serde(serialize_with = "cells::opt_decimals::<4, _>")]
     pub mean_region_delay_s: Option<f64>,
+    /// The planners' search effort over the episode, every region's rounds summed (the
+    /// paper's `episode.csv` columns of the same names).
+    pub plan_stats: PlanStats,
 }
 
 impl ScenarioSummary {

@@ -7,6 +7,7 @@ use std::collections::HashMap;
 use std::sync::Arc;
 
 use crate::config::Config;
+use crate::controller::PlanStats;
 use crate::episode::error::EpisodeError;
 use crate::episode::metrics::{CollisionEvent, Outcome, Timing};
 use crate::episode::step_times::StepTimes;
@@ -75,6 +76,11 @@ pub struct ScenarioRun {
     fleet: Fleet,
     /// The vehicles removed in collisions since the last planning round.
     crashed: Vec<Arc<str>>,
+    /// The vehicles whose departure time had come but which SUMO had not inserted, after the
+    /// last step seen: at the end, the vehicles never inserted.
+    pending: Vec<String>,
+    /// The planners' search effort, over every round of every region.
+    plan_stats: PlanStats,
 }
 
 impl ScenarioRun {
@@ -97,6 +103,8 @@ impl ScenarioRun {
             round: None,
             fleet: Fleet::Drawn,
             crashed: Vec::new(),
+            pending: Vec::new(),
+            plan_stats: PlanStats::default(),
         }
     }
 
@@ -164,6 +172,7 @@ impl ScenarioRun {
         plan: bool,
     ) -> Result<(), SumoError> {
         self.book_departures(sim, now)?;
+        self.pending = sim.pending()?;
         sim.read_vehicles(&mut self.readings)?;
         self.book_collisions(sim, now)?;
         for id in sim.arrived()? {
@@ -209,12 +218,11 @@ impl ScenarioRun {
                 c.plan(&r.scene.scene, &mut r.commands);
             }
         });
-        let shield_ms = self
-            .regions
-            .iter()
-            .filter_map(|r| r.controller.as_ref())
-            .map(|c| c.last_shield_ms())
-            .sum();
+        let controllers = || self.regions.iter().filter_map(|r| r.controller.as_ref());
+        let shield_ms = controllers().map(|c| c.last_shield_ms()).sum();
+        for c in controllers() {
+            self.plan_stats += c.last_stats();
+        }
         self.times
             .add_round(start.elapsed().as_secs_f64() * 1e3, shield_ms);
         self.occupancy.0 += 1;
@@ -440,8 +448,13 @@ impl ScenarioRun {
             seed: head.seed,
             ..RegionRow::default()
         };
+        let summary = ScenarioSummary {
+            never_inserted: self.pending.len(),
+            plan_stats: self.plan_stats,
+            ..ScenarioSummary::of(head, &vehicles, hdv_collisions)
+        };
         Ok(ScenarioResult {
-            summary: ScenarioSummary::of(head, &vehicles, hdv_collisions),
+            summary,
             regions: region_rows(&region_head, &names, &vehicles),
             vehicles,
             collisions: self.collisions,
