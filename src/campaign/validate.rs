@@ -1,6 +1,8 @@
-//! Checks of a collected `episodes.csv` before `bkpbs report` counts it: a hand-edited or
-//! damaged file once went into the tables as it was (a row twice counted twice, `NaN` shown as
-//! `NaN ± NaN`, a delay of −999 s bolded as the best, a collision rate of 7.5).
+//! Checks of a collected `episodes.csv` (and, over scenarios, `regions.csv`) before `bkpbs
+//! report` counts it: a hand-edited or damaged file once went into the tables as it was (a row
+//! twice counted twice, `NaN` shown as `NaN ± NaN`, a delay of −999 s bolded as the best, a
+//! collision rate of 7.5; over scenarios a seed of `x` counted as seed 0). Both grids' rows
+//! pass the same rules ([`problem`]), each file naming its own text and optional columns.
 
 use std::collections::HashSet;
 use std::path::{Path, PathBuf};
@@ -29,7 +31,7 @@ pub enum RowError {
         /// Line of the row in the file (1 is the header).
         line: u64,
         /// The column of the value.
-        column: &'static str,
+        column: String,
         /// The value as written.
         value: String,
         /// The rule it breaks (`is negative`, `is a rate above 1`, …).
@@ -62,12 +64,40 @@ const LARGEST: f64 = 1e15;
 /// The columns that are names, not numbers: the SUMO version (any text SUMO reported).
 const TEXT: [&str; 1] = ["sumo_version"];
 
-/// What `column` may hold, as a reason if `value` breaks it.
+/// Which columns of a file are names rather than numbers (`text`: any text, `names`: never
+/// empty), and which are delays (may be empty, and down to [`LOWEST_DELAY`]); every other
+/// column holds a non-negative number, and [`RATE`] at most 1.
+#[derive(Debug, Clone, Copy)]
+pub struct Rules<'a> {
+    /// Columns of text that must not be empty.
+    pub names: &'a [&'a str],
+    /// Columns of text that may be empty.
+    pub text: &'a [&'a str],
+    /// Columns of delays.
+    pub delays: &'a [&'a str],
+}
+
+/// The rules of the paper grid's `episodes.csv`.
+const EPISODES: Rules<'static> = Rules {
+    names: &TEXT,
+    text: &[],
+    delays: &DELAYS,
+};
+
+/// What `column` may hold under the paper grid's rules, as a reason if `value` breaks it.
 fn problem(column: &str, value: &str) -> Option<&'static str> {
-    if TEXT.contains(&column) {
+    problem_under(&EPISODES, column, value)
+}
+
+/// What `column` may hold under `rules`, as a reason if `value` breaks it.
+fn problem_under(rules: &Rules, column: &str, value: &str) -> Option<&'static str> {
+    if rules.text.contains(&column) {
+        return None;
+    }
+    if rules.names.contains(&column) {
         return value.is_empty().then_some("is empty");
     }
-    let delay = DELAYS.contains(&column);
+    let delay = rules.delays.contains(&column);
     if value.is_empty() {
         return (!delay).then_some("is empty");
     }
@@ -111,7 +141,50 @@ pub fn check_episodes(path: &Path, table: &Table) -> Result<(), RowError> {
                 return Err(RowError::Value {
                     path: path.to_path_buf(),
                     line,
-                    column,
+                    column: column.to_string(),
+                    value: value.to_string(),
+                    reason,
+                });
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Checks every row of a file at `path` of `header` under `rules`: each row's `key` columns
+/// once, every value in range.
+///
+/// # Errors
+/// The first row that repeats a key or holds a value out of range, naming line, column and
+/// value.
+pub fn check_rows(
+    path: &Path,
+    header: &[String],
+    rows: &[csv::StringRecord],
+    key: &[&str],
+    rules: &Rules,
+) -> Result<(), RowError> {
+    let at: Vec<usize> = key
+        .iter()
+        .filter_map(|k| header.iter().position(|h| h == k))
+        .collect();
+    let mut seen = HashSet::new();
+    for row in rows {
+        let line = row.position().map_or(0, |p| p.line());
+        let cell: Vec<&str> = at.iter().map(|&i| row.get(i).unwrap_or("")).collect();
+        if !seen.insert(cell.join("\u{0}")) {
+            return Err(RowError::Duplicate {
+                path: path.to_path_buf(),
+                line,
+                cell: cell.join(" "),
+            });
+        }
+        for (column, value) in header.iter().zip(row.iter()) {
+            if let Some(reason) = problem_under(rules, column, value) {
+                return Err(RowError::Value {
+                    path: path.to_path_buf(),
+                    line,
+                    column: column.clone(),
                     value: value.to_string(),
                     reason,
                 });

@@ -17,6 +17,7 @@ use super::settings::ScenarioSettings;
 use crate::campaign::collect::EPISODES_DIR;
 use crate::campaign::comparison::results_settings;
 use crate::campaign::results::{read_records, ResultsError};
+use crate::campaign::validate::{check_rows, Rules};
 use crate::campaign::worker::{DONE_FILE, ERROR_FILE, SETTINGS_RECORD};
 use crate::episode::output::TIMING_COLUMNS;
 use crate::episode::sumocfg::{RegionRow, ScenarioSummary, ScenarioVehicle};
@@ -216,6 +217,31 @@ pub struct ScenarioResults {
     pub failures: Vec<csv::StringRecord>,
 }
 
+/// The rules of a scenario campaign's `episodes.csv` ([`check_rows`]).
+const EPISODE_RULES: Rules<'static> = Rules {
+    names: &["scenario", "planner", "sumo_version"],
+    text: &["cav_types", "regions"],
+    delays: &[
+        "mean_time_loss_s",
+        "mean_time_loss_region_s",
+        "mean_region_delay_s",
+    ],
+};
+
+/// The rules of its `regions.csv`.
+const REGION_RULES: Rules<'static> = Rules {
+    names: &["scenario", "planner", "region"],
+    text: &[],
+    delays: &[
+        "mean_delay_s",
+        "mean_delay_cav_s",
+        "mean_delay_hdv_s",
+        "mean_delay_main_s",
+        "mean_delay_ramp_s",
+        "mean_time_loss_s",
+    ],
+};
+
 /// The header of `failures.csv`.
 pub const FAILURE_COLUMNS: [&str; 5] = ["planner", "scenario", "alpha", "seed", "error"];
 
@@ -302,10 +328,31 @@ impl ScenarioResults {
     ///
     /// # Errors
     /// A file is missing, unreadable or has other columns.
+    /// Checks every row: each cell (and each cell's region) once, every value in range.
+    ///
+    /// # Errors
+    /// A file is unreadable, has other columns, or a row fails its checks.
     pub fn read(dir: &Path) -> Result<ScenarioResults, ResultsError> {
+        let checked = |name: &str, header: Vec<String>, key: &[&str], rules: &Rules| {
+            let path = dir.join(name);
+            let rows = read_records(&path, &header)?;
+            check_rows(&path, &header, &rows, key, rules)?;
+            Ok::<_, ResultsError>(rows)
+        };
+        let cell = ["scenario", "planner", "alpha", "seed"];
         Ok(ScenarioResults {
-            episodes: read_records(&dir.join("episodes.csv"), &header_of::<ScenarioSummary>())?,
-            regions: read_records(&dir.join("regions.csv"), &header_of::<RegionRow>())?,
+            episodes: checked(
+                "episodes.csv",
+                header_of::<ScenarioSummary>(),
+                &cell,
+                &EPISODE_RULES,
+            )?,
+            regions: checked(
+                "regions.csv",
+                header_of::<RegionRow>(),
+                &[&cell[..], &["region"]].concat(),
+                &REGION_RULES,
+            )?,
             ..ScenarioResults::default()
         })
     }
@@ -318,4 +365,67 @@ fn to_csv(header: &[String], rows: &[csv::StringRecord]) -> Vec<u8> {
         w.write_record(r).expect("writing to memory");
     }
     w.into_inner().expect("writing to memory")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::episode::sumocfg::csv_of;
+
+    /// A collected directory of one episode row and one region row, each edited by `edit`.
+    fn collected(edit: impl Fn(String) -> String) -> tempfile::TempDir {
+        let d = tempfile::tempdir().unwrap();
+        let episode = ScenarioSummary {
+            scenario: "ramp.sumocfg".into(),
+            planner: "bk-pbs".into(),
+            sumo_version: "1.15.0".into(),
+            ..ScenarioSummary::default()
+        };
+        let region = RegionRow {
+            scenario: "ramp.sumocfg".into(),
+            planner: "bk-pbs".into(),
+            region: "gneE7".into(),
+            ..RegionRow::default()
+        };
+        for (name, text) in [
+            ("episodes.csv", csv_of(&[episode])),
+            ("regions.csv", csv_of(&[region])),
+        ] {
+            let text = edit(String::from_utf8(text).unwrap());
+            std::fs::write(d.path().join(name), text).unwrap();
+        }
+        d
+    }
+
+    /// The report once counted a region row of seed `x` as seed 0, and a row twice twice.
+    #[test]
+    fn collected_rows_out_of_range_or_twice_are_refused_naming_them() {
+        assert!(ScenarioResults::read(collected(|t| t).path()).is_ok());
+        let bad_seed = collected(|t| {
+            t.replace("gneE7", "gneE7-")
+                .replacen(",0,gneE7-", ",x,gneE7-", 1)
+        });
+        let e = ScenarioResults::read(bad_seed.path())
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("regions.csv, line 2: seed = 'x' is not a number"),
+            "{e}"
+        );
+        let twice = collected(|t| {
+            let row = t.lines().nth(1).unwrap().to_string();
+            format!("{t}{row}\n")
+        });
+        let e = ScenarioResults::read(twice.path()).unwrap_err().to_string();
+        assert!(
+            e.contains("episodes.csv, line 3: cell ramp.sumocfg bk-pbs 0 0 appears twice"),
+            "{e}"
+        );
+        let negative =
+            collected(|t| t.replacen("bk-pbs,0,,0,1.15.0,0,,0,", "bk-pbs,0,,0,1.15.0,0,,-3,", 1));
+        let e = ScenarioResults::read(negative.path())
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("inserted = '-3' is negative"), "{e}");
+    }
 }
