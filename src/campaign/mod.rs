@@ -35,12 +35,10 @@ pub mod validate;
 #[doc(hidden)] // the worker processes' protocol (`bkpbs campaign --worker`, the Ray runner)
 pub mod worker;
 
-use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
-
+use crate::io::progress::Progress;
 use crate::io::WriteError;
 use results::ResultsError;
 pub use settings::{Overrides, Settings, SettingsError};
@@ -185,51 +183,31 @@ pub fn run<S: CampaignSpec>(
     Ok(summary)
 }
 
-/// Runs the episodes in the worker pool with a progress bar, naming each failure as it
-/// happens (`names` are the cells' by grid position); returns how many ran and how many of
-/// them failed.
+/// Runs the episodes in the worker pool with their progress (a bar on a terminal, a line a
+/// minute elsewhere), naming each failure as it happens (`names` are the cells' by grid
+/// position); returns how many ran and how many of them failed.
 fn run_requests(
     names: &[String],
     options: pool::PoolOptions,
     exe: &Path,
     requests: Vec<worker::Request>,
 ) -> (usize, usize) {
-    let bar = progress_bar(requests.len() as u64);
+    let mut progress = Progress::new("campaign", requests.len() as u64, "episodes");
+    progress.set_note("0 failed".into());
     let mut failed_now = 0;
     let mut ran = 0;
     pool::run(exe, requests, options, |reply| {
         ran += 1;
         if let Outcome::Failed { error } = &reply.outcome {
             failed_now += 1;
-            let line = format!(
+            progress.println(&format!(
                 "campaign: episode {} failed: {error}",
                 names[reply.position]
-            );
-            if bar.is_hidden() {
-                eprintln!("{line}");
-            } else {
-                bar.println(line);
-            }
-            bar.set_message(format!("{failed_now} failed"));
+            ));
+            progress.set_note(format!("{failed_now} failed"));
         }
-        bar.inc(1);
+        progress.advance(1);
     });
-    bar.finish_and_clear();
+    progress.finish();
     (ran, failed_now)
-}
-
-fn progress_bar(len: u64) -> ProgressBar {
-    if !std::io::stderr().is_terminal() {
-        return ProgressBar::hidden();
-    }
-    let bar = ProgressBar::with_draw_target(Some(len), ProgressDrawTarget::stderr());
-    bar.set_style(
-        ProgressStyle::with_template(
-            "{elapsed_precise} [{bar:30}] {pos}/{len} episodes, {msg}, ETA {eta}",
-        )
-        .expect("valid template")
-        .progress_chars("=> "),
-    );
-    bar.set_message("0 failed");
-    bar
 }

@@ -66,6 +66,7 @@ impl EpisodeArgs {
             }
             c.sumo.gui |= gui || gui_delay.is_some();
             c.sumo.gui_delay_ms = gui_delay.or(c.sumo.gui_delay_ms);
+            c.output.progress = true;
         })?;
         if let Some(why) = config.sumo.gui.then(sumo_files::gui_unavailable).flatten() {
             anyhow::bail!("cannot show the episode: {why}");

@@ -52,6 +52,11 @@ impl SumoSettings {
 pub struct OutputSettings {
     /// One row per vehicle and step (columns in docs/src/metrics.md).
     pub trajectories: TrajectoryFormat,
+    /// The episode's progress on stderr (`bkpbs episode`: a bar on a terminal, a line a
+    /// minute elsewhere); never in a file, nor in a campaign's workers, whose campaign shows
+    /// its own.
+    #[serde(skip)]
+    pub progress: bool,
 }
 
 /// Whether and how an episode writes its trajectories.

@@ -487,11 +487,21 @@ pub(crate) fn lock_step(
     let steps = config.scenario.steps;
     let at = |step| step_error(config.scenario.dt, step);
     sim.set_edge_codes(edge_names).map_err(at(0))?;
+    let mut progress = config.output.progress.then(|| {
+        let user = crate::io::watchdog::user_stderr();
+        crate::io::progress::Progress::on_fd("episode", steps.into(), "steps", user)
+    });
     for k in 0..steps {
         if let Some(signal) = crate::io::interrupt::requested() {
             return Err(EpisodeError::Interrupted { step: k, signal });
         }
         step(sim, k + 1 < steps).map_err(at(k))?;
+        if let Some(p) = &mut progress {
+            p.advance(1);
+        }
+    }
+    if let Some(p) = &progress {
+        p.finish();
     }
     Ok(())
 }

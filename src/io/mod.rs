@@ -9,6 +9,7 @@ pub mod bounded;
 pub mod child;
 pub mod cores;
 pub mod interrupt;
+pub mod progress;
 pub mod watchdog;
 
 use std::io::Write;

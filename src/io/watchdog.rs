@@ -78,6 +78,12 @@ pub fn report_to(fd: i32) {
     REPORT_FD.store(if fd < 0 { 2 } else { fd }, Ordering::SeqCst);
 }
 
+/// The descriptor that reaches the user's stderr: 2, or its duplicate while SUMO's output is
+/// captured (see [`report_to`]), so that progress shown during an episode is not captured.
+pub fn user_stderr() -> i32 {
+    REPORT_FD.load(Ordering::SeqCst)
+}
+
 /// Starts the watchdog thread (once per process).
 pub fn start() {
     STARTED.call_once(|| {
