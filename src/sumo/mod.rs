@@ -16,6 +16,8 @@ pub mod sumocfg;
 pub mod version;
 
 mod error;
+#[cfg(test)]
+pub(crate) mod fake;
 mod ffi;
 mod quiet;
 mod vehicle;

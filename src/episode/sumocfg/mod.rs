@@ -25,6 +25,8 @@ mod region;
 mod region_rows;
 mod round;
 mod run;
+#[cfg(test)]
+mod tests;
 
 use std::path::PathBuf;
 
