@@ -95,6 +95,8 @@ pub(crate) struct Step {
     pub arrived: Vec<String>,
     /// Collisions detected in it.
     pub collisions: Vec<Collision>,
+    /// Vehicles whose departure time has come but which are not inserted after it.
+    pub pending: Vec<String>,
 }
 
 impl Step {
@@ -107,6 +109,12 @@ impl Step {
     /// The step with `reading` among the network's vehicles after it.
     pub fn read(mut self, reading: Reading) -> Step {
         self.vehicles.push(reading);
+        self
+    }
+
+    /// The step with vehicle `id` waiting to be inserted after it.
+    pub fn wait(mut self, id: &str) -> Step {
+        self.pending.push(id.into());
         self
     }
 
@@ -239,6 +247,9 @@ impl SumoClient for FakeSumo {
     }
     fn arrived(&self) -> Result<Vec<String>, SumoError> {
         Ok(self.current.arrived.clone())
+    }
+    fn pending(&self) -> Result<Vec<String>, SumoError> {
+        Ok(self.current.pending.clone())
     }
     fn vehicle_type_ids(&self) -> Result<Vec<String>, SumoError> {
         let mut types: Vec<String> = self.inserted.values().map(|v| v.type_id.clone()).collect();

@@ -287,6 +287,31 @@ fn an_arrival_is_booked_and_joined_to_sumos_trip_figures() {
     assert_eq!(s.mean_time_loss_s, Some(1.0));
 }
 
+/// The vehicles never inserted are those SUMO still holds back after the last step, not
+/// those it held back earlier and then inserted.
+#[test]
+fn vehicles_still_waiting_after_the_last_step_are_never_inserted() {
+    let c = config(0.0, 2);
+    let script = vec![
+        Step::default()
+            .depart(FakeVehicle::new("a", "car"))
+            .read(Reading::on("a", "main_in", 0, 10.0, 30.0))
+            .wait("b")
+            .wait("c"),
+        Step::default()
+            .depart(FakeVehicle::new("b", "car"))
+            .read(Reading::on("a", "main_in", 0, 16.0, 30.0))
+            .read(Reading::on("b", "main_in", 0, 1.0, 30.0))
+            .wait("c")
+            .wait("d"),
+    ];
+    let mut run = paper_run(&c, "sumo");
+    let mut sim = sumo_for(&run, script);
+    play(&mut run, &mut sim, 2);
+    let s = finish(run, "").summary;
+    assert_eq!((s.inserted, s.never_inserted), (2, 2));
+}
+
 /// A CAV `c` from `main_in` through the planned part (`acc`, frame 150–330) onto `main_out`:
 /// before it, in it for three steps, then past it.
 fn cav_through_the_planned_part() -> Vec<Step> {
