@@ -38,5 +38,5 @@ if [ ${#need_apt[@]} -gt 0 ]; then
 fi
 have_libsumo || die "SUMO is installed but libsumo (libsumocpp.so and /usr/include/libsumo) is missing: need Debian's sumo package, 1.15+"
 
-command -v cargo >/dev/null 2>&1 || die "cargo not found: install a Rust toolchain (1.75 or newer), e.g. with rustup"
+command -v cargo >/dev/null 2>&1 || die "cargo not found: install a Rust toolchain (1.85 or newer), e.g. with rustup"
 exit 0

@@ -171,7 +171,7 @@ result_versus long-run-fresh results/long-run/fresh idm-mobil,bk-mastar "$BIN" c
 result_versus long-run-unseen results/long-run/unseen idm-mobil,bk-mastar "$BIN" campaign --config results/long-run/long-run.toml \
     --planners idm-mobil,bk-mastar,bk-pbs $long --lambdas 3000 --seeds 30 --seed-base 50000
 
-# The study on SUMO's own game scenarios (results/scenarios, ~60 min on 2 cores): copies of the
+# The study on SUMO's own game scenarios (results/scenarios, ~30 min on 2 cores: its episodes' wall times sum to an hour): copies of the
 # games as a user brings them, then the campaign over A10KW and ramp, then one merge's figures.
 if wanted scenarios || wanted scenarios-plots; then
     scripts/scenario-games.sh target/scenario-games

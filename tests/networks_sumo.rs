@@ -49,7 +49,7 @@ fn check_rows(csv: &str, layout: &Layout, config: &Config, road: &Road) -> Frame
         let (x, y, s, lane, lateral) = (num(7), num(8), num(10), num(11), num(12));
         // Ramp s counts along the ramp, not the reference line; junction lanes bend off the
         // reference line's own junction lane, so an offset from it says little there.
-        if road.edge(f[4]).map_or(true, |e| e.on_ramp) || f[4].starts_with(':') {
+        if road.edge(f[4]).is_none_or(|e| e.on_ramp) || f[4].starts_with(':') {
             continue;
         }
         let d = (lane - f64::from(road.top_lane())) * road.lane_width + lateral;

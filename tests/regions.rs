@@ -283,7 +283,7 @@ fn a_weaving_section_is_a_merge_and_its_exit_is_used() {
         };
         (vehicles.iter())
             .filter(|v| v["origin"] == origin && v["outcome"] == "arrived")
-            .filter(|v| by_exit.map_or(true, |x| short(v) == x))
+            .filter(|v| by_exit.is_none_or(|x| short(v) == x))
             .count()
     };
     let ramp = arrived("ramp", None);

@@ -6,7 +6,7 @@
 //!
 //! ```text
 //! campaign.toml                      the settings (grid and scenario); a re-run must agree
-//! episodes/<planner>/a<α>_l<λ>_s<seed>/
+//! episodes/<planner>/[hdv-<profile>/]a<α>_l<λ>_s<seed>/   (hdv-<profile>/: a profile other than sumo-safe)
 //!     episode.csv vehicles.csv collisions.csv timing.csv settings.toml [sumo.log]   a finished cell
 //!     error.txt                                                       a failed one
 //! episodes.csv vehicles.csv timings.csv failures.csv                  collected, grid order
@@ -16,7 +16,8 @@
 //! Modules: [`grid`] (cells, order, shards), [`settings`] (file and flags), [`claim`] (one
 //! set of settings per directory at a time), [`worker`] and
 //! [`pool`] (the two ends of the worker processes), [`collect`] (resume state, gathering),
-//! [`results`] (the collected files), [`tasks`] (the same run for other schedulers).
+//! [`results`] (the collected files), [`tasks`] (the same run for other schedulers),
+//! [`scenarios`] (the grid over scenarios of the user's own, `--sumocfg`).
 
 mod checks;
 pub mod claim;
@@ -32,7 +33,7 @@ pub mod spec;
 pub mod table;
 pub mod tasks;
 pub mod validate;
-#[doc(hidden)] // the worker processes' protocol (`bkpbs campaign --worker`, the Ray runner)
+#[doc(hidden)] // the worker processes' protocol (`bkpbs worker`, the Ray runner)
 pub mod worker;
 
 use std::path::{Path, PathBuf};

@@ -59,7 +59,7 @@ impl IdmMobil {
                 continue; // main-road vehicles never enter the acceleration lane
             }
             if let Some(g) = mobil::evaluate(&self.idm, &self.mobil, scene, i, target) {
-                if best.map_or(true, |(bg, _)| g > bg) {
+                if best.is_none_or(|(bg, _)| g > bg) {
                     best = Some((g, dir));
                 }
             }

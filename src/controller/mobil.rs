@@ -41,7 +41,7 @@ fn nearest(
         if i == skip || !side(v.s) || !occupies(v, lane, w) {
             continue;
         }
-        if best.map_or(true, |b| closer(v.s, scene.vehicles[b].s)) {
+        if best.is_none_or(|b| closer(v.s, scene.vehicles[b].s)) {
             best = Some(i);
         }
     }
@@ -110,10 +110,9 @@ pub fn merge_is_safe(mobil: &Mobil, scene: &Scene, i: usize, target: i32) -> boo
         let closing = (back.speed - front.speed).max(0.0);
         room >= 0.0 && closing * closing <= 2.0 * mobil.merge_safe_braking * room
     };
-    let leader_ok =
-        leader_index(scene, target, me.s, i).map_or(true, |l| ok(me, &scene.vehicles[l]));
+    let leader_ok = leader_index(scene, target, me.s, i).is_none_or(|l| ok(me, &scene.vehicles[l]));
     let follower_ok =
-        follower_index(scene, target, me.s, i).map_or(true, |f| ok(&scene.vehicles[f], me));
+        follower_index(scene, target, me.s, i).is_none_or(|f| ok(&scene.vehicles[f], me));
     leader_ok && follower_ok
 }
 

@@ -372,7 +372,7 @@ impl Summary {
         let delays = |k: Option<Kind>| {
             mean(
                 v.iter()
-                    .filter(|r| k.map_or(true, |k| r.kind == k))
+                    .filter(|r| k.is_none_or(|k| r.kind == k))
                     .filter_map(|r| r.delay()),
             )
         };

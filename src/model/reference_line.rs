@@ -25,10 +25,7 @@ impl ReferenceLine {
     pub fn new(points: impl IntoIterator<Item = Point>) -> Option<ReferenceLine> {
         let mut pts: Vec<Point> = Vec::new();
         for p in points {
-            if pts
-                .last()
-                .map_or(true, |q| (p - q).norm() > MERGE_TOLERANCE)
-            {
+            if pts.last().is_none_or(|q| (p - q).norm() > MERGE_TOLERANCE) {
                 pts.push(p);
             }
         }

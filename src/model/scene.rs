@@ -254,7 +254,7 @@ impl Scene {
             if i == skip || v.lane != lane || !side(v.s) {
                 continue;
             }
-            if best.map_or(true, |b| closer(v.s, self.vehicles[b].s)) {
+            if best.is_none_or(|b| closer(v.s, self.vehicles[b].s)) {
                 best = Some(i);
             }
         }

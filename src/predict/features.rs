@@ -300,7 +300,7 @@ pub fn neighbours<'a>(ego: &Agent, others: impl Iterator<Item = &'a Agent>) -> [
             if o.lane != ego.lane + slot.lane_offset() || (ds > 0.0) != slot.ahead() {
                 continue;
             }
-            if best[k].map_or(true, |(d, _)| ds.abs() < d) {
+            if best[k].is_none_or(|(d, _)| ds.abs() < d) {
                 best[k] = Some((ds.abs(), *o));
             }
         }

@@ -466,7 +466,8 @@ const METRICS: [Metric; 4] = [
 
 /// Below this many seeds a figure draws each seed's value instead of a 95 % band: with t(0.975,
 /// n − 1) at 12.7, 4.3, 3.2 for 2, 3, 4 seeds the band says more about n than about the data.
-pub const BAND_MIN_SEEDS: usize = 5;
+/// The tables' threshold too ([`stats::INTERVAL_MIN_SEEDS`]).
+pub const BAND_MIN_SEEDS: usize = stats::INTERVAL_MIN_SEEDS;
 
 /// The paper's tables as a figure: per metric (rows) and λ (columns), each planner's mean over
 /// seeds against α, with its 95 % confidence interval as a band (clipped to what the metric can

@@ -2,8 +2,13 @@
 //! system delay and, beside it, the paper's arrived-only mean delay per λ (rows planners,
 //! columns α), controllable collision rate per planner (rows λ, columns α), and one long
 //! summary of every (planner, α, λ).
+//!
+//! A Markdown entry is the mean over seeds ± the half-width of its 95 % interval, or, from 2 up
+//! to fewer than [`INTERVAL_MIN_SEEDS`] seeds, the mean and then each seed's value in seed order
+//! (`6.35 (seeds 3.62, 9.08)`), where such an interval would mostly show how few seeds there
+//! are. The CSV files keep the interval either way.
 
-use super::stats::Estimate;
+use super::stats::{t_975, Estimate, INTERVAL_MIN_SEEDS};
 use super::summary::{Group, Summary};
 
 /// A CSV file of the report: its file name and content.
@@ -46,12 +51,14 @@ fn system_delay_of(g: Option<&Group>) -> Option<&Estimate> {
     g.and_then(|g| g.system_delay.as_ref())
 }
 
-/// A delay table: its file-name prefix, Markdown heading and explanation, and its estimate.
+/// A delay table: its file-name prefix, Markdown heading and explanation, its estimate and the
+/// per-seed values behind it.
 struct DelayKind {
     file: &'static str,
     heading: &'static str,
     explanation: &'static str,
     of: fn(Option<&Group>) -> Option<&Estimate>,
+    samples: fn(&Group) -> &[f64],
 }
 
 /// The system delay, which leads: every vehicle the demand scheduled, arrived or not.
@@ -64,6 +71,7 @@ const SYSTEM_DELAY: DelayKind = DelayKind {
                   stuck in a jam or never inserted count. Then the mean over seeds. Bold: \
                   lowest mean in the column.",
     of: system_delay_of,
+    samples: |g| &g.samples.system_delay,
 };
 
 /// The paper's delay: the vehicles that arrived only.
@@ -73,6 +81,7 @@ const ARRIVED_DELAY: DelayKind = DelayKind {
     explanation: "The paper's delay: per episode the mean delay of the vehicles that arrived \
                   without collision, then the mean over seeds. Bold: lowest mean in the column.",
     of: delay_of,
+    samples: |g| &g.samples.delay,
 };
 
 fn rate_of(g: Option<&Group>) -> Option<&Estimate> {
@@ -212,13 +221,33 @@ fn summary_row(g: &Group) -> Vec<String> {
     r
 }
 
-/// "m ± c" with `decimals`, "(n=k)" appended when fewer than `full` seeds, "–" for nothing.
-fn md_cell(e: Option<&Estimate>, decimals: usize, scale: f64, full: usize) -> String {
+/// Whether an entry lists its seeds' values instead of an interval: 2 up to fewer than
+/// [`INTERVAL_MIN_SEEDS`] values.
+fn lists_seeds(e: &Estimate) -> bool {
+    (2..INTERVAL_MIN_SEEDS).contains(&e.n)
+}
+
+/// "m ± c" with `decimals`, or "m (seeds a, b)" with the values of `samples` (the seeds' values
+/// behind `e`, in seed order) when [`lists_seeds`]; "(n=k)" appended when fewer than `full`
+/// seeds, "–" for nothing.
+fn md_cell(
+    e: Option<&Estimate>,
+    samples: &[f64],
+    decimals: usize,
+    scale: f64,
+    full: usize,
+) -> String {
     let Some(e) = e else {
         return "–".into();
     };
     let mut s = format!("{:.decimals$}", e.mean * scale);
-    if let Some(c) = e.ci95 {
+    if lists_seeds(e) {
+        let values: Vec<String> = samples
+            .iter()
+            .map(|v| format!("{:.decimals$}", v * scale))
+            .collect();
+        s += &format!(" (seeds {})", values.join(", "));
+    } else if let Some(c) = e.ci95 {
         s += &format!(" ± {:.decimals$}", c * scale);
     }
     if e.n < full {
@@ -251,21 +280,64 @@ pub fn markdown(s: &Summary) -> String {
     md
 }
 
-/// The title and what the grid holds and how its entries read.
+/// Every estimate the Markdown tables show: each group's system delay, delay and collision rate.
+fn shown(s: &Summary) -> impl Iterator<Item = &Estimate> {
+    s.groups.iter().flat_map(|g| {
+        [&g.system_delay, &g.delay, &g.collision_rate]
+            .into_iter()
+            .flatten()
+    })
+}
+
+/// Why an entry of few seeds lists them: what the interval would be, and how to read the list.
+fn few_seeds_why() -> String {
+    let few = 2..INTERVAL_MIN_SEEDS;
+    let t: Vec<String> = few
+        .clone()
+        .map(|n| format!("{:.1}", t_975(n - 1)))
+        .collect();
+    let n: Vec<String> = few.map(|n| n.to_string()).collect();
+    format!(
+        "No 95 % interval below {INTERVAL_MIN_SEEDS} seeds: t(0.975, n − 1) is {} for {} seeds, \
+         so it would say more about how few seeds there are than about the planners. A seed is \
+         the same traffic for every planner, so the values in the same place compare planners on \
+         equal terms (`bkpbs report --versus` tests the differences seed by seed).",
+        t.join(", "),
+        n.join(", "),
+    )
+}
+
+/// The title and what the grid holds and how its entries read: the interval, or each seed's
+/// value where a cell has too few seeds for one ([`lists_seeds`]; every cell, or some).
 fn md_intro(s: &Summary) -> String {
     let mut md = String::from("# Campaign report\n\n");
     md += &format!(
-        "{} planners × {} α × {} λ, {} seeds per cell ({} episodes). Each entry: mean over \
-         seeds ± half-width of the 95 % confidence interval, t(0.975, n − 1) · s / √n (Student \
-         t, s the sample standard deviation); \"(n=k)\" marks cells with fewer episodes, \"–\" \
-         cells without any.\n\n",
+        "{} planners × {} α × {} λ, {} seeds per cell ({} episodes). ",
         s.planners.len(),
         s.alphas.len(),
         s.lambdas.len(),
         s.seeds,
         s.groups.iter().map(|g| g.episodes).sum::<usize>(),
     );
-    md
+    let interval = "mean over seeds ± half-width of the 95 % confidence interval, t(0.975, n − 1) \
+                    · s / √n (Student t, s the sample standard deviation)";
+    let marks = "\"(n=k)\" marks cells with fewer episodes, \"–\" cells without any.";
+    let some = shown(s).any(lists_seeds);
+    let all = shown(s).all(|e| e.n < INTERVAL_MIN_SEEDS);
+    let why = few_seeds_why();
+    md += &match (some, all) {
+        (false, _) => format!("Each entry: {interval}; {marks}"),
+        (true, true) => format!(
+            "Each entry: mean over seeds, then each seed's value in seed order, \"m (seeds a, \
+             b)\". {why} {marks}"
+        ),
+        (true, false) => format!(
+            "Each entry: {interval}; {marks} A cell of fewer than {INTERVAL_MIN_SEEDS} seeds \
+             shows its mean and then each seed's value in seed order instead, \"m (seeds a, \
+             b)\". {why}"
+        ),
+    };
+    md + "\n\n"
 }
 
 /// A delay at λ `l`: rows planners, columns α, the lowest mean per column in bold.
@@ -291,7 +363,8 @@ fn md_delay_section(s: &Summary, l: f64, kind: &DelayKind) -> String {
         md += &format!("| {p} |");
         for (i, &a) in s.alphas.iter().enumerate() {
             let e = delay_of(s.get(p, a, l));
-            let cell = md_cell(e, 2, 1.0, s.seeds);
+            let samples = s.get(p, a, l).map_or(&[][..], kind.samples);
+            let cell = md_cell(e, samples, 2, 1.0, s.seeds);
             let bold = e.is_some_and(|e| Some(format!("{:.2}", e.mean)) == best[i]);
             md += &if bold {
                 format!(" **{cell}** |")
@@ -312,7 +385,9 @@ fn md_collision_section(s: &Summary, p: &str) -> String {
     for &l in &s.lambdas {
         md += &format!("| {} |", lambda_label(l));
         for &a in &s.alphas {
-            md += &format!(" {} |", md_cell(rate_of(s.get(p, a, l)), 2, 100.0, s.seeds));
+            let g = s.get(p, a, l);
+            let samples = g.map_or(&[][..], |g| &g.samples.collision_rate);
+            md += &format!(" {} |", md_cell(rate_of(g), samples, 2, 100.0, s.seeds));
         }
         md += "\n";
     }
@@ -322,4 +397,116 @@ fn md_collision_section(s: &Summary, p: &str) -> String {
 /// A planner label as a file-name part: `bk-pbs (paper)` becomes `bk-pbs_paper`.
 pub fn file_stem(label: &str) -> String {
     label.replace(" (", "_").replace(')', "")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::report::summary::Samples;
+
+    /// A group of planner `p` at α `alpha`, λ 3000, with these per-seed system delays (also its
+    /// arrived-only delays) and collision rates.
+    fn group(p: &str, alpha: f64, delays: &[f64], rates: &[f64]) -> Group {
+        Group {
+            planner: p.into(),
+            alpha,
+            lambda: 3000.0,
+            episodes: delays.len(),
+            system_delay: Estimate::of(delays),
+            own_speed_delay: None,
+            delay: Estimate::of(delays),
+            collision_rate: Estimate::of(rates),
+            throughput: None,
+            mean_speed: None,
+            stranded: None,
+            never_inserted: None,
+            samples: Samples {
+                system_delay: delays.to_vec(),
+                delay: delays.to_vec(),
+                collision_rate: rates.to_vec(),
+                ..Samples::default()
+            },
+        }
+    }
+
+    fn summary(groups: Vec<Group>) -> Summary {
+        let mut planners: Vec<String> = groups.iter().map(|g| g.planner.clone()).collect();
+        planners.dedup();
+        let mut alphas: Vec<f64> = groups.iter().map(|g| g.alpha).collect();
+        alphas.dedup();
+        Summary {
+            planners,
+            alphas,
+            lambdas: vec![3000.0],
+            seeds: groups.iter().map(|g| g.episodes).max().unwrap_or(0),
+            groups,
+        }
+    }
+
+    /// The Markdown row of planner `p` in the first table of `md` (the system delay).
+    fn row<'m>(md: &'m str, start: &str) -> &'m str {
+        md.lines()
+            .find(|l| l.starts_with(start))
+            .unwrap_or_else(|| panic!("no row {start} in\n{md}"))
+    }
+
+    #[test]
+    fn two_seeds_show_each_seeds_value_not_an_interval() {
+        // Two seeds: t(0.975, 1) = 12.7 made these "6.25 ± 34.94" s and "12.50 ± 158.83" %.
+        let s = summary(vec![
+            group("sumo", 0.4, &[3.5, 9.0], &[0.0, 0.25]),
+            group("bk-pbs", 0.4, &[2.0, 3.0], &[0.0, 0.0]),
+        ]);
+        let md = markdown(&s);
+        assert!(!md.contains('±'), "{md}");
+        assert_eq!(row(&md, "| sumo |"), "| sumo | 6.25 (seeds 3.50, 9.00) |");
+        assert_eq!(
+            row(&md, "| bk-pbs |"),
+            "| bk-pbs | **2.50 (seeds 2.00, 3.00)** |"
+        );
+        assert_eq!(row(&md, "| 3000 |"), "| 3000 | 12.50 (seeds 0.00, 25.00) |");
+        assert!(
+            md.contains("Each entry: mean over seeds, then each seed's value in seed order")
+                && md.contains("t(0.975, n − 1) is 12.7, 4.3, 3.2 for 2, 3, 4 seeds"),
+            "{md}"
+        );
+    }
+
+    #[test]
+    fn five_seeds_keep_the_interval_and_the_intro_of_the_committed_reports() {
+        let delays = [1.0, 2.0, 3.0, 4.0, 5.0];
+        let md = markdown(&summary(vec![group("sumo", 0.4, &delays, &[0.0; 5])]));
+        // mean 3, t(0.975, 4) · √2.5 / √5 = 2.776 · 0.7071 = 1.96
+        assert_eq!(row(&md, "| sumo |"), "| sumo | **3.00 ± 1.96** |");
+        assert!(md.starts_with(
+            "# Campaign report\n\n1 planners × 1 α × 1 λ, 5 seeds per cell (5 episodes). Each \
+             entry: mean over seeds ± half-width of the 95 % confidence interval, t(0.975, n − \
+             1) · s / √n (Student t, s the sample standard deviation); \"(n=k)\" marks cells with \
+             fewer episodes, \"–\" cells without any.\n\n## "
+        ));
+    }
+
+    #[test]
+    fn a_cell_short_of_seeds_lists_them_among_cells_with_intervals() {
+        let md = markdown(&summary(vec![
+            group("sumo", 0.4, &[1.0, 2.0, 3.0, 4.0, 5.0], &[0.0; 5]),
+            group("sumo", 0.8, &[1.0, 2.0, 6.0], &[0.0; 3]),
+        ]));
+        assert_eq!(
+            row(&md, "| sumo |"),
+            "| sumo | **3.00 ± 1.96** | **3.00 (seeds 1.00, 2.00, 6.00) (n=3)** |"
+        );
+        assert!(
+            md.contains("A cell of fewer than 5 seeds shows its mean and then each seed's value"),
+            "{md}"
+        );
+    }
+
+    #[test]
+    fn one_seed_is_its_value_alone() {
+        let md = markdown(&summary(vec![group("sumo", 0.4, &[2.5], &[0.1])]));
+        assert_eq!(row(&md, "| sumo |"), "| sumo | **2.50** |");
+        assert_eq!(row(&md, "| 3000 |"), "| 3000 | 10.00 |");
+        assert!(!md.contains("seeds 2.50") && md.contains("Each entry: mean over seeds ±"));
+    }
 }

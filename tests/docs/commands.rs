@@ -174,3 +174,55 @@ pub fn rejected((args, doc): &(Vec<String>, Documented)) -> Option<String> {
         )
     })
 }
+
+/// The `bkpbs …` (or `…/bkpbs …`) inline code spans of a text — Markdown prose, or the
+/// comments, doc comments and messages of source files — with their line: the subcommand and
+/// the `--flags` named (values, placeholders and notation left out). Fenced shell blocks are
+/// [`shell_lines`]'s.
+pub fn inline_mentions(text: &str) -> Vec<(usize, String, Vec<String>)> {
+    let mut out = Vec::new();
+    let mut offset = 0;
+    for (i, span) in text.split('`').enumerate() {
+        let line = text[..offset].matches('\n').count() + 1;
+        offset += span.len() + 1;
+        let mut words = span.split_whitespace();
+        let program = words.next().unwrap_or("");
+        if i % 2 == 0 || !(program == "bkpbs" || program.ends_with("/bkpbs")) {
+            continue;
+        }
+        let Some(sub) = words.next() else { continue };
+        if !sub.chars().all(|c| c.is_ascii_lowercase() || c == '-') {
+            continue;
+        }
+        let flags = words
+            .map(|w| w.trim_start_matches('['))
+            .filter(|w| w.starts_with("--"))
+            .map(|w| {
+                let end = w[2..]
+                    .find(|c: char| !(c.is_ascii_alphanumeric() || c == '-'))
+                    .map_or(w.len(), |e| e + 2);
+                w[..end].to_string()
+            })
+            .collect();
+        out.push((line, sub.to_string(), flags));
+    }
+    out
+}
+
+/// The flags `bkpbs SUB --help` lists, or `None` when the binary has no such subcommand.
+pub fn flags_of(sub: &str) -> Option<std::collections::BTreeSet<String>> {
+    let out = Command::new(env!("CARGO_BIN_EXE_bkpbs"))
+        .args([sub, "--help"])
+        .output()
+        .expect("running bkpbs");
+    if !out.status.success() {
+        return None;
+    }
+    let help = String::from_utf8_lossy(&out.stdout);
+    Some(
+        help.split(|c: char| !(c.is_ascii_alphanumeric() || c == '-'))
+            .filter(|w| w.starts_with("--") && w.len() > 2)
+            .map(String::from)
+            .collect(),
+    )
+}

@@ -501,7 +501,7 @@ pub fn clear_of_new_follower(c: &Candidate) -> bool {
         })
         .map(|(_, o)| o)
         .max_by(|a, c| a.s.total_cmp(&c.s));
-    follower.map_or(true, |f| {
+    follower.is_none_or(|f| {
         let back = Motion {
             speed: f.speed,
             first: None,

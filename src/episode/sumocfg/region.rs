@@ -69,7 +69,7 @@ impl Region {
     pub(super) fn commanded(&self) -> bool {
         self.controller
             .as_ref()
-            .map_or(true, |c| c.handling() == CavHandling::Commanded)
+            .is_none_or(|c| c.handling() == CavHandling::Commanded)
     }
 
     /// Records the vehicle just pushed into the scene: its reading and frame state, its own
