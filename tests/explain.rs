@@ -167,3 +167,52 @@ fn plot_marks_the_collision_and_draws_its_close_up() {
     let svg = std::fs::read_to_string(out.join("time_space.svg")).unwrap();
     assert!(svg.contains("collision"), "legend");
 }
+
+/// `--trace` on a scenario of your own (refused before): each merge region's trace beside its
+/// trajectories, no other file changed, and `bkpbs explain` on the episode's directory tells
+/// the story of each collision region by region (the committed policy, unshielded, crashes on
+/// SUMO's `ramp` game within 100 s).
+#[test]
+fn a_scenario_episode_is_traced_and_explained_region_by_region() {
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = common::game_copy(dir.path()).join("ramp.sumocfg");
+    let run = |out: &Path, trace: bool| {
+        let mut args = vec!["episode", "--sumocfg", cfg.to_str().unwrap()];
+        args.extend(["--planner", "rl-ppo", "--alpha", "0.6", "--seed", "1"]);
+        args.extend(["--steps", "500", "--out", out.to_str().unwrap()]);
+        if trace {
+            args.push("--trace");
+        }
+        common::assert_ok(&bkpbs(&args));
+    };
+    let (plain, traced) = (dir.path().join("plain"), dir.path().join("traced"));
+    run(&plain, false);
+    run(&traced, true);
+    for f in [
+        "episode.csv",
+        "vehicles.csv",
+        "regions.csv",
+        "collisions.csv",
+    ] {
+        assert_eq!(
+            std::fs::read(plain.join(f)).unwrap(),
+            std::fs::read(traced.join(f)).unwrap(),
+            "{f}"
+        );
+    }
+    let region = traced.join("trajectories/gneE7");
+    let lines = trace::read(&region.join(TRACE_FILE)).unwrap();
+    assert!(lines.iter().any(|l| l.source.as_str() == "policy"));
+    let o = bkpbs(&["explain", traced.to_str().unwrap(), "--plot"]);
+    common::assert_ok(&o);
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        out.starts_with("region gneE7:\ncollision 1 at t = "),
+        "{out}"
+    );
+    assert!(
+        out.contains("(cav): SUMO's state, the maneuver sent"),
+        "{out}"
+    );
+    assert!(region.join("explain_1.png").is_file(), "{out}");
+}

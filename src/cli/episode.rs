@@ -107,12 +107,12 @@ fn keep_sumo_log(err: episode::EpisodeError, out: &std::path::Path) -> anyhow::E
 
 /// Runs the user's scenario, writes its files and prints its summary.
 fn run_scenario(e: &Episode) -> Result<()> {
-    if e.trace || e.config.sumo.gui {
-        anyhow::bail!(
-            "--sumocfg: --trace and --gui are not available for a scenario of your own yet"
-        );
+    if e.config.sumo.gui {
+        anyhow::bail!("--sumocfg: --gui is not available for a scenario of your own yet");
     }
-    let r = episode::sumocfg::run(&e.config, e.planner.name())
+    let mut config = e.config.clone();
+    config.output.trace = e.trace;
+    let r = episode::sumocfg::run(&config, e.planner.name())
         .map_err(|err| keep_sumo_log(err, &e.out))?;
     episode::sumocfg::write(&r, &e.out).with_context(|| {
         format!(
@@ -154,6 +154,14 @@ fn run_scenario(e: &Episode) -> Result<()> {
             "trajectories of region {region}: {} (`bkpbs plot {}` draws them)",
             d.display(),
             d.display()
+        );
+    }
+    for (region, _) in &r.traces {
+        let d = episode::sumocfg::region_dir(&e.out, region);
+        println!(
+            "trace of region {region}: {} (`bkpbs explain {}` tells the story of each collision)",
+            d.join(episode::trace::TRACE_FILE).display(),
+            e.out.display()
         );
     }
     println!("results: {}", e.out.join("episode.csv").display());

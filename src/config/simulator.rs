@@ -57,6 +57,10 @@ pub struct OutputSettings {
     /// its own.
     #[serde(skip)]
     pub progress: bool,
+    /// `trace.jsonl` of every planning round (`bkpbs episode --trace`): on a scenario of your
+    /// own each region's beside its trajectories; never in a file, nor in a campaign.
+    #[serde(skip)]
+    pub trace: bool,
 }
 
 /// Whether and how an episode writes its trajectories.

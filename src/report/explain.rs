@@ -151,6 +151,44 @@ pub fn read_collisions(path: &Path) -> Result<Vec<CollisionRow>, ExplainError> {
 
 /// Reads `DIR/collisions.csv` and `DIR/trace.jsonl` and explains every collision.
 pub fn explain_dir(dir: &Path) -> Result<Vec<Explanation>, ExplainError> {
+    let (collisions, lines) = read_dir(dir)?;
+    Ok(explain(&collisions, &lines))
+}
+
+/// The traced merge regions of an episode on a scenario of the user's own
+/// (`<dir>/trajectories/<region>/` holding a `trace.jsonl`), in name order; none for any other
+/// directory.
+pub fn traced_regions(dir: &Path) -> Vec<PathBuf> {
+    let root = dir.join(crate::episode::sumocfg::TRAJECTORIES_DIR);
+    let mut found: Vec<PathBuf> = std::fs::read_dir(root)
+        .map(|d| d.flatten().map(|e| e.path()).collect())
+        .unwrap_or_default();
+    found.retain(|p| p.join(TRACE_FILE).is_file());
+    found.sort();
+    found
+}
+
+/// [`explain_dir`] of one region's directory: the episode's collisions there (its
+/// `collisions.csv` is the whole episode's) that a vehicle of the region's trace took part in,
+/// a CAV the region planned or a vehicle one of them was checked against.
+///
+/// # Errors
+/// As [`explain_dir`].
+pub fn explain_region_dir(dir: &Path) -> Result<Vec<Explanation>, ExplainError> {
+    let (collisions, lines) = read_dir(dir)?;
+    let seen: std::collections::HashSet<&str> = lines
+        .iter()
+        .flat_map(|l| std::iter::once(l.id.as_str()).chain(l.others.iter().map(|o| o.id.as_str())))
+        .collect();
+    let here: Vec<CollisionRow> = collisions
+        .into_iter()
+        .filter(|c| seen.contains(c.collider.as_str()) || seen.contains(c.victim.as_str()))
+        .collect();
+    Ok(explain(&here, &lines))
+}
+
+/// The collisions and the trace of directory `dir`.
+fn read_dir(dir: &Path) -> Result<(Vec<CollisionRow>, Vec<TraceLine>), ExplainError> {
     let collisions = dir.join("collisions.csv");
     if !collisions.is_file() {
         return Err(ExplainError::NoCollisions {
@@ -165,7 +203,7 @@ pub fn explain_dir(dir: &Path) -> Result<Vec<Explanation>, ExplainError> {
     }
     let collisions = read_collisions(&collisions)?;
     let lines = trace::read(&trace_path)?;
-    Ok(explain(&collisions, &lines))
+    Ok((collisions, lines))
 }
 
 /// The step length of a trace: the smallest gap between its times (0.2 s without one).

@@ -70,6 +70,9 @@ pub struct ScenarioResult {
     /// Each region's trajectories in its own road frame (region name, file), when
     /// `output.trajectories` is `csv`.
     pub trajectories: Vec<(String, crate::episode::trajectories::TrajectoryFile)>,
+    /// Each region's planners' trace (region name, `trace.jsonl` text), when `output.trace`
+    /// asks (`bkpbs episode --trace`).
+    pub traces: Vec<(String, String)>,
 }
 
 /// The directory below an episode's where each region's trajectories go
@@ -383,6 +386,11 @@ fn write_trajectories(
     for (region, file) in &result.trajectories {
         let d = region_dir(dir, region);
         crate::io::write_atomic(&d.join(file.name), &file.bytes)?;
+        crate::io::write_atomic(&d.join("collisions.csv"), collisions)?;
+    }
+    for (region, text) in &result.traces {
+        let d = region_dir(dir, region);
+        crate::io::write_atomic(&d.join(crate::episode::trace::TRACE_FILE), text.as_bytes())?;
         crate::io::write_atomic(&d.join("collisions.csv"), collisions)?;
     }
     Ok(())

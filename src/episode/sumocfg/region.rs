@@ -4,7 +4,9 @@
 
 use crate::config::Config;
 use crate::controller::{CavHandling, Command, Controller};
+use crate::episode::trace::Tracer;
 use crate::episode::trajectories::{Sent, TrajectoryLog, TrajectoryRow};
+use crate::episode::Observer;
 use crate::model::road::Road;
 use crate::model::scene::Kind;
 use crate::sumo::frame::{self, SumoScene};
@@ -35,11 +37,17 @@ pub struct Region {
     pub(super) log: Option<TrajectoryLog>,
     /// The trajectory row of each scene vehicle in the current step.
     pub(super) log_rows: Vec<usize>,
+    /// Its planners' trace (`trace.jsonl`), when `output.trace` asks.
+    pub(super) trace: Option<Tracer>,
 }
 
 impl Region {
     /// The region of `road`, planned by `controller` (or the episode's round) under `config`.
-    pub fn new(config: Config, road: Road, controller: Option<Box<dyn Controller>>) -> Region {
+    pub fn new(config: Config, road: Road, mut controller: Option<Box<dyn Controller>>) -> Region {
+        let trace = config.output.trace.then(|| Tracer::new(&config));
+        if let (Some(c), Some(t)) = (&mut controller, &trace) {
+            c.set_tracing(t.wants_beliefs());
+        }
         // The main edges come first in the frame: the second one starts where the first ends.
         let control_start = road
             .edges
@@ -61,6 +69,7 @@ impl Region {
             code_offset: 0,
             log,
             log_rows: Vec::new(),
+            trace,
         }
     }
 

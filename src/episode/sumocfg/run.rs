@@ -11,6 +11,7 @@ use crate::controller::PlanStats;
 use crate::episode::error::EpisodeError;
 use crate::episode::metrics::{CollisionEvent, Outcome, Timing};
 use crate::episode::step_times::StepTimes;
+use crate::episode::Observer;
 use crate::model::kinematics::free_flow_time;
 use crate::model::road::MERGE_LANE;
 use crate::model::scene::{Kind, Limits, Origin, VehicleState};
@@ -216,6 +217,9 @@ impl ScenarioRun {
             if let Some(c) = &mut r.controller {
                 r.commands.clear();
                 c.plan(&r.scene.scene, &mut r.commands);
+                if let Some(t) = &mut r.trace {
+                    t.planned(&r.scene.scene, &r.commands, c.as_ref());
+                }
             }
         });
         let controllers = || self.regions.iter().filter_map(|r| r.controller.as_ref());
@@ -421,6 +425,11 @@ impl ScenarioRun {
             .iter_mut()
             .filter_map(|r| Some((r.name.clone(), r.log.take()?.finish())))
             .collect();
+        let traces = self
+            .regions
+            .iter_mut()
+            .filter_map(|r| Some((r.name.clone(), r.trace.take()?.text().to_string())))
+            .collect();
         let vehicles: Vec<ScenarioVehicle> = self
             .lines
             .into_iter()
@@ -464,6 +473,7 @@ impl ScenarioRun {
             vehicles_per_step: per_step(in_scenes),
             cavs_per_step: per_step(cavs),
             trajectories,
+            traces,
         })
     }
 }
