@@ -76,3 +76,40 @@ fn without_a_display_the_gui_is_refused_in_one_line() {
         common::stderr(&o)
     );
 }
+
+/// `--gui` on a scenario of your own (refused before): SUMO's `ramp` game shown in sumo-gui
+/// gives the files of the same episode run in this process.
+#[test]
+fn a_scenario_shown_in_sumo_gui_gives_the_same_results() {
+    let d = tempfile::tempdir().unwrap();
+    let cfg = common::game_copy(d.path()).join("ramp.sumocfg");
+    let (plain, shown) = (d.path().join("plain"), d.path().join("gui"));
+    let args = |out: &std::path::Path| {
+        let mut a: Vec<String> = ["episode", "--sumocfg"].map(String::from).to_vec();
+        a.push(cfg.display().to_string());
+        a.extend(["--planner", "bk-pbs", "--steps", "200", "--seed", "3"].map(String::from));
+        a.extend(["--out".into(), out.display().to_string()]);
+        a
+    };
+    let o = Command::new(BIN).args(args(&plain)).output().unwrap();
+    assert!(o.status.success(), "{}", common::stderr(&o));
+    let o = Command::new("xvfb-run")
+        .args(["-a", BIN])
+        .args(args(&shown))
+        .args(["--gui-delay", "0"])
+        .output()
+        .expect("xvfb-run (Debian's xvfb; `make deps` installs it)");
+    assert!(o.status.success(), "{}", common::stderr(&o));
+    for f in [
+        "episode.csv",
+        "vehicles.csv",
+        "regions.csv",
+        "collisions.csv",
+    ] {
+        assert_eq!(
+            std::fs::read(plain.join(f)).unwrap(),
+            std::fs::read(shown.join(f)).unwrap(),
+            "{f} differs with the GUI"
+        );
+    }
+}

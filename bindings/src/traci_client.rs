@@ -206,4 +206,7 @@ impl SumoClient for TraciClient<'_> {
         // SUMO's REMOVE_VAPORIZED, as the core's own loop removes a crashed vehicle.
         self.command("vehicle.remove", (id, 4))
     }
+    fn set_color(&mut self, id: &str, [r, g, b]: [u8; 3]) -> Result<(), SumoError> {
+        self.command("vehicle.setColor", (id, (r, g, b, 255u8)))
+    }
 }

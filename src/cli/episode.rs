@@ -107,9 +107,6 @@ fn keep_sumo_log(err: episode::EpisodeError, out: &std::path::Path) -> anyhow::E
 
 /// Runs the user's scenario, writes its files and prints its summary.
 fn run_scenario(e: &Episode) -> Result<()> {
-    if e.config.sumo.gui {
-        anyhow::bail!("--sumocfg: --gui is not available for a scenario of your own yet");
-    }
     let mut config = e.config.clone();
     config.output.trace = e.trace;
     let r = episode::sumocfg::run(&config, e.planner.name())

@@ -5,7 +5,7 @@ use std::sync::Arc;
 
 use crate::controller::{Command, Source};
 use crate::model::scene::Scene;
-use crate::sumo::{Simulation, SumoError};
+use crate::sumo::{SumoClient, SumoError};
 
 /// Keeping its lane on its plan: the CAV type's own green.
 pub const CRUISING: [u8; 3] = [0, 200, 0];
@@ -33,7 +33,7 @@ impl GuiColours {
     /// Colours the commanded CAVs whose state changed.
     pub fn update(
         &mut self,
-        sim: &mut Simulation,
+        sim: &mut impl SumoClient,
         scene: &Scene,
         commands: &[Command],
     ) -> Result<(), SumoError> {

@@ -46,6 +46,8 @@ pub trait SumoClient {
     fn change_lane(&mut self, id: &str, lane_index: i32, duration: f64) -> Result<(), SumoError>;
     /// Takes a vehicle out of the simulation now.
     fn remove_vehicle(&mut self, id: &str) -> Result<(), SumoError>;
+    /// Colours a vehicle in sumo-gui (red, green, blue).
+    fn set_color(&mut self, id: &str, rgb: [u8; 3]) -> Result<(), SumoError>;
 }
 
 impl SumoClient for Simulation {
@@ -105,6 +107,9 @@ impl SumoClient for Simulation {
     }
     fn remove_vehicle(&mut self, id: &str) -> Result<(), SumoError> {
         Simulation::remove_vehicle(self, id)
+    }
+    fn set_color(&mut self, id: &str, rgb: [u8; 3]) -> Result<(), SumoError> {
+        Simulation::set_color(self, id, rgb)
     }
 }
 

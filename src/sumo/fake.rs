@@ -152,6 +152,8 @@ pub(crate) enum Sent {
     ChangeLane(String, i32, f64),
     /// The vehicle taken out of the simulation.
     Remove(String),
+    /// Its colour in sumo-gui.
+    Color(String, [u8; 3]),
 }
 
 impl Sent {
@@ -162,7 +164,8 @@ impl Sent {
             | Sent::SpeedMode(id, _)
             | Sent::LaneChangeMode(id, _)
             | Sent::ChangeLane(id, _, _)
-            | Sent::Remove(id) => id,
+            | Sent::Remove(id)
+            | Sent::Color(id, _) => id,
         }
     }
 }
@@ -247,6 +250,9 @@ impl SumoClient for FakeSumo {
     }
     fn arrived(&self) -> Result<Vec<String>, SumoError> {
         Ok(self.current.arrived.clone())
+    }
+    fn set_color(&mut self, id: &str, rgb: [u8; 3]) -> Result<(), SumoError> {
+        self.send("vehicle.setColor", Sent::Color(id.into(), rgb))
     }
     fn pending(&self) -> Result<Vec<String>, SumoError> {
         Ok(self.current.pending.clone())

@@ -314,20 +314,26 @@ pub fn command_line(config: &Config, net: &Path, vtypes: &Path, routes: &Path) -
             args.push("true".into());
         }
     }
-    if config.sumo.gui {
-        // Start at once, close at the end, and pause each step (real time by default).
-        let delay = config.sumo.gui_delay_ms.unwrap_or(s.dt * 1000.0);
-        for (opt, value) in [
-            ("--start", "true".to_string()),
-            ("--quit-on-end", "true".to_string()),
-            ("--delay", format!("{delay}")),
-        ] {
-            args.push(opt.into());
-            args.push(value);
-        }
-    }
+    args.extend(gui_options(config));
     args.extend(config.sumo.extra_args.iter().cloned());
     args
+}
+
+/// What sumo-gui needs when `sumo.gui` shows the episode: start at once, close at the end, and
+/// pause each step (real time by default); nothing otherwise.
+pub fn gui_options(config: &Config) -> Vec<String> {
+    if !config.sumo.gui {
+        return Vec::new();
+    }
+    let delay = (config.sumo.gui_delay_ms).unwrap_or(config.scenario.dt * 1000.0);
+    [
+        ("--start", "true".to_string()),
+        ("--quit-on-end", "true".to_string()),
+        ("--delay", format!("{delay}")),
+    ]
+    .into_iter()
+    .flat_map(|(k, v)| [k.to_string(), v])
+    .collect()
 }
 
 /// The program that shows an episode (`sumo.gui`); `Simulation::start` drives it through
@@ -335,7 +341,7 @@ pub fn command_line(config: &Config, net: &Path, vtypes: &Path, routes: &Path) -
 pub const GUI_PROGRAM: &str = "sumo-gui";
 
 /// The program of a command line: `sumo` (a name libsumo ignores) or [`gui_program`].
-fn program(gui: bool) -> String {
+pub fn program(gui: bool) -> String {
     if gui {
         gui_program()
     } else {

@@ -214,7 +214,7 @@ fn run_planned(
     let dir = scratch_dir()?;
     let tripinfo = dir.path().join("tripinfo.xml");
     let options = sumo_options(config, &tripinfo);
-    let args = command_line(&path, &options);
+    let args = command_line(config, &path, &options);
     let wall = std::time::Instant::now();
     let capture = (!config.sumo.verbose).then(StderrCapture::start).flatten();
     let outcome = (|| {
@@ -275,10 +275,13 @@ fn checked(config: &Config) -> Result<(PathBuf, SumoConfig), EpisodeError> {
     Ok((path, cfg))
 }
 
-/// SUMO's command line: the user's configuration at `path`, then bkpbs's `options`.
-fn command_line(path: &std::path::Path, options: &[String]) -> Vec<String> {
-    let mut args = vec!["sumo".to_string(), "-c".into(), path.display().to_string()];
+/// SUMO's command line: the user's configuration at `path`, then bkpbs's `options`, then
+/// sumo-gui's when `sumo.gui` shows the episode there.
+fn command_line(config: &Config, path: &std::path::Path, options: &[String]) -> Vec<String> {
+    let program = crate::sumo::files::program(config.sumo.gui);
+    let mut args = vec![program, "-c".into(), path.display().to_string()];
     args.extend(options.iter().cloned());
+    args.extend(crate::sumo::files::gui_options(config));
     args
 }
 
@@ -307,11 +310,14 @@ pub fn sumo_alone_ms_per_step(config: &Config) -> Result<f64, EpisodeError> {
     let options = sumo_options(config, &dir.path().join("tripinfo.xml"));
     let capture = (!config.sumo.verbose).then(StderrCapture::start).flatten();
     let timed = (|| {
-        let mut sim = Simulation::start(&command_line(&path, &options), config.sumo.stall_limit())
-            .map_err(|cause| EpisodeError::Start {
-                net: cfg.net.clone(),
-                cause,
-            })?;
+        let mut sim = Simulation::start(
+            &command_line(config, &path, &options),
+            config.sumo.stall_limit(),
+        )
+        .map_err(|cause| EpisodeError::Start {
+            net: cfg.net.clone(),
+            cause,
+        })?;
         let start = std::time::Instant::now();
         let steps = config.scenario.steps;
         for step in 0..steps {

@@ -59,7 +59,7 @@ impl OwnLoop {
 
     /// The command line to start SUMO with: the user's configuration, then bkpbs's options.
     pub fn sumo_command(&self) -> Vec<String> {
-        command_line(&self.sumocfg, &self.options)
+        command_line(&self.config, &self.sumocfg, &self.options)
     }
 
     /// The episode's length in steps: the scenario's interval, or `scenario.steps`.

@@ -4,6 +4,7 @@
 
 use crate::config::Config;
 use crate::controller::{CavHandling, Command, Controller};
+use crate::episode::gui::GuiColours;
 use crate::episode::trace::Tracer;
 use crate::episode::trajectories::{Sent, TrajectoryLog, TrajectoryRow};
 use crate::episode::Observer;
@@ -39,12 +40,15 @@ pub struct Region {
     pub(super) log_rows: Vec<usize>,
     /// Its planners' trace (`trace.jsonl`), when `output.trace` asks.
     pub(super) trace: Option<Tracer>,
+    /// Its CAVs' colours in sumo-gui, when `sumo.gui` shows the episode there.
+    pub(super) gui: Option<GuiColours>,
 }
 
 impl Region {
     /// The region of `road`, planned by `controller` (or the episode's round) under `config`.
     pub fn new(config: Config, road: Road, mut controller: Option<Box<dyn Controller>>) -> Region {
         let trace = config.output.trace.then(|| Tracer::new(&config));
+        let gui = config.sumo.gui.then(GuiColours::default);
         if let (Some(c), Some(t)) = (&mut controller, &trace) {
             c.set_tracing(t.wants_beliefs());
         }
@@ -70,6 +74,7 @@ impl Region {
             log,
             log_rows: Vec::new(),
             trace,
+            gui,
         }
     }
 

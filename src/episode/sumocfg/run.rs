@@ -197,6 +197,9 @@ impl ScenarioRun {
                         &r.config.scenario,
                     )?;
                     r.record_sent();
+                    if let Some(gui) = &mut r.gui {
+                        gui.update(sim, &r.scene.scene, &r.commands)?;
+                    }
                 }
             }
         }
