@@ -431,4 +431,14 @@ fn vehicles_never_inserted_are_counted_as_sumo_counts_them() {
         stdout.contains(&format!("never inserted {}", sumo("waiting"))),
         "{stdout}"
     );
+    // Per region, by where their routes enter it: every one of them passes the weave, the
+    // flow asked onto the on-ramp from there.
+    let region = &csv_rows(&std::fs::read(out.join("regions.csv")).unwrap())[0];
+    let count = |c: &str| region[c].parse::<usize>().unwrap();
+    let never = row["never_inserted"].parse::<usize>().unwrap();
+    assert_eq!(
+        count("never_inserted_main") + count("never_inserted_ramp"),
+        never
+    );
+    assert!(count("never_inserted_ramp") > 50, "{region:?}");
 }

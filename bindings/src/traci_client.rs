@@ -168,6 +168,9 @@ impl SumoClient for TraciClient<'_> {
     fn vehicle_type(&self, id: &str) -> Result<String, SumoError> {
         self.call("vehicle.getTypeID", (id,))
     }
+    fn vehicle_route(&self, id: &str) -> Result<Vec<String>, SumoError> {
+        self.call("vehicle.getRoute", (id,))
+    }
     fn vehicle_size(&self, id: &str) -> Result<(f64, f64), SumoError> {
         Ok((
             self.call("vehicle.getLength", (id,))?,

@@ -26,6 +26,8 @@ pub trait SumoClient {
     fn collisions(&self) -> Result<Vec<Collision>, SumoError>;
     /// A vehicle's type id.
     fn vehicle_type(&self, id: &str) -> Result<String, SumoError>;
+    /// The edges of a vehicle's route (also of one not yet inserted).
+    fn vehicle_route(&self, id: &str) -> Result<Vec<String>, SumoError>;
     /// A vehicle's length and width (m).
     fn vehicle_size(&self, id: &str) -> Result<(f64, f64), SumoError>;
     /// A vehicle's own top speed (m/s).
@@ -77,6 +79,9 @@ impl SumoClient for Simulation {
     }
     fn vehicle_type(&self, id: &str) -> Result<String, SumoError> {
         Simulation::vehicle_type(self, id)
+    }
+    fn vehicle_route(&self, id: &str) -> Result<Vec<String>, SumoError> {
+        Simulation::vehicle_route(self, id)
     }
     fn vehicle_size(&self, id: &str) -> Result<(f64, f64), SumoError> {
         Simulation::vehicle_size(self, id)

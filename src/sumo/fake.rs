@@ -95,8 +95,9 @@ pub(crate) struct Step {
     pub arrived: Vec<String>,
     /// Collisions detected in it.
     pub collisions: Vec<Collision>,
-    /// Vehicles whose departure time has come but which are not inserted after it.
-    pub pending: Vec<String>,
+    /// Vehicles whose departure time has come but which are not inserted after it, each with
+    /// its route's edges.
+    pub pending: Vec<(String, Vec<String>)>,
 }
 
 impl Step {
@@ -112,9 +113,16 @@ impl Step {
         self
     }
 
-    /// The step with vehicle `id` waiting to be inserted after it.
-    pub fn wait(mut self, id: &str) -> Step {
-        self.pending.push(id.into());
+    /// The step with vehicle `id` waiting to be inserted after it, on a route through none of
+    /// the regions.
+    pub fn wait(self, id: &str) -> Step {
+        self.wait_on(id, &[])
+    }
+
+    /// The step with vehicle `id` waiting to be inserted after it, on a route over `edges`.
+    pub fn wait_on(mut self, id: &str, edges: &[&str]) -> Step {
+        let route = edges.iter().map(|e| e.to_string()).collect();
+        self.pending.push((id.into(), route));
         self
     }
 
@@ -255,7 +263,18 @@ impl SumoClient for FakeSumo {
         self.send("vehicle.setColor", Sent::Color(id.into(), rgb))
     }
     fn pending(&self) -> Result<Vec<String>, SumoError> {
-        Ok(self.current.pending.clone())
+        Ok(self
+            .current
+            .pending
+            .iter()
+            .map(|(id, _)| id.clone())
+            .collect())
+    }
+    fn vehicle_route(&self, id: &str) -> Result<Vec<String>, SumoError> {
+        match self.current.pending.iter().find(|(p, _)| p == id) {
+            Some((_, route)) => Ok(route.clone()),
+            None => self.present("vehicle.getRoute", id).map(|_| Vec::new()),
+        }
     }
     fn vehicle_type_ids(&self) -> Result<Vec<String>, SumoError> {
         let mut types: Vec<String> = self.inserted.values().map(|v| v.type_id.clone()).collect();

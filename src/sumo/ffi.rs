@@ -93,6 +93,7 @@ shim_functions! {
     fn bk_id_list / bkt_id_list(which: i32, buf: *mut *const c_char, len: *mut usize) -> i32;
     fn bk_set_edge_names / bkt_set_edge_names(names: *const c_char, count: usize) -> i32;
     fn bk_vehicle_type / bkt_vehicle_type(id: *const c_char, out: *mut *const c_char, len: *mut usize) -> i32;
+    fn bk_vehicle_route / bkt_vehicle_route(id: *const c_char, buf: *mut *const c_char, len: *mut usize) -> i32;
     fn bk_vehicle_size / bkt_vehicle_size(id: *const c_char, length: *mut f64, width: *mut f64) -> i32;
     fn bk_vehicle_max_speed / bkt_vehicle_max_speed(id: *const c_char, out: *mut f64) -> i32;
     fn bk_vehicle_limits / bkt_vehicle_limits(id: *const c_char, accel: *mut f64, decel: *mut f64, emergency: *mut f64) -> i32;

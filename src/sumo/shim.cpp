@@ -170,6 +170,15 @@ int BK(vehicle_type)(const char* id, const char** out, size_t* len) {
     });
 }
 
+// The edges of a vehicle's route, NUL-separated (also of one not yet inserted).
+int BK(vehicle_route)(const char* id, const char** buf, size_t* len) {
+    return guarded([&] {
+        join(api::Vehicle::getRoute(id), g_list);
+        *buf = g_list.data();
+        *len = g_list.size();
+    });
+}
+
 // Reads every vehicle in the net: states into an internal array and the ids, NUL-separated, in
 // the same order. Vehicle types never change, so they are asked for once (`bk_vehicle_type`).
 int BK(read_vehicles)(const BkVehicleState** states, size_t* count, const char** strings,

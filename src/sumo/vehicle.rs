@@ -7,6 +7,21 @@ use super::{c_string, decode, ffi, Simulation, SumoError};
 use crate::model::scene::Limits;
 
 impl Simulation {
+    /// The edges of a vehicle's route, in order (also of one SUMO has not inserted yet).
+    pub fn vehicle_route(&self, id: &str) -> Result<Vec<String>, SumoError> {
+        let cid = c_string(id)?;
+        let mut ptr: *const c_char = std::ptr::null();
+        let mut len = 0usize;
+        // SAFETY: valid pointers; the returned buffer is copied at once.
+        unsafe {
+            decode(
+                "vehicle.getRoute",
+                ffi::bk_vehicle_route(cid.as_ptr(), &mut ptr, &mut len),
+            )?;
+            Ok(super::split_nul(ptr, len))
+        }
+    }
+
     /// The vehicle type id of a vehicle.
     pub fn vehicle_type(&self, id: &str) -> Result<String, SumoError> {
         let cid = c_string(id)?;

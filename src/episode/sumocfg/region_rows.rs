@@ -31,6 +31,11 @@ pub struct RegionRow {
     pub from_main: usize,
     /// Those that entered it from an on-ramp.
     pub from_ramp: usize,
+    /// Vehicles SUMO never inserted (waiting at the end) whose route enters it first, on the
+    /// main carriageway.
+    pub never_inserted_main: usize,
+    /// The same, entering it from an on-ramp.
+    pub never_inserted_ramp: usize,
     /// Of its vehicles, those that reached their route's end.
     pub arrived: usize,
     /// Those removed in collisions.

@@ -80,6 +80,9 @@ pub struct ScenarioRun {
     /// The vehicles whose departure time had come but which SUMO had not inserted, after the
     /// last step seen: at the end, the vehicles never inserted.
     pending: Vec<String>,
+    /// Where each vehicle that ever waited would enter a region first (by its route): which
+    /// region, and from where; none for a route through no region.
+    waiting: HashMap<String, Option<(usize, Origin)>>,
     /// The planners' search effort, over every round of every region.
     plan_stats: PlanStats,
 }
@@ -105,6 +108,7 @@ impl ScenarioRun {
             fleet: Fleet::Drawn,
             crashed: Vec::new(),
             pending: Vec::new(),
+            waiting: HashMap::new(),
             plan_stats: PlanStats::default(),
         }
     }
@@ -173,7 +177,7 @@ impl ScenarioRun {
         plan: bool,
     ) -> Result<(), SumoError> {
         self.book_departures(sim, now)?;
-        self.pending = sim.pending()?;
+        self.note_waiting(sim)?;
         sim.read_vehicles(&mut self.readings)?;
         self.book_collisions(sim, now)?;
         for id in sim.arrived()? {
@@ -238,6 +242,19 @@ impl ScenarioRun {
             self.occupancy.1 += vehicles.len() as u64;
             self.occupancy.2 += vehicles.iter().filter(|v| v.kind == Kind::Cav).count() as u64;
         }
+    }
+
+    /// Reads the vehicles SUMO holds back now, and where each new one would enter a region.
+    fn note_waiting(&mut self, sim: &impl SumoClient) -> Result<(), SumoError> {
+        self.pending = sim.pending()?;
+        for id in &self.pending {
+            if !self.waiting.contains_key(id) {
+                let route = sim.vehicle_route(id)?;
+                let entry = first_region_on(&self.regions, &route);
+                self.waiting.insert(id.clone(), entry);
+            }
+        }
+        Ok(())
     }
 
     fn book_departures(&mut self, sim: &mut impl SumoClient, now: f64) -> Result<(), SumoError> {
@@ -465,9 +482,18 @@ impl ScenarioRun {
             plan_stats: self.plan_stats,
             ..ScenarioSummary::of(head, &vehicles, hdv_collisions)
         };
+        let mut regions = region_rows(&region_head, &names, &vehicles);
+        for id in &self.pending {
+            if let Some(&Some((g, origin))) = self.waiting.get(id) {
+                match origin {
+                    Origin::Main => regions[g].never_inserted_main += 1,
+                    Origin::Ramp => regions[g].never_inserted_ramp += 1,
+                }
+            }
+        }
         Ok(ScenarioResult {
             summary,
-            regions: region_rows(&region_head, &names, &vehicles),
+            regions,
             vehicles,
             collisions: self.collisions,
             sumo_options,
@@ -479,6 +505,23 @@ impl ScenarioRun {
             traces,
         })
     }
+}
+
+/// The region a route enters first, and whether it enters there on an on-ramp.
+fn first_region_on(regions: &[Region], route: &[String]) -> Option<(usize, Origin)> {
+    route.iter().find_map(|edge| {
+        regions.iter().enumerate().find_map(|(g, r)| {
+            let e = r.road.edge(edge)?;
+            Some((
+                g,
+                if e.on_ramp {
+                    Origin::Ramp
+                } else {
+                    Origin::Main
+                },
+            ))
+        })
+    })
 }
 
 /// Vehicle `line` read at `raw`, `(front, lane)` in `region`'s frame, as its planner sees it: a

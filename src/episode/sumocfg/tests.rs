@@ -297,19 +297,24 @@ fn vehicles_still_waiting_after_the_last_step_are_never_inserted() {
             .depart(FakeVehicle::new("a", "car"))
             .read(Reading::on("a", "main_in", 0, 10.0, 30.0))
             .wait("b")
-            .wait("c"),
+            .wait_on("c", &["ramp", "acc", "main_out"]),
         Step::default()
             .depart(FakeVehicle::new("b", "car"))
             .read(Reading::on("a", "main_in", 0, 16.0, 30.0))
             .read(Reading::on("b", "main_in", 0, 1.0, 30.0))
-            .wait("c")
-            .wait("d"),
+            .wait_on("c", &["ramp", "acc", "main_out"])
+            .wait_on("d", &["main_in", "acc", "main_out"])
+            .wait("e"),
     ];
     let mut run = paper_run(&c, "sumo");
     let mut sim = sumo_for(&run, script);
     play(&mut run, &mut sim, 2);
-    let s = finish(run, "").summary;
-    assert_eq!((s.inserted, s.never_inserted), (2, 2));
+    let result = finish(run, "");
+    let s = &result.summary;
+    assert_eq!((s.inserted, s.never_inserted), (2, 3));
+    // Each by where its route enters the region; `e`'s route passes none.
+    let r = &result.regions[0];
+    assert_eq!((r.never_inserted_main, r.never_inserted_ramp), (1, 1));
 }
 
 /// A CAV `c` from `main_in` through the planned part (`acc`, frame 150–330) onto `main_out`:
