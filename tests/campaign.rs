@@ -8,6 +8,7 @@ use std::process::{Command, Output, Stdio};
 use std::sync::OnceLock;
 use std::time::{Duration, Instant, SystemTime};
 
+use bkpbs::campaign::cell::GridCell;
 use bkpbs::campaign::grid::{Cell, Grid, Shard};
 use bkpbs::episode::metrics::mean;
 use bkpbs::report::stats::{sample_std, t_975, Estimate};

@@ -7,7 +7,8 @@ use std::path::{Path, PathBuf};
 use std::time::Duration;
 
 use super::comparison::PER_CELL_KEYS;
-use super::grid::ShardError;
+use super::grid::{Shard, ShardError};
+use super::settings::Overrides;
 use crate::config::Config;
 use crate::config::ConfigError;
 use crate::controller::{PlannerKind, UnknownPlanner};
@@ -214,6 +215,58 @@ pub(crate) fn check_planners(planners: &[String], origin: String) -> Result<(), 
     match planners.iter().find_map(|p| p.parse::<PlannerKind>().err()) {
         Some(planner) => Err(SettingsError::Planner { origin, planner }),
         None => Ok(()),
+    }
+}
+
+/// The planners and α of either kind of campaign's table: known controllers, each α in
+/// [0, 1]. Both kinds check them first, in this order, with the same messages.
+pub(crate) fn check_planners_and_alphas(
+    planners: &[String],
+    alphas: &[f64],
+    o: &Overrides,
+    file: Option<&Path>,
+) -> Result<(), SettingsError> {
+    check_planners(
+        planners,
+        origin(o.planners.is_some(), "--planners", "planners", file),
+    )?;
+    check_values(
+        &origin(o.alphas.is_some(), "--alphas", "alphas", file),
+        "α",
+        alphas,
+        |a| (0.0..=1.0).contains(&a),
+        "must lie in [0, 1]",
+    )
+}
+
+/// The seed count and the steps (where the table sets them) of either kind of campaign's
+/// table: each at least 1.
+pub(crate) fn check_seeds_and_steps(
+    seeds: u64,
+    steps: Option<u32>,
+    o: &Overrides,
+    file: Option<&Path>,
+) -> Result<(), SettingsError> {
+    at_least_one(
+        origin(o.seeds.is_some(), "--seeds", "seeds", file),
+        "seed count",
+        seeds,
+    )?;
+    match steps {
+        Some(n) => at_least_one(
+            origin(o.steps.is_some(), "--steps", "steps", file),
+            "steps",
+            n.into(),
+        ),
+        None => Ok(()),
+    }
+}
+
+/// The slice of the grid `--shard` names; the whole grid without it.
+pub(crate) fn shard_of(o: &Overrides) -> Result<Shard, SettingsError> {
+    match &o.shard {
+        Some(s) => Ok(s.parse()?),
+        None => Ok(Shard::ALL),
     }
 }
 

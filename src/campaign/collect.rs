@@ -8,28 +8,19 @@
 //! killed campaign never counts a half-written cell as done, a re-run never runs a finished one
 //! again, and a damaged, foreign or edited cell is run again, with the reason printed.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
-use super::comparison::results_settings;
+pub use super::cell::{cell_dir, EPISODES_DIR};
+use super::cell::{
+    check_run, check_settings_record, column_value, episode_row, failure_of, rows_counted,
+    CellState,
+};
 use super::grid::{Cell, Grid};
 use super::results::{self, episodes_header, Results, ResultsError};
 use super::settings::Settings;
 use super::table::{key, Row, CELL_COLUMNS};
-use super::worker::{DONE_FILE, ERROR_FILE, SETTINGS_RECORD};
+use super::worker::DONE_FILE;
 use crate::episode::output::{TIMING_COLUMNS, VEHICLE_COLUMNS};
-
-/// Directory of the per-episode files below a campaign directory.
-pub const EPISODES_DIR: &str = "episodes";
-
-/// A cell's directory: `<out>/episodes/<planner>/a<α>_l<λ>_s<seed>`.
-pub fn cell_dir(out: &Path, cell: &Cell) -> PathBuf {
-    out.join(EPISODES_DIR).join(cell.dir_name())
-}
-
-/// Has this cell's episode finished, as the campaign `settings` would run it?
-pub fn is_done(out: &Path, settings: &Settings, cell: &Cell) -> bool {
-    matches!(cell_state(out, settings, cell), CellState::Done(_))
-}
 
 /// A finished cell's files as read by the check, for the collection to gather.
 #[derive(Debug, Clone, PartialEq)]
@@ -42,85 +33,36 @@ pub struct Finished {
     pub timing: Vec<csv::StringRecord>,
 }
 
-/// Where a cell stands.
-#[derive(Debug, Clone, PartialEq)]
-pub enum CellState {
-    /// Finished, with its files.
-    Done(Finished),
-    /// No `episode.csv`: not run, or stopped before it was written.
-    NotRun,
-    /// An `episode.csv` is there but the cell is not finished as this campaign's: why.
-    Stale(String),
-}
-
 /// Where `cell` of the campaign `settings` stands in `out`.
-pub fn cell_state(out: &Path, settings: &Settings, cell: &Cell) -> CellState {
-    let dir = cell_dir(out, cell);
-    if !dir.join(DONE_FILE).exists() {
-        return CellState::NotRun;
-    }
-    match finished_row(&dir, settings, cell) {
-        Ok(row) => CellState::Done(row),
-        Err(why) => CellState::Stale(why),
-    }
+pub fn cell_state(out: &Path, settings: &Settings, cell: &Cell) -> CellState<Finished> {
+    CellState::of(&cell_dir(out, cell), |dir| {
+        finished_row(dir, settings, cell)
+    })
 }
 
 /// The files of `cell` in `dir` if they are whole and this campaign's; otherwise what is
 /// wrong.
 fn finished_row(dir: &Path, settings: &Settings, cell: &Cell) -> Result<Finished, String> {
     let header = episodes_header();
-    let rows = results::read_records(&dir.join(DONE_FILE), &header).map_err(|e| e.to_string())?;
-    let [row] = rows.as_slice() else {
-        return Err(format!("{DONE_FILE} holds {} rows, not 1", rows.len()));
-    };
-    if results::cell_of(row).map(|c| key(&c)) != Ok(key(cell)) {
+    let row = episode_row(dir, &header)?;
+    if results::cell_of(&row).map(|c| key(&c)) != Ok(key(cell)) {
         return Err(format!("{DONE_FILE} belongs to another cell"));
     }
-    let column = |name: &str| {
-        let i = header.iter().position(|c| c == name);
-        i.and_then(|i| row.get(i)).unwrap_or("").to_string()
-    };
-    let steps = settings.config.scenario.steps.to_string();
-    if column("steps") != steps {
-        let found = column("steps");
-        return Err(format!(
-            "{DONE_FILE} has steps {found}, the campaign {steps}"
-        ));
-    }
-    let version = crate::sumo::version::BUILT;
-    if column("sumo_version") != version {
-        let found = column("sumo_version");
-        return Err(format!("SUMO {found} ran it, this is SUMO {version}"));
-    }
-    let vehicles = rows_counted(dir, "vehicles.csv", &VEHICLE_COLUMNS, &column("scheduled"))?;
-    let timing = rows_counted(dir, "timing.csv", &TIMING_COLUMNS, "1")?;
-    let recorded = crate::io::bounded::read_text(
-        &dir.join(SETTINGS_RECORD),
-        crate::io::bounded::FileKind::Config,
-    )
-    .map_err(|_| format!("{SETTINGS_RECORD} is missing or unreadable"))?;
-    if recorded != results_settings(&settings.episode_config(cell)) {
-        return Err(format!("{SETTINGS_RECORD} records other settings"));
-    }
+    let column = |name: &str| column_value(&header, &row, name);
+    check_run(column, settings.config.scenario.steps)?;
+    let vehicles = rows_counted(
+        dir,
+        "vehicles.csv",
+        &strings(&VEHICLE_COLUMNS),
+        column("scheduled"),
+    )?;
+    let timing = rows_counted(dir, "timing.csv", &strings(&TIMING_COLUMNS), 1)?;
+    check_settings_record(dir, &settings.episode_config(cell))?;
     Ok(Finished {
-        row: row.clone(),
+        row,
         vehicles,
         timing,
     })
-}
-
-/// The rows of the cell's `name`, read with `cols`, if there are `expected` of them.
-fn rows_counted(
-    dir: &Path,
-    name: &str,
-    cols: &[&str],
-    expected: &str,
-) -> Result<Vec<csv::StringRecord>, String> {
-    let rows = results::read_records(&dir.join(name), &strings(cols)).map_err(|e| e.to_string())?;
-    if rows.len().to_string() != expected {
-        return Err(format!("{name} has {} rows, not {expected}", rows.len()));
-    }
-    Ok(rows)
 }
 
 /// The episodes `out`'s `episodes.csv` records that a collection for `grid` would leave out:
@@ -153,7 +95,6 @@ pub fn collect(out: &Path, settings: &Settings) -> Result<Results, ResultsError>
         ..Results::default()
     };
     for (position, cell) in grid.cells().into_iter().enumerate() {
-        let dir = cell_dir(out, &cell);
         if let CellState::Done(done) = cell_state(out, settings, &cell) {
             // The cell columns exactly as the episode wrote them.
             let lead: Vec<&str> = done.row.iter().take(CELL_COLUMNS.len()).collect();
@@ -175,12 +116,7 @@ pub fn collect(out: &Path, settings: &Settings) -> Result<Results, ResultsError>
                 }
             }
         } else if shard.contains(position) {
-            let error = crate::io::bounded::read_text(
-                &dir.join(ERROR_FILE),
-                crate::io::bounded::FileKind::Data,
-            )
-            .map(|s| s.trim().to_string())
-            .unwrap_or_else(|_| "not run".into());
+            let error = failure_of(&cell_dir(out, &cell));
             let mut fields = csv::StringRecord::new();
             fields.push_field(&cell.planner);
             fields.push_field(&cell.alpha.to_string());

@@ -1,10 +1,17 @@
 //! Which settings decide an episode's results, and where two sets of settings first differ:
-//! what lets campaigns share a directory, and what a finished cell must have run with.
+//! what lets campaigns share a directory (their `campaign.toml`), and what a finished cell must
+//! have run with.
+
+use serde::Serialize;
 
 use crate::config::Config;
 
 /// Scenario keys a campaign sets itself, per cell.
 pub(super) const PER_CELL_KEYS: [&str; 5] = ["alpha", "lambda", "seed", "steps", "sumocfg"];
+
+/// The keys of either kind of `[campaign]` table that change what a cell runs, in the order
+/// they are compared; the others add cells (the axes) or change only how cells are run.
+const RUN_KEYS: [&str; 2] = ["steps", "sumo_version"];
 
 /// The configuration without how SUMO is watched (its console output, sumo-gui, the stall
 /// bound), which does not change what SUMO computes.
@@ -47,6 +54,36 @@ pub(super) fn scenario_table(config: &Config) -> toml::Table {
         }
     }
     doc
+}
+
+/// A campaign's `campaign.toml`: the `comment` line, then the shared settings of `config` and
+/// the `[campaign]` `table` (either kind, without what does not change results), so that
+/// feeding it back with `--config` reproduces the campaign.
+pub(super) fn campaign_file(comment: &str, table: &impl Serialize, config: &Config) -> String {
+    let mut doc = scenario_table(config);
+    doc.insert(
+        "campaign".into(),
+        toml::Value::try_from(table).expect("campaign table serialises"),
+    );
+    format!(
+        "{comment}\n{}",
+        toml::to_string_pretty(&doc).expect("campaign file serialises")
+    )
+}
+
+/// The first setting, dotted, in which two campaigns of either kind (each its configuration
+/// and `[campaign]` table) run a cell differently: a shared setting, else one of [`RUN_KEYS`].
+/// Campaigns that agree may share a directory, whatever their grids.
+pub(super) fn run_difference<T: Serialize>(a: (&Config, &T), b: (&Config, &T)) -> Option<String> {
+    let shared = |c: &Config| toml::Value::Table(scenario_table(&unwatched(c)));
+    first_difference(&shared(a.0), &shared(b.0), "").or_else(|| {
+        let table = |t: &T| toml::Value::try_from(t).expect("campaign table serialises");
+        let (x, y) = (table(a.1), table(b.1));
+        RUN_KEYS
+            .iter()
+            .find(|k| x.get(**k) != y.get(**k))
+            .map(|k| format!("campaign.{k}"))
+    })
 }
 
 /// The first dotted key in which `a` and `b` differ, if any.

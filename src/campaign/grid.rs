@@ -9,6 +9,7 @@ use std::fmt;
 use std::path::PathBuf;
 use std::str::FromStr;
 
+use super::cell::GridCell;
 use crate::config::hdv::DEFAULT_PROFILE;
 
 /// One episode of the grid.
@@ -26,18 +27,22 @@ pub struct Cell {
     pub hdv_profile: String,
 }
 
-impl Cell {
+impl GridCell for Cell {
     /// The cell's directory below `<out>/episodes/`: `<planner>/a<α>_l<λ>_s<seed>` for the
     /// default drivers, `<planner>/hdv-<profile>/a<α>_l<λ>_s<seed>` for others.
     ///
     /// α and λ use Rust's shortest round-trip formatting, the same as `episode.csv`, so the name
     /// is stable and reads like the values (`a0.4_l2500_s3`).
-    pub fn dir_name(&self) -> PathBuf {
+    fn dir_name(&self) -> PathBuf {
         let mut dir = PathBuf::from(&self.planner);
         if self.hdv_profile != DEFAULT_PROFILE {
             dir.push(format!("hdv-{}", self.hdv_profile));
         }
         dir.join(format!("a{}_l{}_s{}", self.alpha, self.lambda, self.seed))
+    }
+
+    fn planner(&self) -> &str {
+        &self.planner
     }
 }
 
@@ -73,7 +78,7 @@ pub struct Grid {
 }
 
 /// The names in their first-seen order, each once.
-fn unique(names: &[String]) -> Vec<String> {
+pub(super) fn unique(names: &[String]) -> Vec<String> {
     let mut out: Vec<String> = Vec::new();
     for n in names {
         if !out.contains(n) {
@@ -83,10 +88,16 @@ fn unique(names: &[String]) -> Vec<String> {
     out
 }
 
-fn sorted_unique(mut xs: Vec<f64>) -> Vec<f64> {
+/// The values ascending, each once.
+pub(super) fn sorted_unique(mut xs: Vec<f64>) -> Vec<f64> {
     xs.sort_by(f64::total_cmp);
     xs.dedup_by(|a, b| a == b);
     xs
+}
+
+/// `seeds` consecutive seeds from `seed_base` (saturating at the largest seed).
+pub(super) fn seed_range(seed_base: u64, seeds: u64) -> Vec<u64> {
+    (0..seeds).map(|i| seed_base.saturating_add(i)).collect()
 }
 
 impl Grid {
@@ -104,7 +115,7 @@ impl Grid {
             profiles: vec![DEFAULT_PROFILE.to_string()],
             alphas: sorted_unique(alphas.to_vec()),
             lambdas: sorted_unique(lambdas.to_vec()),
-            seeds: (0..seeds).map(|i| seed_base.saturating_add(i)).collect(),
+            seeds: seed_range(seed_base, seeds),
         }
     }
 

@@ -15,10 +15,12 @@
 //!
 //! Modules: [`grid`] (cells, order, shards), [`settings`] (file and flags), [`claim`] (one
 //! set of settings per directory at a time), [`worker`] and
-//! [`pool`] (the two ends of the worker processes), [`collect`] (resume state, gathering),
+//! [`pool`] (the two ends of the worker processes), [`cell`] (a cell's files, either kind of
+//! campaign), [`collect`] (resume state, gathering),
 //! [`results`] (the collected files), [`tasks`] (the same run for other schedulers),
 //! [`scenarios`] (the grid over scenarios of the user's own, `--sumocfg`).
 
+pub mod cell;
 mod checks;
 pub mod claim;
 pub mod collect;

@@ -28,10 +28,10 @@ use serde::{Deserialize, Serialize};
 
 pub use super::checks::SettingsError;
 use super::checks::{
-    at_least_one, check_planners, check_values, episode_timeout, origin, parse_list, read_doc,
-    read_parts, worker_count,
+    check_planners_and_alphas, check_seeds_and_steps, check_values, episode_timeout, origin,
+    parse_list, read_doc, read_parts, shard_of, worker_count,
 };
-use super::comparison::{first_difference, scenario_table, unwatched};
+use super::comparison::{campaign_file, run_difference};
 use super::grid::{Cell, Grid, Shard};
 use crate::config::{Config, ConfigError, TrajectoryFormat};
 use crate::controller::PLANNERS;
@@ -191,10 +191,7 @@ impl Settings {
         // A record of the SUMO that runs, not a choice: a file written by another SUMO runs
         // on this one (and says so in the new campaign.toml).
         table.sumo_version = crate::sumo::version::BUILT.to_string();
-        let shard = match &o.shard {
-            Some(s) => s.parse()?,
-            None => Shard::ALL,
-        };
+        let shard = shard_of(o)?;
         check_table(&table, o, file)?;
         let workers = worker_count(table.workers, o.workers.is_some(), file)?;
         let episode_timeout =
@@ -240,17 +237,15 @@ impl Settings {
     /// the worker count or shard, which do not change results. Feeding it back with `--config`
     /// reproduces the campaign.
     pub fn to_toml(&self) -> String {
-        let mut table = self.table.clone();
-        table.workers = None;
-        table.episode_timeout = None;
-        let mut doc = scenario_table(&self.config);
-        doc.insert(
-            "campaign".into(),
-            toml::Value::try_from(&table).expect("campaign table serialises"),
-        );
-        format!(
-            "# bkpbs campaign settings; rerun with: bkpbs campaign --config campaign.toml --out DIR\n{}",
-            toml::to_string_pretty(&doc).expect("campaign file serialises")
+        let table = CampaignTable {
+            workers: None,
+            episode_timeout: None,
+            ..self.table.clone()
+        };
+        campaign_file(
+            "# bkpbs campaign settings; rerun with: bkpbs campaign --config campaign.toml --out DIR",
+            &table,
+            &self.config,
         )
     }
 
@@ -267,17 +262,7 @@ impl Settings {
     /// The first scenario setting (dotted key) in which two campaigns' episodes differ, if any:
     /// campaigns that agree here may share a results directory.
     pub fn scenario_difference(&self, other: &Settings) -> Option<String> {
-        let (a, b) = (unwatched(&self.config), unwatched(&other.config));
-        first_difference(
-            &toml::Value::Table(scenario_table(&a)),
-            &toml::Value::Table(scenario_table(&b)),
-            "",
-        )
-        .or_else(|| (self.table.steps != other.table.steps).then(|| "campaign.steps".into()))
-        .or_else(|| {
-            (self.table.sumo_version != other.table.sumo_version)
-                .then(|| "campaign.sumo_version".into())
-        })
+        run_difference((&self.config, &self.table), (&other.config, &other.table))
     }
 }
 
@@ -288,17 +273,7 @@ fn check_table(
     o: &Overrides,
     file: Option<&Path>,
 ) -> Result<(), SettingsError> {
-    check_planners(
-        &table.planners,
-        origin(o.planners.is_some(), "--planners", "planners", file),
-    )?;
-    check_values(
-        &origin(o.alphas.is_some(), "--alphas", "alphas", file),
-        "α",
-        &table.alphas,
-        |a| (0.0..=1.0).contains(&a),
-        "must lie in [0, 1]",
-    )?;
+    check_planners_and_alphas(&table.planners, &table.alphas, o, file)?;
     check_values(
         &origin(o.lambdas.is_some(), "--lambdas", "lambdas", file),
         "λ",
@@ -306,16 +281,7 @@ fn check_table(
         |l| l > 0.0 && l.is_finite(),
         "must be a positive rate in veh/h",
     )?;
-    at_least_one(
-        origin(o.seeds.is_some(), "--seeds", "seeds", file),
-        "seed count",
-        table.seeds,
-    )?;
-    at_least_one(
-        origin(o.steps.is_some(), "--steps", "steps", file),
-        "steps",
-        table.steps.into(),
-    )
+    check_seeds_and_steps(table.seeds, Some(table.steps), o, file)
 }
 
 /// Every (α, λ) of the grid must make a valid episode configuration, so that no cell fails on

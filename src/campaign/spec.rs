@@ -3,10 +3,10 @@
 //! ([`super::scenarios::ScenarioSettings`]). The claim, the resume check, the preparation of
 //! the requests, the run and the collection are written once, over this trait.
 
-use std::fmt;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::time::Duration;
 
+use super::cell::{CellState, GridCell};
 use super::grid::Shard;
 use super::{CampaignError, SettingsError};
 use crate::config::Config;
@@ -22,6 +22,17 @@ pub enum Readiness {
     Stale(String),
 }
 
+impl<F> From<CellState<F>> for Readiness {
+    /// The state without the finished cell's files, which the resume check does not need.
+    fn from(state: CellState<F>) -> Readiness {
+        match state {
+            CellState::Done(_) => Readiness::Done,
+            CellState::NotRun => Readiness::NotRun,
+            CellState::Stale(why) => Readiness::Stale(why),
+        }
+    }
+}
+
 /// How many rows a collection gathered.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Collected {
@@ -33,8 +44,8 @@ pub struct Collected {
 
 /// A campaign's validated settings, as the one runner uses them.
 pub trait CampaignSpec {
-    /// One episode of the grid, displayed as the status lines name it.
-    type Cell: fmt::Display;
+    /// One episode of the grid: its directory, its planner, its name in the status lines.
+    type Cell: GridCell;
 
     /// Every cell, in grid order (the order of every collected file).
     fn cells(&self) -> Vec<Self::Cell>;
@@ -57,12 +68,8 @@ pub trait CampaignSpec {
     /// The episodes `out`'s collected `episodes.csv` records outside this grid, as cells are
     /// displayed.
     fn recorded_outside(&self, out: &Path) -> Vec<String>;
-    /// The directory of `cell`'s files below `out`.
-    fn cell_dir(&self, out: &Path, cell: &Self::Cell) -> PathBuf;
     /// Where `cell` stands in `out`.
     fn readiness(&self, out: &Path, cell: &Self::Cell) -> Readiness;
-    /// The planner `cell` runs.
-    fn planner<'a>(&self, cell: &'a Self::Cell) -> &'a str;
     /// The full configuration `cell`'s episode runs with.
     fn episode_config(&self, cell: &Self::Cell) -> Config;
     /// Gathers the finished cells found in `out` into its collected files.
@@ -73,21 +80,30 @@ pub trait CampaignSpec {
     fn collect(&self, out: &Path) -> Result<Collected, CampaignError>;
 }
 
+/// The getters both settings types answer from their fields of the same names (`grid`,
+/// `shard`, `workers`, `episode_timeout`), written once.
+macro_rules! run_fields {
+    () => {
+        fn cells(&self) -> Vec<Self::Cell> {
+            self.grid.cells()
+        }
+        fn shard(&self) -> Shard {
+            self.shard
+        }
+        fn workers(&self) -> usize {
+            self.workers
+        }
+        fn episode_timeout(&self) -> Option<Duration> {
+            self.episode_timeout
+        }
+    };
+}
+
 impl CampaignSpec for super::Settings {
     type Cell = super::grid::Cell;
 
-    fn cells(&self) -> Vec<Self::Cell> {
-        self.grid.cells()
-    }
-    fn shard(&self) -> Shard {
-        self.shard
-    }
-    fn workers(&self) -> usize {
-        self.workers
-    }
-    fn episode_timeout(&self) -> Option<Duration> {
-        self.episode_timeout
-    }
+    run_fields!();
+
     fn axes(&self) -> String {
         let g = &self.grid;
         let profiles = match g.profiles.len() {
@@ -113,19 +129,8 @@ impl CampaignSpec for super::Settings {
         let cells = super::collect::recorded_outside(out, &self.grid);
         cells.iter().map(ToString::to_string).collect()
     }
-    fn cell_dir(&self, out: &Path, cell: &Self::Cell) -> PathBuf {
-        super::collect::cell_dir(out, cell)
-    }
     fn readiness(&self, out: &Path, cell: &Self::Cell) -> Readiness {
-        use super::collect::CellState;
-        match super::collect::cell_state(out, self, cell) {
-            CellState::Done(_) => Readiness::Done,
-            CellState::NotRun => Readiness::NotRun,
-            CellState::Stale(why) => Readiness::Stale(why),
-        }
-    }
-    fn planner<'a>(&self, cell: &'a Self::Cell) -> &'a str {
-        &cell.planner
+        super::collect::cell_state(out, self, cell).into()
     }
     fn episode_config(&self, cell: &Self::Cell) -> Config {
         super::Settings::episode_config(self, cell)
@@ -143,18 +148,8 @@ impl CampaignSpec for super::Settings {
 impl CampaignSpec for super::scenarios::ScenarioSettings {
     type Cell = super::scenarios::ScenarioCell;
 
-    fn cells(&self) -> Vec<Self::Cell> {
-        self.grid.cells()
-    }
-    fn shard(&self) -> Shard {
-        self.shard
-    }
-    fn workers(&self) -> usize {
-        self.workers
-    }
-    fn episode_timeout(&self) -> Option<Duration> {
-        self.episode_timeout
-    }
+    run_fields!();
+
     fn axes(&self) -> String {
         let g = &self.grid;
         format!(
@@ -175,19 +170,8 @@ impl CampaignSpec for super::scenarios::ScenarioSettings {
     fn recorded_outside(&self, out: &Path) -> Vec<String> {
         super::scenarios::collect::recorded_outside(out, &self.grid)
     }
-    fn cell_dir(&self, out: &Path, cell: &Self::Cell) -> PathBuf {
-        super::scenarios::collect::cell_dir(out, cell)
-    }
     fn readiness(&self, out: &Path, cell: &Self::Cell) -> Readiness {
-        use super::scenarios::collect::CellState;
-        match super::scenarios::collect::cell_state(out, self, cell) {
-            CellState::Done(_) => Readiness::Done,
-            CellState::NotRun => Readiness::NotRun,
-            CellState::Stale(why) => Readiness::Stale(why),
-        }
-    }
-    fn planner<'a>(&self, cell: &'a Self::Cell) -> &'a str {
-        &cell.planner
+        super::scenarios::collect::cell_state(out, self, cell).into()
     }
     fn episode_config(&self, cell: &Self::Cell) -> Config {
         super::scenarios::ScenarioSettings::episode_config(self, cell)

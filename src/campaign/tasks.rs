@@ -8,6 +8,7 @@
 use std::path::Path;
 use std::sync::Arc;
 
+use super::cell::{cell_dir, GridCell};
 use super::claim::{self, Claim};
 use super::spec::{CampaignSpec, Readiness};
 use super::worker::{self, Outcome, Request};
@@ -53,8 +54,8 @@ pub fn prepare<S: CampaignSpec>(settings: &S, out: &Path) -> Result<Plan, Campai
         }
         requests.push(Request {
             position,
-            planner: settings.planner(cell).to_string(),
-            dir: settings.cell_dir(out, cell),
+            planner: cell.planner().to_string(),
+            dir: cell_dir(out, cell),
             config: settings.episode_config(cell),
         });
     }

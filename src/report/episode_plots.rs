@@ -8,6 +8,8 @@ use super::explain::{self, ExplainError};
 use super::lane_tracks::{self, TracksError};
 use super::plot::PlotError;
 use super::timespace::{LaneFigure, View};
+use crate::campaign::cell::cell_dir;
+use crate::campaign::{CampaignSpec, Readiness};
 use crate::episode::trace::TRACE_FILE;
 use crate::io::{write_atomic, WriteError};
 
@@ -176,6 +178,18 @@ pub struct CellPlots {
     pub without_trajectories: usize,
 }
 
+/// The directories of the finished cells of this run's shard of either kind of campaign, in
+/// grid order.
+fn finished_dirs<S: CampaignSpec>(out: &Path, settings: &S) -> Vec<PathBuf> {
+    let shard = settings.shard();
+    let cells = settings.cells();
+    let finished = cells
+        .iter()
+        .enumerate()
+        .filter(|(i, c)| shard.contains(*i) && settings.readiness(out, c) == Readiness::Done);
+    finished.map(|(_, c)| cell_dir(out, c)).collect()
+}
+
 /// Draws the figures of every finished cell of a campaign run over scenarios of the user's own
 /// (its shard), each region's in its trajectory directory (`trajectories/<region>/`), in
 /// parallel.
@@ -183,18 +197,8 @@ pub fn plot_scenario_cells(
     out: &Path,
     settings: &crate::campaign::scenarios::ScenarioSettings,
 ) -> Result<CellPlots, EpisodePlotError> {
-    use crate::campaign::scenarios::collect::{cell_dir, cell_state, CellState};
     use rayon::prelude::*;
-    let cells = settings.grid.cells();
-    let finished: Vec<PathBuf> = cells
-        .iter()
-        .enumerate()
-        .filter(|(i, c)| {
-            settings.shard.contains(*i)
-                && matches!(cell_state(out, settings, c), CellState::Done(_))
-        })
-        .map(|(_, c)| cell_dir(out, c))
-        .collect();
+    let finished = finished_dirs(out, settings);
     let mut summary = CellPlots::default();
     let mut regions = Vec::new();
     for dir in &finished {
@@ -218,15 +222,7 @@ pub fn plot_cells(
     settings: &crate::campaign::Settings,
 ) -> Result<CellPlots, EpisodePlotError> {
     use rayon::prelude::*;
-    let cells = settings.grid.cells();
-    let dirs: Vec<PathBuf> = cells
-        .iter()
-        .enumerate()
-        .filter(|(i, c)| {
-            settings.shard.contains(*i) && crate::campaign::collect::is_done(out, settings, c)
-        })
-        .map(|(_, c)| crate::campaign::collect::cell_dir(out, c))
-        .collect();
+    let dirs = finished_dirs(out, settings);
     let results: Vec<Result<bool, EpisodePlotError>> = dirs
         .par_iter()
         .map(|d| match plot_dir(d) {

@@ -14,22 +14,20 @@ use std::path::{Path, PathBuf};
 
 use super::grid::{ScenarioCell, ScenarioGrid};
 use super::settings::ScenarioSettings;
-use crate::campaign::collect::EPISODES_DIR;
-use crate::campaign::comparison::results_settings;
+pub use crate::campaign::cell::cell_dir;
+use crate::campaign::cell::{
+    check_run, check_settings_record, column_value, episode_row, failure_of, rows_counted,
+    CellState,
+};
 use crate::campaign::results::{read_records, ResultsError};
 use crate::campaign::validate::{check_rows, Rules};
-use crate::campaign::worker::{DONE_FILE, ERROR_FILE, SETTINGS_RECORD};
+use crate::campaign::worker::DONE_FILE;
 use crate::episode::output::TIMING_COLUMNS;
 use crate::episode::sumocfg::{RegionRow, ScenarioSummary, ScenarioVehicle};
 use crate::io::WriteError;
 
 /// The columns that lead the collected vehicle and timing rows.
 pub const CELL_COLUMNS: [&str; 4] = ["scenario", "planner", "alpha", "seed"];
-
-/// A cell's directory: `<out>/episodes/<planner>/<scenario>/a<α>_s<seed>`.
-pub fn cell_dir(out: &Path, cell: &ScenarioCell) -> PathBuf {
-    out.join(EPISODES_DIR).join(cell.dir_name())
-}
 
 /// The header `T`'s rows are written with.
 pub fn header_of<T: serde::Serialize + Default>() -> Vec<String> {
@@ -56,45 +54,28 @@ pub struct Finished {
     pub timing: Vec<csv::StringRecord>,
 }
 
-/// Where a cell stands.
-#[derive(Debug, Clone, PartialEq)]
-pub enum CellState {
-    /// Finished, with its files.
-    Done(Box<Finished>),
-    /// No `episode.csv`.
-    NotRun,
-    /// An `episode.csv` that is not this campaign's finished cell: why.
-    Stale(String),
-}
-
 /// Where `cell` stands in `out`.
-pub fn cell_state(out: &Path, settings: &ScenarioSettings, cell: &ScenarioCell) -> CellState {
-    let dir = cell_dir(out, cell);
-    if !dir.join(DONE_FILE).exists() {
-        return CellState::NotRun;
-    }
-    match finished(&dir, settings, cell) {
-        Ok(f) => CellState::Done(Box::new(f)),
-        Err(why) => CellState::Stale(why),
-    }
+pub fn cell_state(
+    out: &Path,
+    settings: &ScenarioSettings,
+    cell: &ScenarioCell,
+) -> CellState<Finished> {
+    CellState::of(&cell_dir(out, cell), |dir| finished(dir, settings, cell))
 }
 
+/// The files of `cell` in `dir` if they are whole and this campaign's; otherwise what is
+/// wrong.
 fn finished(
     dir: &Path,
     settings: &ScenarioSettings,
     cell: &ScenarioCell,
 ) -> Result<Finished, String> {
     let header = header_of::<ScenarioSummary>();
-    let rows = read_records(&dir.join(DONE_FILE), &header).map_err(|e| e.to_string())?;
-    let [row] = rows.as_slice() else {
-        return Err(format!("{DONE_FILE} holds {} rows, not 1", rows.len()));
-    };
-    let column = |name: &str| {
-        let i = header.iter().position(|c| c == name);
-        i.and_then(|i| row.get(i)).unwrap_or("").to_string()
-    };
+    let row = episode_row(dir, &header)?;
+    let column = |name: &str| column_value(&header, &row, name);
     let config = settings.episode_config(cell);
-    is_this_cell(&column, cell, config.scenario.steps)?;
+    is_this_cell(&column, cell)?;
+    check_run(column, config.scenario.steps)?;
     let regions = match column("regions") {
         r if r.is_empty() => 0,
         r => r.split("; ").count(),
@@ -109,28 +90,17 @@ fn finished(
     let region_rows = rows_counted(dir, "regions.csv", &header_of::<RegionRow>(), regions)?;
     let timing_header: Vec<String> = TIMING_COLUMNS.iter().map(|s| s.to_string()).collect();
     let timing = rows_counted(dir, "timing.csv", &timing_header, 1)?;
-    let recorded = crate::io::bounded::read_text(
-        &dir.join(SETTINGS_RECORD),
-        crate::io::bounded::FileKind::Config,
-    )
-    .map_err(|_| format!("{SETTINGS_RECORD} is missing or unreadable"))?;
-    if recorded != results_settings(&config) {
-        return Err(format!("{SETTINGS_RECORD} records other settings"));
-    }
+    check_settings_record(dir, &config)?;
     Ok(Finished {
-        episode: row.clone(),
+        episode: row,
         regions: region_rows,
         vehicles,
         timing,
     })
 }
 
-/// Does the `episode.csv` row (its `column`s) belong to `cell`, run for `steps` by this SUMO?
-fn is_this_cell(
-    column: &dyn Fn(&str) -> String,
-    cell: &ScenarioCell,
-    steps: u32,
-) -> Result<(), String> {
+/// Does the `episode.csv` row (its `column`s) belong to `cell`?
+fn is_this_cell(column: &dyn Fn(&str) -> String, cell: &ScenarioCell) -> Result<(), String> {
     let own = [
         ("scenario", file_name(cell)),
         ("planner", cell.planner.clone()),
@@ -140,36 +110,12 @@ fn is_this_cell(
     if own.iter().any(|(name, value)| column(name) != *value) {
         return Err(format!("{DONE_FILE} belongs to another cell"));
     }
-    if column("steps") != steps.to_string() {
-        let found = column("steps");
-        return Err(format!(
-            "{DONE_FILE} has steps {found}, the campaign {steps}"
-        ));
-    }
-    let version = crate::sumo::version::BUILT;
-    if column("sumo_version") != version {
-        let found = column("sumo_version");
-        return Err(format!("SUMO {found} ran it, this is SUMO {version}"));
-    }
     Ok(())
 }
 
 /// The cell's configuration file name, as `episode.csv` names its scenario.
 fn file_name(cell: &ScenarioCell) -> String {
     super::grid::file_name_of(&cell.sumocfg)
-}
-
-fn rows_counted(
-    dir: &Path,
-    name: &str,
-    header: &[String],
-    expected: usize,
-) -> Result<Vec<csv::StringRecord>, String> {
-    let rows = read_records(&dir.join(name), header).map_err(|e| e.to_string())?;
-    if rows.len() != expected {
-        return Err(format!("{name} has {} rows, not {expected}", rows.len()));
-    }
-    Ok(rows)
 }
 
 /// The episodes `out`'s collected `episodes.csv` records outside `grid` (a larger grid run
@@ -272,12 +218,7 @@ pub fn collect(out: &Path, settings: &ScenarioSettings) -> ScenarioResults {
                 }
             }
             _ if settings.shard.contains(position) => {
-                let error = crate::io::bounded::read_text(
-                    &cell_dir(out, cell).join(ERROR_FILE),
-                    crate::io::bounded::FileKind::Data,
-                )
-                .map(|s| s.trim().to_string())
-                .unwrap_or_else(|_| "not run".into());
+                let error = failure_of(&cell_dir(out, cell));
                 let [scenario, planner, alpha, seed] = lead;
                 res.failures.push(csv::StringRecord::from(vec![
                     planner, scenario, alpha, seed, error,

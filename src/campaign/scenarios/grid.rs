@@ -5,6 +5,8 @@
 use std::fmt;
 use std::path::{Path, PathBuf};
 
+use crate::campaign::cell::GridCell;
+
 /// One episode of the grid.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ScenarioCell {
@@ -38,13 +40,19 @@ impl ScenarioCell {
     pub fn scenario(&self) -> String {
         scenario_name(&self.sumocfg)
     }
+}
 
+impl GridCell for ScenarioCell {
     /// The cell's directory below `<out>/episodes/`: `<planner>/<scenario>/a<α>_s<seed>` (α in
     /// Rust's shortest round-trip form, as `episode.csv` writes it).
-    pub fn dir_name(&self) -> PathBuf {
+    fn dir_name(&self) -> PathBuf {
         PathBuf::from(&self.planner)
             .join(self.scenario())
             .join(format!("a{}_s{}", self.alpha, self.seed))
+    }
+
+    fn planner(&self) -> &str {
+        &self.planner
     }
 }
 

@@ -21,11 +21,11 @@ use serde::{Deserialize, Serialize};
 
 use super::grid::{scenario_name, ScenarioCell, ScenarioGrid};
 use crate::campaign::checks::{
-    at_least_one, check_planners, check_values, episode_timeout, origin, parse_list, read_doc,
-    read_parts, worker_count,
+    check_planners_and_alphas, check_seeds_and_steps, episode_timeout, origin, parse_list,
+    read_doc, read_parts, shard_of, worker_count,
 };
-use crate::campaign::comparison::{first_difference, scenario_table, unwatched};
-use crate::campaign::grid::Shard;
+use crate::campaign::comparison::{campaign_file, run_difference};
+use crate::campaign::grid::{seed_range, sorted_unique, unique, Shard};
 use crate::campaign::settings::{CampaignTable, Overrides, SettingsError};
 use crate::config::Config;
 use crate::sumo::sumocfg::SumoConfig;
@@ -179,10 +179,7 @@ impl ScenarioSettings {
             config.output.trajectories = format;
         }
         apply_overrides(&mut table, o)?;
-        let shard = match &o.shard {
-            Some(s) => s.parse()?,
-            None => Shard::ALL,
-        };
+        let shard = shard_of(o)?;
         let workers = worker_count(table.workers, o.workers.is_some(), file)?;
         let timeout = episode_timeout(table.episode_timeout, o.episode_timeout.is_some(), file)?;
         let grid = checked_grid(&table, o, file)?;
@@ -216,17 +213,15 @@ impl ScenarioSettings {
     /// `campaign.toml`: the shared settings and the table (without workers and timeout, which
     /// do not change results).
     pub fn to_toml(&self) -> String {
-        let mut table = self.table.clone();
-        table.workers = None;
-        table.episode_timeout = None;
-        let mut doc = scenario_table(&self.config);
-        doc.insert(
-            "campaign".into(),
-            toml::Value::try_from(&table).expect("campaign table serialises"),
-        );
-        format!(
-            "# bkpbs campaign over scenarios; rerun with: bkpbs campaign --config campaign.toml --out DIR\n{}",
-            toml::to_string_pretty(&doc).expect("campaign file serialises")
+        let table = ScenarioTable {
+            workers: None,
+            episode_timeout: None,
+            ..self.table.clone()
+        };
+        campaign_file(
+            "# bkpbs campaign over scenarios; rerun with: bkpbs campaign --config campaign.toml --out DIR",
+            &table,
+            &self.config,
         )
     }
 
@@ -245,14 +240,10 @@ impl ScenarioSettings {
     /// The first setting, dotted, in which `earlier` runs a cell differently: the shared
     /// settings, the steps, the SUMO version. Other axes may differ: a grid may grow.
     pub fn difference(&self, earlier: &ScenarioSettings) -> Option<String> {
-        let table =
-            |s: &ScenarioSettings| toml::Value::Table(scenario_table(&unwatched(&s.config)));
-        first_difference(&table(self), &table(earlier), "")
-            .or_else(|| (self.table.steps != earlier.table.steps).then(|| "campaign.steps".into()))
-            .or_else(|| {
-                (self.table.sumo_version != earlier.table.sumo_version)
-                    .then(|| "campaign.sumo_version".into())
-            })
+        run_difference(
+            (&self.config, &self.table),
+            (&earlier.config, &earlier.table),
+        )
     }
 }
 
@@ -262,51 +253,19 @@ fn checked_grid(
     o: &Overrides,
     file: Option<&Path>,
 ) -> Result<ScenarioGrid, SettingsError> {
-    check_planners(
-        &t.planners,
-        origin(o.planners.is_some(), "--planners", "planners", file),
-    )?;
-    check_values(
-        &origin(o.alphas.is_some(), "--alphas", "alphas", file),
-        "α",
-        &t.alphas,
-        |a| (0.0..=1.0).contains(&a),
-        "must lie in [0, 1]",
-    )?;
-    at_least_one(
-        origin(o.seeds.is_some(), "--seeds", "seeds", file),
-        "seed count",
-        t.seeds,
-    )?;
-    if let Some(n) = t.steps {
-        at_least_one(
-            origin(o.steps.is_some(), "--steps", "steps", file),
-            "steps",
-            n.into(),
-        )?;
-    }
+    check_planners_and_alphas(&t.planners, &t.alphas, o, file)?;
+    check_seeds_and_steps(t.seeds, t.steps, o, file)?;
     let scenarios = unique_scenarios(&t.scenarios)?;
     if scenarios.is_empty() {
         return Err(SettingsError::Empty {
             origin: origin(o.sumocfg.is_some(), "--sumocfg", "scenarios", file),
         });
     }
-    let mut alphas = t.alphas.clone();
-    alphas.sort_by(f64::total_cmp);
-    alphas.dedup();
-    let mut planners: Vec<String> = Vec::new();
-    for p in &t.planners {
-        if !planners.contains(p) {
-            planners.push(p.clone());
-        }
-    }
     Ok(ScenarioGrid {
-        planners,
+        planners: unique(&t.planners),
         scenarios,
-        alphas,
-        seeds: (0..t.seeds)
-            .map(|i| t.seed_base.saturating_add(i))
-            .collect(),
+        alphas: sorted_unique(t.alphas.clone()),
+        seeds: seed_range(t.seed_base, t.seeds),
     })
 }
 
