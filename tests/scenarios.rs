@@ -442,3 +442,25 @@ fn vehicles_never_inserted_are_counted_as_sumo_counts_them() {
     );
     assert!(count("never_inserted_ramp") > 50, "{region:?}");
 }
+
+/// A region whose merge nobody used in the episode says so: 4 s of SUMO's `ramp` game bring no
+/// ramp vehicle into the weave.
+#[test]
+fn a_region_without_ramp_traffic_is_a_warning() {
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = game_copy(dir.path()).join("ramp.sumocfg");
+    let o = scenario(&cfg, "sumo", "20", &dir.path().join("short"));
+    common::assert_ok(&o);
+    let err = stderr(&o);
+    assert!(
+        err.contains("warning: region gneE7 received no vehicle from its on-ramp"),
+        "{err}"
+    );
+    let o = scenario(&cfg, "sumo", "600", &dir.path().join("long"));
+    common::assert_ok(&o);
+    assert!(
+        !stderr(&o).contains("received no vehicle"),
+        "{}",
+        stderr(&o)
+    );
+}

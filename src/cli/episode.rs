@@ -145,6 +145,13 @@ fn run_scenario(e: &Episode) -> Result<()> {
         secs(s.mean_region_delay_s)
     );
     println!("SUMO options bkpbs set: {}", r.sumo_options.join(" "));
+    for row in r.regions.iter().filter(|row| row.from_ramp == 0) {
+        eprintln!(
+            "warning: region {} received no vehicle from its on-ramp in this episode ({} never \
+             inserted were bound for it): its rows measure traffic past a merge nobody used",
+            row.region, row.never_inserted_ramp
+        );
+    }
     for (region, _) in &r.trajectories {
         let d = episode::sumocfg::region_dir(&e.out, region);
         println!(
