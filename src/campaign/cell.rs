@@ -7,6 +7,7 @@ use std::fmt;
 use std::path::{Path, PathBuf};
 
 use super::comparison::results_settings;
+pub use super::grid::GridCell;
 use super::results::read_records;
 use super::worker::{DONE_FILE, ERROR_FILE, SETTINGS_RECORD};
 use crate::config::Config;
@@ -14,14 +15,6 @@ use crate::io::bounded::{read_text, FileKind};
 
 /// Directory of the per-episode files below a campaign directory.
 pub const EPISODES_DIR: &str = "episodes";
-
-/// A cell of either grid, as the runner and the cell's files know it.
-pub trait GridCell: fmt::Display {
-    /// The cell's directory below `<out>/episodes/`.
-    fn dir_name(&self) -> PathBuf;
-    /// The controller the cell runs, as the CLI names it.
-    fn planner(&self) -> &str;
-}
 
 /// A cell's directory: `<out>/episodes/` and its [`GridCell::dir_name`].
 pub fn cell_dir(out: &Path, cell: &impl GridCell) -> PathBuf {

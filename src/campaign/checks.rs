@@ -8,7 +8,7 @@ use std::time::Duration;
 
 use super::comparison::PER_CELL_KEYS;
 use super::grid::{Shard, ShardError};
-use super::settings::Overrides;
+use super::overrides::Overrides;
 use crate::config::Config;
 use crate::config::ConfigError;
 use crate::controller::{PlannerKind, UnknownPlanner};

@@ -9,8 +9,15 @@ use std::fmt;
 use std::path::PathBuf;
 use std::str::FromStr;
 
-use super::cell::GridCell;
 use crate::config::hdv::DEFAULT_PROFILE;
+
+/// A cell of either grid, as the runner and the cell's files know it.
+pub trait GridCell: fmt::Display {
+    /// The cell's directory below `<out>/episodes/`.
+    fn dir_name(&self) -> PathBuf;
+    /// The controller the cell runs, as the CLI names it.
+    fn planner(&self) -> &str;
+}
 
 /// One episode of the grid.
 #[derive(Debug, Clone, PartialEq)]

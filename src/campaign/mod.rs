@@ -26,6 +26,7 @@ pub mod claim;
 pub mod collect;
 pub mod comparison;
 pub mod grid;
+pub mod overrides;
 #[doc(hidden)] // worker-process plumbing: the campaign runs it, a library user never does
 pub mod pool;
 pub mod results;

@@ -117,33 +117,7 @@ fn run_scenario(e: &Episode) -> Result<()> {
             e.out.display()
         )
     })?;
-    let s = &r.summary;
-    let secs = |x: Option<f64>| x.map_or("-".into(), |x| format!("{x:.2} s"));
-    let cfg = e.config.scenario.sumocfg.as_ref().expect("a scenario");
-    let cavs = if s.cav_types.is_empty() {
-        format!("α={}", s.alpha)
-    } else {
-        format!("CAVs of type {}", s.cav_types)
-    };
-    println!(
-        "{} {cavs} seed={} on {} (regions {}): inserted {} ({} CAVs, share {:.3}), never \
-         inserted {}, in a region {}, arrived {}, crashed {} (controllable {}), mean timeLoss {}, mean delay in \
-         its region {}",
-        s.planner,
-        s.seed,
-        cfg.display(),
-        s.regions,
-        s.inserted,
-        s.inserted_cav,
-        s.cav_share,
-        s.never_inserted,
-        s.in_region,
-        s.arrived,
-        s.crashed,
-        s.controllable_crashed,
-        secs(s.mean_time_loss_s),
-        secs(s.mean_region_delay_s)
-    );
+    print_scenario_summary(e, &r.summary);
     println!("SUMO options bkpbs set: {}", r.sumo_options.join(" "));
     for row in r.regions.iter().filter(|row| row.from_ramp == 0) {
         eprintln!(
@@ -170,6 +144,36 @@ fn run_scenario(e: &Episode) -> Result<()> {
     }
     println!("results: {}", e.out.join("episode.csv").display());
     Ok(())
+}
+
+/// The one-line summary of an episode on the user's scenario.
+fn print_scenario_summary(e: &Episode, s: &episode::sumocfg::ScenarioSummary) {
+    let secs = |x: Option<f64>| x.map_or("-".into(), |x| format!("{x:.2} s"));
+    let cfg = e.config.scenario.sumocfg.as_ref().expect("a scenario");
+    let cavs = if s.cav_types.is_empty() {
+        format!("α={}", s.alpha)
+    } else {
+        format!("CAVs of type {}", s.cav_types)
+    };
+    println!(
+        "{} {cavs} seed={} on {} (regions {}): inserted {} ({} CAVs, share {:.3}), never \
+         inserted {}, in a region {}, arrived {}, crashed {} (controllable {}), mean timeLoss {}, mean delay in \
+         its region {}",
+        s.planner,
+        s.seed,
+        cfg.display(),
+        s.regions,
+        s.inserted,
+        s.inserted_cav,
+        s.cav_share,
+        s.never_inserted,
+        s.in_region,
+        s.arrived,
+        s.crashed,
+        s.controllable_crashed,
+        secs(s.mean_time_loss_s),
+        secs(s.mean_region_delay_s)
+    );
 }
 
 /// Runs the episode, writes its files and prints its summary and where the files are.

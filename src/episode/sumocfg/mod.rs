@@ -20,6 +20,7 @@
 //! processes (`campaign::scenarios`).
 
 mod own_loop;
+mod passage;
 mod records;
 mod region;
 mod region_rows;

@@ -11,13 +11,14 @@ use crate::controller::PlanStats;
 use crate::episode::error::EpisodeError;
 use crate::episode::metrics::{CollisionEvent, Outcome, Timing};
 use crate::episode::step_times::StepTimes;
+use crate::episode::trajectories::TrajectoryFile;
 use crate::episode::Observer;
-use crate::model::kinematics::free_flow_time;
 use crate::model::road::MERGE_LANE;
 use crate::model::scene::{Kind, Limits, Origin, VehicleState};
 use crate::sumo::frame;
 use crate::sumo::{RawVehicleState, Simulation, SumoClient, SumoError, VehicleReadings};
 
+use super::passage::{enter, first_region_on, passage, Entry};
 use super::records::{self, ScenarioSummary, ScenarioVehicle};
 pub use super::region::Region;
 use super::region_rows::{region_rows, RegionRow};
@@ -42,21 +43,6 @@ struct Line {
     entry: Option<Entry>,
     /// The region whose planner commands it now.
     commanded: Option<usize>,
-}
-
-/// A vehicle's passage through the first region it entered.
-#[derive(Clone, Copy)]
-struct Entry {
-    region: usize,
-    origin: Origin,
-    /// Whether its route leaves the region before the region's end (by an off-ramp): the
-    /// planners keep a CAV on the carriageway, so SUMO drives it.
-    leaves_early: bool,
-    time: f64,
-    front: f64,
-    speed: f64,
-    /// Its last reading in the region: time and front.
-    last: (f64, f64),
 }
 
 /// The loop's state.
@@ -431,15 +417,8 @@ impl ScenarioRun {
         Ok(())
     }
 
-    /// The records with SUMO's trip figures and each vehicle's delay in its region, and the
-    /// summary.
-    pub fn finish(
-        mut self,
-        planner: &str,
-        tripinfo: &std::path::Path,
-        sumo_options: Vec<String>,
-    ) -> Result<ScenarioResult, String> {
-        let trips = records::read_trips(tripinfo)?;
+    /// Each region's trajectories and trace, taken out of it (region name, file).
+    fn take_region_files(&mut self) -> (Vec<(String, TrajectoryFile)>, Vec<(String, String)>) {
         let trajectories = self
             .regions
             .iter_mut()
@@ -450,8 +429,33 @@ impl ScenarioRun {
             .iter_mut()
             .filter_map(|r| Some((r.name.clone(), r.trace.take()?.text().to_string())))
             .collect();
-        let vehicles: Vec<ScenarioVehicle> = self
-            .lines
+        (trajectories, traces)
+    }
+
+    /// Adds each vehicle still waiting at the end to the row of the region its route enters
+    /// first, by where it enters.
+    fn count_never_inserted(&self, regions: &mut [RegionRow]) {
+        for id in &self.pending {
+            if let Some(&Some((g, origin))) = self.waiting.get(id) {
+                match origin {
+                    Origin::Main => regions[g].never_inserted_main += 1,
+                    Origin::Ramp => regions[g].never_inserted_ramp += 1,
+                }
+            }
+        }
+    }
+
+    /// The records with SUMO's trip figures and each vehicle's delay in its region, and the
+    /// summary.
+    pub fn finish(
+        mut self,
+        planner: &str,
+        tripinfo: &std::path::Path,
+        sumo_options: Vec<String>,
+    ) -> Result<ScenarioResult, String> {
+        let trips = records::read_trips(tripinfo)?;
+        let (trajectories, traces) = self.take_region_files();
+        let vehicles: Vec<ScenarioVehicle> = std::mem::take(&mut self.lines)
             .into_iter()
             .map(|l| {
                 let mut v = l.record;
@@ -483,14 +487,7 @@ impl ScenarioRun {
             ..ScenarioSummary::of(head, &vehicles, hdv_collisions)
         };
         let mut regions = region_rows(&region_head, &names, &vehicles);
-        for id in &self.pending {
-            if let Some(&Some((g, origin))) = self.waiting.get(id) {
-                match origin {
-                    Origin::Main => regions[g].never_inserted_main += 1,
-                    Origin::Ramp => regions[g].never_inserted_ramp += 1,
-                }
-            }
-        }
+        self.count_never_inserted(&mut regions);
         Ok(ScenarioResult {
             summary,
             regions,
@@ -505,23 +502,6 @@ impl ScenarioRun {
             traces,
         })
     }
-}
-
-/// The region a route enters first, and whether it enters there on an on-ramp.
-fn first_region_on(regions: &[Region], route: &[String]) -> Option<(usize, Origin)> {
-    route.iter().find_map(|edge| {
-        regions.iter().enumerate().find_map(|(g, r)| {
-            let e = r.road.edge(edge)?;
-            Some((
-                g,
-                if e.on_ramp {
-                    Origin::Ramp
-                } else {
-                    Origin::Main
-                },
-            ))
-        })
-    })
 }
 
 /// Vehicle `line` read at `raw`, `(front, lane)` in `region`'s frame, as its planner sees it: a
@@ -583,49 +563,5 @@ fn summary_head(config: &Config, planner: &str, regions: &[String]) -> ScenarioS
         steps: sc.steps,
         regions: regions.join("; "),
         ..ScenarioSummary::default()
-    }
-}
-
-/// A vehicle's first reading in region `region`: when, where, how fast, from where, and
-/// whether its route leaves the region early.
-fn enter(
-    id: &str,
-    sim: &impl SumoClient,
-    g: usize,
-    region: &Region,
-    raw: &RawVehicleState,
-    front: f64,
-    now: f64,
-) -> Result<Entry, SumoError> {
-    let (end, pos) = (&region.road.end_edge.0, region.road.end_edge.1);
-    Ok(Entry {
-        region: g,
-        origin: if frame::is_on_ramp(&region.road, raw.edge_code) {
-            Origin::Ramp
-        } else {
-            Origin::Main
-        },
-        // SUMO answers a negative distance for an edge off the vehicle's route.
-        leaves_early: sim.driving_distance(id, end, pos)? < 0.0,
-        time: now,
-        front,
-        speed: raw.speed,
-        last: (now, front),
-    })
-}
-
-/// Fills in a vehicle's passage through its first region: when it was there, how far it
-/// drove, and its delay against driving that far free from the speed it entered with.
-fn passage(v: &mut ScenarioVehicle, e: &Entry, config: &Config) {
-    let s = &config.scenario;
-    let (last_time, last_front) = e.last;
-    let distance = (last_front - e.front).max(0.0);
-    let free = free_flow_time(distance, e.speed, s.free_flow_accel, s.v_max.max(e.speed));
-    v.region_origin = e.origin.as_str().into();
-    v.region_enter_s = Some(e.time);
-    v.region_leave_s = Some(last_time);
-    v.region_distance_m = Some(distance);
-    if v.outcome != Outcome::Crashed {
-        v.region_delay_s = Some(last_time - e.time - free);
     }
 }

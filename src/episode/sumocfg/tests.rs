@@ -177,12 +177,8 @@ fn with_alpha_zero_no_vehicle_is_a_cav_and_sumo_is_sent_nothing() {
     assert!(sim.sent.contains(&Sent::SpeedMode("a".into(), 0)));
 }
 
-#[test]
-fn a_collision_removes_both_vehicles_once_and_books_it() {
-    // `c` is a CAV (by its type), `h`, `h2` HDVs; `c` drives into `h`, and `h` into `h2`, in the
-    // second step. SUMO reports the vehicles removed as arrived in the step after.
-    let mut c = config(0.0, 1);
-    c.scenario.cav_types = vec!["cav".into()];
+/// CAV `c` driving into HDV `h` and `h` into `h2` in the second of four steps, `o` beside them.
+fn chain_collision() -> Vec<Step> {
     let read = |pos: f64| {
         Step::default()
             .read(Reading::on("c", "acc", 1, pos, 30.0))
@@ -190,7 +186,7 @@ fn a_collision_removes_both_vehicles_once_and_books_it() {
             .read(Reading::on("h2", "acc", 1, pos + 12.0, 10.0))
             .read(Reading::on("o", "acc", 2, pos, 30.0))
     };
-    let script = vec![
+    vec![
         read(20.0)
             .depart(FakeVehicle::new("c", "cav"))
             .depart(FakeVehicle::new("h", "car"))
@@ -199,9 +195,28 @@ fn a_collision_removes_both_vehicles_once_and_books_it() {
         read(26.0).collide("c", "h").collide("h", "h2"),
         read(32.0).arrive("c").arrive("h").arrive("h2"),
         read(38.0),
-    ];
+    ]
+}
+
+/// Vehicle `v` crashed at `crash` with `with` (ids), a CAV involved when `controllable`.
+fn assert_crashed(v: &super::ScenarioVehicle, crash: f64, with: &str, controllable: bool) {
+    let id = &v.id;
+    assert_eq!(v.outcome, Outcome::Crashed, "{id}");
+    assert_eq!(v.crash_time_s, Some(crash), "{id}");
+    assert_eq!(v.arrival_s, None, "{id}");
+    assert_eq!(v.crashed_with, with, "{id}");
+    assert_eq!(v.controllable_crash, controllable, "{id}");
+    assert_eq!(v.region_delay_s, None, "{id}: no delay for a crash");
+}
+
+#[test]
+fn a_collision_removes_both_vehicles_once_and_books_it() {
+    // `c` is a CAV (by its type), `h`, `h2` HDVs; `c` drives into `h`, and `h` into `h2`, in the
+    // second step. SUMO reports the vehicles removed as arrived in the step after.
+    let mut c = config(0.0, 1);
+    c.scenario.cav_types = vec!["cav".into()];
     let mut run = paper_run(&c, "idm-mobil");
-    let mut sim = sumo_for(&run, script);
+    let mut sim = sumo_for(&run, chain_collision());
     play(&mut run, &mut sim, 4);
     let removed: Vec<&str> = sim
         .sent
@@ -223,13 +238,7 @@ fn a_collision_removes_both_vehicles_once_and_books_it() {
     let crash = began(2);
     let expect = [("c", "h", true), ("h", "c h2", true), ("h2", "h", false)];
     for (id, with, controllable) in expect {
-        let v = record(&result, id);
-        assert_eq!(v.outcome, Outcome::Crashed, "{id}");
-        assert_eq!(v.crash_time_s, Some(crash), "{id}");
-        assert_eq!(v.arrival_s, None, "{id}");
-        assert_eq!(v.crashed_with, with, "{id}");
-        assert_eq!(v.controllable_crash, controllable, "{id}");
-        assert_eq!(v.region_delay_s, None, "{id}: no delay for a crash");
+        assert_crashed(record(&result, id), crash, with, controllable);
     }
     let o = record(&result, "o");
     assert_eq!((o.outcome, o.crash_time_s), (Outcome::Present, None));
