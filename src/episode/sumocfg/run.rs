@@ -45,6 +45,9 @@ struct Line {
     commanded: Option<usize>,
 }
 
+/// A region's trace: its name and its `trace.jsonl` text.
+type RegionTrace = (String, String);
+
 /// The loop's state.
 pub struct ScenarioRun {
     config: Config,
@@ -418,7 +421,7 @@ impl ScenarioRun {
     }
 
     /// Each region's trajectories and trace, taken out of it (region name, file).
-    fn take_region_files(&mut self) -> (Vec<(String, TrajectoryFile)>, Vec<(String, String)>) {
+    fn take_region_files(&mut self) -> (Vec<(String, TrajectoryFile)>, Vec<RegionTrace>) {
         let trajectories = self
             .regions
             .iter_mut()
