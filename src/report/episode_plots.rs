@@ -60,7 +60,7 @@ pub fn plot_dir(dir: &Path) -> Result<EpisodePlots, EpisodePlotError> {
             dir: dir.to_path_buf(),
         });
     }
-    let regions = region_dirs(dir);
+    let regions = crate::episode::sumocfg::region_dirs(dir);
     if regions.is_empty() {
         return plot_tracks(dir);
     }
@@ -72,22 +72,6 @@ pub fn plot_dir(dir: &Path) -> Result<EpisodePlots, EpisodePlotError> {
         out.close_ups |= drawn.close_ups;
     }
     Ok(out)
-}
-
-/// The trajectory directories of an episode on a scenario of the user's own
-/// (`<dir>/trajectories/<region>/`), in name order; none for any other directory.
-fn region_dirs(dir: &Path) -> Vec<PathBuf> {
-    let root = dir.join(crate::episode::sumocfg::TRAJECTORIES_DIR);
-    let mut found: Vec<PathBuf> = std::fs::read_dir(root)
-        .map(|d| {
-            d.flatten()
-                .map(|e| e.path())
-                .filter(|p| p.is_dir())
-                .collect()
-        })
-        .unwrap_or_default();
-    found.sort();
-    found
 }
 
 /// Draws the figures of the trajectories in `dir` into it.
@@ -202,7 +186,7 @@ pub fn plot_scenario_cells(
     let mut summary = CellPlots::default();
     let mut regions = Vec::new();
     for dir in &finished {
-        let found = region_dirs(dir);
+        let found = crate::episode::sumocfg::region_dirs(dir);
         if found.is_empty() {
             summary.without_trajectories += 1;
         } else {

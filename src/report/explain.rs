@@ -159,12 +159,8 @@ pub fn explain_dir(dir: &Path) -> Result<Vec<Explanation>, ExplainError> {
 /// (`<dir>/trajectories/<region>/` holding a `trace.jsonl`), in name order; none for any other
 /// directory.
 pub fn traced_regions(dir: &Path) -> Vec<PathBuf> {
-    let root = dir.join(crate::episode::sumocfg::TRAJECTORIES_DIR);
-    let mut found: Vec<PathBuf> = std::fs::read_dir(root)
-        .map(|d| d.flatten().map(|e| e.path()).collect())
-        .unwrap_or_default();
+    let mut found = crate::episode::sumocfg::region_dirs(dir);
     found.retain(|p| p.join(TRACE_FILE).is_file());
-    found.sort();
     found
 }
 

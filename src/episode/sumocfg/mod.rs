@@ -81,6 +81,21 @@ pub struct ScenarioResult {
 /// `collisions.csv` beside them, so that `bkpbs plot` draws the region's time–space diagram.
 pub const TRAJECTORIES_DIR: &str = "trajectories";
 
+/// The region directories of an episode on a scenario of the user's own
+/// (`<dir>/trajectories/<region>/`), in name order; none for any other directory.
+pub fn region_dirs(dir: &std::path::Path) -> Vec<PathBuf> {
+    let mut found: Vec<PathBuf> = std::fs::read_dir(dir.join(TRAJECTORIES_DIR))
+        .map(|d| {
+            d.flatten()
+                .map(|e| e.path())
+                .filter(|p| p.is_dir())
+                .collect()
+        })
+        .unwrap_or_default();
+    found.sort();
+    found
+}
+
 /// A region's trajectory directory below an episode's `dir`.
 pub fn region_dir(dir: &std::path::Path, region: &str) -> PathBuf {
     dir.join(TRAJECTORIES_DIR).join(region.replace(' ', "+"))
