@@ -43,15 +43,23 @@ fn collected_steps(out: &Path) -> Vec<String> {
 
 #[test]
 fn of_two_campaigns_with_other_settings_started_together_exactly_one_proceeds() {
+    race_thirty_times(|out, steps| {
+        let mut c = campaign(out, "1", steps, &[]);
+        c.stdout(Stdio::piped()).stderr(Stdio::piped());
+        c
+    });
+}
+
+/// Starts the campaign `make(out, steps)` with `--steps 10` and with `--steps 13` into one
+/// directory at once, 30 times: exactly one proceeds, the other is refused naming the
+/// difference, and the directory holds only the winner's rows and settings.
+fn race_thirty_times(make: impl Fn(&Path, &str) -> Command) {
     for trial in 0..30 {
         let d = tempfile::tempdir().unwrap();
-        let (mut a, mut b) = (
-            campaign(d.path(), "1", "10", &[]),
-            campaign(d.path(), "1", "13", &[]),
+        let (pa, pb) = (
+            make(d.path(), "10").spawn().unwrap(),
+            make(d.path(), "13").spawn().unwrap(),
         );
-        let (a, b) = (a.stdout(Stdio::piped()), b.stdout(Stdio::piped()));
-        let (a, b) = (a.stderr(Stdio::piped()), b.stderr(Stdio::piped()));
-        let (pa, pb) = (a.spawn().unwrap(), b.spawn().unwrap());
         let (oa, ob) = (
             pa.wait_with_output().unwrap(),
             pb.wait_with_output().unwrap(),
@@ -159,29 +167,5 @@ fn scenario_campaign(sumocfg: &Path, out: &Path, steps: &str) -> Command {
 fn of_two_scenario_campaigns_with_other_settings_started_together_exactly_one_proceeds() {
     let games = tempfile::tempdir().unwrap();
     let ramp = common::game_copy(games.path()).join("ramp.sumocfg");
-    for trial in 0..30 {
-        let d = tempfile::tempdir().unwrap();
-        let (pa, pb) = (
-            scenario_campaign(&ramp, d.path(), "10").spawn().unwrap(),
-            scenario_campaign(&ramp, d.path(), "13").spawn().unwrap(),
-        );
-        let (oa, ob) = (
-            pa.wait_with_output().unwrap(),
-            pb.wait_with_output().unwrap(),
-        );
-        let (winner, loser, steps) = match (oa.status.success(), ob.status.success()) {
-            (true, false) => (&oa, &ob, "10"),
-            (false, true) => (&ob, &oa, "13"),
-            _ => panic!(
-                "trial {trial}: exactly one must proceed:\n{}\n{}",
-                text(&oa.stderr),
-                text(&ob.stderr)
-            ),
-        };
-        assert_ok(winner);
-        common::refused_naming(loser, &["campaign.steps differs"]);
-        assert_eq!(collected_steps(d.path()), [steps], "trial {trial}");
-        let toml = std::fs::read_to_string(d.path().join("campaign.toml")).unwrap();
-        assert!(toml.contains(&format!("steps = {steps}")), "{toml}");
-    }
+    race_thirty_times(|out, steps| scenario_campaign(&ramp, out, steps));
 }

@@ -188,18 +188,7 @@ fn a_scenario_episode_is_traced_and_explained_region_by_region() {
     let (plain, traced) = (dir.path().join("plain"), dir.path().join("traced"));
     run(&plain, false);
     run(&traced, true);
-    for f in [
-        "episode.csv",
-        "vehicles.csv",
-        "regions.csv",
-        "collisions.csv",
-    ] {
-        assert_eq!(
-            std::fs::read(plain.join(f)).unwrap(),
-            std::fs::read(traced.join(f)).unwrap(),
-            "{f}"
-        );
-    }
+    common::assert_same_files(&plain, &traced, &common::SCENARIO_FILES, "with --trace");
     let region = traced.join("trajectories/gneE7");
     let lines = trace::read(&region.join(TRACE_FILE)).unwrap();
     assert!(lines.iter().any(|l| l.source.as_str() == "policy"));

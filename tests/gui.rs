@@ -7,6 +7,24 @@ mod common;
 
 const BIN: &str = env!("CARGO_BIN_EXE_bkpbs");
 
+/// Runs the episode of `args(out)` into `plain` in this process and into `shown` through
+/// sumo-gui under a virtual X server, each asserted to succeed.
+fn run_plain_and_shown(
+    args: impl Fn(&std::path::Path) -> Vec<String>,
+    plain: &std::path::Path,
+    shown: &std::path::Path,
+) {
+    let o = Command::new(BIN).args(args(plain)).output().unwrap();
+    assert!(o.status.success(), "{}", common::stderr(&o));
+    let o = Command::new("xvfb-run")
+        .args(["-a", BIN])
+        .args(args(shown))
+        .args(["--gui-delay", "0"])
+        .output()
+        .expect("xvfb-run (Debian's xvfb; `make deps` installs it)");
+    assert!(o.status.success(), "{}", common::stderr(&o));
+}
+
 #[test]
 fn an_episode_shown_in_sumo_gui_gives_the_same_results() {
     let d = tempfile::tempdir().unwrap();
@@ -30,27 +48,14 @@ fn an_episode_shown_in_sumo_gui_gives_the_same_results() {
         ]);
         a
     };
-    let o = Command::new(BIN).args(args(&plain)).output().unwrap();
-    assert!(o.status.success(), "{}", common::stderr(&o));
-    let o = Command::new("xvfb-run")
-        .args(["-a", BIN])
-        .args(args(&shown))
-        .args(["--gui-delay", "0"])
-        .output()
-        .expect("xvfb-run (Debian's xvfb; `make deps` installs it)");
-    assert!(o.status.success(), "{}", common::stderr(&o));
-    for f in [
+    run_plain_and_shown(args, &plain, &shown);
+    let files = [
         "episode.csv",
         "vehicles.csv",
         "collisions.csv",
         "trajectories.csv",
-    ] {
-        assert_eq!(
-            std::fs::read(plain.join(f)).unwrap(),
-            std::fs::read(shown.join(f)).unwrap(),
-            "{f} differs with the GUI"
-        );
-    }
+    ];
+    common::assert_same_files(&plain, &shown, &files, "with the GUI");
 }
 
 #[test]
@@ -91,25 +96,6 @@ fn a_scenario_shown_in_sumo_gui_gives_the_same_results() {
         a.extend(["--out".into(), out.display().to_string()]);
         a
     };
-    let o = Command::new(BIN).args(args(&plain)).output().unwrap();
-    assert!(o.status.success(), "{}", common::stderr(&o));
-    let o = Command::new("xvfb-run")
-        .args(["-a", BIN])
-        .args(args(&shown))
-        .args(["--gui-delay", "0"])
-        .output()
-        .expect("xvfb-run (Debian's xvfb; `make deps` installs it)");
-    assert!(o.status.success(), "{}", common::stderr(&o));
-    for f in [
-        "episode.csv",
-        "vehicles.csv",
-        "regions.csv",
-        "collisions.csv",
-    ] {
-        assert_eq!(
-            std::fs::read(plain.join(f)).unwrap(),
-            std::fs::read(shown.join(f)).unwrap(),
-            "{f} differs with the GUI"
-        );
-    }
+    run_plain_and_shown(args, &plain, &shown);
+    common::assert_same_files(&plain, &shown, &common::SCENARIO_FILES, "with the GUI");
 }

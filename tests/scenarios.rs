@@ -263,18 +263,12 @@ fn each_regions_trajectories_are_written_and_drawn_and_change_nothing() {
     args.extend(["--steps", "150", "--seed", "3", "--trajectories"]);
     args.extend(["--out", traced.to_str().unwrap()]);
     common::assert_ok(&bkpbs(&args));
-    for f in [
-        "episode.csv",
-        "vehicles.csv",
-        "regions.csv",
-        "collisions.csv",
-    ] {
-        assert_eq!(
-            std::fs::read(plain.join(f)).unwrap(),
-            std::fs::read(traced.join(f)).unwrap(),
-            "{f}"
-        );
-    }
+    common::assert_same_files(
+        &plain,
+        &traced,
+        &common::SCENARIO_FILES,
+        "with --trajectories",
+    );
     // The planner's effort is in the episode's row, as for the paper's demand.
     let episode = &csv_rows(&std::fs::read(traced.join("episode.csv")).unwrap())[0];
     for effort in [

@@ -215,6 +215,26 @@ pub fn output_within(
     (out, took)
 }
 
+/// The files `names` of directories `a` and `b` are byte for byte the same (`what`: why they
+/// should be, for the message).
+pub fn assert_same_files(a: &std::path::Path, b: &std::path::Path, names: &[&str], what: &str) {
+    for f in names {
+        assert_eq!(
+            std::fs::read(a.join(f)).unwrap(),
+            std::fs::read(b.join(f)).unwrap(),
+            "{f} differs {what}"
+        );
+    }
+}
+
+/// The episode files of a scenario episode (`bkpbs episode --sumocfg`) compared between runs.
+pub const SCENARIO_FILES: [&str; 4] = [
+    "episode.csv",
+    "vehicles.csv",
+    "regions.csv",
+    "collisions.csv",
+];
+
 /// Asserts that the run `o` succeeded, showing both its streams otherwise.
 pub fn assert_ok(o: &Output) {
     assert!(
