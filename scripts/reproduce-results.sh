@@ -162,8 +162,9 @@ long="--hdv-profiles sumo-safe,paper --alphas 0.4,0.6,0.8 --steps 1500"
 result_versus long-run-learned results/long-run/learned idm-mobil,bk-mastar "$BIN" campaign --config results/long-run/long-run.toml \
     $long --lambdas 2500,3000,3500 --seeds 10 --seed-base 20000
 # shellcheck disable=SC2086
-result long-run-constant results/long-run/constant "$BIN" campaign --config results/long-run/constant.toml \
-    --planners bk-pbs $long --lambdas 3000 --seeds 10 --seed-base 20000
+result_versus long-run-predictors results/long-run/predictors bk-pbs+constant "$BIN" campaign \
+    --config results/long-run/long-run.toml --planners bk-pbs --predictors learned,constant $long --lambdas 3000 \
+    --seeds 10 --seed-base 20000
 # shellcheck disable=SC2086
 result_versus long-run-fresh results/long-run/fresh idm-mobil,bk-mastar "$BIN" campaign --config results/long-run/long-run.toml \
     --planners idm-mobil,bk-mastar,bk-pbs $long --lambdas 3000 --seeds 30 --seed-base 40000

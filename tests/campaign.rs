@@ -92,6 +92,7 @@ fn grid_order_is_planner_alpha_lambda_seed_with_sorted_unique_values() {
         lambda,
         seed,
         hdv_profile: "sumo-safe".into(),
+        predictor: None,
     };
     assert_eq!(cells[0], c("idm-mobil", 0.4, 2500.0, 10));
     assert_eq!(cells[1], c("idm-mobil", 0.4, 2500.0, 11));

@@ -119,7 +119,9 @@ impl PyCampaign {
             episode_timeout: None,
             // From the config file's `[output]` table, if any.
             trajectories: None,
+            // Like the HDV profiles, from the config file's `[campaign]` table, if any.
             hdv_profiles: None,
+            predictors: None,
             shard,
             sumocfg: axis(sumocfg)?,
         };

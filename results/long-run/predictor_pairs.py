@@ -1,13 +1,21 @@
 #!/usr/bin/env python3
-"""Paired comparison of two campaigns of the same planners on the same cells and seeds: here
-b_θ (learned/) against the constant-speed predictor (constant/). `bkpbs report --versus` pairs
-planners within one campaign; these two runs differ in their configuration instead, so this
-script pairs across them with the same statistics: the mean per-seed difference with Student's
-95 % interval and the two-sided Wilcoxon signed-rank p (zeros dropped; exact below 50 pairs
-without ties, else normal with tie and continuity correction), as docs/src/campaigns.md
-describes. Standard library only.
+"""Paired comparison of the same planners on the same cells and seeds, either of two arms of
+one campaign with the predictor axis (here b_θ against the constant-speed predictor,
+predictors/, `bkpbs campaign --predictors learned,constant`) or of two campaigns
+(results/sumo-versions: two SUMO versions). `bkpbs report --versus bk-pbs+constant` pairs the
+arms itself; this script adds the shield overrides, with the same statistics: the mean per-seed
+difference with Student's 95 % interval and the two-sided Wilcoxon signed-rank p (zeros dropped;
+exact below 50 pairs without ties, else normal with tie and continuity correction), as
+docs/src/campaigns.md describes; beyond 31 pairs its interval takes the normal quantile 1.96
+where the report takes t(0.975, n - 1), so pooled intervals differ in the second decimal.
+Standard library only.
 
-    python3 results/long-run/predictor_pairs.py results/long-run/learned results/long-run/constant
+    python3 results/long-run/predictor_pairs.py results/long-run/predictors:learned \
+        results/long-run/predictors:constant
+    python3 results/long-run/predictor_pairs.py DIR_A DIR_B
+
+`DIR:NAME` is the episodes of `DIR` whose predictor is NAME; a plain `DIR`, every episode of
+a campaign without the predictor axis.
 
 An optional third argument names the metrics (comma-separated; default the five below), and
 per planner it then adds the controllable collisions of the two runs (vehicles removed in
@@ -27,10 +35,12 @@ T975 = [12.706, 4.303, 3.182, 2.776, 2.571, 2.447, 2.365, 2.306, 2.262, 2.228, 2
         2.060, 2.056, 2.052, 2.048, 2.045, 2.042]
 
 
-def rows(directory):
+def rows(directory, predictor=None):
+    """The episodes of a campaign directory by cell; of a campaign with the predictor axis
+    (`bkpbs campaign --predictors`), those of `predictor` only."""
     with open(f"{directory}/episodes.csv", newline="") as f:
         return {(r["planner"], r["hdv_profile"], r["alpha"], r["lambda"], r["seed"]): r
-                for r in csv.DictReader(f)}
+                for r in csv.DictReader(f) if r.get("predictor") == predictor}
 
 
 def interval(d):
@@ -110,7 +120,12 @@ def main(first, second, metrics=None):
     global METRICS
     if metrics:
         METRICS = metrics.split(",")
-    a, b = rows(first), rows(second)
+    if ":" in first:
+        # DIR:learned DIR:constant, the two arms of one campaign with the predictor axis
+        (da, pa), (db, pb) = first.rsplit(":", 1), second.rsplit(":", 1)
+        a, b = rows(da, pa), rows(db, pb)
+    else:
+        a, b = rows(first), rows(second)
     keys = sorted(set(a) & set(b))
     by_planner = defaultdict(list)
     for k in keys:

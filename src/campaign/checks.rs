@@ -53,6 +53,22 @@ pub enum SettingsError {
         /// The unknown name, with the known ones.
         planner: UnknownPlanner,
     },
+    /// An entry of the predictor axis names no predictor.
+    #[error("{origin}: unknown predictor '{name}' (known: learned, constant)")]
+    UnknownPredictor {
+        /// Where the list came from: the flag, or the key and its file.
+        origin: String,
+        /// The name as given.
+        name: String,
+    },
+    /// A setting a campaign over scenarios of the user's own does not take yet.
+    #[error("{origin}: {why}")]
+    NotYetWithScenarios {
+        /// The flag, or the key and its file.
+        origin: String,
+        /// What to do instead.
+        why: &'static str,
+    },
     /// An entry of a numeric list flag does not parse.
     #[error("{origin}: '{value}' is not a number")]
     NotANumber {

@@ -18,7 +18,7 @@ use super::cell::{
 use super::grid::{Cell, Grid};
 use super::results::{self, episodes_header, Results, ResultsError};
 use super::settings::Settings;
-use super::table::{key, Row, CELL_COLUMNS};
+use super::table::{key, Axes, Row, CELL_COLUMNS};
 use super::worker::DONE_FILE;
 use crate::episode::output::{TIMING_COLUMNS, VEHICLE_COLUMNS};
 
@@ -43,9 +43,14 @@ pub fn cell_state(out: &Path, settings: &Settings, cell: &Cell) -> CellState<Fin
 /// The files of `cell` in `dir` if they are whole and this campaign's; otherwise what is
 /// wrong.
 fn finished_row(dir: &Path, settings: &Settings, cell: &Cell) -> Result<Finished, String> {
-    let header = episodes_header();
+    // An episode's own row names no predictor: its settings record below does.
+    let header = episodes_header(Axes::default());
     let row = episode_row(dir, &header)?;
-    if results::cell_of(&row).map(|c| key(&c)) != Ok(key(cell)) {
+    let own = Cell {
+        predictor: None,
+        ..cell.clone()
+    };
+    if results::cell_of(Axes::default(), &row).map(|c| key(&c)) != Ok(key(&own)) {
         return Err(format!("{DONE_FILE} belongs to another cell"));
     }
     let column = |name: &str| column_value(&header, &row, name);
@@ -70,14 +75,22 @@ fn finished_row(dir: &Path, settings: &Settings, cell: &Cell) -> Result<Finished
 /// Cells of the grid are run again if they are not finished on disk, so none of them is lost.
 /// An unreadable `episodes.csv` records nothing.
 pub fn recorded_outside(out: &Path, grid: &Grid) -> Vec<Cell> {
-    let Ok(rows) = results::read_records(&out.join("episodes.csv"), &episodes_header()) else {
+    let axes = axes_of(grid);
+    let Ok(rows) = results::read_records(&out.join("episodes.csv"), &episodes_header(axes)) else {
         return Vec::new();
     };
     let in_grid: std::collections::HashSet<_> = grid.cells().iter().map(key).collect();
     rows.iter()
-        .filter_map(|row| results::cell_of(row).ok())
+        .filter_map(|row| results::cell_of(axes, row).ok())
         .filter(|c| !in_grid.contains(&key(c)))
         .collect()
+}
+
+/// The optional axes of `grid`'s collected files.
+pub fn axes_of(grid: &Grid) -> Axes {
+    Axes {
+        predictor: grid.has_predictor_axis(),
+    }
 }
 
 fn strings(cols: &[&str]) -> Vec<String> {
@@ -89,43 +102,48 @@ fn strings(cols: &[&str]) -> Vec<String> {
 /// message of their `error.txt`.
 pub fn collect(out: &Path, settings: &Settings) -> Result<Results, ResultsError> {
     let (grid, shard) = (&settings.grid, settings.shard);
+    let axes = axes_of(grid);
     let mut res = Results {
         planners: grid.planners.clone(),
         profiles: grid.profiles.clone(),
-        ..Results::default()
+        predictors: grid.predictors.iter().flatten().cloned().collect(),
+        ..Results::empty(axes)
     };
     for (position, cell) in grid.cells().into_iter().enumerate() {
         if let CellState::Done(done) = cell_state(out, settings, &cell) {
-            // The cell columns exactly as the episode wrote them.
-            let lead: Vec<&str> = done.row.iter().take(CELL_COLUMNS.len()).collect();
-            res.episodes.rows.push(Row {
-                cell: cell.clone(),
-                fields: done.row.clone(),
-            });
-            for (records, table) in [
-                (&done.vehicles, &mut res.vehicles),
-                (&done.timing, &mut res.timings),
-            ] {
-                for rec in records {
-                    let mut fields = csv::StringRecord::from(lead.clone());
-                    fields.extend(rec.iter());
-                    table.rows.push(Row {
-                        cell: cell.clone(),
-                        fields,
-                    });
-                }
-            }
+            gather(&mut res, axes, &cell, &done);
         } else if shard.contains(position) {
             let error = failure_of(&cell_dir(out, &cell));
-            let mut fields = csv::StringRecord::new();
-            fields.push_field(&cell.planner);
-            fields.push_field(&cell.alpha.to_string());
-            fields.push_field(&cell.lambda.to_string());
-            fields.push_field(&cell.seed.to_string());
-            fields.push_field(&cell.hdv_profile);
-            fields.push_field(&error);
+            let (alpha, lambda, seed) = (
+                cell.alpha.to_string(),
+                cell.lambda.to_string(),
+                cell.seed.to_string(),
+            );
+            let lead = [&*cell.planner, &alpha, &lambda, &seed, &cell.hdv_profile];
+            let fields = axes.row(&cell, lead.into_iter().chain([error.as_str()]));
             res.failures.rows.push(Row { cell, fields });
         }
     }
     Ok(res)
+}
+
+/// Adds a finished cell's rows to the collected files, each led by the cell columns exactly as
+/// the episode wrote them (and the cell's values of the optional `axes`).
+fn gather(res: &mut Results, axes: Axes, cell: &Cell, done: &Finished) {
+    let lead: Vec<&str> = done.row.iter().take(CELL_COLUMNS.len()).collect();
+    res.episodes.rows.push(Row {
+        cell: cell.clone(),
+        fields: axes.row(cell, done.row.iter()),
+    });
+    for (records, table) in [
+        (&done.vehicles, &mut res.vehicles),
+        (&done.timing, &mut res.timings),
+    ] {
+        for rec in records {
+            table.rows.push(Row {
+                cell: cell.clone(),
+                fields: axes.row(cell, lead.iter().copied().chain(rec.iter())),
+            });
+        }
+    }
 }

@@ -1,8 +1,8 @@
-//! The experiment grid: planners × HDV profiles × α × λ × seeds, its fixed order, and how it
-//! splits into shards.
+//! The experiment grid: planners × predictors × HDV profiles × α × λ × seeds, its fixed order,
+//! and how it splits into shards.
 //!
-//! Grid order is planner and HDV profile (in the order given), then α, λ and seed, each
-//! ascending. Every output of a campaign follows it, so results never depend on which worker
+//! Grid order is planner, predictor and HDV profile (in the order given), then α, λ and seed,
+//! each ascending. Every output of a campaign follows it, so results never depend on which worker
 //! ran which episode.
 
 use std::fmt;
@@ -32,16 +32,34 @@ pub struct Cell {
     pub seed: u64,
     /// The HDV driver profile SUMO runs.
     pub hdv_profile: String,
+    /// The HDV predictor of the planners (`learned`, `constant`) when the campaign has the
+    /// predictor axis (`--predictors`); `None`: the configuration's `[predictor] kind`.
+    pub predictor: Option<String>,
+}
+
+impl Cell {
+    /// The name the report compares the cell's episodes under: the planner, or on a
+    /// campaign with the predictor axis the planner and its predictor (`bk-pbs+constant`).
+    pub fn arm(&self) -> String {
+        match &self.predictor {
+            None => self.planner.clone(),
+            Some(p) => format!("{}+{p}", self.planner),
+        }
+    }
 }
 
 impl GridCell for Cell {
     /// The cell's directory below `<out>/episodes/`: `<planner>/a<α>_l<λ>_s<seed>` for the
-    /// default drivers, `<planner>/hdv-<profile>/a<α>_l<λ>_s<seed>` for others.
+    /// default drivers, `<planner>/hdv-<profile>/a<α>_l<λ>_s<seed>` for others, with
+    /// `predictor-<name>/` after the planner on a campaign with the predictor axis.
     ///
     /// α and λ use Rust's shortest round-trip formatting, the same as `episode.csv`, so the name
     /// is stable and reads like the values (`a0.4_l2500_s3`).
     fn dir_name(&self) -> PathBuf {
         let mut dir = PathBuf::from(&self.planner);
+        if let Some(p) = &self.predictor {
+            dir.push(format!("predictor-{p}"));
+        }
         if self.hdv_profile != DEFAULT_PROFILE {
             dir.push(format!("hdv-{}", self.hdv_profile));
         }
@@ -60,6 +78,9 @@ impl fmt::Display for Cell {
             "{} α={} λ={} seed={}",
             self.planner, self.alpha, self.lambda, self.seed
         )?;
+        if let Some(p) = &self.predictor {
+            write!(f, " predictor={p}")?;
+        }
         if self.hdv_profile != DEFAULT_PROFILE {
             write!(f, " hdv={}", self.hdv_profile)?;
         }
@@ -67,13 +88,16 @@ impl fmt::Display for Cell {
     }
 }
 
-/// The five axes of a campaign, normalised: planners and HDV profiles keep their order
+/// The axes of a campaign, normalised: planners, predictors and HDV profiles keep their order
 /// (duplicates dropped), α and λ are sorted ascending without duplicates, seeds are
 /// `seed_base .. seed_base + seeds`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Grid {
     /// Controller names, in the order given.
     pub planners: Vec<String>,
+    /// HDV predictors, in the order given; `[None]` without the predictor axis (every cell
+    /// runs the configuration's predictor).
+    pub predictors: Vec<Option<String>>,
     /// HDV driver profiles, in the order given.
     pub profiles: Vec<String>,
     /// CAV penetrations α (0 to 1), ascending.
@@ -119,6 +143,7 @@ impl Grid {
     ) -> Grid {
         Grid {
             planners: unique(planners),
+            predictors: vec![None],
             profiles: vec![DEFAULT_PROFILE.to_string()],
             alphas: sorted_unique(alphas.to_vec()),
             lambdas: sorted_unique(lambdas.to_vec()),
@@ -132,9 +157,23 @@ impl Grid {
         self
     }
 
+    /// The same grid with the predictor axis over these predictors (duplicates dropped, order
+    /// kept).
+    pub fn with_predictors(mut self, predictors: &[String]) -> Grid {
+        self.predictors = unique(predictors).into_iter().map(Some).collect();
+        self
+    }
+
+    /// Whether the grid has the predictor axis (`--predictors`): its cells' directories and
+    /// its collected files' lead columns then name the predictor.
+    pub fn has_predictor_axis(&self) -> bool {
+        self.predictors.iter().any(Option::is_some)
+    }
+
     /// Number of episodes.
     pub fn len(&self) -> usize {
         self.planners.len()
+            * self.predictors.len()
             * self.profiles.len()
             * self.alphas.len()
             * self.lambdas.len()
@@ -146,25 +185,39 @@ impl Grid {
         self.len() == 0
     }
 
-    /// All cells in grid order: planner, profile, α, λ, seed.
+    /// All cells in grid order: planner, predictor, profile, α, λ, seed.
     pub fn cells(&self) -> Vec<Cell> {
         let mut out = Vec::with_capacity(self.len());
         for p in &self.planners {
-            for h in &self.profiles {
-                for &alpha in &self.alphas {
-                    for &lambda in &self.lambdas {
-                        out.extend(self.seeds.iter().map(|&seed| Cell {
-                            planner: p.clone(),
-                            alpha,
-                            lambda,
-                            seed,
-                            hdv_profile: h.clone(),
-                        }));
-                    }
+            for predictor in &self.predictors {
+                for h in &self.profiles {
+                    let cell = Cell {
+                        planner: p.clone(),
+                        alpha: 0.0,
+                        lambda: 0.0,
+                        seed: 0,
+                        hdv_profile: h.clone(),
+                        predictor: predictor.clone(),
+                    };
+                    out.extend(self.points(&cell));
                 }
             }
         }
         out
+    }
+
+    /// The cells of `like`'s planner, predictor and profile at every α, λ and seed.
+    fn points<'a>(&'a self, like: &'a Cell) -> impl Iterator<Item = Cell> + 'a {
+        self.alphas.iter().flat_map(move |&alpha| {
+            self.lambdas.iter().flat_map(move |&lambda| {
+                self.seeds.iter().map(move |&seed| Cell {
+                    alpha,
+                    lambda,
+                    seed,
+                    ..like.clone()
+                })
+            })
+        })
     }
 }
 

@@ -29,6 +29,8 @@ pub struct Overrides {
     pub trajectories: Option<TrajectoryFormat>,
     /// `--hdv-profiles`, comma-separated.
     pub hdv_profiles: Option<String>,
+    /// `--predictors`, comma-separated HDV predictors (`learned`, `constant`): a grid axis.
+    pub predictors: Option<String>,
     /// `--sumocfg`, comma-separated: a campaign over these scenarios of the user's own
     /// ([`super::scenarios`]).
     pub sumocfg: Option<String>,

@@ -6,7 +6,7 @@ use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
 use super::grid::Cell;
-use super::table::{key, CellKey, Row, Table, CELL_COLUMNS};
+use super::table::{key, Axes, CellKey, Row, Table};
 use crate::episode::metrics::Summary;
 use crate::episode::output::{self, WriteError, TIMING_COLUMNS, VEHICLE_COLUMNS};
 
@@ -57,6 +57,14 @@ pub enum ResultsError {
         /// The file of the later directory that disagrees.
         second: PathBuf,
     },
+    /// Merged directories differ in their axes (one has the predictor axis, one not).
+    #[error("{first} and {second} have different axes (one names a predictor per cell): report them apart")]
+    Axes {
+        /// The first directory's `episodes.csv`.
+        first: PathBuf,
+        /// The directory that differs.
+        second: PathBuf,
+    },
     /// A collected file could not be written.
     #[error(transparent)]
     Write(#[from] WriteError),
@@ -65,38 +73,43 @@ pub enum ResultsError {
     Row(#[from] super::validate::RowError),
 }
 
-fn with_cell_columns(rest: &[&str]) -> Vec<String> {
-    CELL_COLUMNS
-        .iter()
-        .chain(rest)
-        .map(|s| s.to_string())
-        .collect()
-}
-
 /// Header of `episodes.csv` (the episode columns already start with the cell).
-pub fn episodes_header() -> Vec<String> {
-    Summary::columns().iter().map(|s| s.to_string()).collect()
+pub fn episodes_header(axes: Axes) -> Vec<String> {
+    axes.header(Summary::columns())
 }
 /// Header of `vehicles.csv`.
-pub fn vehicles_header() -> Vec<String> {
-    with_cell_columns(&VEHICLE_COLUMNS)
+pub fn vehicles_header(axes: Axes) -> Vec<String> {
+    with_cell_columns(axes, &VEHICLE_COLUMNS)
 }
 /// Header of `timings.csv`.
-pub fn timings_header() -> Vec<String> {
-    with_cell_columns(&TIMING_COLUMNS)
+pub fn timings_header(axes: Axes) -> Vec<String> {
+    with_cell_columns(axes, &TIMING_COLUMNS)
 }
 /// Header of `failures.csv`.
-pub fn failures_header() -> Vec<String> {
-    with_cell_columns(&["error"])
+pub fn failures_header(axes: Axes) -> Vec<String> {
+    with_cell_columns(axes, &["error"])
+}
+
+fn with_cell_columns(axes: Axes, rest: &[&str]) -> Vec<String> {
+    let columns: Vec<&str> = super::table::CELL_COLUMNS
+        .iter()
+        .chain(rest)
+        .copied()
+        .collect();
+    axes.header(&columns)
 }
 
 /// The four collected files of one directory (or of several, merged).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Results {
+    /// The optional axes the files' lead columns name.
+    pub axes: Axes,
     /// Planner order of the grid (rows are sorted by it, then HDV profile, α, λ, seed).
     pub planners: Vec<String>,
     /// HDV profile order of the grid.
     pub profiles: Vec<String>,
+    /// Predictor order of the grid (empty without the predictor axis).
+    pub predictors: Vec<String>,
     /// `episodes.csv`: one summary row per finished episode.
     pub episodes: Table,
     /// `vehicles.csv`: one row per vehicle of every finished episode.
@@ -109,20 +122,15 @@ pub struct Results {
 
 impl Default for Results {
     fn default() -> Self {
-        Results {
-            planners: Vec::new(),
-            profiles: Vec::new(),
-            episodes: Table::new(episodes_header()),
-            vehicles: Table::new(vehicles_header()),
-            timings: Table::new(timings_header()),
-            failures: Table::new(failures_header()),
-        }
+        Results::empty(Axes::default())
     }
 }
 
-/// The cell columns of a row as a [`Cell`]; the offending text if a value does not parse.
-pub fn cell_of(fields: &csv::StringRecord) -> Result<Cell, String> {
-    let get = |i: usize| fields.get(i).unwrap_or("");
+/// The cell columns of a row of a file with these `axes` as a [`Cell`]; the offending text if
+/// a value does not parse.
+pub fn cell_of(axes: Axes, fields: &csv::StringRecord) -> Result<Cell, String> {
+    let skip = usize::from(axes.predictor);
+    let get = |i: usize| fields.get(if i == 0 { 0 } else { i + skip }).unwrap_or("");
     let num = |i: usize| get(i).parse::<f64>().map_err(|_| get(i).to_string());
     Ok(Cell {
         planner: get(0).to_string(),
@@ -130,7 +138,27 @@ pub fn cell_of(fields: &csv::StringRecord) -> Result<Cell, String> {
         lambda: num(2)?,
         seed: get(3).parse().map_err(|_| get(3).to_string())?,
         hdv_profile: get(4).to_string(),
+        predictor: axes
+            .predictor
+            .then(|| fields.get(1).unwrap_or("").to_string()),
     })
+}
+
+/// The header of the CSV file at `path`.
+pub fn header_of(path: &Path) -> Result<Vec<String>, ResultsError> {
+    let read_err = |e: csv::Error| ResultsError::Read {
+        path: path.to_path_buf(),
+        message: e.to_string(),
+    };
+    let mut r = csv::Reader::from_reader(
+        crate::io::bounded::open(path, crate::io::bounded::FileKind::Data)
+            .map_err(|e| read_err(e.into()))?,
+    );
+    Ok(r.headers()
+        .map_err(read_err)?
+        .iter()
+        .map(String::from)
+        .collect())
 }
 
 /// Reads the records of a CSV file that must have exactly `header`.
@@ -161,11 +189,12 @@ pub fn read_records(
     r.records().map(|rec| rec.map_err(read_err)).collect()
 }
 
-/// Reads a collected CSV file that must have exactly `header` (starting with the cell columns).
-pub fn read_table(path: &Path, header: &[String]) -> Result<Table, ResultsError> {
+/// Reads a collected CSV file that must have exactly `header` (starting with the cell columns
+/// of `axes`).
+pub fn read_table(path: &Path, axes: Axes, header: &[String]) -> Result<Table, ResultsError> {
     let mut table = Table::new(header.to_vec());
     for fields in read_records(path, header)? {
-        let cell = cell_of(&fields).map_err(|value| ResultsError::Cell {
+        let cell = cell_of(axes, &fields).map_err(|value| ResultsError::Cell {
             path: path.to_path_buf(),
             line: fields.position().map_or(0, |p| p.line()),
             value,
@@ -185,38 +214,53 @@ fn rows_by_cell(table: &Table) -> HashMap<CellKey, Vec<&csv::StringRecord>> {
 }
 
 impl Results {
+    /// Empty files whose lead columns name `axes`.
+    pub fn empty(axes: Axes) -> Results {
+        Results {
+            axes,
+            planners: Vec::new(),
+            profiles: Vec::new(),
+            predictors: Vec::new(),
+            episodes: Table::new(episodes_header(axes)),
+            vehicles: Table::new(vehicles_header(axes)),
+            timings: Table::new(timings_header(axes)),
+            failures: Table::new(failures_header(axes)),
+        }
+    }
+
     /// Reads a campaign directory's collected files; `failures.csv` and `timings.csv` may be
     /// missing. `planners` and `profiles` give the grid's order (those seen only in the rows
-    /// follow in order of appearance).
+    /// follow in order of appearance). The axes are those `episodes.csv`'s header names.
     pub fn read(
         dir: &Path,
         planners: &[String],
         profiles: &[String],
     ) -> Result<Results, ResultsError> {
         let episodes_path = dir.join("episodes.csv");
-        let episodes = read_table(&episodes_path, &episodes_header())?;
-        super::validate::check_episodes(&episodes_path, &episodes)?;
+        let axes = Axes::of_header(&header_of(&episodes_path)?);
+        let episodes = read_table(&episodes_path, axes, &episodes_header(axes))?;
+        super::validate::check_episodes(&episodes_path, axes, &episodes)?;
         let mut res = Results {
             planners: planners.to_vec(),
             profiles: profiles.to_vec(),
             episodes,
-            vehicles: read_table(&dir.join("vehicles.csv"), &vehicles_header())?,
-            ..Results::default()
+            vehicles: read_table(&dir.join("vehicles.csv"), axes, &vehicles_header(axes))?,
+            ..Results::empty(axes)
         };
         for (name, table, header) in [
-            ("timings.csv", &mut res.timings, timings_header()),
-            ("failures.csv", &mut res.failures, failures_header()),
+            ("timings.csv", &mut res.timings, timings_header(axes)),
+            ("failures.csv", &mut res.failures, failures_header(axes)),
         ] {
             let p = dir.join(name);
             if p.exists() {
-                *table = read_table(&p, &header)?;
+                *table = read_table(&p, axes, &header)?;
             }
         }
         res.note_order();
         Ok(res)
     }
 
-    /// Appends the planners and profiles seen in the rows but not yet in the order.
+    /// Appends the planners, profiles and predictors seen in the rows but not yet in the order.
     fn note_order(&mut self) {
         for t in [
             &self.episodes,
@@ -230,6 +274,11 @@ impl Results {
                 }
                 if !self.profiles.contains(&r.cell.hdv_profile) {
                     self.profiles.push(r.cell.hdv_profile.clone());
+                }
+                if let Some(p) = &r.cell.predictor {
+                    if !self.predictors.contains(p) {
+                        self.predictors.push(p.clone());
+                    }
                 }
             }
         }
@@ -246,9 +295,12 @@ impl Results {
                 .collect()
         };
         let (planner_rank, profile_rank) = (rank(&self.planners), rank(&self.profiles));
+        let predictor_rank = rank(&self.predictors);
+        let predictor = |r: &Row| r.cell.predictor.as_ref().map(|p| predictor_rank[p]);
         let order = |a: &Row, b: &Row| {
             planner_rank[&a.cell.planner]
                 .cmp(&planner_rank[&b.cell.planner])
+                .then(predictor(a).cmp(&predictor(b)))
                 .then(profile_rank[&a.cell.hdv_profile].cmp(&profile_rank[&b.cell.hdv_profile]))
                 .then(a.cell.alpha.total_cmp(&b.cell.alpha))
                 .then(a.cell.lambda.total_cmp(&b.cell.lambda))
@@ -269,11 +321,19 @@ impl Results {
     /// once, from the first directory); any difference is an error naming the file. Timings may
     /// differ (they are wall-clock). A failure is kept only for cells nobody finished.
     pub fn merge(parts: &[(PathBuf, Results)]) -> Result<Results, ResultsError> {
-        let mut merged = Results::default();
+        let axes = parts.first().map(|(_, p)| p.axes).unwrap_or_default();
+        if let Some((dir, _)) = parts.iter().find(|(_, p)| p.axes != axes) {
+            return Err(ResultsError::Axes {
+                first: parts[0].0.join("episodes.csv"),
+                second: dir.join("episodes.csv"),
+            });
+        }
+        let mut merged = Results::empty(axes);
         for (_, part) in parts {
             for (mine, theirs) in [
                 (&mut merged.planners, &part.planners),
                 (&mut merged.profiles, &part.profiles),
+                (&mut merged.predictors, &part.predictors),
             ] {
                 for name in theirs {
                     if !mine.contains(name) {

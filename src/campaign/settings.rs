@@ -34,7 +34,7 @@ use super::checks::{
 use super::comparison::{campaign_file, run_difference};
 use super::grid::{Cell, Grid, Shard};
 pub use super::overrides::Overrides;
-use crate::config::{Config, ConfigError};
+use crate::config::{Config, ConfigError, PredictorKind};
 use crate::controller::PLANNERS;
 
 /// The `[campaign]` table: the grid and how to run it.
@@ -63,6 +63,10 @@ pub struct CampaignTable {
     /// HDV driver profiles, a grid axis; default: the one of `[hdv] profile`.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub hdv_profiles: Vec<String>,
+    /// HDV predictors of the planners (`learned`, `constant`), a grid axis; default: none, every
+    /// cell runs `[predictor] kind` (and cells keep the names and columns they had).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub predictors: Vec<String>,
     /// The SUMO version the campaign runs on: always the one bkpbs was built against (written
     /// into `campaign.toml`; a cell another SUMO ran runs again, and `report` merges campaigns
     /// of different versions only with `--allow-mixed`).
@@ -81,6 +85,7 @@ impl Default for CampaignTable {
             workers: None,
             episode_timeout: None,
             hdv_profiles: Vec::new(),
+            predictors: Vec::new(),
             sumo_version: crate::sumo::version::BUILT.to_string(),
         }
     }
@@ -128,6 +133,14 @@ fn apply_overrides(table: &mut CampaignTable, o: &Overrides) -> Result<(), Setti
     }
     if let Some(text) = &o.hdv_profiles {
         table.hdv_profiles = parse_list("--hdv-profiles", text)?;
+    }
+    if let Some(text) = &o.predictors {
+        table.predictors = parse_list("--predictors", text)?;
+        if table.predictors.is_empty() {
+            return Err(SettingsError::Empty {
+                origin: "--predictors".into(),
+            });
+        }
     }
     table.seeds = o.seeds.unwrap_or(table.seeds);
     table.seed_base = o.seed_base.unwrap_or(table.seed_base);
@@ -182,6 +195,10 @@ impl Settings {
             table.seeds,
         )
         .with_profiles(&profiles);
+        let grid = match table.predictors.is_empty() {
+            true => grid,
+            false => grid.with_predictors(&table.predictors),
+        };
         check_cells(&config, &grid)?;
         Ok(Settings {
             table,
@@ -200,6 +217,9 @@ impl Settings {
         c.scenario.lambda = cell.lambda;
         c.scenario.seed = cell.seed;
         c.hdv.profile = cell.hdv_profile.clone();
+        if let Some(p) = &cell.predictor {
+            c.predictor.kind = predictor_kind(p).expect("checked when the settings resolved");
+        }
         c
     }
 
@@ -232,7 +252,31 @@ impl Settings {
     /// The first scenario setting (dotted key) in which two campaigns' episodes differ, if any:
     /// campaigns that agree here may share a results directory.
     pub fn scenario_difference(&self, other: &Settings) -> Option<String> {
+        if self.grid.has_predictor_axis() != other.grid.has_predictor_axis() {
+            // One names a predictor per cell in its collected files, the other not.
+            return Some("campaign.predictors".into());
+        }
         run_difference((&self.config, &self.table), (&other.config, &other.table))
+    }
+}
+
+/// The predictor a name of the predictor axis selects.
+fn predictor_kind(name: &str) -> Option<PredictorKind> {
+    <PredictorKind as clap::ValueEnum>::from_str(name, false).ok()
+}
+
+/// Every entry of the predictor axis must name a predictor.
+fn check_predictors(
+    predictors: &[String],
+    o: &Overrides,
+    file: Option<&Path>,
+) -> Result<(), SettingsError> {
+    match predictors.iter().find(|p| predictor_kind(p).is_none()) {
+        None => Ok(()),
+        Some(p) => Err(SettingsError::UnknownPredictor {
+            origin: origin(o.predictors.is_some(), "--predictors", "predictors", file),
+            name: p.clone(),
+        }),
     }
 }
 
@@ -244,6 +288,7 @@ fn check_table(
     file: Option<&Path>,
 ) -> Result<(), SettingsError> {
     check_planners_and_alphas(&table.planners, &table.alphas, o, file)?;
+    check_predictors(&table.predictors, o, file)?;
     check_values(
         &origin(o.lambdas.is_some(), "--lambdas", "lambdas", file),
         "λ",
@@ -254,17 +299,22 @@ fn check_table(
     check_seeds_and_steps(table.seeds, Some(table.steps), o, file)
 }
 
-/// Every (α, λ) of the grid must make a valid episode configuration, so that no cell fails on
-/// its settings halfway through the campaign.
+/// Every (predictor, profile, α, λ) of the grid must make a valid episode configuration, so
+/// that no cell fails on its settings halfway through the campaign.
 fn check_cells(config: &Config, grid: &Grid) -> Result<(), ConfigError> {
-    for profile in &grid.profiles {
-        for &alpha in &grid.alphas {
-            for &lambda in &grid.lambdas {
-                let mut c = config.clone();
-                c.scenario.alpha = alpha;
-                c.scenario.lambda = lambda;
-                c.hdv.profile = profile.clone();
-                c.validate()?;
+    for predictor in &grid.predictors {
+        for profile in &grid.profiles {
+            for &alpha in &grid.alphas {
+                for &lambda in &grid.lambdas {
+                    let mut c = config.clone();
+                    c.scenario.alpha = alpha;
+                    c.scenario.lambda = lambda;
+                    c.hdv.profile = profile.clone();
+                    if let Some(kind) = predictor.as_deref().and_then(predictor_kind) {
+                        c.predictor.kind = kind;
+                    }
+                    c.validate()?;
+                }
             }
         }
     }

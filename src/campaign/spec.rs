@@ -110,8 +110,12 @@ impl CampaignSpec for super::Settings {
             1 => String::new(),
             n => format!(" × {n} HDV profiles"),
         };
+        let predictors = match g.has_predictor_axis() {
+            false => String::new(),
+            true => format!(" × {} predictors", g.predictors.len()),
+        };
         format!(
-            "{} planners{profiles} × {} α × {} λ × {} seeds",
+            "{} planners{predictors}{profiles} × {} α × {} λ × {} seeds",
             g.planners.len(),
             g.alphas.len(),
             g.lambdas.len(),

@@ -5,8 +5,57 @@
 
 use super::grid::Cell;
 
-/// The columns that name a cell; every collected file starts with them.
+/// The columns that name a cell; every collected file starts with them (and an episode's own
+/// `episode.csv`), with [`PREDICTOR_COLUMN`] after the planner on a grid with that axis.
 pub const CELL_COLUMNS: [&str; 5] = ["planner", "alpha", "lambda", "seed", "hdv_profile"];
+
+/// The lead column of the predictor axis (`--predictors`).
+pub const PREDICTOR_COLUMN: &str = "predictor";
+
+/// Which optional axes a campaign's collected files name in their lead columns; a grid without
+/// them keeps the columns (and directory names) it always had.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Axes {
+    /// The predictor axis: a `predictor` column after `planner`.
+    pub predictor: bool,
+}
+
+impl Axes {
+    /// The axes of a file with `header`.
+    pub fn of_header(header: &[String]) -> Axes {
+        Axes {
+            predictor: header.get(1).is_some_and(|c| c == PREDICTOR_COLUMN),
+        }
+    }
+
+    /// `columns` (led by [`CELL_COLUMNS`], as an episode writes them) with these axes' lead
+    /// columns.
+    pub fn header(self, columns: &[&str]) -> Vec<String> {
+        let mut out: Vec<String> = columns.iter().map(|c| c.to_string()).collect();
+        if self.predictor {
+            out.insert(1, PREDICTOR_COLUMN.to_string());
+        }
+        out
+    }
+
+    /// `fields` (led by the [`CELL_COLUMNS`] values) with `cell`'s values of these axes.
+    pub fn row<'a>(
+        self,
+        cell: &Cell,
+        fields: impl IntoIterator<Item = &'a str>,
+    ) -> csv::StringRecord {
+        let mut fields: Vec<&str> = fields.into_iter().collect();
+        if self.predictor {
+            fields.insert(1, cell.predictor.as_deref().unwrap_or(""));
+        }
+        csv::StringRecord::from(fields)
+    }
+
+    /// How many lead columns name the cell.
+    pub fn lead_len(self) -> usize {
+        CELL_COLUMNS.len() + usize::from(self.predictor)
+    }
+}
 
 /// One CSV row and the cell it belongs to.
 #[derive(Debug, Clone, PartialEq)]
@@ -51,8 +100,9 @@ impl Table {
     }
 }
 
-/// Identity of a cell for lookups: planner, α and λ (by value), seed, HDV profile.
-pub type CellKey = (String, u64, u64, u64, String);
+/// Identity of a cell for lookups: planner, α and λ (by value), seed, HDV profile,
+/// predictor.
+pub type CellKey = (String, u64, u64, u64, String, Option<String>);
 
 /// Identity of a cell for lookups (α and λ by value).
 pub fn key(c: &Cell) -> CellKey {
@@ -62,5 +112,6 @@ pub fn key(c: &Cell) -> CellKey {
         c.lambda.to_bits(),
         c.seed,
         c.hdv_profile.clone(),
+        c.predictor.clone(),
     )
 }

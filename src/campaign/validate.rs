@@ -7,7 +7,7 @@
 use std::collections::HashSet;
 use std::path::{Path, PathBuf};
 
-use super::table::{key, Table, CELL_COLUMNS};
+use super::table::{key, Axes, Table};
 use crate::episode::metrics::Summary;
 
 /// The first thing wrong with a collected `episodes.csv`.
@@ -119,8 +119,9 @@ fn problem_under(rules: &Rules, column: &str, value: &str) -> Option<&'static st
     }
 }
 
-/// Checks every row of `table`, read from `path`: each cell once, every value in range.
-pub fn check_episodes(path: &Path, table: &Table) -> Result<(), RowError> {
+/// Checks every row of `table`, read from `path` with the lead columns of `axes`: each cell
+/// once, every value in range.
+pub fn check_episodes(path: &Path, axes: Axes, table: &Table) -> Result<(), RowError> {
     let mut seen = HashSet::new();
     for row in &table.rows {
         let line = row.fields.position().map_or(0, |p| p.line());
@@ -132,10 +133,11 @@ pub fn check_episodes(path: &Path, table: &Table) -> Result<(), RowError> {
             });
         }
         // The cell columns are checked when the row is read.
-        for (column, value) in Summary::columns()
+        for (column, value) in axes
+            .header(Summary::columns())
             .iter()
             .zip(row.fields.iter())
-            .skip(CELL_COLUMNS.len())
+            .skip(axes.lead_len())
         {
             if let Some(reason) = problem(column, value) {
                 return Err(RowError::Value {
@@ -203,7 +205,8 @@ mod tests {
         for column in DELAYS.iter().chain([&RATE]) {
             assert!(Summary::columns().contains(column), "{column}");
         }
-        assert_eq!(&Summary::columns()[..CELL_COLUMNS.len()], CELL_COLUMNS);
+        let lead = crate::campaign::table::CELL_COLUMNS;
+        assert_eq!(&Summary::columns()[..lead.len()], lead);
     }
 
     #[test]

@@ -38,6 +38,11 @@ pub struct CampaignArgs {
     /// sumo-safe].
     #[arg(long, value_name = "NAMES")]
     hdv_profiles: Option<String>,
+    /// HDV predictors of the planners, comma-separated (learned, constant): a grid axis; the
+    /// report then compares `bk-pbs+learned` with `bk-pbs+constant` [default: the config's
+    /// predictor.kind, no axis].
+    #[arg(long, value_name = "NAMES")]
+    predictors: Option<String>,
     /// Seeds per cell [default: 5].
     #[arg(long)]
     seeds: Option<u64>,
@@ -87,6 +92,7 @@ impl CampaignArgs {
             alphas: self.alphas,
             lambdas: self.lambdas,
             hdv_profiles: self.hdv_profiles,
+            predictors: self.predictors,
             seeds: self.seeds,
             seed_base: self.seed_base,
             steps: self.steps,

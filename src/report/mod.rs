@@ -9,6 +9,7 @@
 //! Figures of one episode: [`episode_plots`] (`bkpbs plot`), from its trajectories
 //! ([`lane_tracks`]) drawn by [`timespace`], and the collision close-ups of [`explain`].
 
+pub mod arms;
 pub mod calibration;
 pub mod entries;
 pub mod episode_plots;
@@ -263,6 +264,7 @@ pub fn run_versus(
     }
     let out = out.unwrap_or(first).to_path_buf();
     let (results, mut files) = gather(dirs, &out, allow_mixed)?;
+    let results = arms::by_arm(results);
     let episodes = out.join("episodes.csv");
     let summary = Summary::from_results(&results, &episodes)?;
     let by_entry = entries::rows(&results);

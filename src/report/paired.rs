@@ -328,6 +328,7 @@ mod tests {
                 lambda: 3000.0,
                 seed,
                 hdv_profile: "h".into(),
+                predictor: None,
             };
             let fields = [
                 planner.to_string(),

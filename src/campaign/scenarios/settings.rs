@@ -131,6 +131,14 @@ fn refuse_demand_settings(
             });
         }
     }
+    let set = o.predictors.is_some();
+    if set || keys.iter().any(|k| k == "predictors") {
+        return Err(SettingsError::NotYetWithScenarios {
+            origin: origin(set, "--predictors", "predictors", file),
+            why: "the predictor axis runs on the paper's demand only so far; run one campaign \
+                  over your scenarios per [predictor] kind (in its --config)",
+        });
+    }
     Ok(())
 }
 
