@@ -6,7 +6,7 @@
 use std::fmt;
 use std::path::{Path, PathBuf};
 
-use super::comparison::results_settings;
+use super::comparison::{first_difference, results_settings};
 pub use super::grid::GridCell;
 use super::results::read_records;
 use super::worker::{DONE_FILE, ERROR_FILE, SETTINGS_RECORD};
@@ -102,10 +102,21 @@ pub fn rows_counted(
 pub fn check_settings_record(dir: &Path, config: &Config) -> Result<(), String> {
     let recorded = read_text(&dir.join(SETTINGS_RECORD), FileKind::Config)
         .map_err(|_| format!("{SETTINGS_RECORD} is missing or unreadable"))?;
-    if recorded != results_settings(config) {
-        return Err(format!("{SETTINGS_RECORD} records other settings"));
+    let expected = results_settings(config);
+    if recorded == expected {
+        return Ok(());
     }
-    Ok(())
+    let parse = |text: &str| text.parse::<toml::Table>().map(toml::Value::Table).ok();
+    let first = parse(&recorded)
+        .zip(parse(&expected))
+        .and_then(|(a, b)| first_difference(&a, &b, ""));
+    Err(match first {
+        Some(key) => match key.strip_prefix("scenario.sumocfg_digests.") {
+            Some(file) => format!("its scenario's file '{file}' is not the one it ran with"),
+            None => format!("{SETTINGS_RECORD} records other settings ({key} differs)"),
+        },
+        None => format!("{SETTINGS_RECORD} records other settings"),
+    })
 }
 
 /// Why the unfinished cell in `dir` has no result, for `failures.csv`: its `error.txt`, or

@@ -183,7 +183,7 @@ pub(crate) fn read_parts<T: serde::de::DeserializeOwned + Default>(
                         "alpha" => "alphas",
                         "lambda" => "lambdas",
                         "seed" => "seed_base",
-                        "sumocfg" => "scenarios",
+                        "sumocfg" | "sumocfg_digests" => "scenarios",
                         _ => "steps",
                     },
                 });

@@ -7,7 +7,14 @@ use serde::Serialize;
 use crate::config::Config;
 
 /// Scenario keys a campaign sets itself, per cell.
-pub(super) const PER_CELL_KEYS: [&str; 5] = ["alpha", "lambda", "seed", "steps", "sumocfg"];
+pub(super) const PER_CELL_KEYS: [&str; 6] = [
+    "alpha",
+    "lambda",
+    "seed",
+    "steps",
+    "sumocfg",
+    "sumocfg_digests",
+];
 
 /// The keys of either kind of `[campaign]` table that change what a cell runs, in the order
 /// they are compared; the others add cells (the axes) or change only how cells are run.

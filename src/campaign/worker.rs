@@ -11,6 +11,7 @@
 //! next request. A stop signal ends the episode early (its input removed) and the worker with
 //! it, without a reply: the cell is unfinished and runs again next time.
 
+use std::collections::BTreeMap;
 use std::io::{BufRead, Write};
 use std::panic::{self, AssertUnwindSafe};
 use std::path::{Path, PathBuf};
@@ -221,8 +222,11 @@ enum Ran {
 impl Ran {
     fn run(req: &Request) -> Result<Ran, String> {
         let (config, planner) = (&req.config, &req.planner);
-        let ran = match config.scenario.sumocfg {
-            Some(_) => episode::sumocfg::run(config, planner).map(|r| Ran::Scenario(Box::new(r))),
+        let ran = match &config.scenario.sumocfg {
+            Some(cfg) => {
+                same_scenario(cfg, &config.scenario.sumocfg_digests)?;
+                episode::sumocfg::run(config, planner).map(|r| Ran::Scenario(Box::new(r)))
+            }
             None => episode::run(config, planner).map(|r| Ran::Demand(Box::new(r))),
         };
         ran.map_err(|e| e.to_string())
@@ -234,6 +238,23 @@ impl Ran {
             Ran::Demand(r) => r.write(dir).map(drop),
             Ran::Scenario(r) => episode::sumocfg::write(r, dir).map(drop),
         }
+    }
+}
+
+/// Refuses to run a scenario whose files are not those the campaign recorded when it started
+/// (`digests`; none recorded: nothing to check): a route file edited mid-campaign would mix two
+/// scenarios under one name.
+fn same_scenario(cfg: &Path, digests: &BTreeMap<String, String>) -> Result<(), String> {
+    if digests.is_empty() {
+        return Ok(());
+    }
+    match crate::sumo::scenario_files::first_change(cfg, digests) {
+        Ok(None) => Ok(()),
+        Ok(Some(change)) => Err(format!(
+            "the scenario {} is not the one the campaign started with: {change}",
+            cfg.display()
+        )),
+        Err(e) => Err(e.to_string()),
     }
 }
 

@@ -48,6 +48,12 @@ pub struct Scenario {
     /// share α drawn per vehicle. Empty: the draw.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub cav_types: Vec<String>,
+    /// Set by a campaign over scenarios, per cell: the SHA-256 of `sumocfg` and of every file it
+    /// names (net, routes, additional files), by the name it gives them. The cell's record of
+    /// its settings carries them, so a cell whose scenario changed runs again; the worker
+    /// refuses to run a scenario whose files no longer match. Empty: not checked.
+    #[serde(skip_serializing_if = "std::collections::BTreeMap::is_empty")]
+    pub sumocfg_digests: std::collections::BTreeMap<String, String>,
 }
 
 impl Default for Scenario {
@@ -67,6 +73,7 @@ impl Default for Scenario {
             regions: Vec::new(),
             sumocfg: None,
             cav_types: Vec::new(),
+            sumocfg_digests: std::collections::BTreeMap::new(),
         }
     }
 }

@@ -12,6 +12,7 @@ pub mod frame;
 pub mod layout;
 pub mod network;
 pub mod road_frame;
+pub mod scenario_files;
 pub mod sumocfg;
 pub mod version;
 

@@ -14,6 +14,7 @@
 //! place here; each scenario runs its own `begin`–`end` unless `steps` shortens it. Every
 //! scenario is read and its step length checked before the first episode starts.
 
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
@@ -28,6 +29,7 @@ use crate::campaign::comparison::{campaign_file, run_difference};
 use crate::campaign::grid::{seed_range, sorted_unique, unique, Shard};
 use crate::campaign::settings::{CampaignTable, Overrides, SettingsError};
 use crate::config::Config;
+use crate::sumo::scenario_files;
 use crate::sumo::sumocfg::SumoConfig;
 
 /// The `[campaign]` table of a campaign over scenarios.
@@ -92,6 +94,9 @@ pub struct ScenarioSettings {
     pub config: Config,
     /// Each scenario's steps, in the order of `grid.scenarios`.
     steps: Vec<u32>,
+    /// Per scenario (in grid order), the digests of its files
+    /// ([`crate::sumo::scenario_files::digests`]), which every cell's settings record carries.
+    digests: Vec<BTreeMap<String, String>>,
 }
 
 /// Is this campaign one over scenarios of the user's own: `--sumocfg` given, or a file whose
@@ -192,6 +197,11 @@ impl ScenarioSettings {
         let timeout = episode_timeout(table.episode_timeout, o.episode_timeout.is_some(), file)?;
         let grid = checked_grid(&table, o, file)?;
         let steps = scenario_steps(&grid.scenarios, table.steps, config.scenario.dt)?;
+        let digests = grid
+            .scenarios
+            .iter()
+            .map(|path| scenario_files::digests(path))
+            .collect::<Result<_, _>>()?;
         let settings = ScenarioSettings {
             table,
             grid,
@@ -200,6 +210,7 @@ impl ScenarioSettings {
             episode_timeout: timeout,
             config,
             steps,
+            digests,
         };
         for cell in settings.grid.cells() {
             settings.episode_config(&cell).validate()?;
@@ -215,6 +226,9 @@ impl ScenarioSettings {
         c.scenario.alpha = cell.alpha;
         c.scenario.seed = cell.seed;
         c.scenario.steps = i.map_or(c.scenario.steps, |i| self.steps[i]);
+        if let Some(i) = i {
+            c.scenario.sumocfg_digests = self.digests[i].clone();
+        }
         c
     }
 
