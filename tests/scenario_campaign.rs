@@ -220,6 +220,23 @@ fn a_campaign_over_scenarios_refuses_bad_settings_before_any_episode() {
     std::fs::copy(ramp, &other).unwrap();
     let o = campaign(&format!("{ramp},{}", other.display()), &out, &[]);
     refused_naming(&o, &["two scenarios are named 'ramp'"]);
+    // Once a scenario named '..' put every planner's cells in one directory, and α = 1e-300
+    // made every cell fail with "File name too long".
+    let dots = game.join("...sumocfg");
+    std::fs::copy(ramp, &dots).unwrap();
+    let o = campaign(dots.to_str().unwrap(), &out, &[]);
+    refused_naming(&o, &["...sumocfg", "its name '..'", "rename the file"]);
+    let out_arg = out.to_str().unwrap();
+    let o = bkpbs(&[
+        "campaign",
+        "--sumocfg",
+        ramp,
+        "--alphas",
+        "1e-300",
+        "--out",
+        out_arg,
+    ]);
+    refused_naming(&o, &["--alphas", "α 1e-300", "too many digits"]);
     assert!(!out.join("episodes").exists(), "no episode ran");
 
     // A campaign file with a scenario list is one too, and its paper keys are refused.

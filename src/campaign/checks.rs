@@ -119,6 +119,17 @@ pub enum SettingsError {
         /// The configuration file.
         path: PathBuf,
     },
+    /// A scenario's name (its file name without `.sumocfg`) cannot name a directory.
+    #[error(
+        "{path}: its name '{name}' (the file name without .sumocfg) cannot name its cells' \
+         directory: rename the file"
+    )]
+    BadName {
+        /// The configuration file.
+        path: PathBuf,
+        /// The name it would give its cells.
+        name: String,
+    },
     /// Two scenarios share a name, so their cells would share directories.
     #[error("two scenarios are named '{name}' ({first} and {second}): rename one")]
     SameName {
@@ -246,13 +257,26 @@ pub(crate) fn check_planners_and_alphas(
         planners,
         origin(o.planners.is_some(), "--planners", "planners", file),
     )?;
+    let alpha_origin = origin(o.alphas.is_some(), "--alphas", "alphas", file);
     check_values(
-        &origin(o.alphas.is_some(), "--alphas", "alphas", file),
+        &alpha_origin,
         "α",
         alphas,
         |a| (0.0..=1.0).contains(&a),
         "must lie in [0, 1]",
-    )
+    )?;
+    check_values(&alpha_origin, "α", alphas, names_a_cell, TOO_LONG)
+}
+
+/// What [`names_a_cell`] refuses.
+pub(crate) const TOO_LONG: &str =
+    "has too many digits to name a cell's directory (at most 16 characters as written)";
+
+/// Whether `x` names a cell's directory as Rust's shortest round-trip form writes it
+/// (`a0.4_…`): 16 characters at most. α = 1e-300 once made every cell fail with "File name too
+/// long".
+pub(crate) fn names_a_cell(x: f64) -> bool {
+    x.to_string().len() <= 16
 }
 
 /// The seed count and the steps (where the table sets them) of either kind of campaign's
@@ -363,9 +387,20 @@ pub(crate) fn check_values(
         Some(v) => Err(SettingsError::OutOfRange {
             origin: origin.to_string(),
             what,
-            value: v.to_string(),
+            value: shown(*v),
             reason,
         }),
         None => Ok(()),
+    }
+}
+
+/// A value as an error message shows it: as written, or in scientific notation when that is
+/// long (1e-300 rather than 302 digits).
+fn shown(v: f64) -> String {
+    let plain = v.to_string();
+    if plain.len() > 24 {
+        format!("{v:e}")
+    } else {
+        plain
     }
 }

@@ -28,8 +28,8 @@ use serde::{Deserialize, Serialize};
 
 pub use super::checks::SettingsError;
 use super::checks::{
-    check_planners_and_alphas, check_seeds_and_steps, check_values, episode_timeout, origin,
-    parse_list, read_doc, read_parts, shard_of, worker_count,
+    check_planners_and_alphas, check_seeds_and_steps, check_values, episode_timeout, names_a_cell,
+    origin, parse_list, read_doc, read_parts, shard_of, worker_count, TOO_LONG,
 };
 use super::comparison::{campaign_file, run_difference};
 use super::grid::{Cell, Grid, Shard};
@@ -295,6 +295,13 @@ fn check_table(
         &table.lambdas,
         |l| l > 0.0 && l.is_finite(),
         "must be a positive rate in veh/h",
+    )?;
+    check_values(
+        &origin(o.lambdas.is_some(), "--lambdas", "lambdas", file),
+        "λ",
+        &table.lambdas,
+        names_a_cell,
+        TOO_LONG,
     )?;
     check_seeds_and_steps(table.seeds, Some(table.steps), o, file)
 }

@@ -298,6 +298,13 @@ fn unique_scenarios(given: &[PathBuf]) -> Result<Vec<PathBuf>, SettingsError> {
         if out.contains(s) {
             continue;
         }
+        let name = scenario_name(s);
+        if name.is_empty() || name == "." || name == ".." {
+            return Err(SettingsError::BadName {
+                path: s.clone(),
+                name,
+            });
+        }
         if let Some(first) = out.iter().find(|o| scenario_name(o) == scenario_name(s)) {
             return Err(SettingsError::SameName {
                 name: scenario_name(s),
