@@ -220,6 +220,13 @@ fn a_campaign_over_scenarios_refuses_bad_settings_before_any_episode() {
     std::fs::copy(ramp, &other).unwrap();
     let o = campaign(&format!("{ramp},{}", other.display()), &out, &[]);
     refused_naming(&o, &["two scenarios are named 'ramp'"]);
+    // A tripinfo output of the configuration's own would be one file for every episode.
+    let text = std::fs::read_to_string(ramp).unwrap();
+    let own = game.join("own.sumocfg");
+    let output = "<output><tripinfo-output value=\"t.xml\"/></output></configuration>";
+    std::fs::write(&own, text.replace("</configuration>", output)).unwrap();
+    let o = campaign(own.to_str().unwrap(), &out, &[]);
+    refused_naming(&o, &["own.sumocfg", "tripinfo-output", "t.xml"]);
     assert!(!out.join("episodes").exists(), "no episode ran");
 
     // A campaign file with a scenario list is one too, and its paper keys are refused.
