@@ -237,6 +237,13 @@ fn a_campaign_over_scenarios_refuses_bad_settings_before_any_episode() {
         out_arg,
     ]);
     refused_naming(&o, &["--alphas", "α 1e-300", "too many digits"]);
+    // A tripinfo output of the configuration's own would be one file for every episode.
+    let text = std::fs::read_to_string(ramp).unwrap();
+    let own = game.join("own.sumocfg");
+    let output = "<output><tripinfo-output value=\"t.xml\"/></output></configuration>";
+    std::fs::write(&own, text.replace("</configuration>", output)).unwrap();
+    let o = campaign(own.to_str().unwrap(), &out, &[]);
+    refused_naming(&o, &["own.sumocfg", "tripinfo-output", "t.xml"]);
     assert!(!out.join("episodes").exists(), "no episode ran");
 
     // A campaign file with a scenario list is one too, and its paper keys are refused.

@@ -75,10 +75,9 @@ pub fn resolve_with(
     table.insert("sumocfg".into(), toml::Value::String(path));
     let steps_given = overrides.is_some_and(|o| o.contains("steps").unwrap_or(false));
     let mut config = crate::config::resolve(config, overrides, table)?;
-    if !steps_given {
-        if let Some(n) = SumoConfig::steps_of(sumocfg, config.scenario.dt) {
-            config.scenario.steps = n;
-        }
-    }
+    // `steps=` or the scenario's interval; one without an end is refused as by the CLI.
+    let given = steps_given.then_some(config.scenario.steps);
+    config.scenario.steps = SumoConfig::episode_steps(sumocfg, config.scenario.dt, given)
+        .map_err(|e| bad_input(e.to_string()))?;
     Ok(config)
 }

@@ -130,6 +130,19 @@ pub enum SettingsError {
         /// The name it would give its cells.
         name: String,
     },
+    /// A scenario names its own tripinfo output, which every episode of the campaign would
+    /// write at once and read back as its own.
+    #[error(
+        "{path} names a tripinfo-output of its own ('{file}'): a campaign runs its episodes at \
+         once, each would write that one file and read back another's trips; remove it from a \
+         copy for the campaign (each episode keeps its own)"
+    )]
+    OwnTripinfo {
+        /// The configuration file.
+        path: PathBuf,
+        /// The file it names.
+        file: String,
+    },
     /// Two scenarios share a name, so their cells would share directories.
     #[error("two scenarios are named '{name}' ({first} and {second}): rename one")]
     SameName {

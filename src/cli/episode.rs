@@ -119,6 +119,9 @@ fn run_scenario(e: &Episode) -> Result<()> {
     })?;
     print_scenario_summary(e, &r.summary);
     println!("SUMO options bkpbs set: {}", r.sumo_options.join(" "));
+    for note in &r.sumo_notes {
+        println!("{note}");
+    }
     for row in r.regions.iter().filter(|row| row.from_ramp == 0) {
         eprintln!(
             "warning: region {} received no vehicle from its on-ramp in this episode ({} never \

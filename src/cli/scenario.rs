@@ -74,10 +74,25 @@ impl ScenarioArgs {
     /// Like [`Self::resolve`], with a subcommand's own overrides applied after these flags and
     /// before validation, so the configuration that runs is the one that was checked.
     pub fn resolve_with(&self, more: impl FnOnce(&mut Config)) -> Result<Config> {
-        load_config(self.config.as_deref(), |c| {
+        let config = load_config(self.config.as_deref(), |c| {
             self.apply(c);
             more(c);
-        })
+        })?;
+        self.with_scenario_steps(config)
+    }
+
+    /// `config` running a scenario of the user's own for `--steps`, else for the scenario's
+    /// `begin`–`end` interval; one without an end and no `--steps` is refused (SUMO would run
+    /// it until every vehicle has arrived; an episode runs a number of steps).
+    fn with_scenario_steps(&self, mut config: Config) -> Result<Config> {
+        let Some(cfg) = config.scenario.sumocfg.clone() else {
+            return Ok(config);
+        };
+        let dt = config.scenario.dt;
+        config.scenario.steps =
+            bkpbs::sumo::sumocfg::SumoConfig::episode_steps(&cfg, dt, self.steps)?;
+        config.validate()?;
+        Ok(config)
     }
 
     /// Writes the flags that were given over the file's values.
@@ -103,12 +118,6 @@ impl ScenarioArgs {
         }
         if let Some(cfg) = &self.sumocfg {
             s.sumocfg = Some(cfg.clone());
-            // The scenario's own interval, unless --steps shortens it (an unreadable file is
-            // reported when the episode starts).
-            let interval = bkpbs::sumo::sumocfg::SumoConfig::steps_of(cfg, s.dt);
-            if let (None, Some(n)) = (self.steps, interval) {
-                s.steps = n;
-            }
         }
         if let Some(t) = &self.cav_types {
             s.cav_types = t.clone();

@@ -21,6 +21,7 @@ mod error;
 pub(crate) mod fake;
 mod ffi;
 mod quiet;
+mod sumocfg_refusals;
 mod vehicle;
 
 use std::ffi::{CStr, CString};

@@ -3,7 +3,8 @@
 //! simulated interval — read as SUMO reads them: each option an element with a `value`,
 //! anywhere under `<configuration>` (or `<sumoConfiguration>`), file names relative to the configuration's directory.
 //! Everything else in it (routes, flows, vehicle types, additional files, the user's own
-//! options) SUMO reads itself, from the file.
+//! options) SUMO reads itself, from the file; bkpbs keeps a list of every option it sets, to
+//! say which of them an episode changes and to refuse those that reach outside it.
 
 use std::path::{Path, PathBuf};
 
@@ -22,6 +23,9 @@ pub struct SumoConfig {
     pub begin: f64,
     /// Its `end` (s), if it sets one.
     pub end: Option<f64>,
+    /// Every option it sets, as SUMO reads them (an element with a `value`), in its order:
+    /// (name, value).
+    pub options: Vec<(String, String)>,
 }
 
 /// The root elements of a SUMO configuration file.
@@ -52,7 +56,8 @@ impl SumoConfig {
     /// Reads the configuration at `path`.
     ///
     /// # Errors
-    /// An unreadable file, no `<configuration>`, no `net-file`, or a time that is no number.
+    /// An unreadable file, no `<configuration>`, no `net-file`, a time that is no number, or an
+    /// option that reaches outside the episode (`sumocfg_refusals`).
     pub fn read(path: &Path) -> Result<SumoConfig, SumoConfigError> {
         let bad = |what: String| SumoConfigError::Content {
             path: path.to_path_buf(),
@@ -86,20 +91,55 @@ impl SumoConfig {
         let net = option(&["net-file", "n"])
             .ok_or_else(|| bad("no net-file: bkpbs needs the network to find its merges".into()))?;
         let dir = path.parent().unwrap_or(Path::new("."));
-        Ok(SumoConfig {
+        let cfg = SumoConfig {
             path: path.to_path_buf(),
             net: dir.join(net),
             step_length: time(&["step-length"])?.unwrap_or(1.0),
             begin: time(&["begin", "b"])?.unwrap_or(0.0),
-            end: time(&["end", "e"])?,
-        })
+            // SUMO's -1: no end.
+            end: time(&["end", "e"])?.filter(|e| *e >= 0.0),
+            options: doc
+                .descendants()
+                .filter(|n| n.is_element() && *n != doc.root_element())
+                .filter_map(|n| {
+                    let value = n.attribute("value")?;
+                    Some((n.tag_name().name().to_string(), value.to_string()))
+                })
+                .collect(),
+        };
+        match super::sumocfg_refusals::first_refusal(&cfg.options) {
+            Some(what) => Err(bad(what)),
+            None => Ok(cfg),
+        }
     }
 
-    /// The steps of `dt` of the interval of the configuration at `path`: an episode's default
-    /// length. `None` for a file that cannot be read (the episode reports it when it starts)
-    /// or that sets no end.
-    pub fn steps_of(path: &Path, dt: f64) -> Option<u32> {
-        SumoConfig::read(path).ok()?.steps(dt)
+    /// The value the configuration gives the option of any of `names` (an option's name and
+    /// its abbreviations or synonyms), if it sets it.
+    pub fn option(&self, names: &[&str]) -> Option<&str> {
+        self.options
+            .iter()
+            .find(|(k, _)| names.contains(&k.as_str()))
+            .map(|(_, v)| v.as_str())
+    }
+
+    /// An episode's length in steps of `dt`: `given` (`--steps`), else the configuration's
+    /// `begin`–`end` interval.
+    ///
+    /// # Errors
+    /// An unreadable configuration, or one that sets no `end` when no length is given: SUMO
+    /// would run it until every vehicle has arrived, bkpbs runs a fixed number of steps.
+    pub fn episode_steps(path: &Path, dt: f64, given: Option<u32>) -> Result<u32, SumoConfigError> {
+        let cfg = SumoConfig::read(path)?;
+        match (given, cfg.steps(dt)) {
+            (Some(n), _) | (None, Some(n)) => Ok(n),
+            (None, None) => Err(SumoConfigError::Content {
+                path: path.to_path_buf(),
+                what: "it sets no <end> (SUMO would run until every vehicle has arrived; an \
+                       episode runs a fixed number of steps): set <end value=\"…\"/> in it or \
+                       give --steps"
+                    .into(),
+            }),
+        }
     }
 
     /// Steps of `dt` from its begin to its end, if it has an end.
@@ -188,6 +228,18 @@ mod tests {
         std::fs::write(&p, r#"<routes><net-file value="a"/></routes>"#).unwrap();
         let e = SumoConfig::read(&p).unwrap_err().to_string();
         assert!(e.contains("root element is <routes>"), "{e}");
+    }
+
+    /// An option that reaches outside the episode is refused naming it and the file.
+    #[test]
+    fn a_traci_server_is_refused_naming_the_file() {
+        let d = tempfile::tempdir().unwrap();
+        let p = write(
+            d.path(),
+            r#"<net-file value="a"/><remote-port value="8813"/>"#,
+        );
+        let e = SumoConfig::read(&p).unwrap_err().to_string();
+        assert!(e.contains("s.sumocfg") && e.contains("remote-port"), "{e}");
     }
 
     /// The root newer SUMO writes (the games shipped with 1.28 have it).

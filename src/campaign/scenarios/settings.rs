@@ -317,8 +317,9 @@ fn unique_scenarios(given: &[PathBuf]) -> Result<Vec<PathBuf>, SettingsError> {
     Ok(out)
 }
 
-/// Each scenario's steps: `steps` if given, else its own interval; each read and its step
-/// length checked against the planners' `dt`.
+/// Each scenario's steps: `steps` if given, else its own interval; each read, its step
+/// length checked against the planners' `dt`, and one naming its own tripinfo output refused
+/// (the campaign's episodes would share it).
 fn scenario_steps(
     scenarios: &[PathBuf],
     steps: Option<u32>,
@@ -329,6 +330,14 @@ fn scenario_steps(
         .map(|path| {
             let cfg = SumoConfig::read(path)?;
             cfg.check_step(dt)?;
+            if let Some(file) = cfg.option(&["tripinfo-output", "tripinfo"]) {
+                if !file.trim().is_empty() {
+                    return Err(SettingsError::OwnTripinfo {
+                        path: path.clone(),
+                        file: file.to_string(),
+                    });
+                }
+            }
             match (steps, cfg.steps(dt)) {
                 (Some(n), _) | (None, Some(n)) => Ok(n),
                 (None, None) => Err(SettingsError::NoInterval { path: path.clone() }),

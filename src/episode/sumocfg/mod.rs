@@ -19,6 +19,7 @@
 //! are its trained action space). Campaigns over scenarios run these episodes in worker
 //! processes (`campaign::scenarios`).
 
+mod options;
 mod own_loop;
 mod passage;
 mod records;
@@ -42,6 +43,7 @@ use crate::sumo::frame;
 use crate::sumo::sumocfg::{SumoConfig, SumoConfigError};
 use crate::sumo::{Simulation, StderrCapture};
 
+pub use options::{has_cavs, sumo_options, SumoOptions};
 pub use own_loop::OwnLoop;
 pub use records::{csv_of, ScenarioSummary, ScenarioVehicle};
 pub use region_rows::RegionRow;
@@ -60,6 +62,8 @@ pub struct ScenarioResult {
     pub collisions: Vec<CollisionEvent>,
     /// The options bkpbs gave SUMO beside the user's configuration.
     pub sumo_options: Vec<String>,
+    /// One line per setting of the user's configuration bkpbs changed, saying why.
+    pub sumo_notes: Vec<String>,
     /// What SUMO printed to stderr.
     pub sumo_log: String,
     /// Its wall-clock figures (`timing.csv`): planning per step is every region's together.
@@ -99,35 +103,6 @@ pub fn region_dirs(dir: &std::path::Path) -> Vec<PathBuf> {
 /// A region's trajectory directory below an episode's `dir`.
 pub fn region_dir(dir: &std::path::Path, region: &str) -> PathBuf {
     dir.join(TRAJECTORIES_DIR).join(region.replace(' ', "+"))
-}
-
-/// The SUMO command line: the user's configuration, then what bkpbs must set — collisions
-/// reported, not acted on (the episode removes both vehicles, as for its own demand); no
-/// teleports (a jam stays a jam and every trip is accounted for); lane changes taking
-/// `scenario.lane_change_duration` (the planners' primitives assume it); the episode's seed;
-/// the tripinfo output bkpbs reads, unfinished trips included; SUMO's progress output off.
-pub fn sumo_options(config: &Config, tripinfo: &std::path::Path) -> Vec<String> {
-    let s = &config.scenario;
-    [
-        ("--collision.action", "warn".to_string()),
-        ("--collision.check-junctions", "true".into()),
-        ("--collision.mingap-factor", "0".into()),
-        ("--time-to-teleport", "-1".into()),
-        (
-            "--lanechange.duration",
-            format!("{}", s.lane_change_duration),
-        ),
-        ("--seed", format!("{}", s.seed % (i32::MAX as u64))),
-        ("--tripinfo-output", tripinfo.display().to_string()),
-        ("--tripinfo-output.write-unfinished", "true".into()),
-        ("--verbose", "false".into()),
-        ("--no-step-log", "true".into()),
-        ("--duration-log.disable", "true".into()),
-        ("--no-warnings", (!config.sumo.verbose).to_string()),
-    ]
-    .into_iter()
-    .flat_map(|(k, v)| [k.to_string(), v])
-    .collect()
 }
 
 /// Whether vehicle `id` is a CAV: a draw of probability α on a stream seeded by the
@@ -228,9 +203,8 @@ fn run_planned(
     let (path, cfg) = checked(config)?;
     let roads = frame::scenario_roads(&config.scenario)?;
     let dir = scratch_dir()?;
-    let tripinfo = dir.path().join("tripinfo.xml");
-    let options = sumo_options(config, &tripinfo);
-    let args = command_line(config, &path, &options);
+    let options = sumo_options(config, &cfg, dir.path());
+    let args = command_line(config, &path, &options.args);
     let wall = std::time::Instant::now();
     let capture = (!config.sumo.verbose).then(StderrCapture::start).flatten();
     let outcome = (|| {
@@ -243,7 +217,7 @@ fn run_planned(
         check_cav_types(&sim, config, &path)?;
         let mut run = make(roads)?;
         run.run(sim)?;
-        Ok::<_, EpisodeError>(run.finish(planner, &tripinfo, options.clone()))
+        Ok::<_, EpisodeError>(run.finish(planner, &options))
     })();
     let sumo_log = capture.map(StderrCapture::finish).unwrap_or_default();
     let mut result = outcome
@@ -323,7 +297,7 @@ fn scratch_dir() -> Result<tempfile::TempDir, EpisodeError> {
 pub fn sumo_alone_ms_per_step(config: &Config) -> Result<f64, EpisodeError> {
     let (path, cfg) = checked(config)?;
     let dir = scratch_dir()?;
-    let options = sumo_options(config, &dir.path().join("tripinfo.xml"));
+    let options = sumo_options(config, &cfg, dir.path()).args;
     let capture = (!config.sumo.verbose).then(StderrCapture::start).flatten();
     let timed = (|| {
         let mut sim = Simulation::start(

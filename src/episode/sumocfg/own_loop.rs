@@ -14,7 +14,8 @@ use crate::sumo::{frame, SumoClient};
 
 use super::run::ScenarioRun;
 use super::ScenarioResult;
-use super::{check_cav_types, checked, command_line, regions, scratch_dir, sumo_options};
+use super::{check_cav_types, checked, command_line, regions, scratch_dir};
+use super::{sumo_options, SumoOptions};
 
 /// The episode's state between the caller's steps.
 pub struct OwnLoop {
@@ -23,9 +24,11 @@ pub struct OwnLoop {
     config: Config,
     /// The user's SUMO configuration.
     sumocfg: PathBuf,
-    /// The options bkpbs needs beside it, the tripinfo output into `dir` among them.
-    options: Vec<String>,
-    dir: tempfile::TempDir,
+    /// The options bkpbs needs beside it, its tripinfo output into `dir` among them when
+    /// the configuration names none.
+    options: SumoOptions,
+    /// Holds bkpbs's tripinfo output until the episode ends.
+    _scratch: tempfile::TempDir,
     /// SUMO's time when the step to book next began: read at the start and after each step.
     clock: Option<f64>,
     /// Steps booked so far.
@@ -40,17 +43,17 @@ impl OwnLoop {
     /// As `sumocfg::run`'s before SUMO starts.
     pub fn new(config: &Config, planner: &str) -> Result<OwnLoop, EpisodeError> {
         config.validate()?;
-        let (sumocfg, _) = checked(config)?;
+        let (sumocfg, cfg) = checked(config)?;
         let roads = frame::scenario_roads(&config.scenario)?;
         let dir = scratch_dir()?;
-        let options = sumo_options(config, &dir.path().join("tripinfo.xml"));
+        let options = sumo_options(config, &cfg, dir.path());
         Ok(OwnLoop {
             run: ScenarioRun::new(config, regions(config, roads, planner)?),
             planner: planner.to_string(),
             config: config.clone(),
             sumocfg,
             options,
-            dir,
+            _scratch: dir,
             clock: None,
             steps: 0,
             started: std::time::Instant::now(),
@@ -59,7 +62,7 @@ impl OwnLoop {
 
     /// The command line to start SUMO with: the user's configuration, then bkpbs's options.
     pub fn sumo_command(&self) -> Vec<String> {
-        command_line(&self.config, &self.sumocfg, &self.options)
+        command_line(&self.config, &self.sumocfg, &self.options.args)
     }
 
     /// The episode's length in steps: the scenario's interval, or `scenario.steps`.
@@ -121,7 +124,7 @@ impl OwnLoop {
     /// Whether SUMO has been closed, so that its tripinfo output is complete.
     pub fn sumo_closed(&self) -> Result<(), EpisodeError> {
         // SUMO writes the document's end when it closes.
-        let complete = std::fs::read_to_string(self.tripinfo())
+        let complete = std::fs::read_to_string(&self.options.tripinfo)
             .is_ok_and(|t| t.trim_end().ends_with("</tripinfos>"));
         if complete {
             return Ok(());
@@ -133,10 +136,6 @@ impl OwnLoop {
         ))
     }
 
-    fn tripinfo(&self) -> PathBuf {
-        self.dir.path().join("tripinfo.xml")
-    }
-
     /// The episode's result, once the caller has closed SUMO (which writes the tripinfo
     /// output): its rows cover the steps booked.
     pub fn finish(mut self) -> Result<ScenarioResult, EpisodeError> {
@@ -144,9 +143,8 @@ impl OwnLoop {
         let loop_s = self.started.elapsed().as_secs_f64();
         self.run.ran_steps(self.steps);
         self.run.close_timing(loop_s);
-        let tripinfo = self.tripinfo();
         self.run
-            .finish(&self.planner, &tripinfo, self.options.clone())
+            .finish(&self.planner, &self.options)
             .map_err(EpisodeError::Output)
     }
 }

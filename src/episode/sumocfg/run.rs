@@ -23,7 +23,7 @@ use super::records::{self, ScenarioSummary, ScenarioVehicle};
 pub use super::region::Region;
 use super::region_rows::{region_rows, RegionRow};
 use super::round::{crosses_a_region, plan_together, Fleet, Round};
-use super::{becomes_cav, ScenarioResult};
+use super::{becomes_cav, has_cavs, ScenarioResult, SumoOptions};
 
 /// SUMO's defaults, restored when a CAV leaves the planned part of a region: every safety check
 /// on, and its own lane changes (SUMO's `speedMode` 31 and `laneChangeMode` 1621).
@@ -74,6 +74,9 @@ pub struct ScenarioRun {
     waiting: HashMap<String, Option<(usize, Origin)>>,
     /// The planners' search effort, over every round of every region.
     plan_stats: PlanStats,
+    /// Whether the episode removes the vehicles of a collision (with CAVs; without, SUMO's
+    /// own `collision.action` does what the configuration says).
+    removes_crashed: bool,
 }
 
 impl ScenarioRun {
@@ -99,6 +102,7 @@ impl ScenarioRun {
             pending: Vec::new(),
             waiting: HashMap::new(),
             plan_stats: PlanStats::default(),
+            removes_crashed: has_cavs(&config.scenario),
         }
     }
 
@@ -280,8 +284,8 @@ impl ScenarioRun {
         Ok(())
     }
 
-    /// Removes both vehicles of each collision and books it (a CAV in it makes it
-    /// controllable).
+    /// Books each collision (a CAV in it makes it controllable) and, in an episode with CAVs,
+    /// removes both vehicles; without, SUMO does what its `collision.action` says.
     fn book_collisions(&mut self, sim: &mut impl SumoClient, now: f64) -> Result<(), SumoError> {
         for c in sim.collisions()? {
             let kind = |id: &str| self.index.get(id).map(|&k| self.lines[k].record.kind);
@@ -299,7 +303,7 @@ impl ScenarioRun {
                     continue;
                 };
                 let r = &mut self.lines[k].record;
-                if r.outcome == Outcome::Present {
+                if self.removes_crashed && r.outcome == Outcome::Present {
                     sim.remove_vehicle(me)?;
                     r.outcome = Outcome::Crashed;
                     r.crash_time_s = Some(now);
@@ -453,10 +457,9 @@ impl ScenarioRun {
     pub fn finish(
         mut self,
         planner: &str,
-        tripinfo: &std::path::Path,
-        sumo_options: Vec<String>,
+        options: &SumoOptions,
     ) -> Result<ScenarioResult, String> {
-        let trips = records::read_trips(tripinfo)?;
+        let trips = records::read_trips(&options.tripinfo)?;
         let (trajectories, traces) = self.take_region_files();
         let vehicles: Vec<ScenarioVehicle> = std::mem::take(&mut self.lines)
             .into_iter()
@@ -496,7 +499,8 @@ impl ScenarioRun {
             regions,
             vehicles,
             collisions: self.collisions,
-            sumo_options,
+            sumo_options: options.args.clone(),
+            sumo_notes: options.notes.clone(),
             sumo_log: String::new(),
             timing: self.timing.expect("timed when the episode ran"),
             vehicles_per_step: per_step(in_scenes),

@@ -65,7 +65,12 @@ fn finish(mut run: ScenarioRun, trips: &str) -> ScenarioResult {
     let path = dir.path().join("tripinfo.xml");
     std::fs::write(&path, format!("<tripinfos>\n{trips}\n</tripinfos>\n")).unwrap();
     run.close_timing(0.0);
-    run.finish("test", &path, Vec::new()).unwrap()
+    let options = super::SumoOptions {
+        args: Vec::new(),
+        notes: Vec::new(),
+        tripinfo: path,
+    };
+    run.finish("test", &options).unwrap()
 }
 
 /// The record of vehicle `id`.

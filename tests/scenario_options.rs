@@ -1,0 +1,225 @@
+//! A user's scenario runs as SUMO runs it, and nothing in it reaches outside: with no CAV the
+//! episode is `sumo -c` trip for trip (the configuration's own tripinfo output included);
+//! a TraCI server port, an output prefix, a random seed and a configuration without an end are
+//! refused, pinned or named, each in one line.
+
+mod common;
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::time::Duration;
+
+use common::{assert_ok, csv_rows, output_within, refused_naming};
+
+/// The configuration's time: 150 s of steps of 0.2 s.
+const TIME: &str = r#"<time><begin value="0"/><end value="150"/><step-length value="0.2"/></time>"#;
+
+/// A three-lane motorway with an on-ramp (netconvert's), a vehicle type distribution of cars,
+/// eager lane changers and trucks on flows with random lanes, and `options` (the elements of
+/// the configuration beside its input): the configuration's path.
+fn motorway(dir: &Path, options: &str) -> PathBuf {
+    common::netconvert_net(dir, 3, &[600.0], false);
+    let routes = r#"<routes>
+    <vTypeDistribution id="mix">
+        <vType id="car" probability="0.6" sigma="0.5" speedFactor="normc(1,0.1,0.7,1.3)"/>
+        <vType id="eager" probability="0.25" lcSpeedGain="3" lcKeepRight="0.2" speedFactor="1.15"/>
+        <vType id="truck" vClass="truck" probability="0.15" length="12" maxSpeed="25"/>
+    </vTypeDistribution>
+    <route id="main" edges="road0 merge0 tail"/>
+    <route id="ramp" edges="entry0 merge0 tail"/>
+    <flow id="m" type="mix" route="main" begin="0" end="150" vehsPerHour="2700" departLane="random" departSpeed="random"/>
+    <flow id="r" type="mix" route="ramp" begin="0" end="150" vehsPerHour="700" departSpeed="max"/>
+</routes>
+"#;
+    std::fs::write(dir.join("m.rou.xml"), routes).unwrap();
+    let cfg = dir.join("m.sumocfg");
+    std::fs::write(
+        &cfg,
+        format!(
+            r#"<configuration>
+    <input><net-file value="n.net.xml"/><route-files value="m.rou.xml"/></input>
+    {options}
+</configuration>
+"#
+        ),
+    )
+    .unwrap();
+    cfg
+}
+
+/// SUMO's trips in a tripinfo file: id → (arrival, timeLoss), to 0.01 s; unfinished trips
+/// (arrival -1) left out.
+fn trips(path: &Path) -> BTreeMap<String, (String, String)> {
+    let text = std::fs::read_to_string(path).unwrap();
+    let doc = roxmltree::Document::parse(&text).unwrap();
+    let num = |n: roxmltree::Node, k: &str| n.attribute(k).unwrap().parse::<f64>().unwrap();
+    doc.descendants()
+        .filter(|n| n.has_tag_name("tripinfo") && num(*n, "arrival") >= 0.0)
+        .map(|n| {
+            let id = n.attribute("id").unwrap().to_string();
+            let arrival = format!("{:.2}", num(n, "arrival"));
+            (id, (arrival, format!("{:.2}", num(n, "timeLoss"))))
+        })
+        .collect()
+}
+
+/// `sumo -c cfg --seed seed` as a user runs it.
+fn sumo_alone(cfg: &Path, seed: &str) {
+    let o = Command::new("sumo")
+        .args(["-c", cfg.to_str().unwrap(), "--seed", seed, "--no-step-log"])
+        .output()
+        .unwrap();
+    assert_ok(&o);
+}
+
+/// With α = 0 there is no CAV, and every vehicle moves as under `sumo -c` with the same seed:
+/// each trip's arrival and timeLoss in `vehicles.csv` are those of SUMO's own tripinfo, to
+/// 0.01 s, for `--planner sumo` and for a planner that would drive CAVs; and the
+/// configuration's own tripinfo output is written where it says, with the same trips. Before
+/// bkpbs left the scenario alone (lane changes of 1 s for every vehicle, no teleports, its
+/// own tripinfo in place of the configuration's), 15 of 303 trips agreed on such a motorway.
+#[test]
+fn with_no_cav_every_trip_is_sumo_alones() {
+    let tmp = tempfile::tempdir().unwrap();
+    let own = r#"<output><tripinfo-output value="trips.xml"/></output>"#;
+    let cfg = motorway(tmp.path(), &format!("{TIME}{own}"));
+    sumo_alone(&cfg, "11");
+    let alone = trips(&tmp.path().join("trips.xml"));
+    std::fs::remove_file(tmp.path().join("trips.xml")).unwrap();
+    assert!(alone.len() > 100, "{}", alone.len());
+    for planner in ["sumo", "bk-pbs"] {
+        let out = tmp.path().join(planner);
+        let flags = ["--alpha", "0", "--seed", "11"];
+        let o = common::scenario_run(&cfg, planner, &flags, &out);
+        assert_ok(&o);
+        let rows = csv_rows(&std::fs::read(out.join("vehicles.csv")).unwrap());
+        let ours: BTreeMap<String, (String, String)> = rows
+            .iter()
+            .filter(|r| r["outcome"] == "arrived")
+            .map(|r| {
+                let v = (r["arrival_s"].clone(), r["time_loss_s"].clone());
+                (r["id"].clone(), v)
+            })
+            .collect();
+        let agree = alone
+            .iter()
+            .filter(|(k, v)| ours.get(*k) == Some(v))
+            .count();
+        assert_eq!(
+            (agree, ours.len()),
+            (alone.len(), alone.len()),
+            "{planner}: trips agreeing with sumo -c, trips arrived"
+        );
+        assert_eq!(trips(&tmp.path().join("trips.xml")), alone, "{planner}");
+    }
+}
+
+/// A TraCI server port in the configuration is one error line naming the option and the file,
+/// before SUMO starts: no socket listens, and the run does not wait for a client (it stalled
+/// for 120 s, SUMO listening on every interface, with a message naming no option).
+#[test]
+fn a_traci_server_port_is_refused_at_once() {
+    let tmp = tempfile::tempdir().unwrap();
+    let port = std::net::TcpListener::bind("127.0.0.1:0")
+        .unwrap()
+        .local_addr()
+        .unwrap()
+        .port();
+    let server = format!(r#"<traci_server><remote-port value="{port}"/></traci_server>"#);
+    let cfg = motorway(tmp.path(), &format!("{TIME}{server}"));
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_bkpbs"));
+    cmd.args(["episode", "--planner", "sumo", "--sumocfg"])
+        .arg(&cfg)
+        .arg("--out")
+        .arg(tmp.path().join("out"));
+    let (o, took) = output_within(&mut cmd, Duration::from_secs(30));
+    refused_naming(&o, &["remote-port", "m.sumocfg"]);
+    assert!(took < Duration::from_secs(10), "{took:?}");
+}
+
+/// Every file under `dir`.
+fn files_under(dir: &Path) -> Vec<PathBuf> {
+    let mut out = Vec::new();
+    for e in std::fs::read_dir(dir).unwrap().flatten() {
+        let p = e.path();
+        if p.is_dir() {
+            out.extend(files_under(&p));
+        } else {
+            out.push(p);
+        }
+    }
+    out
+}
+
+/// An `output-prefix` is refused: it moved every output, bkpbs's own tripinfo included (with
+/// `../../`, to two directories above its temporary directory), so nothing may be written
+/// outside the scenario's folder and the episode's.
+#[test]
+fn an_output_prefix_is_refused_and_nothing_lands_outside() {
+    let tmp = tempfile::tempdir().unwrap();
+    let scenario = tmp.path().join("a/b/scenario");
+    let scratch = tmp.path().join("t/u/v");
+    std::fs::create_dir_all(&scenario).unwrap();
+    std::fs::create_dir_all(&scratch).unwrap();
+    let prefix =
+        r#"<output><output-prefix value="../../"/><summary-output value="s.xml"/></output>"#;
+    let cfg = motorway(&scenario, &format!("{TIME}{prefix}"));
+    let out = tmp.path().join("out");
+    let o = Command::new(env!("CARGO_BIN_EXE_bkpbs"))
+        .args(["episode", "--planner", "sumo", "--steps", "50", "--sumocfg"])
+        .arg(&cfg)
+        .arg("--out")
+        .arg(&out)
+        .env("TMPDIR", &scratch)
+        .output()
+        .unwrap();
+    refused_naming(&o, &["output-prefix", "m.sumocfg"]);
+    let outside: Vec<PathBuf> = files_under(tmp.path())
+        .into_iter()
+        .filter(|p| !p.starts_with(&scenario) && !p.starts_with(&out))
+        .collect();
+    assert!(outside.is_empty(), "{outside:?}");
+}
+
+/// `<random value="true"/>` would seed SUMO from the clock (two runs of seed 3 inserted 67
+/// and 71 vehicles): bkpbs pins it, says so in a line, and two runs are the same.
+#[test]
+fn a_random_seed_is_pinned_and_named() {
+    let tmp = tempfile::tempdir().unwrap();
+    let random = r#"<random_number><random value="true"/></random_number>"#;
+    let cfg = motorway(tmp.path(), &format!("{TIME}{random}"));
+    let run = |name: &str| {
+        let out = tmp.path().join(name);
+        let flags = ["--alpha", "0", "--seed", "3", "--steps", "300"];
+        let o = common::scenario_run(&cfg, "sumo", &flags, &out);
+        assert_ok(&o);
+        let stdout = String::from_utf8_lossy(&o.stdout).to_string();
+        let line = "your configuration sets random = true; bkpbs uses false because";
+        assert!(stdout.lines().any(|l| l.starts_with(line)), "{stdout}");
+        out
+    };
+    let (a, b) = (run("a"), run("b"));
+    common::assert_same_files(
+        &a,
+        &b,
+        &common::SCENARIO_FILES,
+        "between two runs of seed 3",
+    );
+}
+
+/// A configuration without an end (SUMO runs it until every vehicle has arrived) ran 80 s,
+/// silently: now it is one error line naming the file and what to set, and `--steps` runs it.
+#[test]
+fn a_configuration_without_an_end_needs_steps() {
+    let tmp = tempfile::tempdir().unwrap();
+    let cfg = motorway(tmp.path(), r#"<time><step-length value="0.2"/></time>"#);
+    let out = tmp.path().join("out");
+    let o = common::scenario_run(&cfg, "sumo", &["--alpha", "0"], &out);
+    refused_naming(&o, &["m.sumocfg", "<end>", "--steps"]);
+    assert!(!out.join("episode.csv").exists());
+    let o = common::scenario_run(&cfg, "sumo", &["--alpha", "0", "--steps", "25"], &out);
+    assert_ok(&o);
+    let row = &csv_rows(&std::fs::read(out.join("episode.csv")).unwrap())[0];
+    assert_eq!(row["steps"], "25");
+}
