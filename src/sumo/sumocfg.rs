@@ -58,19 +58,8 @@ impl SumoConfig {
             path: path.to_path_buf(),
             what,
         };
-        let text = read_text(path, FileKind::Config).map_err(|cause| SumoConfigError::Read {
-            path: path.to_path_buf(),
-            cause,
-        })?;
-        let doc = roxmltree::Document::parse(&text).map_err(|e| bad(e.to_string()))?;
-        // SUMO writes `<sumoConfiguration>` (the shipped games of 1.28), older versions
-        // `<configuration>`; it reads both.
-        let root = doc.root_element().tag_name().name();
-        if !ROOTS.contains(&root) {
-            return Err(bad(format!(
-                "its root element is <{root}>, not <configuration> or <sumoConfiguration>"
-            )));
-        }
+        let text = read_config(path)?;
+        let doc = parse(path, &text)?;
         let option = |names: &[&str]| {
             doc.descendants()
                 .find(|n| names.iter().any(|k| n.has_tag_name(*k)))
@@ -93,6 +82,32 @@ impl SumoConfig {
             begin: time(&["begin", "b"])?.unwrap_or(0.0),
             end: time(&["end", "e"])?,
         })
+    }
+
+    /// The files the configuration at `path` names in its options — its network, routes,
+    /// additional files and any other option whose value (or a comma-separated part of it) is
+    /// an existing file, relative to the configuration's directory —, the configuration
+    /// first, each once. What a copy of the scenario on another machine takes along; outputs
+    /// (`*-output`) are left out, and files those files name in turn are not followed.
+    ///
+    /// # Errors
+    /// An unreadable file or one that is no SUMO configuration.
+    pub fn named_files(path: &Path) -> Result<Vec<PathBuf>, SumoConfigError> {
+        let text = read_config(path)?;
+        let doc = parse(path, &text)?;
+        let dir = path.parent().unwrap_or(Path::new("."));
+        let mut files = vec![path.to_path_buf()];
+        let values = doc
+            .descendants()
+            .filter(|n| !n.tag_name().name().ends_with("-output"))
+            .filter_map(|n| n.attribute("value"));
+        for part in values.flat_map(|v| v.split(',')).map(str::trim) {
+            let file = dir.join(part);
+            if !part.is_empty() && file.is_file() && !files.contains(&file) {
+                files.push(file);
+            }
+        }
+        Ok(files)
     }
 
     /// The steps of `dt` of the interval of the configuration at `path`: an episode's default
@@ -125,6 +140,33 @@ impl SumoConfig {
         }
         Ok(())
     }
+}
+
+/// The text of the configuration at `path`.
+fn read_config(path: &Path) -> Result<String, SumoConfigError> {
+    read_text(path, FileKind::Config).map_err(|cause| SumoConfigError::Read {
+        path: path.to_path_buf(),
+        cause,
+    })
+}
+
+/// The configuration `text` (of the file at `path`) as an XML document with one of SUMO's
+/// configuration roots.
+fn parse<'t>(path: &Path, text: &'t str) -> Result<roxmltree::Document<'t>, SumoConfigError> {
+    let bad = |what: String| SumoConfigError::Content {
+        path: path.to_path_buf(),
+        what,
+    };
+    let doc = roxmltree::Document::parse(text).map_err(|e| bad(e.to_string()))?;
+    // SUMO writes `<sumoConfiguration>` (the shipped games of 1.28), older versions
+    // `<configuration>`; it reads both.
+    let root = doc.root_element().tag_name().name();
+    if !ROOTS.contains(&root) {
+        return Err(bad(format!(
+            "its root element is <{root}>, not <configuration> or <sumoConfiguration>"
+        )));
+    }
+    Ok(doc)
 }
 
 /// A SUMO time value: seconds, or `h:m:s` / `d:h:m:s`.
@@ -188,6 +230,41 @@ mod tests {
         std::fs::write(&p, r#"<routes><net-file value="a"/></routes>"#).unwrap();
         let e = SumoConfig::read(&p).unwrap_err().to_string();
         assert!(e.contains("root element is <routes>"), "{e}");
+    }
+
+    /// Every file the options name, relative to the configuration, once; not the outputs,
+    /// nor values that are no file.
+    #[test]
+    fn named_files_are_the_inputs_it_names() {
+        let d = tempfile::tempdir().unwrap();
+        std::fs::create_dir(d.path().join("nets")).unwrap();
+        for f in [
+            "nets/a.net.xml",
+            "r1.rou.xml",
+            "r2.rou.xml",
+            "add.xml",
+            "out.xml",
+        ] {
+            std::fs::write(d.path().join(f), "").unwrap();
+        }
+        let p = write(
+            d.path(),
+            r#"<input><net-file value="nets/a.net.xml"/><route-files value="r1.rou.xml, r2.rou.xml"/>
+               <additional-files value="add.xml,missing.xml,nets/a.net.xml"/></input>
+               <output><summary-output value="out.xml"/></output><begin value="0"/>"#,
+        );
+        let names = SumoConfig::named_files(&p).unwrap();
+        let want: Vec<PathBuf> = [
+            "s.sumocfg",
+            "nets/a.net.xml",
+            "r1.rou.xml",
+            "r2.rou.xml",
+            "add.xml",
+        ]
+        .iter()
+        .map(|f| d.path().join(f))
+        .collect();
+        assert_eq!(names, want);
     }
 
     /// The root newer SUMO writes (the games shipped with 1.28 have it).
