@@ -93,25 +93,48 @@ class Cluster:
                        capture_output=True)
 
     @staticmethod
-    def kill(p: subprocess.Popen) -> None:
-        """Ends the node at once, as a machine that fails: `ray start` and its process group,
-        and for a worker node every process in its mount namespace (Ray's worker processes
-        have process groups of their own)."""
+    def processes(p: subprocess.Popen) -> List[int]:
+        """The processes of the worker node `p` started: those in its mount namespace."""
         try:
             ns = os.readlink(f"/proc/{p.pid}/ns/mnt")
         except OSError:
-            ns = None
+            return []
+        if ns == os.readlink("/proc/self/ns/mnt"):
+            return []
+        pids = []
+        for pid in filter(str.isdigit, os.listdir("/proc")):
+            try:
+                if os.readlink(f"/proc/{pid}/ns/mnt") == ns:
+                    pids.append(int(pid))
+            except OSError:
+                pass
+        return pids
+
+    def running_an_episode(self, p: subprocess.Popen) -> bool:
+        """Is a Ray task of the campaign running on the worker node `p` (a worker process
+        titled after the task's function)?"""
+        for pid in self.processes(p):
+            try:
+                if Path(f"/proc/{pid}/cmdline").read_bytes().startswith(b"ray::_run_remote"):
+                    return True
+            except OSError:
+                pass
+        return False
+
+    def kill(self, p: subprocess.Popen) -> None:
+        """Ends the node at once, as a machine that fails: `ray start` and its process group,
+        and for a worker node every process in its mount namespace (Ray's worker processes
+        have process groups of their own)."""
+        pids = self.processes(p)
         try:
             os.killpg(p.pid, signal.SIGKILL)  # `ray start --block` ignores SIGTERM
         except ProcessLookupError:
             pass
-        if ns is not None and ns != os.readlink("/proc/self/ns/mnt"):
-            for pid in filter(str.isdigit, os.listdir("/proc")):
-                try:
-                    if os.readlink(f"/proc/{pid}/ns/mnt") == ns:
-                        os.kill(int(pid), signal.SIGKILL)
-                except OSError:
-                    pass
+        for pid in pids:
+            try:
+                os.kill(pid, signal.SIGKILL)
+            except ProcessLookupError:
+                pass
         p.wait()
 
     def stop(self) -> None:
@@ -130,20 +153,20 @@ class Cluster:
         shutil.rmtree(self.temp, ignore_errors=True)
 
 
-def campaign(cluster: Cluster, out: Path, *grid: str, check: bool = True):
+def campaign(cluster: Cluster, out: Path, *grid: str, check: bool = True, cwd=None):
     p = subprocess.run(
         [sys.executable, "-m", "bkpbs.campaign", "--ray", "--address", cluster.address,
          "--out", str(out), "--no-report", *grid],
-        capture_output=True, text=True, timeout=600, env=ENV,
+        capture_output=True, text=True, timeout=600, env=ENV, cwd=cwd,
     )
     if check:
         assert p.returncode == 0, p.stdout + p.stderr
     return p
 
 
-def local_campaign(cli: Path, out: Path, *grid: str) -> None:
+def local_campaign(cli: Path, out: Path, *grid: str, cwd=None) -> None:
     subprocess.run([str(cli), "campaign", "--out", str(out), "--workers", "2", *grid],
-                   check=True, capture_output=True)
+                   check=True, capture_output=True, cwd=cwd)
 
 
 def same(a: Path, b: Path, names) -> None:
@@ -206,6 +229,28 @@ def test_a_scenario_grid_travels_through_ray(cluster, tmp_path, cli):
                                    "failures.csv", "campaign.toml"])
 
 
+def test_a_config_s_model_and_policy_files_travel_through_ray(cluster, tmp_path, cli):
+    """A --config file naming a model and a policy relative to the working directory, all of
+    them where the worker node cannot see them."""
+    from conftest import REPO
+
+    work = tmp_path / "work"
+    shutil.copytree(REPO / "models", work / "my-models",
+                    ignore=shutil.ignore_patterns("networks", "profiles"))
+    (work / "grid.toml").write_text(
+        '[predictor]\nconditioned_model = "my-models/gcn-conditioned.json"\n'
+        'unconditioned_model = "./my-models/../my-models/gcn-unconditioned.json"\n'
+        '[rl]\npolicy = "my-models/rl-ppo.json"\n'
+    )
+    grid = ["--config", "grid.toml", "--planners", "bk-pbs,rl-ppo", "--alphas", "0.5",
+            "--lambdas", "3000", "--seeds", "1", "--steps", "50"]
+    p = campaign(cluster, tmp_path / "ray", *grid, cwd=work)
+    assert "2 done, 0 failed" in p.stdout, p.stdout + p.stderr
+    local_campaign(cli, tmp_path / "local", *grid, cwd=work)
+    same(tmp_path / "ray", tmp_path / "local", ["episodes.csv", "vehicles.csv",
+                                                "failures.csv", "campaign.toml"])
+
+
 def test_a_lost_node_s_episodes_run_again_elsewhere(hidden, tmp_path, cli):
     grid = ["--planners", "idm-mobil", "--alphas", "0.5", "--lambdas", "3000", "--seeds", "6",
             "--steps", "600"]
@@ -221,15 +266,13 @@ def test_a_lost_node_s_episodes_run_again_elsewhere(hidden, tmp_path, cli):
             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=ENV,
         )
         t0 = time.monotonic()
-        lines = []
-        for line in driver.stdout:
-            lines.append(line)
-            if " done, " in line:  # both nodes busy again: one of them dies now
-                c.kill(doomed)
-                break
-        rest, err = driver.communicate(timeout=600)
+        # The node dies in the middle of an episode.
+        while not c.running_an_episode(doomed):
+            assert driver.poll() is None and time.monotonic() - t0 < 120, driver.communicate()
+            time.sleep(0.02)
+        c.kill(doomed)
+        stdout, err = driver.communicate(timeout=600)
         print(f"cluster: a lost node's campaign in {time.monotonic() - t0:.1f} s")
-        stdout = "".join(lines) + rest
         assert driver.returncode == 0, stdout + err
     finally:
         c.stop()

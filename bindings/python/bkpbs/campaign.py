@@ -123,12 +123,19 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         f"to run: {len(tasks)} on {where}",
         flush=True,
     )
-    if args.ray:
-        failures = run_on_ray(
-            tasks, args.address, args.num_cpus, out=args.out, max_retries=args.max_retries
+    try:
+        if args.ray:
+            failures = run_on_ray(
+                tasks, args.address, args.num_cpus, out=args.out, max_retries=args.max_retries
+            )
+        else:
+            failures = run_locally(tasks, workers)
+    except KeyboardInterrupt:
+        print(
+            "campaign: stopped; the episodes stored so far stay, and the same command resumes",
+            file=sys.stderr,
         )
-    else:
-        failures = run_locally(tasks, workers)
+        return 130
     summary = campaign.collect()
     print(
         f"campaign: ran {len(tasks)} episodes: {len(tasks) - len(failures)} done, "
