@@ -70,7 +70,7 @@ pytest: deps
 PYTESTS ?= bindings/tests
 
 # The Ray cluster test alone (bindings/tests/test_ray_cluster.py, part of `make pytest`, about
-# 40 s): a head node without CPUs and worker nodes in mount namespaces of their own, which do
+# 50 s): a head node without CPUs and worker nodes in mount namespaces of their own, which do
 # not see the campaign's files, run campaigns whose files must travel through Ray; one node is
 # killed mid-campaign. Needs root and unshare (skipped otherwise).
 test-cluster:

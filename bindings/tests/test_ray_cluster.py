@@ -6,7 +6,7 @@ so every episode runs on a worker node. The collected files must equal, byte for
 a local ``bkpbs campaign`` of the same grid.
 
 Needs root (for the mount namespace) and ``unshare``, skipped otherwise (and with
-BKPBS_CLUSTER_TESTS=0); part of ``make pytest`` (about 40 s), alone: ``make test-cluster``."""
+BKPBS_CLUSTER_TESTS=0); part of ``make pytest`` (about 50 s), alone: ``make test-cluster``."""
 
 from __future__ import annotations
 
@@ -249,6 +249,31 @@ def test_a_config_s_model_and_policy_files_travel_through_ray(cluster, tmp_path,
     local_campaign(cli, tmp_path / "local", *grid, cwd=work)
     same(tmp_path / "ray", tmp_path / "local", ["episodes.csv", "vehicles.csv",
                                                 "failures.csv", "campaign.toml"])
+
+
+def test_a_stopped_driver_resumes_from_the_directory(cluster, tmp_path, cli):
+    """Ctrl-C after the first episodes are stored: the same command runs only the others."""
+    grid = ["--planners", "idm-mobil", "--alphas", "0.5", "--lambdas", "3000", "--seeds", "6",
+            "--steps", "400"]
+    out = tmp_path / "ray"
+    driver = subprocess.Popen(
+        [sys.executable, "-m", "bkpbs.campaign", "--ray", "--address", cluster.address,
+         "--out", str(out), "--no-report", *grid],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=ENV,
+    )
+    for line in driver.stdout:
+        if line.startswith("campaign: 2 done"):
+            driver.send_signal(signal.SIGINT)
+            break
+    _, err = driver.communicate(timeout=120)
+    assert driver.returncode == 130 and "the same command resumes" in err, err
+    p = campaign(cluster, out, *grid)
+    left = int(p.stdout.split("to run: ")[1].split()[0])
+    assert 0 < left <= 4, p.stdout
+    assert f"ran {left} episodes: {left} done" in p.stdout and "6 episodes collected" in p.stdout
+    local_campaign(cli, tmp_path / "local", *grid)
+    same(out, tmp_path / "local", ["episodes.csv", "vehicles.csv", "failures.csv",
+                                   "campaign.toml"])
 
 
 def test_a_lost_node_s_episodes_run_again_elsewhere(hidden, tmp_path, cli):
