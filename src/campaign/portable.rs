@@ -177,7 +177,7 @@ pub fn store(dir: &Path, files: &[File]) -> Result<(), PortableError> {
     let gone: Vec<&str> = old
         .iter()
         .map(String::as_str)
-        .filter(|n| *n != DONE_FILE && !top.iter().any(|(t, _)| t == n))
+        .filter(|n| !top.iter().any(|(t, _)| t == n))
         .collect();
     top.extend(gone.into_iter().map(|n| (n, None)));
     top.push(done);
@@ -188,13 +188,21 @@ pub fn store(dir: &Path, files: &[File]) -> Result<(), PortableError> {
     Ok(())
 }
 
-/// Readies `dir` for a new set of files: removes its `error.txt` and subdirectories and
-/// returns the names of its other files (not the temporaries of a writer at work).
+/// Readies `dir` for a new set of files: removes its `episode.csv` first (from here on the cell
+/// reads as unfinished, as when a local worker starts it), its `error.txt` and subdirectories,
+/// and returns the names of its other files (not the temporaries of a writer at work).
 fn clear(dir: &Path) -> Result<Vec<String>, PortableError> {
     let read = |cause| PortableError::Read {
         path: dir.to_path_buf(),
         cause,
     };
+    match std::fs::remove_file(dir.join(DONE_FILE)) {
+        Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
+            let path = dir.join(DONE_FILE);
+            return Err(WriteError { path, cause: e }.into());
+        }
+        _ => {}
+    }
     let entries = match std::fs::read_dir(dir) {
         Ok(entries) => entries,
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(Vec::new()),
