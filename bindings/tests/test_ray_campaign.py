@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
 
@@ -118,7 +119,13 @@ def test_failed_and_lost_episodes_on_ray_are_told_apart(tmp_path):
     (seed 1, as a SUMO abort would) runs again up to --max-retries, recorded in retries.csv,
     then fails. The last lines agree with each other and with failures.csv."""
     import os
+    import tempfile
 
+    # A task's directory whose process is gone (a worker that died) is swept by later tasks.
+    gone = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
+                          capture_output=True, text=True, check=True).stdout.strip()
+    stale = Path(tempfile.gettempdir()) / f"bkpbs-task-{gone}-test"
+    (stale / "inputs").mkdir(parents=True)
     out = tmp_path / "faults"
     grid = ["--planners", "sumo", "--alphas", "0.5", "--lambdas", "3000", "--seeds", "3",
             "--steps", "10"]
@@ -141,3 +148,4 @@ def test_failed_and_lost_episodes_on_ray_are_told_apart(tmp_path):
     assert retries[0] == "cell,attempt,reason" and len(retries) == 2, retries
     assert retries[1].startswith("episodes/sumo/a0.5_l3000_s1,1,")
     assert "lost 2 times" in (out / "exit" / "failures.csv").read_text()
+    assert not stale.exists()

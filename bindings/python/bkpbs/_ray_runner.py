@@ -36,13 +36,38 @@ Failure = Tuple[CampaignTask, str]
 RETRIES_FILE = "retries.csv"
 
 
+#: The private directories of the tasks: ``bkpbs-task-<pid>-<random>`` in the node's temporary
+#: directory.
+SCRATCH_PREFIX = "bkpbs-task-"
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        pass
+    return True
+
+
+def _sweep_stale_scratch(tmp: str) -> None:
+    """Removes the private directories of tasks whose process is gone (killed with its node,
+    or by a SUMO abort), which could not remove their own."""
+    for name in os.listdir(tmp):
+        pid = name[len(SCRATCH_PREFIX):].split("-", 1)[0]
+        if name.startswith(SCRATCH_PREFIX) and pid.isdigit() and not _alive(int(pid)):
+            shutil.rmtree(os.path.join(tmp, name), ignore_errors=True)
+
+
 def _run_remote(task: CampaignTask, base: str, inputs: List[Tuple[str, Any]]):
     """The Ray task: fetches the inputs, runs the episode in a private directory, returns
     ``(error, files)`` (see :meth:`CampaignTask.run_portable`)."""
     import ray
 
     data = ray.get([ref for _, ref in inputs])
-    scratch = tempfile.mkdtemp(prefix="bkpbs-task-")
+    _sweep_stale_scratch(tempfile.gettempdir())
+    scratch = tempfile.mkdtemp(prefix=f"{SCRATCH_PREFIX}{os.getpid()}-")
     try:
         return task.run_portable(scratch, base, [(p, b) for (p, _), b in zip(inputs, data)])
     finally:
