@@ -3,7 +3,7 @@ SHELL := /bin/bash
 CARGO ?= cargo
 DEMO_OUT ?= out/demo
 
-.PHONY: deps demo test build net pytest docs test-sumo-latest
+.PHONY: deps demo test build net pytest docs test-sumo-latest test-cluster
 
 # Which SUMO bkpbs builds and runs against: `apt`, Debian's package (the default), or `pip`, the
 # eclipse-sumo wheel of version $(SUMO_PIP_VERSION) from PyPI, installed into the virtualenv
@@ -64,7 +64,17 @@ pytest: deps
 	rm -rf $(TARGET_DIR)/wheels
 	$(VENV)/bin/maturin build --quiet -m bindings/Cargo.toml --profile dev --out $(TARGET_DIR)/wheels
 	$(VENV)/bin/python -m pip install --quiet --disable-pip-version-check --force-reinstall --no-deps $(TARGET_DIR)/wheels/bkpbs-*.whl
-	BKPBS_BIN=$(TARGET_DIR)/debug/bkpbs $(VENV)/bin/python -m pytest -q -p no:cacheprovider bindings/tests
+	BKPBS_BIN=$(TARGET_DIR)/debug/bkpbs $(VENV)/bin/python -m pytest -q -p no:cacheprovider $(PYTESTS)
+
+# Which Python tests `make pytest` runs.
+PYTESTS ?= bindings/tests
+
+# The Ray cluster test alone (bindings/tests/test_ray_cluster.py, part of `make pytest`, about
+# 50 s): a head node without CPUs and worker nodes in mount namespaces of their own, which do
+# not see the campaign's files, run campaigns whose files must travel through Ray; one node is
+# killed mid-campaign. Needs root and unshare (skipped otherwise).
+test-cluster:
+	@$(MAKE) --no-print-directory pytest PYTESTS=bindings/tests/test_ray_cluster.py
 
 # Regenerates the networks sumo_net/*.net.xml (merge, three-lane, corridor) from their plain XML
 # sources; an unchanged network keeps its file (see sumo_net/README.md).

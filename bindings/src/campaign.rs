@@ -7,9 +7,10 @@
 use std::path::PathBuf;
 
 use pyo3::prelude::*;
-use pyo3::types::{PyDict, PyList, PyString, PyTuple};
+use pyo3::types::{PyBytes, PyDict, PyList, PyString, PyTuple};
 
 use bkpbs::campaign::collect::cell_dir;
+use bkpbs::campaign::portable;
 use bkpbs::campaign::scenarios::{self, is_scenario_campaign, ScenarioSettings};
 use bkpbs::campaign::worker::{self, Outcome, Request};
 use bkpbs::campaign::{tasks, CampaignError, CampaignSpec, Overrides, Settings, SettingsError};
@@ -238,6 +239,9 @@ impl PyCampaign {
     }
 }
 
+/// A file of an episode as Python sees it: its path in the cell directory and its bytes.
+type PyFile<'py> = (String, Bound<'py, PyBytes>);
+
 /// One unfinished episode of a campaign; picklable, so it can travel to another process.
 #[pyclass(name = "CampaignTask", module = "bkpbs", frozen)]
 pub struct PyCampaignTask {
@@ -312,6 +316,62 @@ impl PyCampaignTask {
             Outcome::Done => None,
             Outcome::Failed { error } => Some(error),
         })
+    }
+
+    /// The files the episode reads, as absolute paths (relative ones resolved against `base`,
+    /// default the working directory): its scenario's `.sumocfg` and the files that names, the
+    /// model, calibration and policy files. A scheduler ships them to `run_portable`.
+    #[pyo3(signature = (base = None))]
+    fn inputs(&self, base: Option<PathBuf>) -> PyResult<Vec<PathBuf>> {
+        let base = match base {
+            Some(b) => b,
+            None => std::env::current_dir()?,
+        };
+        Ok(portable::inputs(&self.request.config, &base))
+    }
+
+    /// Runs the episode in this process (GIL released) on a machine that need not see the
+    /// campaign's files: `inputs` are `(path, bytes)` of the files `inputs(base)` listed where
+    /// the campaign runs (working directory `base`), written below `scratch`, a private
+    /// directory the caller removes. Returns `(None, files)`, the cell's files as
+    /// `(relative path, bytes)` for `store`, or `(error, [])`.
+    fn run_portable<'py>(
+        &self,
+        py: Python<'py>,
+        scratch: PathBuf,
+        base: PathBuf,
+        inputs: Vec<(PathBuf, Bound<'py, PyBytes>)>,
+    ) -> PyResult<(Option<String>, Vec<PyFile<'py>>)> {
+        let _slot = Slot::claim()?;
+        let inputs: Vec<portable::File> = inputs
+            .into_iter()
+            .map(|(p, b)| (p, b.as_bytes().to_vec()))
+            .collect();
+        let ran = py.detach(|| portable::run(&self.request, &base, &inputs, &scratch));
+        Ok(match ran {
+            Ok(files) => {
+                let files = files
+                    .into_iter()
+                    .map(|(p, b)| (p.display().to_string(), PyBytes::new(py, &b)))
+                    .collect();
+                (None, files)
+            }
+            Err(error) => (Some(error), Vec::new()),
+        })
+    }
+
+    /// Puts the episode's files, as `run_portable` returned them, into the cell directory:
+    /// they replace its earlier files, `episode.csv` last, as a local run writes them.
+    fn store(&self, py: Python<'_>, files: Vec<(PathBuf, Bound<'_, PyBytes>)>) -> PyResult<()> {
+        let files: Vec<portable::File> = files
+            .into_iter()
+            .map(|(p, b)| (p, b.as_bytes().to_vec()))
+            .collect();
+        py.detach(|| portable::store(&self.request.dir, &files))
+            .map_err(|e| match e {
+                portable::PortableError::Name { .. } => bad_input(e),
+                _ => pyo3::exceptions::PyOSError::new_err(e.to_string()),
+            })
     }
 
     /// Records that the episode failed outside this process (e.g. its worker died): writes

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
 
@@ -111,3 +112,40 @@ def test_a_ray_campaign_over_a_scenario_of_your_own_matches_the_rust_one(tmp_pat
     with pytest.raises(bkpbs.BkpbsError, match="outside this grid"):
         bkpbs.Campaign(out, sumocfg=[cfg], planners="sumo", alphas=[0.5], seeds=2,
                        steps=100).prepare()
+
+
+def test_failed_and_lost_episodes_on_ray_are_told_apart(tmp_path):
+    """A planner panic (seed 0) fails once and is not retried; a worker process that dies
+    (seed 1, as a SUMO abort would) runs again up to --max-retries, recorded in retries.csv,
+    then fails. The last lines agree with each other and with failures.csv."""
+    import os
+    import tempfile
+
+    # A task's directory whose process is gone (a worker that died) is swept by later tasks.
+    gone = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
+                          capture_output=True, text=True, check=True).stdout.strip()
+    stale = Path(tempfile.gettempdir()) / f"bkpbs-task-{gone}-test"
+    (stale / "inputs").mkdir(parents=True)
+    out = tmp_path / "faults"
+    grid = ["--planners", "sumo", "--alphas", "0.5", "--lambdas", "3000", "--seeds", "3",
+            "--steps", "10"]
+    results = {}
+    for fault, seed in (("panic", 0), ("exit", 1)):
+        env = dict(os.environ, BKPBS_WORKER_FAULT=f"{fault}:{seed}")
+        results[fault] = subprocess.run(
+            [sys.executable, "-m", "bkpbs.campaign", "--ray", "--num-cpus", "2", "--max-retries",
+             "1", "--out", str(out / fault), "--no-report", *grid],
+            capture_output=True, text=True, timeout=600, env=env,
+        )
+    panic, lost = results["panic"], results["exit"]
+    assert panic.returncode == 1 and "ran 3 episodes: 2 done, 1 failed" in panic.stdout
+    assert "error: 1 episodes failed" in panic.stderr and "retry" not in panic.stderr
+    assert "injected planner fault" in (out / "panic" / "failures.csv").read_text()
+    assert not (out / "panic" / "retries.csv").exists()
+    assert lost.returncode == 1 and "ran 3 episodes: 2 done, 1 failed" in lost.stdout, lost.stdout
+    assert "retry 1 of 1" in lost.stderr and "error: 1 episodes failed" in lost.stderr
+    retries = (out / "exit" / "retries.csv").read_text().splitlines()
+    assert retries[0] == "cell,attempt,reason" and len(retries) == 2, retries
+    assert retries[1].startswith("episodes/sumo/a0.5_l3000_s1,1,")
+    assert "lost 2 times" in (out / "exit" / "failures.csv").read_text()
+    assert not stale.exists()

@@ -18,6 +18,8 @@
 //! [`pool`] (the two ends of the worker processes), [`cell`] (a cell's files, either kind of
 //! campaign), [`collect`] (resume state, gathering),
 //! [`results`] (the collected files), [`tasks`] (the same run for other schedulers),
+//! [`portable`] (an episode whose inputs and results travel as bytes, for a cluster without
+//! shared storage),
 //! [`scenarios`] (the grid over scenarios of the user's own, `--sumocfg`).
 
 pub mod cell;
@@ -29,6 +31,7 @@ pub mod grid;
 pub mod overrides;
 #[doc(hidden)] // worker-process plumbing: the campaign runs it, a library user never does
 pub mod pool;
+pub mod portable;
 pub mod results;
 pub mod scenarios;
 pub mod settings;

@@ -170,6 +170,13 @@ fn injected_fault(req: &Request) {
 
 /// Runs one episode and writes its files; the error text on failure.
 pub(crate) fn run_cell(req: &Request) -> Result<(), String> {
+    run_cell_recording(req, &req.config)
+}
+
+/// Runs one episode and writes its files, recording `record` as the settings it ran with:
+/// the campaign's configuration, when `req.config` is the same one pointed at copies of its
+/// input files elsewhere ([`super::portable`]). The error text on failure.
+pub(crate) fn run_cell_recording(req: &Request, record: &Config) -> Result<(), String> {
     // A retried cell: the old failure note and a stale episode.csv (a cell is only asked for
     // when it is not finished) go first. A kill from here on leaves neither, and the cell
     // simply runs again next time.
@@ -206,7 +213,7 @@ pub(crate) fn run_cell(req: &Request) -> Result<(), String> {
             return Err(format!("planner {} panicked: {message}", req.planner));
         }
     };
-    let record = super::comparison::results_settings(&req.config);
+    let record = super::comparison::results_settings(record);
     io::write_atomic(&req.dir.join(SETTINGS_RECORD), record.as_bytes())
         .and_then(|()| result.write(&req.dir))
         .map_err(|e| e.to_string())

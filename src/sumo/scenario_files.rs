@@ -1,10 +1,12 @@
 //! The files a SUMO configuration names — itself, its `net-file`, `route-files` and
-//! `additional-files` — and their SHA-256 digests: what a campaign over scenarios records per
-//! cell, so that a cell whose scenario changed (an edited route file, another copy of the
-//! scenario found from another working directory) runs again instead of counting as done.
+//! `additional-files`, and any other option whose value is an existing file — and their
+//! SHA-256 digests: what a campaign over scenarios records per cell, so that a cell whose
+//! scenario changed (an edited route file, another copy of the scenario found from another
+//! working directory) runs again instead of counting as done; and what a campaign on a cluster
+//! without shared storage ships to the node that runs the cell ([`crate::campaign::portable`]).
 //!
-//! Files an additional file itself names (an `<include>`, a detector's output) are not followed:
-//! SUMO reads them, and the guide says so.
+//! Outputs (`*-output`) are not inputs; files a named file itself names (an `<include>`, a
+//! detector's output) are not followed: SUMO reads them, and the guide says so.
 
 use std::collections::BTreeMap;
 use std::io::Read;
@@ -42,14 +44,24 @@ pub fn named_files(cfg: &Path) -> Result<Vec<(String, PathBuf)>, SumoConfigError
         |f| f.to_string_lossy().into_owned(),
     );
     let mut files = vec![(own, cfg.to_path_buf())];
-    for names in INPUTS {
-        let values = doc
-            .descendants()
-            .filter(|n| names.iter().any(|k| n.has_tag_name(*k)))
-            .filter_map(|n| n.attribute("value"));
-        for name in values.flat_map(|v| v.split([',', ' ', '\t', '\n'])) {
-            if !name.is_empty() {
-                files.push((name.to_string(), dir.join(name)));
+    let mut add = |name: &str, required: bool| {
+        let path = dir.join(name);
+        let known = files.iter().any(|(n, _)| n == name);
+        if !name.is_empty() && !known && (required || path.is_file()) {
+            files.push((name.to_string(), path));
+        }
+    };
+    for node in doc.descendants().filter(|n| n.is_element()) {
+        let tag = node.tag_name().name();
+        let Some(value) = node.attribute("value") else {
+            continue;
+        };
+        // The inputs SUMO must read, each of them; any other value that is a file here (a
+        // vehicle-type file an option names, the gui settings) too; outputs never.
+        let required = INPUTS.iter().any(|names| names.contains(&tag));
+        if !tag.ends_with("-output") {
+            for name in value.split([',', ' ', '\t', '\n']) {
+                add(name, required);
             }
         }
     }
@@ -151,6 +163,49 @@ mod tests {
             first_change(&cfg, &recorded).unwrap().as_deref(),
             Some("'a.rou.xml' changed")
         );
+    }
+
+    /// Every file the options name, relative to the configuration, once; not the outputs, nor
+    /// values that are no file (a missing input is listed: it is an error to digest).
+    #[test]
+    fn named_files_are_the_inputs_it_names() {
+        let d = tempfile::tempdir().unwrap();
+        std::fs::create_dir(d.path().join("nets")).unwrap();
+        for f in [
+            "nets/a.net.xml",
+            "r1.rou.xml",
+            "r2.rou.xml",
+            "add.xml",
+            "out.xml",
+            "v.xml",
+        ] {
+            std::fs::write(d.path().join(f), "").unwrap();
+        }
+        let cfg = d.path().join("s.sumocfg");
+        std::fs::write(
+            &cfg,
+            r#"<configuration><input><net-file value="nets/a.net.xml"/>
+               <route-files value="r1.rou.xml, r2.rou.xml"/>
+               <additional-files value="add.xml,missing.xml,nets/a.net.xml"/></input>
+               <output><summary-output value="out.xml"/></output><begin value="0"/>
+               <gui-settings-file value="v.xml"/></configuration>"#,
+        )
+        .unwrap();
+        let names: Vec<String> = named_files(&cfg)
+            .unwrap()
+            .into_iter()
+            .map(|(n, _)| n)
+            .collect();
+        let want = [
+            "s.sumocfg",
+            "nets/a.net.xml",
+            "r1.rou.xml",
+            "r2.rou.xml",
+            "add.xml",
+            "missing.xml",
+            "v.xml",
+        ];
+        assert_eq!(names, want);
     }
 
     #[test]

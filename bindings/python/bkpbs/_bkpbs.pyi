@@ -175,6 +175,19 @@ class CampaignTask:
     def dir(self) -> Path: ...
     def run(self) -> Optional[str]:
         """Runs the episode in this process; ``None`` when done, else the error message."""
+    def inputs(self, base: Optional[_PathArg] = None) -> List[Path]:
+        """The files the episode reads, absolute (relative ones resolved against ``base``,
+        default the working directory): its ``.sumocfg`` and the files that names, model,
+        calibration and policy files."""
+    def run_portable(
+        self, scratch: _PathArg, base: _PathArg, inputs: Sequence[Tuple[_PathArg, bytes]]
+    ) -> Tuple[Optional[str], List[Tuple[str, bytes]]]:
+        """Runs the episode here against copies of ``inputs`` (the files ``inputs(base)``
+        listed where the campaign runs) written below ``scratch``; ``(None, files)`` with the
+        cell's files as ``(relative path, bytes)``, or ``(error, [])``."""
+    def store(self, files: Sequence[Tuple[_PathArg, bytes]]) -> None:
+        """Puts the files ``run_portable`` returned into the cell directory, replacing its
+        earlier files, ``episode.csv`` last."""
     def record_failure(self, message: str) -> None: ...
 
 class Campaign:

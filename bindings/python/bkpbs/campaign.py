@@ -6,13 +6,16 @@
 
 One task per episode. libsumo allows one simulation per process, so on Ray every task runs in a
 worker process of its own (``max_calls=1``); locally (without ``--ray``) each of ``--workers``
-processes runs its episodes one after another, as ``bkpbs campaign`` does. The grid, the
+processes runs its episodes one after another, as ``bkpbs campaign`` does. On Ray the
+episodes' input files travel to the nodes and their results back through Ray's object store,
+so the nodes need no file of the campaign's (see :mod:`bkpbs._ray_runner`); a task whose node
+or worker is lost runs again (``--max-retries``, recorded in ``retries.csv``). The grid, the
 resume state (finished cells are skipped), the per-episode files and the collected
 ``episodes.csv``/``vehicles.csv``/``timings.csv``/``failures.csv`` all come from the Rust core
 (:class:`bkpbs.Campaign`), so the directory is the one ``bkpbs campaign`` writes and
 ``bkpbs report DIR`` reads. With ``--sumocfg`` the grid is planners × scenarios of your own ×
 α × seeds, as ``bkpbs campaign --sumocfg``. On a Ray cluster every node needs SUMO and this
-package (and the scenarios' files, at the same paths).
+package, nothing else.
 """
 
 from __future__ import annotations
@@ -23,12 +26,12 @@ import sys
 import time
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from multiprocessing import get_context
-from typing import List, Optional, Sequence, Tuple
+from typing import List, Optional, Sequence
 
 from ._bkpbs import BkpbsError, Campaign, CampaignTask, report
+from ._ray_runner import RETRIES_FILE, Failure, describe, run_on_ray
 
-#: A failed task and its error message.
-Failure = Tuple[CampaignTask, str]
+__all__ = ["Failure", "RETRIES_FILE", "main", "run_locally", "run_on_ray"]
 
 
 def _run_task(task: CampaignTask) -> Optional[str]:
@@ -36,52 +39,9 @@ def _run_task(task: CampaignTask) -> Optional[str]:
     return task.run()
 
 
-def _describe(task: CampaignTask) -> str:
-    if task.scenario is not None:
-        return f"{task.planner} {task.scenario} α={task.alpha} seed={task.seed}"
-    return f"{task.planner} α={task.alpha} λ={task.lam} seed={task.seed}"
-
-
 def _failed(task: CampaignTask, error: str) -> Failure:
-    print(f"campaign: episode {_describe(task)} failed: {error}", file=sys.stderr)
+    print(f"campaign: episode {describe(task)} failed: {error}", file=sys.stderr)
     return (task, error)
-
-
-def run_on_ray(
-    tasks: Sequence[CampaignTask], address: Optional[str] = None, num_cpus: Optional[int] = None
-) -> List[Failure]:
-    """Runs every task as a Ray task in a fresh worker process; returns the failures.
-
-    Connects to the cluster at ``address`` (e.g. ``"auto"``), or starts a local Ray with
-    ``num_cpus`` CPUs when ``address`` is ``None`` and Ray is not initialised yet.
-    """
-    import ray
-
-    started = False
-    if not ray.is_initialized():
-        if address is None:
-            ray.init(num_cpus=num_cpus, include_dashboard=False)
-        else:
-            ray.init(address=address)
-        started = True
-    try:
-        remote = ray.remote(max_calls=1, num_cpus=1)(_run_task)
-        pending = {remote.remote(t): t for t in tasks}
-        failures: List[Failure] = []
-        while pending:
-            done, _ = ray.wait(list(pending), num_returns=1)
-            task = pending.pop(done[0])
-            try:
-                error = ray.get(done[0])
-            except Exception as e:  # the worker process died (e.g. SUMO aborted it)
-                error = f"worker process died during the episode ({type(e).__name__}: {e})"
-                task.record_failure(error)
-            if error is not None:
-                failures.append(_failed(task, error))
-        return failures
-    finally:
-        if started:
-            ray.shutdown()
 
 
 def run_locally(tasks: Sequence[CampaignTask], workers: int) -> List[Failure]:
@@ -113,6 +73,10 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument("--ray", action="store_true", help="run the episodes as Ray tasks")
     p.add_argument("--address", help="Ray cluster address (default: start a local Ray)")
     p.add_argument("--num-cpus", type=int, help="CPUs of a local Ray (default: all)")
+    p.add_argument(
+        "--max-retries", type=int, default=2,
+        help="Ray: runs again of a task whose worker or node is lost (default: 2)",
+    )
     p.add_argument(
         "--workers", type=int, default=None, help="local processes without --ray (default: cores)"
     )
@@ -159,15 +123,24 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         f"to run: {len(tasks)} on {where}",
         flush=True,
     )
-    if args.ray:
-        failures = run_on_ray(tasks, args.address, args.num_cpus)
-    else:
-        failures = run_locally(tasks, workers)
+    try:
+        if args.ray:
+            failures = run_on_ray(
+                tasks, args.address, args.num_cpus, out=args.out, max_retries=args.max_retries
+            )
+        else:
+            failures = run_locally(tasks, workers)
+    except KeyboardInterrupt:
+        print(
+            "campaign: stopped; the episodes stored so far stay, and the same command resumes",
+            file=sys.stderr,
+        )
+        return 130
     summary = campaign.collect()
     print(
-        f"campaign: ran {len(tasks)} episodes ({len(failures)} failed) in "
-        f"{time.monotonic() - start:.1f} s; {summary['collected']} episodes collected in "
-        f"{summary['episodes_csv']}",
+        f"campaign: ran {len(tasks)} episodes: {len(tasks) - len(failures)} done, "
+        f"{len(failures)} failed, in {time.monotonic() - start:.1f} s; "
+        f"{summary['collected']} episodes collected in {summary['episodes_csv']}",
         flush=True,
     )
     if summary["collected"] and not args.no_report:
