@@ -178,7 +178,7 @@ if wanted scenarios || wanted scenarios-plots; then
     scripts/scenario-games.sh target/scenario-games
 fi
 games=target/scenario-games
-result scenarios results/scenarios "$BIN" campaign --sumocfg $games/A10KW.sumocfg,$games/ramp.sumocfg \
+result scenarios results/scenarios "$BIN" campaign --sumocfg $games/A10KW-motorway.sumocfg,$games/ramp.sumocfg \
     --planners bk-pbs,bk-mastar,idm-mobil,sumo,rl-ppo --alphas 0.3,0.6 --seeds 3 --seed-base 100
 if wanted scenarios-plots; then
     start=$SECONDS
