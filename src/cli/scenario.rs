@@ -88,6 +88,23 @@ impl ScenarioArgs {
         let Some(cfg) = config.scenario.sumocfg.clone() else {
             return Ok(config);
         };
+        // The paper's demand and drivers: a scenario brings its own, and the flags would be
+        // ignored without a word.
+        for (flag, given, what) in [
+            ("--lambda", self.lambda.is_some(), "its own demand"),
+            (
+                "--hdv-profile",
+                self.hdv_profile.is_some(),
+                "its own drivers",
+            ),
+        ] {
+            if given {
+                anyhow::bail!(
+                    "{flag}: a scenario of your own ({}) brings {what}; leave {flag} out",
+                    cfg.display()
+                );
+            }
+        }
         let dt = config.scenario.dt;
         config.scenario.steps =
             bkpbs::sumo::sumocfg::SumoConfig::episode_steps(&cfg, dt, self.steps)?;

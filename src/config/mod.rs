@@ -37,7 +37,7 @@ use rules::{
     check_demand, check_idm, check_mobil, check_pbs, check_planner, check_predictor,
     check_ramp_merge, check_scenario, check_sumo,
 };
-pub use scenario::{CavShare, Demand, MetricsSettings, Scenario, TStarSpeed};
+pub use scenario::{CavShare, Demand, MetricsSettings, Scenario, TStarSpeed, MAX_STEPS};
 pub use simulator::{OutputSettings, SumoSettings, TrajectoryFormat};
 
 /// Why a configuration could not be used.

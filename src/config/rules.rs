@@ -171,7 +171,7 @@ pub(super) fn check_scenario(s: &Scenario) -> Result<(), ConfigError> {
     check_rows(&rows!(scenario: s;
         alpha => UnitInterval,
         lambda => Rate,
-        steps => Between(1.0, 100_000.0, STEPS_RANGE),
+        steps => Between(1.0, f64::from(super::scenario::MAX_STEPS), STEPS_RANGE),
         dt => StepLength,
         v_max => Between(1.0, 100.0, V_MAX_RANGE),
         free_flow_accel => Between(0.1, 20.0, FREE_FLOW_ACCEL_RANGE),

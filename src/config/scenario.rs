@@ -56,6 +56,9 @@ pub struct Scenario {
     pub sumocfg_digests: std::collections::BTreeMap<String, String>,
 }
 
+/// The longest episode bkpbs runs, in steps: longer ones only fill memory.
+pub const MAX_STEPS: u32 = 100_000;
+
 impl Default for Scenario {
     fn default() -> Self {
         Scenario {

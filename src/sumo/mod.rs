@@ -14,6 +14,7 @@ pub mod network;
 pub mod road_frame;
 pub mod scenario_files;
 pub mod sumocfg;
+pub mod type_distributions;
 pub mod version;
 
 mod error;

@@ -8,6 +8,7 @@
 
 use std::path::{Path, PathBuf};
 
+use crate::config::MAX_STEPS;
 use crate::io::bounded::{read_text, FileKind};
 
 /// What bkpbs reads of a `.sumocfg`.
@@ -130,7 +131,7 @@ impl SumoConfig {
     /// would run it until every vehicle has arrived, bkpbs runs a fixed number of steps.
     pub fn episode_steps(path: &Path, dt: f64, given: Option<u32>) -> Result<u32, SumoConfigError> {
         let cfg = SumoConfig::read(path)?;
-        match (given, cfg.steps(dt)) {
+        match (given, cfg.steps(dt)?) {
             (Some(n), _) | (None, Some(n)) => Ok(n),
             (None, None) => Err(SumoConfigError::Content {
                 path: path.to_path_buf(),
@@ -143,9 +144,33 @@ impl SumoConfig {
     }
 
     /// Steps of `dt` from its begin to its end, if it has an end.
-    pub fn steps(&self, dt: f64) -> Option<u32> {
-        self.end
-            .map(|end| ((end - self.begin) / dt).round().max(0.0) as u32)
+    ///
+    /// # Errors
+    /// An end not after the begin, or an interval longer than an episode runs
+    /// (`scenario.steps`'s bound, [`MAX_STEPS`]): said naming the file, not as a step count of 0 or 4294967295.
+    pub fn steps(&self, dt: f64) -> Result<Option<u32>, SumoConfigError> {
+        let Some(end) = self.end else {
+            return Ok(None);
+        };
+        let bad = |what: String| SumoConfigError::Content {
+            path: self.path.clone(),
+            what,
+        };
+        let steps = ((end - self.begin) / dt).round();
+        if steps < 1.0 {
+            return Err(bad(format!(
+                "its <end> {end} s is not after its <begin> {} s",
+                self.begin
+            )));
+        }
+        if steps > f64::from(MAX_STEPS) {
+            return Err(bad(format!(
+                "its <begin>–<end> interval of {} s is {steps:e} steps of {dt} s, more than an \
+                 episode runs ({MAX_STEPS}): give --steps",
+                end - self.begin
+            )));
+        }
+        Ok(Some(steps as u32))
     }
 
     /// Checks that the scenario runs at the planner's step `dt`.
@@ -202,7 +227,7 @@ mod tests {
         let c = SumoConfig::read(&p).unwrap();
         assert_eq!(c.net, d.path().join("nets/a.net.xml"));
         assert_eq!((c.begin, c.end, c.step_length), (60.0, Some(1800.0), 0.2));
-        assert_eq!(c.steps(0.2), Some(8700));
+        assert_eq!(c.steps(0.2).unwrap(), Some(8700));
         c.check_step(0.2).unwrap();
     }
 

@@ -338,7 +338,7 @@ fn scenario_steps(
                     });
                 }
             }
-            match (steps, cfg.steps(dt)) {
+            match (steps, cfg.steps(dt)?) {
                 (Some(n), _) | (None, Some(n)) => Ok(n),
                 (None, None) => Err(SettingsError::NoInterval { path: path.clone() }),
             }

@@ -41,6 +41,7 @@ use crate::episode::metrics::{CollisionEvent, Timing};
 use crate::model::road::Road;
 use crate::sumo::frame;
 use crate::sumo::sumocfg::{SumoConfig, SumoConfigError};
+use crate::sumo::type_distributions::distributions;
 use crate::sumo::{Simulation, StderrCapture};
 
 pub use options::{has_cavs, sumo_options, SumoOptions};
@@ -142,6 +143,22 @@ fn check_cav_types(
         time: 0.0,
         cause,
     })?;
+    let distributions = SumoConfig::read(path).and_then(|c| distributions(&c))?;
+    if let Some((t, d)) = wanted
+        .iter()
+        .find_map(|t| distributions.get(t).map(|d| (t, d)))
+    {
+        return Err(SumoConfigError::Content {
+            path: path.to_path_buf(),
+            what: format!(
+                "cav_types names '{t}', a vTypeDistribution of {}: each of its vehicles gets \
+                 the type drawn from it, so none would be a CAV; name its types instead ({})",
+                d.file,
+                d.members.join(", ")
+            ),
+        }
+        .into());
+    }
     match wanted.iter().find(|t| !loaded.contains(t)) {
         None => Ok(()),
         Some(t) => Err(SumoConfigError::Content {
@@ -275,10 +292,17 @@ fn command_line(config: &Config, path: &std::path::Path, options: &[String]) -> 
     args
 }
 
+/// The scratch directories of scenario episodes in the temporary directory are
+/// `bkpbs-scenario-<pid>-<random>`: the process id tells those of an episode that died (swept
+/// by the next one) from those of one running now.
+pub const SCRATCH_PREFIX: &str = "bkpbs-scenario-";
+
 /// A directory of the episode's own for SUMO's tripinfo output, removed with it.
 fn scratch_dir() -> Result<tempfile::TempDir, EpisodeError> {
+    // Those of episodes killed, stalled or aborted before they could remove their own.
+    crate::io::sweep_stale(&std::env::temp_dir(), SCRATCH_PREFIX);
     tempfile::Builder::new()
-        .prefix(&format!("bkpbs-scenario-{}-", std::process::id()))
+        .prefix(&format!("{SCRATCH_PREFIX}{}-", std::process::id()))
         .tempdir()
         .map_err(|cause| {
             crate::sumo::files::InputError::Write {
