@@ -5,13 +5,15 @@
 //! Files in `<dir>/report/`:
 //! - `regions.csv`: per scenario, region, α and planner, the mean over the seeds of the
 //!   region's mean system delay with its 95 % t-interval, of its vehicles' mean `timeLoss`, of
-//!   the vehicles still driving at the end; the controllable crashes summed.
+//!   the vehicles still driving at the end; the controllable crashes summed; the vehicles that
+//!   entered it from an on-ramp (mean over the seeds) and the episodes in which none did.
 //! - `paired_regions.csv`: per scenario, region, α, reference and other planner, the mean of
 //!   the per-seed differences reference − other of the region's mean system delay, its 95 %
 //!   t-interval and the two-sided paired t-test's p-value.
 //! - `paired_collisions.csv`: per scenario, α, reference and other planner, the episodes with
 //!   a controllable crash of each, and Fisher's exact test of the 2×2 table.
-//! - `tables.md`: the paired tables in Markdown.
+//! - `tables.md`: the regions whose merge saw no ramp traffic in some episode (their delays
+//!   are of traffic past a merge nobody used), then the paired tables, in Markdown.
 //!
 //! The paired t-test, not Wilcoxon's: a scenario's episodes are long and few (three seeds give
 //! Wilcoxon a smallest p of 0.25), and the per-seed differences of a mean over hundreds of
@@ -47,6 +49,7 @@ struct RegionSample {
     time_loss: Option<f64>,
     present: f64,
     controllable: f64,
+    from_ramp: f64,
 }
 
 /// (scenario, region, α as text) → planner → samples, in seed order.
@@ -76,6 +79,7 @@ fn by_region(rows: &[csv::StringRecord]) -> ByRegion {
                 time_loss: num(r, "mean_time_loss_s"),
                 present: num(r, "present").unwrap_or(0.0),
                 controllable: num(r, "controllable_crashed").unwrap_or(0.0),
+                from_ramp: num(r, "from_ramp").unwrap_or(0.0),
             });
     }
     out
@@ -150,7 +154,8 @@ pub fn report(dir: &Path, out: &Path, versus: &[String]) -> Result<Report, Repor
         }));
     }
     let regions = by_region(&res.regions);
-    let (paired, markdown) = paired_csv(&regions, &versus);
+    let (paired, paired_md) = paired_csv(&regions, &versus);
+    let markdown = unused_merges_md(&regions) + &paired_md;
     let files = [
         ("regions.csv", summary_csv(&regions)),
         ("paired_regions.csv", paired),
@@ -176,9 +181,37 @@ pub fn report(dir: &Path, out: &Path, versus: &[String]) -> Result<Report, Repor
     })
 }
 
+/// The regions whose merge no ramp vehicle entered in some episode, as a Markdown section: the
+/// A10KW game's two merges once got 2 and 0 ramp vehicles in 30 minutes, and their delays were
+/// read as merge results.
+fn unused_merges_md(regions: &ByRegion) -> String {
+    let mut rows = String::new();
+    for ((scenario, region, alpha), planners) in regions {
+        for (planner, samples) in planners {
+            let none = samples.iter().filter(|x| x.from_ramp == 0.0).count();
+            if none > 0 {
+                rows += &format!(
+                    "| {scenario} | {region} | {alpha} | {planner} | {none} of {} |\n",
+                    samples.len()
+                );
+            }
+        }
+    }
+    let head = "### Merges without ramp traffic\n\n";
+    if rows.is_empty() {
+        return format!("{head}Every region received ramp vehicles in every episode.\n\n");
+    }
+    format!(
+        "{head}In these episodes no vehicle entered the region from an on-ramp: its delays there \
+         are of traffic past a merge nobody used, not merge results.\n\n\
+         | scenario | region | α | planner | episodes without a ramp vehicle |\n\
+         | --- | --- | --- | --- | --- |\n{rows}\n"
+    )
+}
+
 fn summary_csv(regions: &ByRegion) -> String {
     let mut s = String::from(
-        "scenario,region,alpha,planner,seeds,mean_delay_s,delay_ci95_s,mean_time_loss_s,mean_present,controllable_crashed\n",
+        "scenario,region,alpha,planner,seeds,mean_delay_s,delay_ci95_s,mean_time_loss_s,mean_present,controllable_crashed,mean_from_ramp,episodes_without_ramp_traffic\n",
     );
     for ((scenario, region, alpha), planners) in regions {
         for (planner, samples) in planners {
@@ -186,14 +219,17 @@ fn summary_csv(regions: &ByRegion) -> String {
             let losses: Vec<f64> = samples.iter().filter_map(|x| x.time_loss).collect();
             let delay = Estimate::of(&delays);
             let present: Vec<f64> = samples.iter().map(|x| x.present).collect();
+            let from_ramp: Vec<f64> = samples.iter().map(|x| x.from_ramp).collect();
             s += &format!(
-                "{scenario},{region},{alpha},{planner},{},{},{},{},{},{}\n",
+                "{scenario},{region},{alpha},{planner},{},{},{},{},{},{},{},{}\n",
                 samples.len(),
                 fmt_opt(delay.map(|e| e.mean), 4),
                 fmt_opt(delay.and_then(|e| e.ci95), 4),
                 fmt_opt(Estimate::of(&losses).map(|e| e.mean), 4),
                 fmt_opt(Estimate::of(&present).map(|e| e.mean), 2),
-                samples.iter().map(|x| x.controllable).sum::<f64>()
+                samples.iter().map(|x| x.controllable).sum::<f64>(),
+                fmt_opt(Estimate::of(&from_ramp).map(|e| e.mean), 2),
+                from_ramp.iter().filter(|&&n| n == 0.0).count()
             );
         }
     }
@@ -295,6 +331,48 @@ fn collisions_csv(episodes: &[csv::StringRecord], versus: &[String]) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    fn sample(seed: u64, from_ramp: f64) -> RegionSample {
+        RegionSample {
+            seed,
+            delay: Some(1.0),
+            time_loss: Some(2.0),
+            present: 0.0,
+            controllable: 0.0,
+            from_ramp,
+        }
+    }
+
+    #[test]
+    fn a_merge_nobody_used_is_named_with_its_episodes() {
+        let mut regions = ByRegion::new();
+        let key = (
+            "A10KW.sumocfg".to_string(),
+            "4054057".to_string(),
+            "0.3".to_string(),
+        );
+        let planners = regions.entry(key).or_default();
+        planners.insert(
+            "sumo".into(),
+            vec![sample(1, 0.0), sample(2, 0.0), sample(3, 2.0)],
+        );
+        planners.insert("bk-pbs".into(), vec![sample(1, 5.0)]);
+        let md = unused_merges_md(&regions);
+        assert!(
+            md.contains("| A10KW.sumocfg | 4054057 | 0.3 | sumo | 2 of 3 |"),
+            "{md}"
+        );
+        assert!(!md.contains("bk-pbs"), "{md}");
+        let csv = summary_csv(&regions);
+        assert!(
+            csv.contains(",sumo,3,1.0000,0.0000,2.0000,0.00,0,0.67,2\n"),
+            "{csv}"
+        );
+        regions
+            .values_mut()
+            .for_each(|p| p.remove("sumo").map(drop).unwrap_or(()));
+        assert!(unused_merges_md(&regions).contains("Every region received ramp vehicles"));
+    }
 
     #[test]
     fn the_paired_t_test_matches_a_worked_example() {
