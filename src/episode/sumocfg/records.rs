@@ -64,6 +64,10 @@ pub struct ScenarioVehicle {
     /// the episode's end.
     #[serde(serialize_with = "cells::opt_decimals::<2, _>")]
     pub time_loss_s: Option<f64>,
+    /// SUMO's `departDelay` (s): how long it waited to be inserted after its departure time
+    /// (no room at its departure position), which `timeLoss` leaves out.
+    #[serde(serialize_with = "cells::opt_decimals::<2, _>")]
+    pub depart_delay_s: Option<f64>,
     /// SUMO's `routeLength` (m) driven.
     #[serde(serialize_with = "cells::opt_decimals::<2, _>")]
     pub route_length_m: Option<f64>,
@@ -123,6 +127,10 @@ pub struct ScenarioSummary {
     /// The same over the vehicles that were in the region (s).
     #[serde(serialize_with = "cells::opt_decimals::<4, _>")]
     pub mean_time_loss_region_s: Option<f64>,
+    /// Mean of `timeLoss` plus `departDelay` (the wait to be inserted) per vehicle not crashed
+    /// (s): a planner that holds vehicles at the network's entrance pays for it here.
+    #[serde(serialize_with = "cells::opt_decimals::<4, _>")]
+    pub mean_time_loss_with_wait_s: Option<f64>,
     /// Total `timeLoss` of the vehicles not crashed (vehicle-hours).
     #[serde(serialize_with = "cells::decimals::<6, _>")]
     pub time_loss_veh_h: f64,
@@ -138,14 +146,18 @@ impl ScenarioSummary {
     /// The summary of `vehicles` (`collisions`: how many involved HDVs only).
     pub fn of(head: ScenarioSummary, vehicles: &[ScenarioVehicle], hdv_collisions: usize) -> Self {
         let count = |f: &dyn Fn(&ScenarioVehicle) -> bool| vehicles.iter().filter(|v| f(v)).count();
-        let mean = |f: &dyn Fn(&ScenarioVehicle) -> bool| {
+        let mean_of = |loss: &dyn Fn(&ScenarioVehicle) -> Option<f64>,
+                       f: &dyn Fn(&ScenarioVehicle) -> bool| {
             let losses: Vec<f64> = vehicles
                 .iter()
                 .filter(|v| v.outcome != Outcome::Crashed && f(v))
-                .filter_map(|v| v.time_loss_s)
+                .filter_map(loss)
                 .collect();
             (!losses.is_empty()).then(|| losses.iter().sum::<f64>() / losses.len() as f64)
         };
+        let mean = |f: &dyn Fn(&ScenarioVehicle) -> bool| mean_of(&|v| v.time_loss_s, f);
+        let with_wait =
+            |v: &ScenarioVehicle| Some(v.time_loss_s? + v.depart_delay_s.unwrap_or(0.0));
         let inserted = vehicles.len();
         let inserted_cav = count(&|v| v.kind == Kind::Cav);
         ScenarioSummary {
@@ -164,6 +176,7 @@ impl ScenarioSummary {
             hdv_collisions,
             mean_time_loss_s: mean(&|_| true),
             mean_time_loss_region_s: mean(&|v| v.region_enter_s.is_some()),
+            mean_time_loss_with_wait_s: mean_of(&with_wait, &|_| true),
             mean_region_delay_s: {
                 let d: Vec<f64> = vehicles.iter().filter_map(|v| v.region_delay_s).collect();
                 (!d.is_empty()).then(|| d.iter().sum::<f64>() / d.len() as f64)
@@ -186,6 +199,8 @@ pub struct Trip {
     pub time_loss: f64,
     /// `routeLength` (m).
     pub route_length: f64,
+    /// `departDelay` (s; 0 where SUMO writes none).
+    pub depart_delay: f64,
 }
 
 /// The trips of SUMO's tripinfo output at `path`, by vehicle id.
@@ -205,6 +220,7 @@ pub fn read_trips(path: &Path) -> Result<BTreeMap<String, Trip>, String> {
             let trip = Trip {
                 time_loss: num(n, "timeLoss")?,
                 route_length: num(n, "routeLength")?,
+                depart_delay: num(n, "departDelay").unwrap_or(0.0),
             };
             Some((n.attribute("id")?.to_string(), trip))
         })

@@ -468,6 +468,7 @@ impl ScenarioRun {
                 if let Some(t) = trips.get(&v.id) {
                     v.time_loss_s = Some(t.time_loss);
                     v.route_length_m = Some(t.route_length);
+                    v.depart_delay_s = Some(t.depart_delay);
                 }
                 if let Some(e) = l.entry {
                     passage(&mut v, &e, &self.regions[e.region].config);

@@ -280,7 +280,7 @@ fn an_arrival_is_booked_and_joined_to_sumos_trip_figures() {
     let mut run = paper_run(&c, "idm-mobil");
     let mut sim = sumo_for(&run, script);
     play(&mut run, &mut sim, 4);
-    let trips = r#"<tripinfo id="a" depart="0.00" arrival="0.40" timeLoss="1.25" routeLength="480.50"/>
+    let trips = r#"<tripinfo id="a" depart="0.00" arrival="0.40" timeLoss="1.25" routeLength="480.50" departDelay="2.50"/>
 <tripinfo id="b" depart="0.00" arrival="-1" timeLoss="0.75" routeLength="212.00"/>
 <tripinfo id="never" depart="0.00" timeLoss="9.00" routeLength="1.00"/>"#;
     let result = finish(run, trips);
@@ -299,6 +299,9 @@ fn an_arrival_is_booked_and_joined_to_sumos_trip_figures() {
     let s = &result.summary;
     assert_eq!((s.arrived, s.present, s.crashed), (1, 1, 0));
     assert_eq!(s.mean_time_loss_s, Some(1.0));
+    // a waited 2.5 s to enter; b's trip names no wait.
+    assert_eq!((a.depart_delay_s, b.depart_delay_s), (Some(2.5), Some(0.0)));
+    assert_eq!(s.mean_time_loss_with_wait_s, Some(2.25));
 }
 
 /// The vehicles never inserted are those SUMO still holds back after the last step, not
