@@ -2,8 +2,8 @@
 //! `error:` line naming the culprit (or, for the scratch directories, cleaned up): a
 //! `--cav-types` naming a vTypeDistribution (0 CAVs), `--lambda`/`--hdv-profile` beside
 //! `--sumocfg` (ignored), an `<end>` before `<begin>` or absurdly far (0 or 4294967295 steps), and
-//! the scratch directories of killed episodes (never swept). On a copy of SUMO's `ramp` game,
-//! with real SUMO.
+//! the scratch directories of killed episodes (never swept), a flow of 1e9 vehicles (SUMO grew
+//! to 3.85 GB before it aborted). On a copy of SUMO's `ramp` game, with real SUMO.
 
 mod common;
 
@@ -118,4 +118,49 @@ fn scratch_directories_of_dead_episodes_are_swept_and_live_ones_kept() {
         "the dead episode's scratch directory is swept"
     );
     assert!(live.exists(), "a running process's is kept");
+}
+
+/// The peak resident memory of the waited-for children of this process so far (MiB).
+fn children_peak_mib() -> f64 {
+    // SAFETY: getrusage fills the struct it is given.
+    let mut usage: libc::rusage = unsafe { std::mem::zeroed() };
+    assert_eq!(
+        unsafe { libc::getrusage(libc::RUSAGE_CHILDREN, &mut usage) },
+        0
+    );
+    usage.ru_maxrss as f64 / 1024.0
+}
+
+#[test]
+fn a_flow_of_a_billion_vehicles_is_one_error_line_in_bounded_memory() {
+    let dir = tempfile::tempdir().unwrap();
+    let game = game_copy(dir.path());
+    let flows = game.join("ramp/huge.rou.xml");
+    let flow = r#"<routes><flow id="huge" type="passenger" begin="0" end="400" number="1000000000" from="gneE2" to="gneE8"/></routes>"#;
+    std::fs::write(&flows, flow).unwrap();
+    let text = std::fs::read_to_string(game.join("ramp.sumocfg")).unwrap();
+    let cfg = game.join("huge.sumocfg");
+    let routes = "<route-files value=\"ramp/ramp.rou.xml,ramp/huge.rou.xml\"/>";
+    std::fs::write(
+        &cfg,
+        text.replace("<route-files value=\"ramp/ramp.rou.xml\"/>", routes),
+    )
+    .unwrap();
+    let start = std::time::Instant::now();
+    let o = episode(&cfg, &dir.path().join("out"), dir.path(), &[]);
+    refused_naming(
+        &o,
+        &[
+            "huge.sumocfg",
+            "flow 'huge' of ramp/huge.rou.xml",
+            "1.000e9",
+        ],
+    );
+    assert!(
+        start.elapsed() < std::time::Duration::from_secs(5),
+        "{:?}",
+        start.elapsed()
+    );
+    let peak = children_peak_mib();
+    assert!(peak < 1024.0, "peak memory {peak} MiB");
 }

@@ -12,9 +12,9 @@ pub mod frame;
 pub mod layout;
 pub mod network;
 pub mod road_frame;
+pub mod route_files;
 pub mod scenario_files;
 pub mod sumocfg;
-pub mod type_distributions;
 pub mod version;
 
 mod error;

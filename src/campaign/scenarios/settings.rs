@@ -330,6 +330,7 @@ fn scenario_steps(
         .map(|path| {
             let cfg = SumoConfig::read(path)?;
             cfg.check_step(dt)?;
+            crate::sumo::route_files::check_demand(&cfg)?;
             if let Some(file) = cfg.option(&["tripinfo-output", "tripinfo"]) {
                 if !file.trim().is_empty() {
                     return Err(SettingsError::OwnTripinfo {

@@ -40,8 +40,8 @@ use crate::episode::error::EpisodeError;
 use crate::episode::metrics::{CollisionEvent, Timing};
 use crate::model::road::Road;
 use crate::sumo::frame;
+use crate::sumo::route_files::distributions;
 use crate::sumo::sumocfg::{SumoConfig, SumoConfigError};
-use crate::sumo::type_distributions::distributions;
 use crate::sumo::{Simulation, StderrCapture};
 
 pub use options::{has_cavs, sumo_options, SumoOptions};
@@ -279,6 +279,7 @@ fn checked(config: &Config) -> Result<(PathBuf, SumoConfig), EpisodeError> {
         .expect("a scenario episode has a configuration");
     let cfg = SumoConfig::read(&path)?;
     cfg.check_step(config.scenario.dt)?;
+    crate::sumo::route_files::check_demand(&cfg)?;
     Ok((path, cfg))
 }
 
