@@ -33,6 +33,15 @@ pub enum CellState<F> {
 }
 
 impl<F> CellState<F> {
+    /// The state without the finished cell's files.
+    pub fn without_files(self) -> CellState<()> {
+        match self {
+            CellState::Done(_) => CellState::Done(()),
+            CellState::NotRun => CellState::NotRun,
+            CellState::Stale(why) => CellState::Stale(why),
+        }
+    }
+
     /// Where the cell whose files are in `dir` stands: not run without its `episode.csv`,
     /// otherwise as `finished` finds its files (the campaign's own checks), so that both kinds
     /// of campaign decide "not run" the same way.

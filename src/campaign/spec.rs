@@ -11,27 +11,9 @@ use super::grid::Shard;
 use super::{CampaignError, SettingsError};
 use crate::config::Config;
 
-/// Where a cell of a campaign directory stands, for the resume check.
-#[derive(Debug, Clone, PartialEq)]
-pub enum Readiness {
-    /// Finished as this campaign's.
-    Done,
-    /// No `episode.csv`: not run, or stopped before it was written.
-    NotRun,
-    /// An `episode.csv` is there but the cell is not finished as this campaign's: why.
-    Stale(String),
-}
-
-impl<F> From<CellState<F>> for Readiness {
-    /// The state without the finished cell's files, which the resume check does not need.
-    fn from(state: CellState<F>) -> Readiness {
-        match state {
-            CellState::Done(_) => Readiness::Done,
-            CellState::NotRun => Readiness::NotRun,
-            CellState::Stale(why) => Readiness::Stale(why),
-        }
-    }
-}
+/// Where a cell of a campaign directory stands, for the resume check: a [`CellState`] without
+/// the finished cell's files, which the check does not need.
+pub type Readiness = CellState<()>;
 
 /// How many rows a collection gathered.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -134,7 +116,7 @@ impl CampaignSpec for super::Settings {
         cells.iter().map(ToString::to_string).collect()
     }
     fn readiness(&self, out: &Path, cell: &Self::Cell) -> Readiness {
-        super::collect::cell_state(out, self, cell).into()
+        super::collect::cell_state(out, self, cell).without_files()
     }
     fn episode_config(&self, cell: &Self::Cell) -> Config {
         super::Settings::episode_config(self, cell)
@@ -175,7 +157,7 @@ impl CampaignSpec for super::scenarios::ScenarioSettings {
         super::scenarios::collect::recorded_outside(out, &self.grid)
     }
     fn readiness(&self, out: &Path, cell: &Self::Cell) -> Readiness {
-        super::scenarios::collect::cell_state(out, self, cell).into()
+        super::scenarios::collect::cell_state(out, self, cell).without_files()
     }
     fn episode_config(&self, cell: &Self::Cell) -> Config {
         super::scenarios::ScenarioSettings::episode_config(self, cell)

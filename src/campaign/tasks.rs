@@ -48,7 +48,7 @@ pub fn prepare<S: CampaignSpec>(settings: &S, out: &Path) -> Result<Plan, Campai
         }
         shard_size += 1;
         match settings.readiness(out, cell) {
-            Readiness::Done => continue,
+            Readiness::Done(()) => continue,
             Readiness::Stale(why) => println!("campaign: {cell} runs again: {why}"),
             Readiness::NotRun => {}
         }

@@ -170,7 +170,7 @@ fn finished_dirs<S: CampaignSpec>(out: &Path, settings: &S) -> Vec<PathBuf> {
     let finished = cells
         .iter()
         .enumerate()
-        .filter(|(i, c)| shard.contains(*i) && settings.readiness(out, c) == Readiness::Done);
+        .filter(|(i, c)| shard.contains(*i) && settings.readiness(out, c) == Readiness::Done(()));
     finished.map(|(_, c)| cell_dir(out, c)).collect()
 }
 
