@@ -144,21 +144,29 @@ pub fn cell_of(axes: Axes, fields: &csv::StringRecord) -> Result<Cell, String> {
     })
 }
 
-/// The header of the CSV file at `path`.
-pub fn header_of(path: &Path) -> Result<Vec<String>, ResultsError> {
-    let read_err = |e: csv::Error| ResultsError::Read {
-        path: path.to_path_buf(),
-        message: e.to_string(),
-    };
+/// The CSV file at `path` opened for reading (bounded), with its header.
+fn open_csv(
+    path: &Path,
+) -> Result<(csv::Reader<crate::io::bounded::BoundedFile>, Vec<String>), ResultsError> {
     let mut r = csv::Reader::from_reader(
         crate::io::bounded::open(path, crate::io::bounded::FileKind::Data)
-            .map_err(|e| read_err(e.into()))?,
+            .map_err(|e| read_error(path, e.into()))?,
     );
-    Ok(r.headers()
-        .map_err(read_err)?
-        .iter()
-        .map(String::from)
-        .collect())
+    let header = r.headers().map_err(|e| read_error(path, e))?;
+    let header = header.iter().map(String::from).collect();
+    Ok((r, header))
+}
+
+fn read_error(path: &Path, e: csv::Error) -> ResultsError {
+    ResultsError::Read {
+        path: path.to_path_buf(),
+        message: e.to_string(),
+    }
+}
+
+/// The header of the CSV file at `path`.
+pub fn header_of(path: &Path) -> Result<Vec<String>, ResultsError> {
+    open_csv(path).map(|(_, header)| header)
 }
 
 /// Reads the records of a CSV file that must have exactly `header`.
@@ -166,27 +174,16 @@ pub fn read_records(
     path: &Path,
     header: &[String],
 ) -> Result<Vec<csv::StringRecord>, ResultsError> {
-    let read_err = |e: csv::Error| ResultsError::Read {
-        path: path.to_path_buf(),
-        message: e.to_string(),
-    };
-    let mut r = csv::Reader::from_reader(
-        crate::io::bounded::open(path, crate::io::bounded::FileKind::Data)
-            .map_err(|e| read_err(e.into()))?,
-    );
-    let found: Vec<String> = r
-        .headers()
-        .map_err(read_err)?
-        .iter()
-        .map(String::from)
-        .collect();
+    let (mut r, found) = open_csv(path)?;
     if found != header {
         return Err(ResultsError::Columns {
             path: path.to_path_buf(),
             header: found.join(","),
         });
     }
-    r.records().map(|rec| rec.map_err(read_err)).collect()
+    r.records()
+        .map(|rec| rec.map_err(|e| read_error(path, e)))
+        .collect()
 }
 
 /// Reads a collected CSV file that must have exactly `header` (starting with the cell columns
