@@ -31,6 +31,7 @@ fn main() {
     println!("cargo:rerun-if-changed=src/sumo/shim_traci.cpp");
     println!("cargo:rerun-if-changed=build.rs");
     println!("cargo:rerun-if-env-changed=SUMO_HOME");
+    record_commit();
     let sumo = find_sumo();
     let version = probe_version(&sumo);
     compile_shim(&sumo, "src/sumo/shim.cpp", "bkpbs_sumo_shim");
@@ -52,6 +53,37 @@ fn main() {
             Path::new(&home).display()
         );
     }
+}
+
+/// The commit the sources are built from, as `BKPBS_COMMIT` (what a campaign cell records of
+/// its build): `$BKPBS_COMMIT` if set (a build from a source archive), else git's `HEAD`, else
+/// `unknown`. The build script runs again when `HEAD` moves: its file and the ref it names
+/// are watched (only existing files: cargo reruns a script on every build for a missing one).
+fn record_commit() {
+    println!("cargo:rerun-if-env-changed=BKPBS_COMMIT");
+    let given = std::env::var("BKPBS_COMMIT").ok().filter(|c| !c.is_empty());
+    let commit = given.or_else(git_head).unwrap_or_else(|| "unknown".into());
+    println!("cargo:rustc-env=BKPBS_COMMIT={commit}");
+}
+
+/// `HEAD`'s commit, watching the files that move it; `None` outside a git checkout.
+fn git_head() -> Option<String> {
+    let git = |args: &[&str]| {
+        let out = Command::new("git").args(args).output().ok()?;
+        let text = String::from_utf8(out.stdout).ok()?;
+        out.status.success().then(|| text.trim().to_string())
+    };
+    let head = git(&["rev-parse", "HEAD"])?;
+    let mut watched = vec!["HEAD".to_string(), "packed-refs".to_string()];
+    watched.extend(git(&["symbolic-ref", "-q", "HEAD"]));
+    for name in watched {
+        if let Some(path) = git(&["rev-parse", "--path-format=absolute", "--git-path", &name]) {
+            if Path::new(&path).exists() {
+                println!("cargo:rerun-if-changed={path}");
+            }
+        }
+    }
+    Some(head)
 }
 
 /// `$SUMO_HOME` with headers, else Debian's system paths; a build script's panic is the one

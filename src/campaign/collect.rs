@@ -16,6 +16,7 @@ use super::cell::{
     CellState,
 };
 use super::grid::{Cell, Grid};
+use super::provenance::check_provenance;
 use super::results::{self, episodes_header, Results, ResultsError};
 use super::settings::Settings;
 use super::table::{key, Axes, Row, CELL_COLUMNS};
@@ -62,7 +63,9 @@ fn finished_row(dir: &Path, settings: &Settings, cell: &Cell) -> Result<Finished
         column("scheduled"),
     )?;
     let timing = rows_counted(dir, "timing.csv", &strings(&TIMING_COLUMNS), 1)?;
-    check_settings_record(dir, &settings.episode_config(cell))?;
+    let config = settings.episode_config(cell);
+    check_settings_record(dir, &config)?;
+    check_provenance(dir, &config)?;
     Ok(Finished {
         row,
         vehicles,

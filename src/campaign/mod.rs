@@ -7,7 +7,7 @@
 //! ```text
 //! campaign.toml                      the settings (grid and scenario); a re-run must agree
 //! episodes/<planner>/[hdv-<profile>/]a<α>_l<λ>_s<seed>/   (hdv-<profile>/: a profile other than sumo-safe)
-//!     episode.csv vehicles.csv collisions.csv timing.csv settings.toml [sumo.log]   a finished cell
+//!     episode.csv vehicles.csv collisions.csv timing.csv settings.toml provenance.toml [sumo.log]   a finished cell
 //!     error.txt                                                       a failed one
 //! episodes.csv vehicles.csv timings.csv failures.csv                  collected, grid order
 //! report/                                                             tables and figures
@@ -32,6 +32,7 @@ pub mod overrides;
 #[doc(hidden)] // worker-process plumbing: the campaign runs it, a library user never does
 pub mod pool;
 pub mod portable;
+pub mod provenance;
 pub mod results;
 pub mod scenarios;
 pub mod settings;

@@ -22,13 +22,6 @@ use crate::io::{self, WriteError};
 /// runs, a result by its path in the cell directory.
 pub type File = (PathBuf, Vec<u8>);
 
-/// The files of a profile in `predictor.calibrations` (`DIR/<profile>/…`) an episode may read.
-const PROFILE_FILES: [&str; 3] = [
-    "calibration.json",
-    "gcn-conditioned.json",
-    "gcn-unconditioned.json",
-];
-
 /// Why an episode's files could not be put into, or read from, a directory.
 #[derive(Debug, thiserror::Error)]
 pub enum PortableError {
@@ -57,28 +50,19 @@ pub enum PortableError {
 /// `base`, the campaign's working directory), sorted, each once. A file that does not exist
 /// here is left out: the episode reports it where it runs, as it would here.
 pub fn inputs(config: &Config, base: &Path) -> Vec<PathBuf> {
-    let (s, p) = (&config.scenario, &config.predictor);
     let mut named: Vec<PathBuf> = Vec::new();
-    if let Some(cfg) = &s.sumocfg {
+    if let Some(cfg) = &config.scenario.sumocfg {
         let cfg = absolute(base, cfg);
         match crate::sumo::scenario_files::named_files(&cfg) {
             Ok(files) => named.extend(files.into_iter().map(|(_, path)| path)),
             Err(_) => named.push(cfg),
         }
     }
-    let single = [
-        &s.net_file,
-        &p.conditioned_model,
-        &p.unconditioned_model,
-        &p.calibration,
-        &config.rl.policy,
-    ];
-    named.extend(single.into_iter().flatten().cloned());
-    if let Some(dir) = &p.calibrations {
-        let profile = dir.join(&config.hdv.profile);
-        named.extend(PROFILE_FILES.iter().map(|f| profile.join(f)));
-    }
-    named.extend(config.sumo.additional_files.iter().cloned());
+    named.extend(
+        super::provenance::named_inputs(config)
+            .into_iter()
+            .map(|(_, f)| f),
+    );
     let mut files: Vec<PathBuf> = named
         .iter()
         .map(|f| absolute(base, f))

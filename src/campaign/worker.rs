@@ -193,6 +193,7 @@ pub(crate) fn run_cell_recording(req: &Request, record: &Config) -> Result<(), S
         }
     }
     remove_stale_temporaries(&req.dir);
+    let provenance = super::provenance::Provenance::of(&req.config)?;
     IN_EPISODE.store(true, Ordering::SeqCst);
     let run = panic::catch_unwind(AssertUnwindSafe(|| {
         injected_fault(req);
@@ -214,7 +215,9 @@ pub(crate) fn run_cell_recording(req: &Request, record: &Config) -> Result<(), S
         }
     };
     let record = super::comparison::results_settings(record);
+    let provenance_file = req.dir.join(super::provenance::PROVENANCE_RECORD);
     io::write_atomic(&req.dir.join(SETTINGS_RECORD), record.as_bytes())
+        .and_then(|()| io::write_atomic(&provenance_file, provenance.to_toml().as_bytes()))
         .and_then(|()| result.write(&req.dir))
         .map_err(|e| e.to_string())
 }

@@ -22,8 +22,16 @@ use clap::{Parser, Subcommand};
 #[derive(Parser)]
 #[command(
     name = "bkpbs",
-    // The SUMO it was built against (and will run: another is refused).
-    version = concat!(env!("CARGO_PKG_VERSION"), " (SUMO ", env!("BKPBS_SUMO_VERSION"), ")"),
+    // The commit it was built from and the SUMO it was built against (and will run: another
+    // is refused).
+    version = concat!(
+        env!("CARGO_PKG_VERSION"),
+        " (commit ",
+        env!("BKPBS_COMMIT"),
+        ", SUMO ",
+        env!("BKPBS_SUMO_VERSION"),
+        ")"
+    ),
     about = "BK-PBS merge coordination co-simulated with SUMO"
 )]
 pub struct Cli {

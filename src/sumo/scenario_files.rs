@@ -108,7 +108,7 @@ pub fn first_change(
 }
 
 /// The SHA-256 of the regular file at `path`, read as a stream (bounded memory).
-fn digest_of(path: &Path) -> std::io::Result<String> {
+pub(crate) fn digest_of(path: &Path) -> std::io::Result<String> {
     let mut file = open(path, FileKind::Network)?;
     let mut hasher = Sha256::new();
     let mut buf = vec![0u8; 1 << 16];

@@ -19,6 +19,7 @@ use crate::campaign::cell::{
     check_run, check_settings_record, column_value, episode_row, failure_of, rows_counted,
     CellState,
 };
+use crate::campaign::provenance::check_provenance;
 use crate::campaign::results::{read_records, ResultsError};
 use crate::campaign::validate::{check_rows, Rules};
 use crate::campaign::worker::DONE_FILE;
@@ -91,6 +92,7 @@ fn finished(
     let timing_header: Vec<String> = TIMING_COLUMNS.iter().map(|s| s.to_string()).collect();
     let timing = rows_counted(dir, "timing.csv", &timing_header, 1)?;
     check_settings_record(dir, &config)?;
+    check_provenance(dir, &config)?;
     Ok(Finished {
         episode: row,
         regions: region_rows,
