@@ -3,7 +3,7 @@ SHELL := /bin/bash
 CARGO ?= cargo
 DEMO_OUT ?= out/demo
 
-.PHONY: deps demo test build net pytest docs test-sumo-latest test-cluster
+.PHONY: deps demo test build net pytest wheel bench-python docs test-sumo-latest test-cluster
 
 # Which SUMO bkpbs builds and runs against: `apt`, Debian's package (the default), or `pip`, the
 # eclipse-sumo wheel of version $(SUMO_PIP_VERSION) from PyPI, installed into the virtualenv
@@ -27,6 +27,8 @@ else
 $(error SUMO=$(SUMO): choose apt (Debian's package, the default) or pip (the eclipse-sumo wheel))
 endif
 TARGET_DIR := $(abspath $(or $(CARGO_TARGET_DIR),target))
+# The SUMO version the bkpbs binary $(1) is built against (`bkpbs --version`).
+sumo_of = $$($(1) --version | sed -n 's/.*SUMO \([0-9.]*\)).*/\1/p')
 
 deps:
 	@bash scripts/ensure-deps.sh
@@ -56,15 +58,34 @@ test: deps
 	@$(MAKE) --no-print-directory pytest
 
 # The Python bindings (bindings/): a virtualenv $(VENV) with maturin, pytest and ray
-# (scripts/ensure-python.sh), the wheel built with maturin and installed into it, then the Python
+# (scripts/ensure-python.sh) and SUMO's libsumo wheel of the version bkpbs is built against, the
+# wheel built with maturin (a test build) and installed into it, then the Python
 # tests (real SUMO, a local Ray), which compare against the CLI binary `cargo test` builds.
 pytest: deps
 	@VENV=$(VENV) SUMO_PIP_VERSION=$(SUMO_PIP_VERSION) bash scripts/ensure-python.sh sumo tools
 	$(CARGO) build --quiet --profile test --bin bkpbs
+	@VENV=$(VENV) LIBSUMO_VERSION=$(call sumo_of,$(TARGET_DIR)/debug/bkpbs) bash scripts/ensure-python.sh libsumo
 	rm -rf $(TARGET_DIR)/wheels
 	$(VENV)/bin/maturin build --quiet -m bindings/Cargo.toml --profile dev --out $(TARGET_DIR)/wheels
 	$(VENV)/bin/python -m pip install --quiet --disable-pip-version-check --force-reinstall --no-deps $(TARGET_DIR)/wheels/bkpbs-*.whl
 	BKPBS_BIN=$(TARGET_DIR)/debug/bkpbs $(VENV)/bin/python -m pytest -q -p no:cacheprovider $(PYTESTS)
+
+# The Python package as a user installs it (bindings/README.md): a release wheel in
+# $(TARGET_DIR)/wheels-release, installed into $(VENV) beside SUMO's libsumo wheel of the version
+# bkpbs is built against, so a TraCI loop there runs SUMO in-process at full speed. (`make
+# pytest` installs its quicker-to-build test wheel over it.)
+wheel: build
+	@VENV=$(VENV) bash scripts/ensure-python.sh wheel
+	rm -rf $(TARGET_DIR)/wheels-release
+	$(VENV)/bin/maturin build --quiet --release -m bindings/Cargo.toml --out $(TARGET_DIR)/wheels-release
+	$(VENV)/bin/python -m pip install --quiet --disable-pip-version-check --force-reinstall --no-deps $(TARGET_DIR)/wheels-release/bkpbs-*.whl
+	@VENV=$(VENV) LIBSUMO_VERSION=$(call sumo_of,$(TARGET_DIR)/release/bkpbs) bash scripts/ensure-python.sh libsumo
+	@echo "wheel: bkpbs (release) and libsumo installed into $(VENV)"
+
+# A TraCI loop of your own from $(VENV) (libsumo in-process, and traci) against the CLI on the
+# same scenario, side by side (examples/loop_speed.py): wall times, ratios, identical files.
+bench-python: wheel
+	$(VENV)/bin/python examples/loop_speed.py --bin $(TARGET_DIR)/release/bkpbs $(BENCH_ARGS)
 
 # Which Python tests `make pytest` runs.
 PYTESTS ?= bindings/tests

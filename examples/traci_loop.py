@@ -28,7 +28,8 @@ those of ``bkpbs episode --sumocfg``).
     python examples/traci_loop.py --sumocfg my.sumocfg --alpha 0.3 --seed 1 [--steps N] [--out DIR]
 
 ``traci`` comes from ``$SUMO_HOME/tools`` (Debian: /usr/share/sumo/tools, package sumo-tools);
-``--libsumo`` needs SUMO's Python libsumo, which Debian ships for its own ``/usr/bin/python3``.
+``--libsumo`` needs SUMO's Python libsumo: ``make wheel`` installs PyPI's ``libsumo`` wheel of
+the SUMO bkpbs is built against into ``.venv`` (Debian's own is for its ``/usr/bin/python3`` only).
 ``--timing`` also runs the same episode in bkpbs's Rust runner and prints both per-step costs.
 """
 
@@ -66,7 +67,7 @@ def import_sumo(use_libsumo: bool) -> Any:
 
         return traci
     except ImportError as e:
-        what = "libsumo (try Debian's /usr/bin/python3)" if use_libsumo else "traci"
+        what = "libsumo (`make wheel` installs it into .venv)" if use_libsumo else "traci"
         sys.exit(f"error: cannot import {what}: {e}; set SUMO_HOME to SUMO's directory")
 
 

@@ -4,17 +4,24 @@
 #   tools  maturin, pytest, ray, gymnasium and pettingzoo (the bindings' tests), and
 #   sumo   SUMO's own wheel eclipse-sumo, version $SUMO_PIP_VERSION (default 1.28.0): headers,
 #          libsumocpp and programs (`make ... SUMO=pip` builds against it).
+#   wheel  maturin alone (`make wheel` builds the release wheel with it).
+#   libsumo  SUMO's Python libsumo wheel, version $LIBSUMO_VERSION (the SUMO bkpbs is built
+#          against): a TraCI loop in the virtualenv then runs SUMO in-process (`make wheel`).
 # The arguments name which (default: tools). Fails with one clear line when something cannot be had.
 set -euo pipefail
 
 want_tools=0
 want_sumo=0
+want_maturin=0
+want_libsumo=0
 [ $# -gt 0 ] || set -- tools
 for what in "$@"; do
     case "$what" in
         tools) want_tools=1 ;;
         sumo) want_sumo=1 ;;
-        *) echo "python: error: unknown part '$what' (tools, sumo)" >&2; exit 1 ;;
+        wheel) want_maturin=1 ;;
+        libsumo) want_libsumo=1 ;;
+        *) echo "python: error: unknown part '$what' (tools, sumo, wheel, libsumo)" >&2; exit 1 ;;
     esac
 done
 SUMO_PIP_VERSION=${SUMO_PIP_VERSION:-1.28.0}
@@ -56,6 +63,14 @@ if [ $want_tools = 1 ]; then
     "$VENV/bin/python" -c 'import ray' 2>/dev/null || need+=("ray>=2.9")
     "$VENV/bin/python" -c 'import gymnasium' 2>/dev/null || need+=("gymnasium>=1.0")
     "$VENV/bin/python" -c 'import pettingzoo' 2>/dev/null || need+=("pettingzoo>=1.24")
+fi
+if [ $want_maturin = 1 ]; then
+    "$VENV/bin/python" -c 'import maturin' 2>/dev/null || need+=("maturin>=1.9.4,<2")
+fi
+if [ $want_libsumo = 1 ]; then
+    [ -n "${LIBSUMO_VERSION:-}" ] || die "LIBSUMO_VERSION is not set (the SUMO version bkpbs is built against)"
+    have=$("$VENV/bin/python" -c 'import importlib.metadata as m; print(m.version("libsumo"))' 2>/dev/null || true)
+    [ "$have" = "$LIBSUMO_VERSION" ] || need+=("libsumo==$LIBSUMO_VERSION")
 fi
 if [ $want_sumo = 1 ]; then
     have=$("$VENV/bin/python" -c 'import importlib.metadata as m; print(m.version("eclipse-sumo"))' 2>/dev/null || true)
