@@ -3,7 +3,7 @@ SHELL := /bin/bash
 CARGO ?= cargo
 DEMO_OUT ?= out/demo
 
-.PHONY: deps demo test build net pytest wheel bench-python docs test-sumo-latest test-cluster
+.PHONY: deps demo test build net pytest wheel bench-python bench-cluster docs test-sumo-latest test-cluster
 
 # Which SUMO bkpbs builds and runs against: `apt`, Debian's package (the default), or `pip`, the
 # eclipse-sumo wheel of version $(SUMO_PIP_VERSION) from PyPI, installed into the virtualenv
@@ -86,6 +86,13 @@ wheel: build
 # same scenario, side by side (examples/loop_speed.py): wall times, ratios, identical files.
 bench-python: wheel
 	$(VENV)/bin/python examples/loop_speed.py --bin $(TARGET_DIR)/release/bkpbs $(BENCH_ARGS)
+
+# How a campaign scales with Ray nodes (bindings/tests/bench_cluster.py): the same grid on a
+# cluster of 1 and of 2 worker nodes of one CPU each, nodes that do not see the campaign's files.
+# Needs root and unshare.
+bench-cluster: wheel
+	@VENV=$(VENV) bash scripts/ensure-python.sh tools
+	cd bindings/tests && $(abspath $(VENV))/bin/python bench_cluster.py $(BENCH_ARGS)
 
 # Which Python tests `make pytest` runs.
 PYTESTS ?= bindings/tests
