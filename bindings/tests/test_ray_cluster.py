@@ -129,6 +129,13 @@ def test_a_config_s_model_and_policy_files_travel_through_ray(cluster, tmp_path,
     local_campaign(cli, tmp_path / "local", *grid, cwd=work)
     same(tmp_path / "ray", tmp_path / "local", ["episodes.csv", "vehicles.csv",
                                                 "failures.csv", "campaign.toml"])
+    # The policy retrained in place: the cells whose settings name it run again, saying why.
+    policy = work / "my-models" / "rl-ppo.json"
+    policy.write_text(policy.read_text() + "\n")
+    p = campaign(cluster, tmp_path / "ray", *grid, cwd=work)
+    assert "rl-ppo α=0.5 λ=3000 seed=0 runs again: its rl.policy file is not the one it ran " \
+        "with" in p.stdout, p.stdout
+    assert "2 done, 0 failed" in p.stdout, p.stdout + p.stderr
 
 
 def test_a_stopped_driver_resumes_from_the_directory(cluster, tmp_path, cli):
