@@ -305,6 +305,8 @@ struct FlowCount {
 fn per_flow(cfg: &Path, planner: &str, alpha: &str, out: &Path) -> BTreeMap<String, FlowCount> {
     let o = scenario_run(cfg, planner, &["--alpha", alpha, "--seed", "5"], out);
     assert!(o.status.success(), "{planner}: {}", stderr(&o));
+    let said = String::from_utf8_lossy(&o.stdout);
+    has_line(&said, &["region at", "left to SUMO's drivers: on-ramp"]);
     let mut flows: BTreeMap<String, FlowCount> = BTreeMap::new();
     for v in csv_rows(&std::fs::read(out.join("vehicles.csv")).unwrap()) {
         let flow = v["id"].split('.').next().unwrap().to_string();
