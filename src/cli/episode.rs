@@ -109,6 +109,9 @@ fn keep_sumo_log(err: episode::EpisodeError, out: &std::path::Path) -> anyhow::E
 fn run_scenario(e: &Episode) -> Result<()> {
     let mut config = e.config.clone();
     config.output.trace = e.trace;
+    for line in bkpbs::sumo::frame::scenario_left_to_sumo(&config.scenario)? {
+        println!("{line}");
+    }
     let r = episode::sumocfg::run(&config, e.planner.name())
         .map_err(|err| keep_sumo_log(err, &e.out))?;
     episode::sumocfg::write(&r, &e.out).with_context(|| {

@@ -124,6 +124,9 @@ impl Regions {
     /// # Errors
     /// No region, or one that cannot be placed in a frame (naming it).
     pub fn all_planned(self, selection: &[String]) -> Result<Vec<Road>, String> {
+        if self.nothing_to_plan_but_sumos(selection) {
+            return Ok(Vec::new());
+        }
         let picked = self.picked(selection)?;
         let names: Vec<String> = picked.iter().map(|&k| self.region_name(k)).collect();
         let mut roads: Vec<Option<Result<Road, String>>> =
@@ -136,6 +139,18 @@ impl Regions {
                 road.map_err(|why| format!("region at {name}: {why}"))
             })
             .collect()
+    }
+
+    /// Whether every region found is left to SUMO's drivers (and `selection` picks none):
+    /// an episode on a user's scenario then runs with SUMO driving everyone.
+    fn nothing_to_plan_but_sumos(&self, selection: &[String]) -> bool {
+        selection.is_empty() && self.found.regions.is_empty() && !self.found.left_to_sumo.is_empty()
+    }
+
+    /// What an episode on a user's scenario says at its start: one line per region left to
+    /// SUMO's drivers.
+    pub fn left_to_sumo_lines(&self) -> Vec<String> {
+        self.found.left_to_sumo.iter().map(|l| l.line()).collect()
     }
 
     /// The regions `selection` picks, at least one.
@@ -169,6 +184,12 @@ impl Regions {
             .iter()
             .map(|n| format!("ramp '{}' {}", n.ramp, n.why))
             .collect();
+        let unplanned = self.found.changes.iter().map(|(c, _)| c);
+        let why = why
+            .into_iter()
+            .chain(self.found.left_to_sumo.iter().map(|l| l.line()))
+            .chain(unplanned.map(|c| format!("{} {}", c.kind.as_str(), c.what)))
+            .collect::<Vec<_>>();
         if why.is_empty() {
             "no on-ramp joins a carriageway on an acceleration lane: no merge to plan".into()
         } else {
@@ -218,6 +239,19 @@ pub fn scenario_roads(scenario: &Scenario) -> Result<Vec<Road>, NetworkError> {
             path: net_path,
             what,
         })
+}
+
+/// One line per merge region of a user's scenario (`scenario.sumocfg`) that is left to SUMO's
+/// drivers, saying why: what an episode prints at its start. None without a configuration.
+///
+/// # Errors
+/// An unreadable configuration or network.
+pub fn scenario_left_to_sumo(scenario: &Scenario) -> Result<Vec<String>, NetworkError> {
+    let Some(path) = &scenario.sumocfg else {
+        return Ok(Vec::new());
+    };
+    let net = Net::read(&sumocfg_net(path)?)?;
+    Ok(Regions::of(&net).left_to_sumo_lines())
 }
 
 /// The network a SUMO configuration names.

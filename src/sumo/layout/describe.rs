@@ -1,9 +1,10 @@
-//! What `bkpbs network` prints: each region found, one line per element, then every junction
-//! that is no merge and every edge left out, grouped by why.
+//! What `bkpbs network` prints: each region found, one line per element, then the regions
+//! left to SUMO's drivers, every forced lane change by kind with where it is planned or why
+//! not, every junction that is no merge and every edge left out, grouped by why.
 
 use std::collections::BTreeMap;
 
-use super::{Discovery, Layout};
+use super::{Discovery, Layout, Status};
 
 impl Layout {
     /// The region, one line per element.
@@ -50,10 +51,30 @@ impl Layout {
 }
 
 impl Discovery {
-    /// Junctions that are no merge and edges left out, grouped by why (the regions are
-    /// described with their road frames, by the caller).
+    /// The regions left to SUMO's drivers, forced lane changes, junctions that are no merge
+    /// and edges left out, grouped by why (the regions planned are described with their road
+    /// frames, by the caller).
     pub fn describe_left_out(&self) -> String {
         let mut out = String::new();
+        for l in &self.left_to_sumo {
+            out += &(l.line() + "\n");
+            out += &l.layout.describe();
+        }
+        for (c, status) in &self.changes {
+            let status = match status {
+                Status::Region(k) => format!("planned in region {}", k + 1),
+                Status::LeftToSumo(k) => format!(
+                    "in the region at {}, left to SUMO's drivers",
+                    self.left_to_sumo[*k]
+                        .layout
+                        .merge_edges()
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ),
+                Status::NotPlanned => "not planned yet, SUMO's drivers drive it".into(),
+            };
+            out += &format!("{} {}: {status}\n", c.kind.as_str(), c.what);
+        }
         for n in &self.not_merges {
             out += &format!("not a merge: ramp '{}' {}\n", n.ramp, n.why);
         }
@@ -69,5 +90,19 @@ impl Discovery {
             );
         }
         out
+    }
+}
+
+impl super::LeftToSumo {
+    /// The line that says the region is left to SUMO's drivers, and why: also what an
+    /// episode prints at its start.
+    pub fn line(&self) -> String {
+        let l = self;
+        format!(
+            "region at {} left to SUMO's drivers: on-ramp {}; the planners would stop its \
+             traffic where that lane ends (its CAVs are driven by SUMO too)",
+            l.layout.merge_edges().collect::<Vec<_>>().join(", "),
+            l.why
+        )
     }
 }

@@ -72,7 +72,13 @@ pub fn find(net: &Net) -> (Vec<Merge>, Vec<NotAMerge>) {
         };
         let main_lanes = lanes_fed(net, main, &e.id);
         let lowest_main = main_lanes.first().copied().unwrap_or(0);
+        let lanes = |id: &str| net.edge(id).lanes.iter().filter(|l| l.for_cars).count();
         for ramp in preds.into_iter().filter(|p| *p != main) {
+            if lanes(ramp) > lanes(main) || lanes_feeding(net, ramp, &e.id) > 1 {
+                // The carriageway itself (the road on the left is a left-side on-ramp), or a
+                // ramp of several lanes: `lane_ends` names both, none is planned yet.
+                continue;
+            }
             let fed = lanes_fed(net, ramp, &e.id);
             if fed.iter().any(|l| *l >= lowest_main) {
                 continue; // joins beside or left of the carriageway: a junction, not a ramp
@@ -85,6 +91,16 @@ pub fn find(net: &Net) -> (Vec<Merge>, Vec<NotAMerge>) {
         }
     }
     (merges, not)
+}
+
+/// How many lanes of `from` lead into `to`.
+fn lanes_feeding(net: &Net, from: &str, to: &str) -> usize {
+    let set: BTreeSet<u32> = net
+        .outgoing(from)
+        .filter(|c| c.to == to)
+        .map(|c| c.from_lane)
+        .collect();
+    set.len()
 }
 
 /// The lanes of `to` that `from` feeds, rightmost first.

@@ -8,8 +8,14 @@
 //! carriageway that begins or ends sooner is taken whole, so each of the shipped networks is
 //! one region from its source to its sink. The distance along a region counts the junctions'
 //! internal lanes between its edges. The road frame of a region is built in `road_frame.rs`.
+//!
+//! Besides the regions, every forced lane change of the network is named by its kind
+//! (`lane_ends.rs`), with where it is planned or why not; a region with an on-ramp alongside
+//! another merge's auxiliary lane is left to SUMO's drivers (`alongside.rs`).
 
+mod alongside;
 mod describe;
+pub mod lane_ends;
 mod merges;
 
 use std::collections::{BTreeMap, BTreeSet};
@@ -18,6 +24,7 @@ use crate::model::math::Point;
 use crate::model::reference_line::ReferenceLine;
 use crate::sumo::network::Net;
 
+pub use lane_ends::{ForcedChange, Kind, LANE_GAIN};
 pub use merges::{Merge, NotAMerge, MIN_WEAVING_LANE};
 
 /// How far upstream of its first merge a region begins (m): longer than the planners'
@@ -87,12 +94,38 @@ pub struct Layout {
     pub line: ReferenceLine,
 }
 
-/// What was found in a network: its merge regions, in file order of their first merge, and why
-/// every other edge was left out.
+/// A region found but left to SUMO's drivers, and why.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LeftToSumo {
+    /// The region.
+    pub layout: Layout,
+    /// The on-ramp (its last edge) that cannot be planned.
+    pub ramp: String,
+    /// Why, in one phrase.
+    pub why: String,
+}
+
+/// Where a forced lane change is planned, or that it is not.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Status {
+    /// In the region of this index in [`Discovery::regions`].
+    Region(usize),
+    /// In the region of this index in [`Discovery::left_to_sumo`].
+    LeftToSumo(usize),
+    /// Nowhere: SUMO's drivers drive it.
+    NotPlanned,
+}
+
+/// What was found in a network: its merge regions, in file order of their first merge, every
+/// forced lane change by kind, and why every other edge was left out.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Discovery {
-    /// The regions: each a carriageway's stretch around its merges.
+    /// The regions to plan: each a carriageway's stretch around its merges.
     pub regions: Vec<Layout>,
+    /// Regions found that the planners cannot plan yet, each with why.
+    pub left_to_sumo: Vec<LeftToSumo>,
+    /// Every forced lane change, by kind, with where it is planned.
+    pub changes: Vec<(ForcedChange, Status)>,
     /// Ramps joining a carriageway where no merge is planned, each with why.
     pub not_merges: Vec<NotAMerge>,
     /// Every edge in no region, with why (closed to cars, or far from any merge).
@@ -112,31 +145,90 @@ impl Discovery {
             }
             by_road.entry(road).or_default().push(m);
         }
-        let mut regions: Vec<Layout> = Vec::new();
+        let (mut regions, mut left_to_sumo) = (Vec::new(), Vec::new());
         for road in &order {
             let merges = &by_road[road];
             match Layout::of_region(net, road, merges) {
-                Some(layout) => regions.push(layout),
+                Some(layout) => match alongside::why(net, &layout) {
+                    Some((ramp, why)) => left_to_sumo.push(LeftToSumo { layout, ramp, why }),
+                    None => regions.push(layout),
+                },
                 None => not_merges.extend(merges.iter().map(|m| NotAMerge {
                     ramp: m.ramp.clone(),
                     why: format!("joins '{}', a carriageway without lane shapes", m.joins),
                 })),
             }
         }
+        let changes = changes(lane_ends::find(net), &regions, &left_to_sumo);
         let used: BTreeSet<&str> = regions.iter().flat_map(Layout::edge_ids).collect();
+        let sumos: BTreeSet<&str> = left_to_sumo
+            .iter()
+            .flat_map(|l| l.layout.edge_ids())
+            .collect();
         let mut left_out = net.closed.clone();
-        left_out.extend(
-            net.edges
-                .iter()
-                .filter(|e| !used.contains(e.id.as_str()))
-                .map(|e| (e.id.clone(), "in no merge region".to_string())),
-        );
+        for e in net.edges.iter().filter(|e| !used.contains(e.id.as_str())) {
+            let why = if sumos.contains(e.id.as_str()) {
+                "in a merge region left to SUMO's drivers"
+            } else {
+                "in no merge region"
+            };
+            left_out.push((e.id.clone(), why.to_string()));
+        }
         Discovery {
             regions,
+            left_to_sumo,
+            changes,
             not_merges,
             left_out,
         }
     }
+}
+
+/// The forced lane changes `found`, with the weaving sections of the regions, each with where
+/// it is planned; an on-ramp of a region left to SUMO for running alongside another's
+/// auxiliary lane is named so.
+fn changes(
+    mut found: Vec<ForcedChange>,
+    regions: &[Layout],
+    left: &[LeftToSumo],
+) -> Vec<(ForcedChange, Status)> {
+    let layouts = regions.iter().chain(left.iter().map(|l| &l.layout));
+    for r in layouts.flat_map(|l| &l.on_ramps) {
+        if let Some(exit) = &r.weaves_into {
+            found.push(ForcedChange {
+                kind: Kind::Weaving,
+                ramp: Some(alongside::ramp_name(r).to_string()),
+                what: format!(
+                    "'{}' → '{}': its lane runs on into off-ramp '{exit}' on '{}'",
+                    alongside::ramp_name(r),
+                    r.joins,
+                    r.ends_on
+                ),
+            });
+        }
+    }
+    let has = |l: &Layout, ramp: &str| l.on_ramps.iter().any(|r| alongside::ramp_name(r) == ramp);
+    let mut out: Vec<(ForcedChange, Status)> = found
+        .into_iter()
+        .map(|mut c| {
+            let planned = matches!(c.kind, Kind::AccelerationLane | Kind::Weaving);
+            let ramp = c.ramp.as_deref().filter(|_| planned).unwrap_or_default();
+            let status = if let Some(k) = regions.iter().position(|l| has(l, ramp)) {
+                Status::Region(k)
+            } else if let Some(k) = left.iter().position(|l| has(&l.layout, ramp)) {
+                if left[k].ramp == ramp {
+                    c.kind = Kind::Alongside;
+                    c.what = left[k].why.clone();
+                }
+                Status::LeftToSumo(k)
+            } else {
+                Status::NotPlanned
+            };
+            (c, status)
+        })
+        .collect();
+    out.sort_by_key(|(c, _)| c.kind);
+    out
 }
 
 impl Layout {
