@@ -122,6 +122,10 @@ fn the_environment_on_a_scenario_is_the_rl_ppo_planners_episode() {
         .collect();
     assert_eq!(cavs.len(), 1, "one CAV among HDVs");
     assert_eq!(cavs[0].id.as_str(), &*ego);
-    assert!(cavs[0].depart_s >= 10.0, "departed at {}", cavs[0].depart_s);
+    assert!(
+        cavs[0].depart_s >= Some(10.0),
+        "departed at {:?}",
+        cavs[0].depart_s
+    );
     assert_eq!(env.possible_agents(), [ego]);
 }

@@ -19,6 +19,11 @@ const TIME: &str = r#"<time><begin value="0"/><end value="150"/><step-length val
 /// eager lane changers and trucks on flows with random lanes, and `options` (the elements of
 /// the configuration beside its input): the configuration's path.
 fn motorway(dir: &Path, options: &str) -> PathBuf {
+    motorway_at(dir, options, (2700, 700))
+}
+
+/// The same motorway with its flows at `(main, ramp)` vehicles per hour.
+fn motorway_at(dir: &Path, options: &str, (main, ramp): (u32, u32)) -> PathBuf {
     common::netconvert_net(dir, 3, &[600.0], false);
     let routes = r#"<routes>
     <vTypeDistribution id="mix">
@@ -28,10 +33,13 @@ fn motorway(dir: &Path, options: &str) -> PathBuf {
     </vTypeDistribution>
     <route id="main" edges="road0 merge0 tail"/>
     <route id="ramp" edges="entry0 merge0 tail"/>
-    <flow id="m" type="mix" route="main" begin="0" end="150" vehsPerHour="2700" departLane="random" departSpeed="random"/>
-    <flow id="r" type="mix" route="ramp" begin="0" end="150" vehsPerHour="700" departSpeed="max"/>
+    <flow id="m" type="mix" route="main" begin="0" end="150" vehsPerHour="MAIN" departLane="random" departSpeed="random"/>
+    <flow id="r" type="mix" route="ramp" begin="0" end="150" vehsPerHour="RAMP" departSpeed="max"/>
 </routes>
 "#;
+    let routes = routes
+        .replace("MAIN", &main.to_string())
+        .replace("RAMP", &ramp.to_string());
     std::fs::write(dir.join("m.rou.xml"), routes).unwrap();
     let cfg = dir.join("m.sumocfg");
     std::fs::write(
@@ -113,6 +121,117 @@ fn with_no_cav_every_trip_is_sumo_alones() {
         );
         assert_eq!(trips(&tmp.path().join("trips.xml")), alone, "{planner}");
     }
+}
+
+/// The `<vehicles>` counts and the `<vehicleTripStatistics>` of SUMO's statistic output.
+fn statistics(path: &Path) -> (BTreeMap<String, f64>, BTreeMap<String, f64>) {
+    let text = std::fs::read_to_string(path).unwrap();
+    let doc = roxmltree::Document::parse(&text).unwrap();
+    let attributes = |tag: &str| {
+        let n = doc.descendants().find(|n| n.has_tag_name(tag)).unwrap();
+        n.attributes()
+            .filter_map(|a| Some((a.name().to_string(), a.value().parse().ok()?)))
+            .collect()
+    };
+    (attributes("vehicles"), attributes("vehicleTripStatistics"))
+}
+
+/// The trips SUMO never started in a tripinfo file written with `write-undeparted`: id →
+/// departDelay, to 0.01 s.
+fn undeparted(path: &Path) -> BTreeMap<String, String> {
+    let text = std::fs::read_to_string(path).unwrap();
+    let doc = roxmltree::Document::parse(&text).unwrap();
+    doc.descendants()
+        .filter(|n| n.has_tag_name("tripinfo") && n.attribute("depart") == Some("-1"))
+        .map(|n| {
+            let delay: f64 = n.attribute("departDelay").unwrap().parse().unwrap();
+            (
+                n.attribute("id").unwrap().to_string(),
+                format!("{delay:.2}"),
+            )
+        })
+        .collect()
+}
+
+/// More demand than the motorway takes (7000 veh/h on the main road, 1800 on the ramp): with
+/// α = 0 every trip is still `sumo -c`'s, and every vehicle SUMO loaded is in the books.
+/// `never_inserted` is SUMO's loaded minus inserted (its statistic output), one
+/// `never_inserted` row each in `vehicles.csv` with SUMO's own wait to the end (`departDelay`
+/// of its undeparted trip; their mean SUMO's `departDelayWaiting`), and the mean with the wait
+/// charges those waits. Before, the held-back vehicles were a count in `episode.csv` only.
+#[test]
+fn vehicles_sumo_never_inserted_are_each_in_the_books() {
+    let tmp = tempfile::tempdir().unwrap();
+    let cfg = motorway_at(tmp.path(), TIME, (7000, 1800));
+    let (trips_xml, stats_xml) = (tmp.path().join("alone.xml"), tmp.path().join("stats.xml"));
+    let o = Command::new("sumo")
+        .args(["-c", cfg.to_str().unwrap(), "--seed", "5", "--no-step-log"])
+        .args(["--tripinfo-output", trips_xml.to_str().unwrap()])
+        .args(["--tripinfo-output.write-undeparted", "true"])
+        .args(["--statistic-output", stats_xml.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert_ok(&o);
+    let (counts, trip_stats) = statistics(&stats_xml);
+    let (loaded, inserted) = (counts["loaded"], counts["inserted"]);
+    let held_back = undeparted(&trips_xml);
+    assert!(loaded - inserted > 20.0, "{counts:?}");
+    let out = tmp.path().join("episode");
+    assert_ok(&common::scenario_run(
+        &cfg,
+        "sumo",
+        &["--alpha", "0", "--seed", "5"],
+        &out,
+    ));
+    let row = &csv_rows(&std::fs::read(out.join("episode.csv")).unwrap())[0];
+    let count = |c: &str| row[c].parse::<f64>().unwrap();
+    assert_eq!(
+        (count("inserted"), count("never_inserted")),
+        (inserted, loaded - inserted),
+        "{counts:?}"
+    );
+    let rows = csv_rows(&std::fs::read(out.join("vehicles.csv")).unwrap());
+    let arrived: BTreeMap<String, (String, String)> = rows
+        .iter()
+        .filter(|r| r["outcome"] == "arrived")
+        .map(|r| {
+            let v = (r["arrival_s"].clone(), r["time_loss_s"].clone());
+            (r["id"].clone(), v)
+        })
+        .collect();
+    assert_eq!(
+        arrived,
+        trips(&trips_xml),
+        "arrival and timeLoss of each trip"
+    );
+    let never: BTreeMap<String, String> = rows
+        .iter()
+        .filter(|r| r["outcome"] == "never_inserted")
+        .map(|r| (r["id"].clone(), r["depart_delay_s"].clone()))
+        .collect();
+    assert_eq!(
+        never, held_back,
+        "each vehicle never inserted, with its wait"
+    );
+    let waits: Vec<f64> = never.values().map(|w| w.parse().unwrap()).collect();
+    let mean_wait = waits.iter().sum::<f64>() / waits.len() as f64;
+    assert!(
+        (mean_wait - trip_stats["departDelayWaiting"]).abs() < 0.01,
+        "{mean_wait} {trip_stats:?}"
+    );
+    // The mean with the wait, over every vehicle not crashed, inserted or not.
+    let with_wait: Vec<f64> = rows
+        .iter()
+        .map(|r| {
+            let num = |c: &str| r[c].parse::<f64>().unwrap_or(0.0);
+            num("time_loss_s") + num("depart_delay_s")
+        })
+        .collect();
+    let mean = with_wait.iter().sum::<f64>() / with_wait.len() as f64;
+    assert!(
+        (count("mean_time_loss_with_wait_s") - mean).abs() < 0.01,
+        "{row:?} {mean}"
+    );
 }
 
 /// A TraCI server port in the configuration is one error line naming the option and the file,

@@ -20,6 +20,7 @@ pub mod paired;
 pub mod paired_tables;
 pub mod plot;
 pub mod raster;
+pub mod scenario_inserted;
 pub mod scenarios;
 pub mod signif;
 pub mod stats;

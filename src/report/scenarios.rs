@@ -12,8 +12,11 @@
 //!   t-interval and the two-sided paired t-test's p-value.
 //! - `paired_collisions.csv`: per scenario, α, reference and other planner, the episodes with
 //!   a controllable crash of each, and Fisher's exact test of the 2×2 table.
-//! - `tables.md`: the regions whose merge saw no ramp traffic in some episode (their delays
-//!   are of traffic past a merge nobody used), then the paired tables, in Markdown.
+//! - `inserted.csv`: per scenario, α and planner, the vehicles SUMO inserted and those it never
+//!   inserted, each the mean over the seeds ([`super::scenario_inserted`]).
+//! - `tables.md`: the vehicles inserted and never inserted, the regions whose merge saw no
+//!   ramp traffic in some episode (their delays are of traffic past a merge nobody used), then
+//!   the paired tables, in Markdown.
 //!
 //! The paired t-test, not Wilcoxon's: a scenario's episodes are long and few (three seeds give
 //! Wilcoxon a smallest p of 0.25), and the per-seed differences of a mean over hundreds of
@@ -24,6 +27,7 @@ use std::path::Path;
 
 use statrs::distribution::{ContinuousCDF, StudentsT};
 
+use super::scenario_inserted::inserted_tables;
 use super::signif::fisher_exact;
 use super::stats::{t_975, Estimate};
 use super::{Report, ReportError, REPORT_DIR};
@@ -155,7 +159,8 @@ pub fn report(dir: &Path, out: &Path, versus: &[String]) -> Result<Report, Repor
     }
     let regions = by_region(&res.regions);
     let (paired, paired_md) = paired_csv(&regions, &versus);
-    let markdown = unused_merges_md(&regions) + &paired_md;
+    let (inserted, inserted_md) = inserted_tables(&res.episodes, &planners);
+    let markdown = inserted_md + &unused_merges_md(&regions) + &paired_md;
     let files = [
         ("regions.csv", summary_csv(&regions)),
         ("paired_regions.csv", paired),
@@ -163,6 +168,7 @@ pub fn report(dir: &Path, out: &Path, versus: &[String]) -> Result<Report, Repor
             "paired_collisions.csv",
             collisions_csv(&res.episodes, &versus),
         ),
+        ("inserted.csv", inserted),
     ];
     let report_dir = out.join(REPORT_DIR);
     let mut written = Vec::new();

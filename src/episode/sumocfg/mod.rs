@@ -19,6 +19,7 @@
 //! are its trained action space). Campaigns over scenarios run these episodes in worker
 //! processes (`campaign::scenarios`).
 
+mod never_inserted;
 mod options;
 mod own_loop;
 mod passage;
@@ -55,7 +56,8 @@ pub use round::{Fleet, Round};
 pub struct ScenarioResult {
     /// The `episode.csv` row.
     pub summary: ScenarioSummary,
-    /// One row per vehicle SUMO inserted, in order of departure.
+    /// One row per vehicle SUMO inserted, in order of departure, then one per vehicle never
+    /// inserted.
     pub vehicles: Vec<ScenarioVehicle>,
     /// One row per merge region (`regions.csv`), in the order of `summary.regions`.
     pub regions: Vec<RegionRow>,

@@ -132,18 +132,28 @@ fn run_settings<'a>(config: &Config, cfg: &SumoConfig) -> Vec<Setting<'a>> {
 }
 
 /// The tripinfo output bkpbs reads, and what it sets for it: the configuration's own file, its
-/// unfinished trips added; else one of bkpbs's own in `scratch`.
+/// unfinished and undeparted trips added; else one of bkpbs's own in `scratch`.
 fn tripinfo<'a>(cfg: &SumoConfig, scratch: &Path) -> (PathBuf, Vec<Setting<'a>>) {
-    let unfinished = |default| Setting {
-        names: &["tripinfo-output.write-unfinished"],
-        value: "true".into(),
-        default,
-        why: "bkpbs counts the time lost by vehicles still driving at the end",
+    let unfinished = |default| {
+        [
+            Setting {
+                names: &["tripinfo-output.write-unfinished"],
+                value: "true".into(),
+                default,
+                why: "bkpbs counts the time lost by vehicles still driving at the end",
+            },
+            Setting {
+                names: &["tripinfo-output.write-undeparted"],
+                value: "true".into(),
+                default,
+                why: "bkpbs lists the vehicles never inserted, each with its wait to the end",
+            },
+        ]
     };
     match cfg.option(&["tripinfo-output", "tripinfo"]) {
         Some(own) if !own.trim().is_empty() => {
             let dir = cfg.path.parent().unwrap_or(Path::new("."));
-            (dir.join(own.trim()), vec![unfinished(Some("false"))])
+            (dir.join(own.trim()), unfinished(Some("false")).into())
         }
         _ => {
             let path = scratch.join("tripinfo.xml");
@@ -153,7 +163,8 @@ fn tripinfo<'a>(cfg: &SumoConfig, scratch: &Path) -> (PathBuf, Vec<Setting<'a>>)
                 default: None,
                 why: "bkpbs reads SUMO's trips",
             };
-            (path, vec![ours, unfinished(None)])
+            let [a, b] = unfinished(None);
+            (path, vec![ours, a, b])
         }
     }
 }
@@ -270,6 +281,10 @@ mod tests {
         assert_eq!(named("random = true; bkpbs uses false"), 1);
         assert_eq!(
             named("leaves tripinfo-output.write-unfinished at SUMO's default false"),
+            1
+        );
+        assert_eq!(
+            named("leaves tripinfo-output.write-undeparted at SUMO's default false"),
             1
         );
         assert_eq!(named("verbose = true; bkpbs uses false"), 1);

@@ -1,7 +1,7 @@
 //! What an episode on a user's scenario records: per vehicle SUMO's own trip figures (from its
-//! tripinfo output, unfinished trips included, so a vehicle that never arrives still counts
-//! with the time it lost) and bkpbs's (who was a CAV, when it was in the merge region,
-//! collisions); one summary row. Its columns differ from the paper demand's `episode.csv`,
+//! tripinfo output, unfinished and undeparted trips included, so a vehicle that never arrives
+//! still counts with the time it lost, and one never inserted with its wait) and bkpbs's (who
+//! was a CAV, when it was in the merge region, collisions); one summary row. Its columns differ from the paper demand's `episode.csv`,
 //! whose delays are defined against bkpbs's own insertion; here SUMO's `timeLoss` is the delay.
 
 use std::collections::BTreeMap;
@@ -22,7 +22,8 @@ fn outcome_name<S: serde::Serializer>(o: &Outcome, s: S) -> Result<S::Ok, S::Err
     s.serialize_str(o.as_str())
 }
 
-/// One vehicle SUMO inserted (a `vehicles.csv` row).
+/// One vehicle of the scenario (a `vehicles.csv` row): one SUMO inserted, or one whose
+/// departure time came but which SUMO never inserted (outcome `never_inserted`).
 #[derive(Debug, Clone, Default, PartialEq, Serialize)]
 pub struct ScenarioVehicle {
     /// SUMO's vehicle id.
@@ -37,9 +38,13 @@ pub struct ScenarioVehicle {
     pub region: String,
     /// Where it entered that region (`main`, `ramp`), empty if it never did.
     pub region_origin: String,
-    /// When SUMO inserted it (s).
-    #[serde(serialize_with = "cells::decimals::<2, _>")]
-    pub depart_s: f64,
+    /// Its departure time in the scenario (s): SUMO's `depart` of the vehicle (of its flow's
+    /// schedule), when it wanted to enter; `depart_s` less `depart_delay_s` once inserted.
+    #[serde(serialize_with = "cells::opt_decimals::<2, _>")]
+    pub scheduled_depart_s: Option<f64>,
+    /// When SUMO inserted it (s); none if it never did.
+    #[serde(serialize_with = "cells::opt_decimals::<2, _>")]
+    pub depart_s: Option<f64>,
     /// When it was first seen in the region (s).
     #[serde(serialize_with = "cells::opt_decimals::<2, _>")]
     pub region_enter_s: Option<f64>,
@@ -54,7 +59,7 @@ pub struct ScenarioVehicle {
     /// `v_max`); a vehicle still there at the end counts to its last reading; none if crashed.
     #[serde(serialize_with = "cells::opt_decimals::<4, _>")]
     pub region_delay_s: Option<f64>,
-    /// `arrived`, `crashed` or `present` (still driving at the end).
+    /// `arrived`, `crashed`, `present` (still driving at the end) or `never_inserted`.
     #[serde(serialize_with = "outcome_name")]
     pub outcome: Outcome,
     /// When it arrived at its route's end (s).
@@ -65,7 +70,8 @@ pub struct ScenarioVehicle {
     #[serde(serialize_with = "cells::opt_decimals::<2, _>")]
     pub time_loss_s: Option<f64>,
     /// SUMO's `departDelay` (s): how long it waited to be inserted after its departure time
-    /// (no room at its departure position), which `timeLoss` leaves out.
+    /// (no room at its departure position), which `timeLoss` leaves out; for a vehicle never
+    /// inserted, its wait from its departure time to the episode's end.
     #[serde(serialize_with = "cells::opt_decimals::<2, _>")]
     pub depart_delay_s: Option<f64>,
     /// SUMO's `routeLength` (m) driven.
@@ -102,7 +108,8 @@ pub struct ScenarioSummary {
     /// Vehicles SUMO inserted.
     pub inserted: usize,
     /// Vehicles whose departure time had come by the episode's end but which SUMO never
-    /// inserted (no room at their departure position): SUMO's pending vehicles at the end.
+    /// inserted (no room at their departure position): SUMO's pending vehicles after the last
+    /// step, its statistics' `waiting`; the rows of outcome `never_inserted`.
     pub never_inserted: usize,
     /// CAVs among them.
     pub inserted_cav: usize,
@@ -127,8 +134,10 @@ pub struct ScenarioSummary {
     /// The same over the vehicles that were in the region (s).
     #[serde(serialize_with = "cells::opt_decimals::<4, _>")]
     pub mean_time_loss_region_s: Option<f64>,
-    /// Mean of `timeLoss` plus `departDelay` (the wait to be inserted) per vehicle not crashed
-    /// (s): a planner that holds vehicles at the network's entrance pays for it here.
+    /// Mean of `timeLoss` plus `departDelay` (the wait to be inserted) per vehicle not crashed,
+    /// a vehicle never inserted counting with its whole wait to the end (s): a planner that
+    /// holds vehicles at the network's entrance pays for it here, as in the paper demand's
+    /// system delay.
     #[serde(serialize_with = "cells::opt_decimals::<4, _>")]
     pub mean_time_loss_with_wait_s: Option<f64>,
     /// Total `timeLoss` of the vehicles not crashed (vehicle-hours).
@@ -156,12 +165,11 @@ impl ScenarioSummary {
             (!losses.is_empty()).then(|| losses.iter().sum::<f64>() / losses.len() as f64)
         };
         let mean = |f: &dyn Fn(&ScenarioVehicle) -> bool| mean_of(&|v| v.time_loss_s, f);
-        let with_wait =
-            |v: &ScenarioVehicle| Some(v.time_loss_s? + v.depart_delay_s.unwrap_or(0.0));
-        let inserted = vehicles.len();
-        let inserted_cav = count(&|v| v.kind == Kind::Cav);
+        let inserted = count(&|v| v.outcome != Outcome::NeverInserted);
+        let inserted_cav = count(&|v| v.outcome != Outcome::NeverInserted && v.kind == Kind::Cav);
         ScenarioSummary {
             inserted,
+            never_inserted: vehicles.len() - inserted,
             inserted_cav,
             cav_share: if inserted == 0 {
                 0.0
@@ -176,7 +184,7 @@ impl ScenarioSummary {
             hdv_collisions,
             mean_time_loss_s: mean(&|_| true),
             mean_time_loss_region_s: mean(&|v| v.region_enter_s.is_some()),
-            mean_time_loss_with_wait_s: mean_of(&with_wait, &|_| true),
+            mean_time_loss_with_wait_s: mean_of(&time_loss_with_wait, &|_| true),
             mean_region_delay_s: {
                 let d: Vec<f64> = vehicles.iter().filter_map(|v| v.region_delay_s).collect();
                 (!d.is_empty()).then(|| d.iter().sum::<f64>() / d.len() as f64)
@@ -192,18 +200,34 @@ impl ScenarioSummary {
     }
 }
 
+/// A vehicle's SUMO `timeLoss` plus its `departDelay` (s): for one never inserted, its wait to
+/// the end alone (it lost no time driving); none for one without SUMO's figures.
+fn time_loss_with_wait(v: &ScenarioVehicle) -> Option<f64> {
+    match v.outcome {
+        Outcome::NeverInserted => v.depart_delay_s,
+        _ => Some(v.time_loss_s? + v.depart_delay_s.unwrap_or(0.0)),
+    }
+}
+
 /// SUMO's figures of one trip (a `<tripinfo>` element).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct Trip {
     /// `timeLoss` (s).
     pub time_loss: f64,
     /// `routeLength` (m).
     pub route_length: f64,
-    /// `departDelay` (s; 0 where SUMO writes none).
+    /// `departDelay` (s; 0 where SUMO writes none): for a vehicle never inserted, the time
+    /// from its departure time to the end.
     pub depart_delay: f64,
+    /// Whether SUMO inserted the vehicle (its `depart` is not -1, which marks a vehicle
+    /// `--tripinfo-output.write-undeparted` lists).
+    pub departed: bool,
+    /// `vType`: its vehicle type.
+    pub sumo_type: Option<String>,
 }
 
-/// The trips of SUMO's tripinfo output at `path`, by vehicle id.
+/// The trips of SUMO's tripinfo output at `path`, by vehicle id, vehicles never inserted
+/// included.
 ///
 /// # Errors
 /// A file that cannot be read or is no tripinfo output.
@@ -221,6 +245,8 @@ pub fn read_trips(path: &Path) -> Result<BTreeMap<String, Trip>, String> {
                 time_loss: num(n, "timeLoss")?,
                 route_length: num(n, "routeLength")?,
                 depart_delay: num(n, "departDelay").unwrap_or(0.0),
+                departed: num(n, "depart").is_none_or(|t| t >= 0.0),
+                sumo_type: n.attribute("vType").map(String::from),
             };
             Some((n.attribute("id")?.to_string(), trip))
         })

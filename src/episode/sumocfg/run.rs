@@ -3,7 +3,7 @@
 //! its own scene and planned by its own controller, the regions in parallel (each
 //! deterministic, and none sees another's vehicles or state).
 
-use std::collections::HashMap;
+use std::collections::{BTreeMap, HashMap};
 use std::sync::Arc;
 
 use crate::config::Config;
@@ -18,6 +18,7 @@ use crate::model::scene::{Kind, Limits, Origin, VehicleState};
 use crate::sumo::frame;
 use crate::sumo::{RawVehicleState, Simulation, SumoClient, SumoError, VehicleReadings};
 
+use super::never_inserted::{never_inserted_rows, to_ms};
 use super::passage::{enter, first_region_on, passage, Entry};
 use super::records::{self, ScenarioSummary, ScenarioVehicle};
 pub use super::region::Region;
@@ -69,6 +70,8 @@ pub struct ScenarioRun {
     /// The vehicles whose departure time had come but which SUMO had not inserted, after the
     /// last step seen: at the end, the vehicles never inserted.
     pending: Vec<String>,
+    /// SUMO's time after the last step seen (s): at the end, the episode's end.
+    end: f64,
     /// Where each vehicle that ever waited would enter a region first (by its route): which
     /// region, and from where; none for a route through no region.
     waiting: HashMap<String, Option<(usize, Origin)>>,
@@ -100,6 +103,7 @@ impl ScenarioRun {
             fleet: Fleet::Drawn,
             crashed: Vec::new(),
             pending: Vec::new(),
+            end: 0.0,
             waiting: HashMap::new(),
             plan_stats: PlanStats::default(),
             removes_crashed: has_cavs(&config.scenario),
@@ -169,6 +173,7 @@ impl ScenarioRun {
         now: f64,
         plan: bool,
     ) -> Result<(), SumoError> {
+        self.end = now + self.config.scenario.dt;
         self.book_departures(sim, now)?;
         self.note_waiting(sim)?;
         sim.read_vehicles(&mut self.readings)?;
@@ -271,7 +276,7 @@ impl ScenarioRun {
                     id,
                     sumo_type,
                     kind,
-                    depart_s: now,
+                    depart_s: Some(now),
                     ..ScenarioVehicle::default()
                 },
                 size,
@@ -452,6 +457,18 @@ impl ScenarioRun {
         }
     }
 
+    /// The rows of the vehicles still waiting at the end, SUMO's `trips` giving their waits;
+    /// each of the kind the draw would have made it (a single agent is one that departed).
+    fn never_inserted(&self, trips: &BTreeMap<String, records::Trip>) -> Vec<ScenarioVehicle> {
+        let drawn = matches!(self.fleet, Fleet::Drawn);
+        never_inserted_rows(&self.pending, trips, self.end, |id, sumo_type| {
+            match drawn && becomes_cav(&self.config.scenario, id, sumo_type) {
+                true => Kind::Cav,
+                false => Kind::Hdv,
+            }
+        })
+    }
+
     /// The records with SUMO's trip figures and each vehicle's delay in its region, and the
     /// summary.
     pub fn finish(
@@ -461,7 +478,7 @@ impl ScenarioRun {
     ) -> Result<ScenarioResult, String> {
         let trips = records::read_trips(&options.tripinfo)?;
         let (trajectories, traces) = self.take_region_files();
-        let vehicles: Vec<ScenarioVehicle> = std::mem::take(&mut self.lines)
+        let mut vehicles: Vec<ScenarioVehicle> = std::mem::take(&mut self.lines)
             .into_iter()
             .map(|l| {
                 let mut v = l.record;
@@ -469,6 +486,7 @@ impl ScenarioRun {
                     v.time_loss_s = Some(t.time_loss);
                     v.route_length_m = Some(t.route_length);
                     v.depart_delay_s = Some(t.depart_delay);
+                    v.scheduled_depart_s = v.depart_s.map(|d| to_ms(d - t.depart_delay));
                 }
                 if let Some(e) = l.entry {
                     passage(&mut v, &e, &self.regions[e.region].config);
@@ -476,6 +494,7 @@ impl ScenarioRun {
                 v
             })
             .collect();
+        vehicles.extend(self.never_inserted(&trips));
         let hdv_collisions = self.collisions.iter().filter(|c| !c.controllable()).count();
         let names: Vec<String> = self.regions.iter().map(|r| r.name.clone()).collect();
         let head = summary_head(&self.config, planner, &names);
@@ -489,7 +508,6 @@ impl ScenarioRun {
             ..RegionRow::default()
         };
         let summary = ScenarioSummary {
-            never_inserted: self.pending.len(),
             plan_stats: self.plan_stats,
             ..ScenarioSummary::of(head, &vehicles, hdv_collisions)
         };

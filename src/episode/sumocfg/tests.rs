@@ -115,7 +115,7 @@ fn every_departure_is_booked_with_its_type_time_and_drawn_kind() {
     );
     for (k, v) in result.vehicles.iter().enumerate() {
         assert_eq!(v.sumo_type, type_of(k), "{}", v.id);
-        assert_eq!(v.depart_s, began(k as u32 / 4 + 1), "{}", v.id);
+        assert_eq!(v.depart_s, Some(began(k as u32 / 4 + 1)), "{}", v.id);
         let drawn = if is_cav(seed, &v.id, alpha) {
             Kind::Cav
         } else {
@@ -305,7 +305,8 @@ fn an_arrival_is_booked_and_joined_to_sumos_trip_figures() {
 }
 
 /// The vehicles never inserted are those SUMO still holds back after the last step, not
-/// those it held back earlier and then inserted.
+/// those it held back earlier and then inserted: each a row with SUMO's wait to the end (its
+/// undeparted trip), and in the mean with the wait, which charges that whole wait.
 #[test]
 fn vehicles_still_waiting_after_the_last_step_are_never_inserted() {
     let c = config(0.0, 2);
@@ -326,9 +327,32 @@ fn vehicles_still_waiting_after_the_last_step_are_never_inserted() {
     let mut run = paper_run(&c, "sumo");
     let mut sim = sumo_for(&run, script);
     play(&mut run, &mut sim, 2);
-    let result = finish(run, "");
+    let trips = r#"<tripinfo id="a" depart="0.00" arrival="-1" timeLoss="1.00" routeLength="9.00" departDelay="0.00"/>
+<tripinfo id="b" depart="0.20" arrival="-1" timeLoss="0.00" routeLength="1.00" departDelay="0.20"/>
+<tripinfo id="c" depart="-1" arrival="-1.00" timeLoss="0.00" routeLength="5.10" departDelay="0.30" vType="truck"/>
+<tripinfo id="d" depart="-1" arrival="-1.00" timeLoss="0.00" routeLength="5.10" departDelay="0.10" vType="car"/>"#;
+    let result = finish(run, trips);
     let s = &result.summary;
     assert_eq!((s.inserted, s.never_inserted), (2, 3));
+    let ids: Vec<&str> = result.vehicles.iter().map(|v| v.id.as_str()).collect();
+    assert_eq!(ids, ["a", "b", "c", "d", "e"]);
+    let c = record(&result, "c");
+    assert_eq!(
+        (c.outcome, c.sumo_type.as_str()),
+        (Outcome::NeverInserted, "truck")
+    );
+    // Two steps end at 0.4 s: c wanted to depart at 0.1 s and waited 0.3 s.
+    assert_eq!(
+        (c.scheduled_depart_s, c.depart_delay_s),
+        (Some(0.1), Some(0.3))
+    );
+    assert_eq!((c.depart_s, c.time_loss_s), (None, None));
+    assert_eq!(record(&result, "b").scheduled_depart_s, Some(0.0));
+    // e has no trip: a row, without figures. The mean with the wait: a 1.0, b 0.2, c 0.3, d 0.1.
+    assert_eq!(record(&result, "e").depart_delay_s, None);
+    let with_wait = s.mean_time_loss_with_wait_s.unwrap();
+    assert!((with_wait - 0.4).abs() < 1e-12, "{with_wait}");
+    assert_eq!(s.mean_time_loss_s, Some(0.5));
     // Each by where its route enters the region; `e`'s route passes none.
     let r = &result.regions[0];
     assert_eq!((r.never_inserted_main, r.never_inserted_ramp), (1, 1));
