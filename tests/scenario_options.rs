@@ -234,6 +234,38 @@ fn vehicles_sumo_never_inserted_are_each_in_the_books() {
     );
 }
 
+/// A campaign cell whose episode held vehicles back is finished: its `vehicles.csv` holds a row
+/// per vehicle inserted and per vehicle never inserted, and the same command run again finds
+/// it done (counting only the inserted rows made every such cell stale, run again for ever).
+#[test]
+fn a_campaign_cell_with_vehicles_never_inserted_is_done_when_run_again() {
+    let tmp = tempfile::tempdir().unwrap();
+    let cfg = motorway_at(tmp.path(), TIME, (7000, 1800));
+    let out = tmp.path().join("campaign");
+    let (cfg, out_s) = (cfg.to_str().unwrap(), out.to_str().unwrap());
+    let args = [
+        "campaign",
+        "--sumocfg",
+        cfg,
+        "--planners",
+        "sumo",
+        "--alphas",
+        "0",
+        "--seeds",
+        "1",
+        "--out",
+        out_s,
+    ];
+    assert_ok(&common::bkpbs(&args));
+    let episodes = csv_rows(&std::fs::read(out.join("episodes.csv")).unwrap());
+    let held_back: u32 = episodes[0]["never_inserted"].parse().unwrap();
+    assert!(held_back > 0, "{:?}", episodes[0]);
+    let again = common::bkpbs(&args);
+    assert_ok(&again);
+    let said = String::from_utf8_lossy(&again.stdout);
+    assert!(said.contains("already done: 1;"), "{said}");
+}
+
 /// A TraCI server port in the configuration is one error line naming the option and the file,
 /// before SUMO starts: no socket listens, and the run does not wait for a client (it stalled
 /// for 120 s, SUMO listening on every interface, with a message naming no option).

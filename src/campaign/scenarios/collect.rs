@@ -2,7 +2,7 @@
 //!
 //! A cell is finished exactly when its files are whole and this campaign's: `episode.csv` (the
 //! worker writes it last) holds the one row of this cell — its scenario, planner, α, seed, the
-//! campaign's steps, this SUMO — `vehicles.csv` a row per vehicle inserted, `regions.csv` a
+//! campaign's steps, this SUMO — `vehicles.csv` a row per vehicle inserted or never inserted, `regions.csv` a
 //! row per region, and `settings.toml` the very settings the campaign would run it with. A
 //! damaged, foreign or edited cell runs again, with the reason printed.
 //!
@@ -64,6 +64,16 @@ pub fn cell_state(
     CellState::of(&cell_dir(out, cell), |dir| finished(dir, settings, cell))
 }
 
+/// How many `vehicles.csv` rows the `episode.csv` row (its `column`s) announces: one per
+/// vehicle inserted and one per vehicle never inserted; a count that is no number is never met.
+fn vehicle_rows(column: impl Fn(&str) -> String) -> String {
+    let count = |name| column(name).parse::<usize>().ok();
+    match (count("inserted"), count("never_inserted")) {
+        (Some(a), Some(b)) => (a + b).to_string(),
+        _ => "not a count".into(),
+    }
+}
+
 /// The files of `cell` in `dir` if they are whole and this campaign's; otherwise what is
 /// wrong.
 fn finished(
@@ -81,12 +91,11 @@ fn finished(
         r if r.is_empty() => 0,
         r => r.split("; ").count(),
     };
-    let inserted = column("inserted").parse().unwrap_or(usize::MAX);
     let vehicles = rows_counted(
         dir,
         "vehicles.csv",
         &header_of::<ScenarioVehicle>(),
-        inserted,
+        vehicle_rows(&column),
     )?;
     let region_rows = rows_counted(dir, "regions.csv", &header_of::<RegionRow>(), regions)?;
     let timing_header: Vec<String> = TIMING_COLUMNS.iter().map(|s| s.to_string()).collect();
