@@ -95,7 +95,7 @@ fn finished(
         dir,
         "vehicles.csv",
         &header_of::<ScenarioVehicle>(),
-        vehicle_rows(&column),
+        vehicle_rows(column),
     )?;
     let region_rows = rows_counted(dir, "regions.csv", &header_of::<RegionRow>(), regions)?;
     let timing_header: Vec<String> = TIMING_COLUMNS.iter().map(|s| s.to_string()).collect();
