@@ -16,7 +16,7 @@
 
 use std::collections::{BTreeMap, BTreeSet};
 
-use super::merges::feeder;
+use super::merges::{feeder, lanes_fed};
 use crate::sumo::network::Net;
 
 /// How far an on-ramp's lanes run on before the first of them ends for the carriageway to
@@ -184,16 +184,6 @@ fn origin(net: &Net, edge: &str, lane: u32) -> (Origin, f64) {
             }
         }
     }
-}
-
-/// The lanes of `to` that `from` feeds, rightmost first.
-fn lanes_fed(net: &Net, from: &str, to: &str) -> Vec<u32> {
-    let set: BTreeSet<u32> = net
-        .outgoing(from)
-        .filter(|c| c.to == to)
-        .map(|c| c.to_lane)
-        .collect();
-    set.into_iter().collect()
 }
 
 /// The lane drops among `ends` (lanes of the carriageway), one per edge.

@@ -104,7 +104,7 @@ fn lanes_feeding(net: &Net, from: &str, to: &str) -> usize {
 }
 
 /// The lanes of `to` that `from` feeds, rightmost first.
-fn lanes_fed(net: &Net, from: &str, to: &str) -> Vec<u32> {
+pub(super) fn lanes_fed(net: &Net, from: &str, to: &str) -> Vec<u32> {
     let set: BTreeSet<u32> = net
         .outgoing(from)
         .filter(|c| c.to == to)
