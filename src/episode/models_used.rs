@@ -92,22 +92,33 @@ fn digest(embedded: Option<&str>, path: &str) -> String {
     }
 }
 
-/// One warning per used file trained on another scenario than `run`, naming both; none for a
-/// file that does not record its scenarios.
+/// The warnings of files trained on another scenario than `run`: one line per set of
+/// training scenarios, naming its files, those scenarios and `run`; none for a file that does
+/// not record its scenarios.
 pub fn scenario_warnings(used: &[UsedModel], run: &TrainingScenario) -> Vec<String> {
-    used.iter()
-        .filter_map(|m| {
-            let t = m.trained_on.as_ref()?;
-            (!t.scenarios.is_empty() && !t.covers(run)).then(|| {
-                format!(
-                    "warning: {} {} was trained on {}, this episode runs {run}: its \
-                     predictions may not fit here (bkpbs collect and bkpbs train on this \
-                     scenario make a model that does)",
-                    m.setting,
-                    m.source,
-                    t.scenarios_text()
-                )
-            })
+    let mut by_scenarios: Vec<(String, Vec<String>)> = Vec::new();
+    for m in used {
+        let Some(t) = m.trained_on.as_ref() else {
+            continue;
+        };
+        if t.scenarios.is_empty() || t.covers(run) {
+            continue;
+        }
+        let (trained, file) = (t.scenarios_text(), format!("{} {}", m.setting, m.source));
+        match by_scenarios.iter_mut().find(|(s, _)| *s == trained) {
+            Some((_, files)) => files.push(file),
+            None => by_scenarios.push((trained, vec![file])),
+        }
+    }
+    by_scenarios
+        .into_iter()
+        .map(|(trained, files)| {
+            format!(
+                "warning: {} {} trained on {trained}, this episode runs {run}: predictions may \
+                 not fit here (bkpbs collect and bkpbs train on this scenario make models that do)",
+                files.join(" and "),
+                if files.len() == 1 { "was" } else { "were" },
+            )
         })
         .collect()
 }
@@ -149,8 +160,8 @@ pub fn models_toml(used: &[UsedModel]) -> String {
 mod tests {
     use super::*;
 
-    /// The shipped models were trained on the paper's merge: quiet there, one warning per
-    /// model on another scenario.
+    /// The shipped models were trained on the paper's merge: quiet there, one warning naming
+    /// both on another scenario.
     #[test]
     fn shipped_models_warn_only_off_the_paper_s_merge() {
         let used = models_used(&Config::default(), "bk-pbs").unwrap();
@@ -161,8 +172,9 @@ mod tests {
             sha256: [("mine.sumocfg".to_string(), "00".to_string())].into(),
         };
         let w = scenario_warnings(&used, &other);
-        assert_eq!(w.len(), 2);
+        assert_eq!(w.len(), 1, "{w:?}");
         assert!(w[0].contains("the paper's merge") && w[0].contains("mine.sumocfg"));
+        assert!(w[0].contains("gcn-conditioned") && w[0].contains("gcn-unconditioned"));
     }
 
     /// `models.toml` lists the embedded policy with its record; a planner without models says so.
