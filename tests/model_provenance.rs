@@ -132,8 +132,10 @@ fn a_model_of_another_scenario_warns_once_and_the_episode_runs() {
         assert!(w[0].contains(word), "'{word}' not in {}", w[0]);
     }
 
-    let mut s = bkpbs::config::Scenario::default();
-    s.sumocfg = Some(ramp.clone());
+    let s = bkpbs::config::Scenario {
+        sumocfg: Some(ramp.clone()),
+        ..Default::default()
+    };
     let own = bkpbs::sumo::scenario_record::scenario_record(&s).unwrap();
     let own = serde_json::to_value(vec![own]).unwrap();
     let model = copy_with(
