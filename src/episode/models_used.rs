@@ -114,8 +114,8 @@ pub fn scenario_warnings(used: &[UsedModel], run: &TrainingScenario) -> Vec<Stri
         .into_iter()
         .map(|(trained, files)| {
             format!(
-                "warning: {} {} trained on {trained}, this episode runs {run}: predictions may \
-                 not fit here (bkpbs collect and bkpbs train on this scenario make models that do)",
+                "warning: {} {} trained on {trained}, this episode runs {run}: its decisions \
+                 may not fit here (see the guide, \"Your own scenario\", learned parts)",
                 files.join(" and "),
                 if files.len() == 1 { "was" } else { "were" },
             )
