@@ -64,7 +64,7 @@ fn file(dir: &std::path::Path, name: &str) -> String {
 fn the_environment_on_a_scenario_is_the_rl_ppo_planners_episode() {
     let tmp = tempfile::tempdir().unwrap();
     let cfg = game_copy(tmp.path()).join("ramp.sumocfg");
-    let net = model_file::load(None).unwrap();
+    let net = model_file::load(None, 0.2).unwrap();
 
     let mut env = MergeEnv::start(
         &ramp_config(&cfg),

@@ -178,7 +178,8 @@ impl PyPredictor {
 /// The planners' HDV predictor. `path` is a b_θ model file (JSON, as in `models/`), which
 /// replaces the embedded model of its kind (conditioned on CAV plans or not); without it, the
 /// predictor the configuration selects (`predictor.kind`: `"learned"`, with the configured or
-/// embedded models, or `"constant"`). `config` and keyword overrides as for `Controller`.
+/// embedded models, or `"constant"`). `config` and keyword overrides as for `Controller`. A
+/// model trained under another step length than the configuration's `scenario.dt` is refused.
 #[pyfunction]
 #[pyo3(signature = (path = None, *, config = None, **overrides))]
 pub fn load_predictor(
@@ -190,6 +191,8 @@ pub fn load_predictor(
     let model = match path {
         Some(p) => {
             let m = Arc::new(load_model(&p)?);
+            // A model trained under another step length is refused, as by the binary.
+            m.check_step_length(config.scenario.dt).map_err(bad_input)?;
             let (c, u) = if m.conditioned() {
                 (m, LaneChangeModel::embedded(false))
             } else {

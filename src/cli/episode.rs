@@ -105,6 +105,14 @@ fn keep_sumo_log(err: episode::EpisodeError, out: &std::path::Path) -> anyhow::E
     }
 }
 
+/// Writes `models.toml`: the learned files the episode used and what they were trained on.
+fn write_models_record(e: &Episode) -> Result<()> {
+    let used = episode::models_used::models_used(&e.config, e.planner.name())?;
+    let path = e.out.join(episode::models_used::MODELS_RECORD);
+    bkpbs::io::write_atomic(&path, episode::models_used::models_toml(&used).as_bytes())
+        .with_context(|| format!("cannot write {}", path.display()))
+}
+
 /// Runs the user's scenario, writes its files and prints its summary.
 fn run_scenario(e: &Episode) -> Result<()> {
     let mut config = e.config.clone();
@@ -120,6 +128,7 @@ fn run_scenario(e: &Episode) -> Result<()> {
             e.out.display()
         )
     })?;
+    write_models_record(e)?;
     print_scenario_summary(e, &r.summary);
     println!("SUMO options bkpbs set: {}", r.sumo_options.join(" "));
     for note in &r.sumo_notes {
@@ -208,6 +217,7 @@ pub fn run(e: Episode) -> Result<()> {
         result.write(&e.out).with_context(saving)?;
         result
     };
+    write_models_record(&e)?;
     let m = &result.summary;
     println!(
         "{} α={} λ={} seed={}: inserted {}, arrived {}, crashed {} (controllable rate {:.4}), system delay {} s, mean delay (arrived) {} s",

@@ -180,7 +180,7 @@ fn log_update(files: &RunFiles, ck: &Checkpoint, r: &trainer::UpdateReport) -> R
 
 /// Writes the policy, evaluates it, and draws the learning curve with the reference levels.
 fn finish(t: &TrainRl, ck: &Checkpoint, pool: &mut Pool) -> Result<()> {
-    trainer::policy_file(ck).write(&t.files.policy())?;
+    trainer::policy_file(ck)?.write(&t.files.policy())?;
     println!(
         "policy: {} ({} steps, {} updates, {:.0} s of training)",
         t.files.policy().display(),

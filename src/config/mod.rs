@@ -11,7 +11,9 @@
 //! - [`hdv`]: the HDV driver profiles;
 //! - `planning`: planner, BK-PBS, predictor, safety shield and RL-PPO;
 //! - `simulator`: how SUMO runs and the optional outputs;
-//! - `rules`: what every number must satisfy, with its error text.
+//! - `rules`: what every number must satisfy, with its error text;
+//! - [`trained_on`]: what a model or policy file was trained on (not a setting: the record
+//!   both file formats share).
 
 mod drivers;
 pub mod hdv;
@@ -21,6 +23,7 @@ mod scenario;
 mod simulator;
 #[cfg(test)]
 mod tests;
+pub mod trained_on;
 
 use std::path::{Path, PathBuf};
 
@@ -39,6 +42,7 @@ use rules::{
 };
 pub use scenario::{CavShare, Demand, MetricsSettings, Scenario, TStarSpeed, MAX_STEPS};
 pub use simulator::{OutputSettings, SumoSettings, TrajectoryFormat};
+pub use trained_on::{TrainedOn, TrainingScenario};
 
 /// Why a configuration could not be used.
 #[derive(Debug, thiserror::Error)]

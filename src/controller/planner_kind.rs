@@ -111,9 +111,11 @@ impl PlannerKind {
             PlannerKind::BkMastar | PlannerKind::BkPbs => crate::predict::configured(config)
                 .map(drop)
                 .map_err(Into::into),
-            PlannerKind::RlPpo => crate::policy::model_file::load(config.rl.policy.as_deref())
-                .map(drop)
-                .map_err(Into::into),
+            PlannerKind::RlPpo => {
+                crate::policy::model_file::load(config.rl.policy.as_deref(), config.scenario.dt)
+                    .map(drop)
+                    .map_err(Into::into)
+            }
         }
     }
 }

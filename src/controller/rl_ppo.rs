@@ -178,7 +178,7 @@ impl RlPpo {
 
     /// The `rl-ppo` planner: the configured (or embedded) policy, greedy.
     pub fn from_config(config: &Config) -> Result<Self, crate::policy::model_file::PolicyError> {
-        let net = crate::policy::model_file::load(config.rl.policy.as_deref())?;
+        let net = crate::policy::model_file::load(config.rl.policy.as_deref(), config.scenario.dt)?;
         Ok(RlPpo::new(config, Arc::new(net), Choice::Greedy, false))
     }
 

@@ -17,6 +17,7 @@ pub mod gui;
 mod ledger;
 pub mod merge_rule;
 pub mod metrics;
+pub mod models_used;
 pub mod observer;
 pub mod output;
 mod recording;

@@ -10,6 +10,7 @@ use super::actions::ACTIONS;
 use super::mlp::Mlp;
 use super::network::{ActorCritic, HIDDEN};
 use super::observation::OBS_DIM;
+use crate::config::TrainedOn;
 use crate::planner::primitives::Primitive;
 
 /// The largest weight magnitude a policy file may hold: trained policies stay below 100 (the
@@ -77,6 +78,20 @@ pub enum PolicyError {
         /// What does not fit, and what was expected.
         what: String,
     },
+    /// The policy was trained under another SUMO step length than the run's: its actions
+    /// last one step, so they would mean something else.
+    #[error(
+        "policy file {path} was trained at step length {trained} s, this run's scenario.dt is \
+         {run} s: train one at {run} s (bkpbs train-rl with this configuration)"
+    )]
+    StepLength {
+        /// The file.
+        path: PathBuf,
+        /// Its step length (s).
+        trained: f64,
+        /// The run's `scenario.dt` (s).
+        run: f64,
+    },
     /// Writing the file failed.
     #[error(transparent)]
     Write(#[from] crate::io::WriteError),
@@ -103,11 +118,19 @@ pub struct PolicyFile {
     pub critic: Vec<f32>,
     /// How it was trained (steps, seed, wall time, hyper-parameters), for the record.
     pub training: serde_json::Value,
+    /// What it was trained on: step length, scenario, seeds, command, versions. Absent in
+    /// files written before it was kept; a file is refused under another step length.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub trained_on: Option<TrainedOn>,
 }
 
 impl PolicyFile {
-    /// The file of `net`, trained as `training` says.
-    pub fn of(net: &ActorCritic, training: serde_json::Value) -> PolicyFile {
+    /// The file of `net`, trained as `training` says, on what `trained_on` says.
+    pub fn of(
+        net: &ActorCritic,
+        training: serde_json::Value,
+        trained_on: Option<TrainedOn>,
+    ) -> PolicyFile {
         PolicyFile {
             format: POLICY_FORMAT.into(),
             version: POLICY_VERSION,
@@ -121,6 +144,7 @@ impl PolicyFile {
             actor: net.actor_params.clone(),
             critic: net.critic_params.clone(),
             training,
+            trained_on,
         }
     }
 
@@ -212,11 +236,36 @@ impl PolicyFile {
     }
 }
 
-/// The policy at `path`, or the embedded one.
-pub fn load(path: Option<&Path>) -> Result<ActorCritic, PolicyError> {
-    match path {
-        Some(p) => PolicyFile::read(p).map(|f| f.networks()),
-        None => PolicyFile::from_json(Path::new("embedded:rl-ppo.json"), EMBEDDED_POLICY)
-            .map(|f| f.networks()),
+/// Where the embedded policy is said to come from.
+pub const EMBEDDED_POLICY_SOURCE: &str = "embedded:rl-ppo.json";
+
+/// The policy file at `path`, or the embedded one, checked to be trained under the step length
+/// `dt` (s) where it records one.
+///
+/// # Errors
+/// A file that cannot be read or used, or [`PolicyError::StepLength`].
+pub fn load_file(path: Option<&Path>, dt: f64) -> Result<PolicyFile, PolicyError> {
+    let (file, source) = match path {
+        Some(p) => (PolicyFile::read(p)?, p),
+        None => {
+            let source = Path::new(EMBEDDED_POLICY_SOURCE);
+            (PolicyFile::from_json(source, EMBEDDED_POLICY)?, source)
+        }
+    };
+    match &file.trained_on {
+        Some(t) if !t.fits_step_length(dt) => Err(PolicyError::StepLength {
+            path: source.to_path_buf(),
+            trained: t.step_length_s,
+            run: dt,
+        }),
+        _ => Ok(file),
     }
+}
+
+/// The networks of the policy at `path`, or of the embedded one, for a run of step length `dt`.
+///
+/// # Errors
+/// As [`load_file`].
+pub fn load(path: Option<&Path>, dt: f64) -> Result<ActorCritic, PolicyError> {
+    load_file(path, dt).map(|f| f.networks())
 }

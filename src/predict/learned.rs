@@ -420,6 +420,48 @@ fn profile_model(config: &Config, conditioned: bool) -> Option<std::path::PathBu
     path.is_file().then_some(path)
 }
 
+/// The conditioned and unconditioned b_θ `config.predictor` selects: the named files, those
+/// of the profile SUMO runs (`predictor.calibrations`), or the embedded ones; each checked to
+/// be of its kind and trained under the run's step length.
+///
+/// # Errors
+/// A model file that cannot be used, naming the setting and the file.
+pub fn configured_models(
+    config: &Config,
+) -> Result<(Arc<LaneChangeModel>, Arc<LaneChangeModel>), PredictorError> {
+    let p = &config.predictor;
+    let dt = config.scenario.dt;
+    let load = |path: &Option<std::path::PathBuf>, field, conditioned| {
+        let model = match path.clone().or_else(|| profile_model(config, conditioned)) {
+            Some(path) => LaneChangeModel::load(&path).map(Arc::new),
+            None => Ok(LaneChangeModel::embedded(conditioned)),
+        };
+        model
+            .and_then(|m| m.check_step_length(dt).map(|()| m))
+            .map_err(|cause| PredictorError { field, cause })
+    };
+    let c = load(&p.conditioned_model, "predictor.conditioned_model", true)?;
+    let u = load(
+        &p.unconditioned_model,
+        "predictor.unconditioned_model",
+        false,
+    )?;
+    if !c.conditioned() || u.conditioned() {
+        return Err(PredictorError {
+            field: "predictor",
+            cause: ModelError::Shape {
+                path: if c.conditioned() {
+                    u.source.clone().into()
+                } else {
+                    c.source.clone().into()
+                },
+                what: "conditioned_model must be a conditioned model and unconditioned_model an unconditioned one".into(),
+            },
+        });
+    }
+    Ok((c, u))
+}
+
 /// The HDV predictor `config.predictor` selects: b_θ (with the configured or the embedded
 /// models) or constant speed.
 ///
@@ -435,35 +477,7 @@ pub fn configured(config: &Config) -> Result<Box<dyn Predictor>, PredictorError>
             super::ConstantSpeed::new(config).with_longitudinal(longitudinal),
         )),
         PredictorKind::Learned => {
-            let p = &config.predictor;
-            let load = |path: &Option<std::path::PathBuf>, field, conditioned| match path
-                .clone()
-                .or_else(|| profile_model(config, conditioned))
-            {
-                Some(path) => LaneChangeModel::load(&path)
-                    .map(Arc::new)
-                    .map_err(|cause| PredictorError { field, cause }),
-                None => Ok(LaneChangeModel::embedded(conditioned)),
-            };
-            let c = load(&p.conditioned_model, "predictor.conditioned_model", true)?;
-            let u = load(
-                &p.unconditioned_model,
-                "predictor.unconditioned_model",
-                false,
-            )?;
-            if !c.conditioned() || u.conditioned() {
-                return Err(PredictorError {
-                    field: "predictor",
-                    cause: ModelError::Shape {
-                        path: if c.conditioned() {
-                            u.source.clone().into()
-                        } else {
-                            c.source.clone().into()
-                        },
-                        what: "conditioned_model must be a conditioned model and unconditioned_model an unconditioned one".into(),
-                    },
-                });
-            }
+            let (c, u) = configured_models(config)?;
             Ok(Box::new(
                 Learned::with_models(config, c, u).with_longitudinal(longitudinal),
             ))

@@ -16,6 +16,7 @@ use super::gcn::Architecture;
 use super::infer::{Network, Workspace};
 use super::logistic::Logistic;
 use super::training_record::{EpochLog, TrainOptions};
+use crate::config::TrainedOn;
 
 /// The `format` field of every model file.
 pub const MODEL_FORMAT: &str = "bkpbs-lane-change-model";
@@ -81,6 +82,10 @@ pub struct ModelFile {
     pub baseline: Baseline,
     /// How the model was trained.
     pub training: TrainingInfo,
+    /// What it was trained on: step length, scenario, seeds, commands, versions. Absent in
+    /// files written before it was kept; a file is refused under another step length.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub trained_on: Option<TrainedOn>,
 }
 
 /// Largest parameter magnitude a model file may hold: the committed models stay below 20, and
@@ -140,6 +145,20 @@ pub enum ModelError {
         path: PathBuf,
         /// What does not fit.
         what: String,
+    },
+    /// The model was trained under another SUMO step length than the run's: its probabilities
+    /// are per step, so they would mean something else.
+    #[error(
+        "model file {path} was trained at step length {trained} s, this run's scenario.dt is \
+         {run} s: train one at {run} s (bkpbs collect and bkpbs train with this configuration)"
+    )]
+    StepLength {
+        /// The file.
+        path: PathBuf,
+        /// Its step length (s).
+        trained: f64,
+        /// The run's `scenario.dt` (s).
+        run: f64,
     },
     /// Writing the file failed.
     #[error(transparent)]
@@ -338,6 +357,22 @@ impl LaneChangeModel {
             Arc::new(LaneChangeModel::new(format!("embedded:{name}"), file))
         })
         .clone()
+    }
+
+    /// Refuses the model under a step length `dt` (s) other than the one it was trained at;
+    /// a file without a record of it is taken as it is.
+    ///
+    /// # Errors
+    /// [`ModelError::StepLength`], naming the file and both step lengths.
+    pub fn check_step_length(&self, dt: f64) -> Result<(), ModelError> {
+        match &self.file.trained_on {
+            Some(t) if !t.fits_step_length(dt) => Err(ModelError::StepLength {
+                path: self.source.clone().into(),
+                trained: t.step_length_s,
+                run: dt,
+            }),
+            _ => Ok(()),
+        }
     }
 
     /// The model reads sequence (b), the higher-priority CAVs' planned states.

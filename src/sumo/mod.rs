@@ -14,6 +14,7 @@ pub mod network;
 pub mod road_frame;
 pub mod route_files;
 pub mod scenario_files;
+pub mod scenario_record;
 pub mod sumocfg;
 pub mod version;
 

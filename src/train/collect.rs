@@ -382,6 +382,9 @@ pub enum CollectError {
         /// What went wrong.
         cause: Box<EpisodeError>,
     },
+    /// A file of the scenario could not be read for the data's record of it.
+    #[error(transparent)]
+    Scenario(#[from] crate::sumo::sumocfg::SumoConfigError),
 }
 
 /// What the collector writes into a data file's header.
@@ -396,6 +399,10 @@ pub struct CollectMeta {
     pub stats: CollectStats,
     /// Version of bkpbs that collected the data.
     pub bkpbs_version: String,
+    /// What the data was collected on (step length, scenario, seeds, command, versions), which
+    /// `bkpbs train` carries into the model; absent in data files written before it was kept.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub trained_on: Option<crate::config::TrainedOn>,
 }
 
 /// Runs the plan's episodes one after another (libsumo: one simulation per process) on top of
@@ -406,6 +413,8 @@ pub fn collect(
     mut progress: impl FnMut(usize, &CollectStats),
 ) -> Result<Dataset, CollectError> {
     check_plan(plan)?;
+    let seeds = super::provenance::seed_range(plan.seed_base, plan.episodes as u64);
+    let trained_on = super::provenance::of_episodes(base, seeds, plan.episodes as u64)?;
     let mut samples = Vec::new();
     let mut stats = CollectStats::default();
     for e in 0..plan.episodes {
@@ -420,6 +429,7 @@ pub fn collect(
         rollout_predictor: "constant".into(),
         stats,
         bkpbs_version: env!("CARGO_PKG_VERSION").into(),
+        trained_on: Some(trained_on),
     };
     Ok(Dataset {
         meta: serde_json::to_string(&meta).expect("metadata serialises"),

@@ -112,7 +112,7 @@ pub fn run_train(
         opts.threads
     );
     let pb = bar(opts.epochs as u64, "train");
-    let model = fit(&data, &name, conditioned, opts, |what, e| {
+    let mut model = fit(&data, &name, conditioned, opts, |what, e| {
         let line = format!("{}: {e}", what.as_str());
         match (&pb, what) {
             (Some(b), Fitting::Network) => {
@@ -126,6 +126,7 @@ pub fn run_train(
     if let Some(b) = pb {
         b.finish_and_clear();
     }
+    model.trained_on = trained_on_of(&data, data_path, opts.seed);
     model.write(out)?;
     let c = &model.calibration;
     Ok(format!(
@@ -138,6 +139,20 @@ pub fn run_train(
         c.threshold_main,
         out.display()
     ))
+}
+
+/// The model's record of what it was trained on: the data's, carried on; none (said on
+/// stderr) when the data file predates the record.
+fn trained_on_of(data: &Dataset, path: &Path, seed: u64) -> Option<crate::config::TrainedOn> {
+    let record = meta_of(data).and_then(|m| m.trained_on);
+    if record.is_none() {
+        eprintln!(
+            "warning: data file {} does not record what it was collected on (written before \
+             bkpbs kept it): the model will not record it either",
+            path.display()
+        );
+    }
+    record.map(|r| super::provenance::of_training(&r, seed))
 }
 
 /// Where `eval-predictor` gets its data.

@@ -30,7 +30,8 @@ impl Fitting {
     }
 }
 
-/// Trains the network and the baseline on `data` (named `data_name` in the file).
+/// Trains the network and the baseline on `data` (named `data_name` in the file); the
+/// caller fills in what the data was collected on (`trained_on`).
 pub fn fit(
     data: &Dataset,
     data_name: &str,
@@ -73,5 +74,6 @@ pub fn fit(
             baseline_wall_s: base.wall_s,
             log: net.log,
         },
+        trained_on: None,
     })
 }

@@ -15,4 +15,5 @@ pub mod gcn;
 pub mod logistic;
 pub mod longitudinal;
 pub mod ppo;
+pub mod provenance;
 pub mod training_loop;

@@ -275,4 +275,6 @@ def load_predictor(
     path: Optional[_PathArg] = None, *, config: _ConfigSource = None, **overrides: Any
 ) -> Predictor:
     """The planners' HDV predictor: ``path`` is a b_θ model file (JSON); without it, the one
-    the configuration's ``predictor.kind`` selects (``"learned"`` or ``"constant"``)."""
+    the configuration's ``predictor.kind`` selects (``"learned"`` or ``"constant"``). A model
+    trained under another step length than the configuration's ``scenario.dt`` (its
+    ``trained_on`` record) raises ``BkpbsError``."""

@@ -166,6 +166,9 @@ pub enum TrainError {
          configuration): resume with the same ones, or train into another directory"
     )]
     OtherSettings(PathBuf),
+    /// A file of the scenario could not be read for the policy's record of it.
+    #[error(transparent)]
+    Scenario(#[from] crate::sumo::sumocfg::SumoConfigError),
 }
 
 /// The files of a run directory.
@@ -317,7 +320,7 @@ pub fn one_update(
 ) -> Result<UpdateReport, TrainError> {
     let u = ck.updates;
     let mut net = ck.networks();
-    PolicyFile::of(&net, serde_json::Value::Null).write(&files.acting())?;
+    PolicyFile::of(&net, serde_json::Value::Null, None).write(&files.acting())?;
     let t0 = Instant::now();
     let rollouts = pool.run(requests(ck, u, &files.acting()))?;
     let rollout_s = t0.elapsed().as_secs_f64();
@@ -376,8 +379,11 @@ pub fn save(ck: &Checkpoint, files: &RunFiles) -> Result<(), TrainError> {
     Ok(())
 }
 
-/// The trained policy file of a checkpoint.
-pub fn policy_file(ck: &Checkpoint) -> PolicyFile {
+/// The trained policy file of a checkpoint, with its record of what it was trained on.
+///
+/// # Errors
+/// A file of the scenario that cannot be read for the record.
+pub fn policy_file(ck: &Checkpoint) -> Result<PolicyFile, TrainError> {
     let net = ck.networks();
     let training = serde_json::json!({
         "algorithm": "PPO (clipped, GAE), every CAV of an episode acting with the shared policy",
@@ -385,5 +391,16 @@ pub fn policy_file(ck: &Checkpoint) -> PolicyFile {
         "updates": ck.updates,
         "settings": ck.settings,
     });
-    PolicyFile::of(&net, training)
+    Ok(PolicyFile::of(&net, training, Some(trained_on(ck)?)))
+}
+
+/// What the checkpoint's episodes were: its scenario and step, the seeds of every training
+/// episode so far, and the training seed.
+fn trained_on(ck: &Checkpoint) -> Result<crate::config::TrainedOn, TrainError> {
+    use crate::train::provenance::{of_episodes, seed_range};
+    let s = &ck.settings;
+    let episodes = ck.updates * s.episodes_per_update as u64;
+    let mut r = of_episodes(&ck.config, seed_range(s.seed_base, episodes), episodes)?;
+    r.training_seed = s.seed.to_string();
+    Ok(r)
 }
