@@ -138,8 +138,14 @@ impl CampaignArgs {
 pub fn run(c: Campaign) -> Result<()> {
     let exe = std::env::current_exe().context("cannot locate the bkpbs binary")?;
     let done = match &c.settings {
-        Grid::Demand(s) => campaign::run(s.as_ref(), &c.out, &exe)?,
-        Grid::Scenarios(s) => campaign::run(s.as_ref(), &c.out, &exe)?,
+        Grid::Demand(s) => {
+            say_model_warnings(&s.config, &s.table.planners);
+            campaign::run(s.as_ref(), &c.out, &exe)?
+        }
+        Grid::Scenarios(s) => {
+            say_regions_left_to_sumo(s)?;
+            campaign::run(s.as_ref(), &c.out, &exe)?
+        }
     };
     if done.collected > 0 {
         print_report(std::slice::from_ref(&c.out), None, false, &[])?;
@@ -176,6 +182,35 @@ pub fn run(c: Campaign) -> Result<()> {
         );
     }
     Ok(())
+}
+
+/// One line per merge region of each scenario that is left to SUMO's drivers, as an episode
+/// on it says at its start (its results are SUMO's own there), and the warnings of learned
+/// files trained on another scenario.
+fn say_regions_left_to_sumo(s: &ScenarioSettings) -> Result<()> {
+    for cfg in &s.table.scenarios {
+        let mut config = s.config.clone();
+        config.scenario.sumocfg = Some(cfg.clone());
+        for line in bkpbs::sumo::frame::scenario_left_to_sumo(&config.scenario)? {
+            println!("campaign: {}: {line}", cfg.display());
+        }
+        say_model_warnings(&config, &s.table.planners);
+    }
+    Ok(())
+}
+
+/// The warnings of learned files the `planners` use under `config` that were trained on
+/// another scenario, each once, before the campaign runs (its episodes print none), on
+/// stdout with the campaign's other lines (stderr is for its one `error:` line).
+fn say_model_warnings(config: &bkpbs::config::Config, planners: &[String]) {
+    let mut said = std::collections::BTreeSet::new();
+    for planner in planners {
+        for line in bkpbs::episode::models_used::other_scenario_warnings(config, planner) {
+            if said.insert(line.clone()) {
+                println!("campaign: {line}");
+            }
+        }
+    }
 }
 
 /// Serves a campaign's episode requests on stdin until it closes.

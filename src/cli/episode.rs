@@ -105,12 +105,17 @@ fn keep_sumo_log(err: episode::EpisodeError, out: &std::path::Path) -> anyhow::E
     }
 }
 
-/// Writes `models.toml`: the learned files the episode used and what they were trained on.
+/// Writes `models.toml`: the learned files the episode used and what they were trained on;
+/// warns of those trained on another scenario.
 fn write_models_record(e: &Episode) -> Result<()> {
     let used = episode::models_used::models_used(&e.config, e.planner.name())?;
     let path = e.out.join(episode::models_used::MODELS_RECORD);
     bkpbs::io::write_atomic(&path, episode::models_used::models_toml(&used).as_bytes())
-        .with_context(|| format!("cannot write {}", path.display()))
+        .with_context(|| format!("cannot write {}", path.display()))?;
+    for line in episode::models_used::other_scenario_warnings(&e.config, e.planner.name()) {
+        eprintln!("{line}");
+    }
+    Ok(())
 }
 
 /// Runs the user's scenario, writes its files and prints its summary.

@@ -1,6 +1,6 @@
 //! The learned files an episode uses — b_θ's model files, the RL-PPO policy — with what each
-//! was trained on: an episode warns once, at its start, where a file was trained on another
-//! scenario than the one it runs, and `bkpbs episode` lists them in `models.toml` beside its
+//! was trained on: `bkpbs episode` warns once, after its run, where a file was trained on
+//! another scenario than the one it runs (a campaign once at its start), and `bkpbs episode` lists them in `models.toml` beside its
 //! CSV files (which keep their columns: committed results stay as they are).
 //!
 //! A file trained under another step length never gets here: loading it is refused
@@ -123,21 +123,21 @@ pub fn scenario_warnings(used: &[UsedModel], run: &TrainingScenario) -> Vec<Stri
         .collect()
 }
 
-/// Prints, once at an episode's start, a warning for each file `planner` uses under `config`
-/// that was trained on another scenario. Quiet where nothing can be said: a file that cannot
-/// be loaded is reported when the planner is built.
-pub fn warn_of_other_scenarios(config: &Config, planner: &str) {
+/// The warnings, one line each, of the files `planner` uses under `config` that were trained
+/// on another scenario than `config` runs: what `bkpbs episode` prints after its run and a
+/// campaign once at its start (the library prints nothing: an episode that fails says one
+/// `error:` line). None where nothing can be said: a file that cannot be loaded is reported
+/// when the planner is built.
+pub fn other_scenario_warnings(config: &Config, planner: &str) -> Vec<String> {
     let Ok(used) = models_used(config, planner) else {
-        return;
+        return Vec::new();
     };
     if used.is_empty() {
-        return;
+        return Vec::new();
     }
-    let Ok(run) = crate::sumo::scenario_record::scenario_record(&config.scenario) else {
-        return;
-    };
-    for line in scenario_warnings(&used, &run) {
-        eprintln!("{line}");
+    match crate::sumo::scenario_record::scenario_record(&config.scenario) {
+        Ok(run) => scenario_warnings(&used, &run),
+        Err(_) => Vec::new(),
     }
 }
 

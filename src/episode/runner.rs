@@ -109,9 +109,6 @@ pub fn run_observed(
         return Err(EpisodeError::NoGui(why));
     }
     let road = frame::scenario_road(&config.scenario)?;
-    if let Driver::Named(name) = driver {
-        super::models_used::warn_of_other_scenarios(config, name);
-    }
     let input = EpisodeInput::write(config, &road)?;
     let capture = if config.sumo.verbose {
         None

@@ -220,7 +220,6 @@ fn run_planned(
 ) -> Result<ScenarioResult, EpisodeError> {
     config.validate()?;
     let (path, cfg) = checked(config)?;
-    crate::episode::models_used::warn_of_other_scenarios(config, planner);
     let roads = frame::scenario_roads(&config.scenario)?;
     let dir = scratch_dir()?;
     let options = sumo_options(config, &cfg, dir.path());
