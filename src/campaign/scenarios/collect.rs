@@ -182,6 +182,7 @@ const EPISODE_RULES: Rules<'static> = Rules {
         "mean_time_loss_s",
         "mean_time_loss_region_s",
         "mean_time_loss_with_wait_s",
+        "mean_time_loss_crashes_charged_s",
         "mean_region_delay_s",
     ],
 };

@@ -509,7 +509,7 @@ impl ScenarioRun {
         };
         let summary = ScenarioSummary {
             plan_stats: self.plan_stats,
-            ..ScenarioSummary::of(head, &vehicles, hdv_collisions)
+            ..ScenarioSummary::of(head, &vehicles, hdv_collisions, self.end)
         };
         let mut regions = region_rows(&region_head, &names, &vehicles);
         self.count_never_inserted(&mut regions);
