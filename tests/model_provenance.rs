@@ -64,6 +64,25 @@ fn a_model_trained_at_another_step_length_is_refused() {
     refused_naming(&o, &["at-0.1s.json", "0.1 s", "scenario.dt is 0.2 s"]);
 }
 
+/// `eval-predictor` and `bench-predictor` refuse it too, before any episode runs.
+#[test]
+fn evaluating_a_model_of_another_step_length_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let model = copy_with(
+        dir.path(),
+        "gcn-conditioned.json",
+        "at-0.1s.json",
+        "step_length_s",
+        0.1.into(),
+    );
+    let m = model.to_str().unwrap();
+    let o = bkpbs(&["eval-predictor", "--model", m, "--episodes", "1"]);
+    refused_naming(&o, &["at-0.1s.json", "0.1 s", "0.2 s"]);
+    let cfg = config_naming(dir.path(), "predictor", "conditioned_model", &model);
+    let o = bkpbs(&["bench-predictor", "--config", cfg.to_str().unwrap()]);
+    refused_naming(&o, &["at-0.1s.json", "0.1 s", "0.2 s"]);
+}
+
 #[test]
 fn a_policy_trained_at_another_step_length_is_refused() {
     let dir = tempfile::tempdir().unwrap();

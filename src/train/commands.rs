@@ -189,8 +189,15 @@ pub fn run_eval(
         None => LaneChangeModel::embedded(!unconditioned),
     };
     let data = match data {
-        EvalData::File(p) => Dataset::read(p)?,
+        EvalData::File(p) => {
+            let d = Dataset::read(p)?;
+            // Samples of another step length are other per-step probabilities.
+            let recorded = meta_of(&d).and_then(|m| m.trained_on);
+            model.check_step_length(recorded.map_or(base.scenario.dt, |t| t.step_length_s))?;
+            d
+        }
         EvalData::Collect(plan) => {
+            model.check_step_length(base.scenario.dt)?;
             let pb = bar(plan.episodes as u64, "collect evaluation data");
             let d = collect(base, plan, |done, _| {
                 if let Some(b) = &pb {
@@ -218,10 +225,12 @@ pub fn run_bench(config: &Config) -> Result<String, CommandError> {
     c.predictor.kind = crate::config::PredictorKind::Learned;
     let p = &c.predictor;
     let load = |path: &Option<PathBuf>, conditioned| -> Result<_, ModelError> {
-        Ok(match path {
+        let model = match path {
             Some(p) => std::sync::Arc::new(LaneChangeModel::load(p)?),
             None => LaneChangeModel::embedded(conditioned),
-        })
+        };
+        model.check_step_length(c.scenario.dt)?;
+        Ok(model)
     };
     let learned = Learned::with_models(
         &c,
