@@ -390,3 +390,35 @@ fn a_cloverleaf_flows_as_under_sumo_alone() {
     );
     ramps_as_sumo_alone(&cfg, &["loopon", "outon", "main"]);
 }
+
+/// `bkpbs network --sumocfg` on SUMO's shipped game `name` (its stdout).
+fn game_network(name: &str) -> String {
+    let cfg = common::sumo_game_dir().join(format!("{name}.sumocfg"));
+    let o = bkpbs(&["network", "--sumocfg", cfg.to_str().unwrap()]);
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
+/// SUMO's `highway` game: the merge its routes use (3 lanes and a 2-lane ramp into 4, the
+/// leftmost then dropped) was neither planned nor listed; it is a lane drop, not planned yet.
+#[test]
+fn the_highway_game_s_routed_merge_is_listed_as_a_lane_drop() {
+    let said = game_network("highway");
+    assert!(
+        said.contains("lane drop 4 → 3 lanes on '189604289' (its leftmost lane ends), where")
+            && said.contains("not planned yet, SUMO's drivers drive it"),
+        "{said}"
+    );
+}
+
+/// A merge in a region whose road frame cannot be built (SUMO's `DRT` game) does not read
+/// "planned": an episode refuses that region.
+#[test]
+fn a_merge_of_a_region_that_cannot_be_planned_does_not_read_planned() {
+    let said = game_network("DRT");
+    assert!(said.contains("cannot be planned on:"), "{said}");
+    assert!(
+        said.contains("in region 1, which cannot be planned on (an episode refuses it)")
+            && !said.contains("planned in region 1"),
+        "{said}"
+    );
+}

@@ -49,7 +49,10 @@ pub fn run(a: NetworkArgs) -> Result<()> {
             println!("cannot be planned on: {why}");
         }
     }
-    print!("{}", regions.found.describe_left_out());
+    let unplannable: Vec<usize> = (regions.roads.iter().enumerate())
+        .filter_map(|(k, road)| road.is_err().then_some(k))
+        .collect();
+    print!("{}", regions.found.describe_left_out(&unplannable));
     println!(
         "internal junction lanes: {}",
         if net.internal.is_empty() { "no" } else { "yes" }

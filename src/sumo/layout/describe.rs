@@ -53,8 +53,9 @@ impl Layout {
 impl Discovery {
     /// The regions left to SUMO's drivers, forced lane changes, junctions that are no merge
     /// and edges left out, grouped by why (the regions planned are described with their road
-    /// frames, by the caller).
-    pub fn describe_left_out(&self) -> String {
+    /// frames, by the caller; `unplannable`: the regions, by index, whose road frame cannot be
+    /// built: an episode refuses them).
+    pub fn describe_left_out(&self, unplannable: &[usize]) -> String {
         let mut out = String::new();
         for l in &self.left_to_sumo {
             out += &(l.line() + "\n");
@@ -62,6 +63,10 @@ impl Discovery {
         }
         for (c, status) in &self.changes {
             let status = match status {
+                Status::Region(k) if unplannable.contains(k) => format!(
+                    "in region {}, which cannot be planned on (an episode refuses it)",
+                    k + 1
+                ),
                 Status::Region(k) => format!("planned in region {}", k + 1),
                 Status::LeftToSumo(k) => format!(
                     "in the region at {}, left to SUMO's drivers",

@@ -268,11 +268,21 @@ fn ramp_lanes(net: &Net, ramp: &str, joins: &str, ends: &[End]) -> ForcedChange 
     }
 }
 
-/// Every ramp joining at the nose: an edge fed by two roads where every lane the narrower
-/// one (only ever leading there) feeds is a lane the carriageway feeds too, on its right.
+/// The lowest speed limit (m/s, 60 km/h) of a road on which a ramp joining at the nose is a
+/// merge: on slower roads (city streets) a side street joining is a junction, where SUMO's
+/// right of way decides (SUMO's `DRT` game listed ten such "nose merges" without it).
+const NOSE_MERGE_MIN_SPEED: f64 = 60.0 / 3.6;
+
+/// Every ramp joining at the nose: an edge of a road of at least [`NOSE_MERGE_MIN_SPEED`] fed
+/// by two roads where every lane the narrower one (only ever leading there) feeds is a lane the
+/// carriageway feeds too, on its right.
 fn nose_merges(net: &Net) -> Vec<ForcedChange> {
     let mut out = Vec::new();
     for e in &net.edges {
+        let limit = e.lanes.iter().map(|l| l.speed).fold(0.0, f64::max);
+        if limit < NOSE_MERGE_MIN_SPEED {
+            continue;
+        }
         let preds = net.predecessors(&e.id);
         let Some(main) = main_feeder(net, &e.id).filter(|_| preds.len() == 2) else {
             continue;
