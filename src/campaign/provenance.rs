@@ -13,6 +13,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::config::Config;
 use crate::io::bounded::{read_text, FileKind};
+use crate::io::build::Build;
 
 /// Name of the cell's provenance record.
 pub const PROVENANCE_RECORD: &str = "provenance.toml";
@@ -23,33 +24,6 @@ pub const PROFILE_FILES: [&str; 3] = [
     "gcn-conditioned.json",
     "gcn-unconditioned.json",
 ];
-
-/// A bkpbs build: its version and the commit its sources were built from (`unknown` when
-/// built outside a git checkout; uncommitted edits are not seen).
-#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
-pub struct Build {
-    /// The package version.
-    pub version: String,
-    /// The git commit (full hash).
-    pub commit: String,
-}
-
-impl Build {
-    /// The build of this binary.
-    pub fn this() -> Build {
-        Build {
-            version: env!("CARGO_PKG_VERSION").into(),
-            commit: env!("BKPBS_COMMIT").into(),
-        }
-    }
-}
-
-impl std::fmt::Display for Build {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        let short = self.commit.get(..12).unwrap_or(&self.commit);
-        write!(f, "bkpbs {} (commit {short})", self.version)
-    }
-}
 
 /// What produced a cell.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]

@@ -205,7 +205,9 @@ fn say_regions_left_to_sumo(s: &ScenarioSettings) -> Result<()> {
 fn say_model_warnings(config: &bkpbs::config::Config, planners: &[String]) {
     let mut said = std::collections::BTreeSet::new();
     for planner in planners {
-        for line in bkpbs::episode::models_used::other_scenario_warnings(config, planner) {
+        // A file that cannot be used is reported when its episodes build the planner.
+        let used = bkpbs::episode::models_used::models_used(config, planner).unwrap_or_default();
+        for line in bkpbs::episode::models_used::other_scenario_warnings(config, &used) {
             if said.insert(line.clone()) {
                 println!("campaign: {line}");
             }

@@ -112,7 +112,7 @@ fn write_models_record(e: &Episode) -> Result<()> {
     let path = e.out.join(episode::models_used::MODELS_RECORD);
     bkpbs::io::write_atomic(&path, episode::models_used::models_toml(&used).as_bytes())
         .with_context(|| format!("cannot write {}", path.display()))?;
-    for line in episode::models_used::other_scenario_warnings(&e.config, e.planner.name()) {
+    for line in episode::models_used::other_scenario_warnings(&e.config, &used) {
         eprintln!("{line}");
     }
     Ok(())

@@ -123,20 +123,16 @@ pub fn scenario_warnings(used: &[UsedModel], run: &TrainingScenario) -> Vec<Stri
         .collect()
 }
 
-/// The warnings, one line each, of the files `planner` uses under `config` that were trained
-/// on another scenario than `config` runs: what `bkpbs episode` prints after its run and a
-/// campaign once at its start (the library prints nothing: an episode that fails says one
-/// `error:` line). None where nothing can be said: a file that cannot be loaded is reported
-/// when the planner is built.
-pub fn other_scenario_warnings(config: &Config, planner: &str) -> Vec<String> {
-    let Ok(used) = models_used(config, planner) else {
-        return Vec::new();
-    };
+/// The warnings, one line each, of the `used` files that were trained on another scenario than
+/// `config` runs: what `bkpbs episode` prints after its run and a campaign once at its start
+/// (the library prints nothing: an episode that fails says one `error:` line). None where the
+/// scenario cannot be read (the episode reports that).
+pub fn other_scenario_warnings(config: &Config, used: &[UsedModel]) -> Vec<String> {
     if used.is_empty() {
         return Vec::new();
     }
     match crate::sumo::scenario_record::scenario_record(&config.scenario) {
-        Ok(run) => scenario_warnings(&used, &run),
+        Ok(run) => scenario_warnings(used, &run),
         Err(_) => Vec::new(),
     }
 }

@@ -6,6 +6,7 @@
 //! [`bounded`]: every file read, read with a bound.
 
 pub mod bounded;
+pub mod build;
 pub mod child;
 pub mod cores;
 pub mod interrupt;

@@ -5,6 +5,7 @@
 
 use crate::config::trained_on::command_line;
 use crate::config::{Config, TrainedOn};
+use crate::io::build::Build;
 use crate::sumo::scenario_record::scenario_record;
 use crate::sumo::sumocfg::SumoConfigError;
 
@@ -35,8 +36,8 @@ pub fn of_episodes(
         training_seed: "-".into(),
         commands: vec![command_line()],
         sumo_version: crate::sumo::version::BUILT.into(),
-        bkpbs_version: env!("CARGO_PKG_VERSION").into(),
-        bkpbs_commit: env!("BKPBS_COMMIT").into(),
+        bkpbs_version: Build::this().version,
+        bkpbs_commit: Build::this().commit,
     })
 }
 
@@ -47,7 +48,7 @@ pub fn of_training(data: &TrainedOn, seed: u64) -> TrainedOn {
     let mut r = data.clone();
     r.training_seed = seed.to_string();
     r.commands.push(command_line());
-    let (version, commit) = (env!("CARGO_PKG_VERSION"), env!("BKPBS_COMMIT"));
+    let Build { version, commit } = Build::this();
     if r.bkpbs_commit != commit || r.bkpbs_version != version {
         r.bkpbs_version = format!("{version} (data: {})", r.bkpbs_version);
         r.bkpbs_commit = format!("{commit} (data: {})", r.bkpbs_commit);
