@@ -157,52 +157,42 @@ fn a_model_of_another_scenario_warns_once_and_the_episode_runs() {
     };
     let own = bkpbs::sumo::scenario_record::scenario_record(&s).unwrap();
     let own = serde_json::to_value(vec![own]).unwrap();
-    let model = copy_with(
-        dir.path(),
-        "gcn-conditioned.json",
-        "ramp.json",
-        "scenarios",
-        own,
-    );
-    let cfg = config_naming(dir.path(), "predictor", "conditioned_model", &model);
-    let o = scenario_run(
-        &ramp,
-        "bk-pbs",
-        &[&flags[..], &["--config", cfg.to_str().unwrap()]].concat(),
-        &dir.path().join("own"),
-    );
-    assert!(o.status.success(), "{}", stderr(&o));
-    let w = scenario_warnings(&o);
+    let w = ramp_episode_with_model(dir.path(), &ramp, &flags, "ramp.json", own);
     assert_eq!(
         w.len(),
         1,
-        "only the embedded unconditioned model warns: {}",
-        stderr(&o)
+        "only the embedded unconditioned model warns: {w:?}"
     );
     assert!(!w[0].contains("ramp.json"), "{}", w[0]);
 
     let other = serde_json::json!([{"kind": "sumocfg", "file": "other.sumocfg",
                                      "sha256": {"other.sumocfg": "00"}}]);
-    let model = copy_with(
-        dir.path(),
-        "gcn-conditioned.json",
-        "other.json",
-        "scenarios",
-        other,
-    );
-    let cfg = config_naming(dir.path(), "predictor", "conditioned_model", &model);
-    let o = scenario_run(
-        &ramp,
-        "bk-pbs",
-        &[&flags[..], &["--config", cfg.to_str().unwrap()]].concat(),
-        &dir.path().join("other"),
-    );
-    assert!(o.status.success(), "{}", stderr(&o));
-    let w = scenario_warnings(&o);
+    let w = ramp_episode_with_model(dir.path(), &ramp, &flags, "other.json", other);
     assert!(
         w.iter().any(|l| l.contains("other.json")
             && l.contains("scenario other.sumocfg")
             && l.contains("ramp.sumocfg")),
         "{w:?}"
     );
+}
+
+/// A bk-pbs episode on `ramp` (with `flags`) whose conditioned model is a copy of the shipped
+/// one named `copy` (in `dir`) recording `scenarios`; the warnings it printed.
+fn ramp_episode_with_model(
+    dir: &Path,
+    ramp: &Path,
+    flags: &[&str],
+    copy: &str,
+    scenarios: serde_json::Value,
+) -> Vec<String> {
+    let model = copy_with(dir, "gcn-conditioned.json", copy, "scenarios", scenarios);
+    let cfg = config_naming(dir, "predictor", "conditioned_model", &model);
+    let o = scenario_run(
+        ramp,
+        "bk-pbs",
+        &[flags, &["--config", cfg.to_str().unwrap()]].concat(),
+        &dir.join(copy.trim_end_matches(".json")),
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    scenario_warnings(&o)
 }
