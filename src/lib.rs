@@ -39,7 +39,7 @@
 
 pub use config::{Config, ConfigError};
 pub use controller::{Command, Controller, LaneChange, Maneuver, PlannerKind};
-pub use episode::metrics::Summary;
+pub use episode::summary::Summary;
 pub use episode::{run as run_episode, EpisodeError, EpisodeResult, Observer};
 pub use model::road::Road;
 pub use model::scene::{Kind, Scene, VehicleState};

@@ -23,7 +23,7 @@ fn full_episodes_at_both_densities_and_penetrations() {
         assert!(s.plan_stats.searches > 0 && s.plan_stats.nodes_expanded > 0);
         // The planner keeps safe gaps: collisions involving CAVs stay rare.
         assert!(
-            s.controllable_collision_rate < 0.1,
+            s.controllable_collision_rate.unwrap() < 0.1,
             "α={alpha} λ={lambda}: {s:?}"
         );
         // Ramp CAVs that entered in the first 40 s, and how many of them reached the end.
@@ -43,7 +43,7 @@ fn full_episodes_at_both_densities_and_penetrations() {
             .count();
         eprintln!(
             "bk-mastar α={alpha} λ={lambda}: delay {:?} s, crashed {}, fallbacks {}, phase-2 {} of {} searches, {:.1} nodes/search",
-            s.mean_delay_s,
+            s.travel().mean_delay_s,
             s.crashed,
             s.plan_stats.fallbacks,
             s.plan_stats.phase2_plans,

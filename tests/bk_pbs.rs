@@ -22,12 +22,12 @@ fn full_episodes_at_both_densities_and_penetrations() {
         assert!(p.pbs_fallbacks * 3 < 399, "{p:?}");
         assert_eq!(p.time_budget_hits, 0);
         assert!(
-            s.controllable_collision_rate < 0.1,
+            s.controllable_collision_rate.unwrap() < 0.1,
             "α={alpha} λ={lambda}: {s:?}"
         );
         eprintln!(
             "bk-pbs α={alpha} λ={lambda}: delay {:.2} s, crashed {}, PBS nodes {}, fallback rounds {}, M-A* calls {}, predictions {}",
-            s.mean_delay_s.unwrap_or(f64::NAN),
+            s.travel().mean_delay_s.unwrap_or(f64::NAN),
             s.crashed,
             p.pbs_nodes,
             p.pbs_fallbacks,
@@ -77,9 +77,9 @@ fn the_shield_counts_its_overrides_and_is_silent_when_off() {
     eprintln!(
         "bk-pbs α=0.5 λ=3000 seed 1: shield on: {overrides} overrides, {} controllable crashes, delay {:?}; off: {} controllable crashes, delay {:?}",
         on.summary.controllable_crashed,
-        on.summary.mean_delay_s,
+        on.summary.travel().mean_delay_s,
         off.summary.controllable_crashed,
-        off.summary.mean_delay_s
+        off.summary.travel().mean_delay_s
     );
 }
 

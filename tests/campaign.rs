@@ -8,7 +8,6 @@ use std::process::{Command, Output, Stdio};
 use std::sync::OnceLock;
 use std::time::{Duration, Instant, SystemTime};
 
-use bkpbs::campaign::cell::GridCell;
 use bkpbs::campaign::grid::{Cell, Grid, Shard};
 use bkpbs::episode::metrics::mean;
 use bkpbs::report::stats::{sample_std, t_975, Estimate};
@@ -93,6 +92,7 @@ fn grid_order_is_planner_alpha_lambda_seed_with_sorted_unique_values() {
         seed,
         hdv_profile: "sumo-safe".into(),
         predictor: None,
+        scenario: None,
     };
     assert_eq!(cells[0], c("idm-mobil", 0.4, 2500.0, 10));
     assert_eq!(cells[1], c("idm-mobil", 0.4, 2500.0, 11));

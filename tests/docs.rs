@@ -239,10 +239,11 @@ fn scenario_header<T: serde::Serialize + Default>() -> Vec<String> {
 #[test]
 fn every_column_of_every_episode_file_is_documented_in_the_metrics_chapter() {
     use bkpbs::episode::output::{COLLISION_COLUMNS, TIMING_COLUMNS, VEHICLE_COLUMNS};
-    use bkpbs::episode::sumocfg::{RegionRow, ScenarioSummary, ScenarioVehicle};
+    use bkpbs::episode::summary::{Summary, Traffic};
+    use bkpbs::episode::sumocfg::{RegionRow, ScenarioVehicle};
     let metrics = std::fs::read_to_string(root().join("docs/src/metrics.md")).unwrap();
     let scenario = [
-        ("Its `episode.csv`", scenario_header::<ScenarioSummary>()),
+        ("Its `episode.csv`", Summary::header(Traffic::Scenario)),
         ("Its `vehicles.csv`", scenario_header::<ScenarioVehicle>()),
         ("`regions.csv`", scenario_header::<RegionRow>()),
     ];
@@ -259,7 +260,7 @@ fn every_column_of_every_episode_file_is_documented_in_the_metrics_chapter() {
     let mut files: Vec<(String, Vec<&str>, String)> = vec![
         (
             "### `episode.csv`".into(),
-            bkpbs::episode::metrics::Summary::columns().to_vec(),
+            Summary::columns(Traffic::Demand).to_vec(),
             "episode.csv".into(),
         ),
         (

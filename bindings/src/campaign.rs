@@ -11,7 +11,7 @@ use pyo3::types::{PyBytes, PyDict, PyList, PyString, PyTuple};
 
 use bkpbs::campaign::collect::cell_dir;
 use bkpbs::campaign::portable;
-use bkpbs::campaign::scenarios::{self, is_scenario_campaign, ScenarioSettings};
+use bkpbs::campaign::scenarios::{is_scenario_campaign, ScenarioSettings};
 use bkpbs::campaign::worker::{self, Outcome, Request};
 use bkpbs::campaign::{tasks, CampaignError, CampaignSpec, Overrides, Settings, SettingsError};
 use bkpbs::report::{self as core_report, ReportError};
@@ -168,31 +168,24 @@ impl PyCampaign {
     /// seed.
     fn cells<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyList>> {
         let out = PyList::empty(py);
-        match &self.settings {
-            Grid::Demand(s) => {
-                for (position, c) in s.grid.cells().iter().enumerate() {
-                    let d = PyDict::new(py);
-                    d.set_item("position", position)?;
-                    d.set_item("planner", &c.planner)?;
-                    d.set_item("alpha", c.alpha)?;
-                    d.set_item("lambda", c.lambda)?;
-                    d.set_item("seed", c.seed)?;
-                    d.set_item("dir", cell_dir(&self.out, c))?;
-                    out.append(d)?;
-                }
+        let cells = match &self.settings {
+            Grid::Demand(s) => s.grid.cells(),
+            Grid::Scenarios(s) => s.grid.cells(),
+        };
+        for (position, c) in cells.iter().enumerate() {
+            let d = PyDict::new(py);
+            d.set_item("position", position)?;
+            d.set_item("planner", &c.planner)?;
+            if let Some(scenario) = &c.scenario {
+                d.set_item("scenario", scenario)?;
             }
-            Grid::Scenarios(s) => {
-                for (position, c) in s.grid.cells().iter().enumerate() {
-                    let d = PyDict::new(py);
-                    d.set_item("position", position)?;
-                    d.set_item("planner", &c.planner)?;
-                    d.set_item("scenario", &c.sumocfg)?;
-                    d.set_item("alpha", c.alpha)?;
-                    d.set_item("seed", c.seed)?;
-                    d.set_item("dir", scenarios::collect::cell_dir(&self.out, c))?;
-                    out.append(d)?;
-                }
+            d.set_item("alpha", c.alpha)?;
+            if c.scenario.is_none() {
+                d.set_item("lambda", c.lambda)?;
             }
+            d.set_item("seed", c.seed)?;
+            d.set_item("dir", cell_dir(&self.out, c))?;
+            out.append(d)?;
         }
         Ok(out)
     }

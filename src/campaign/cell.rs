@@ -7,7 +7,7 @@ use std::fmt;
 use std::path::{Path, PathBuf};
 
 use super::comparison::{first_difference, results_settings};
-pub use super::grid::GridCell;
+use super::grid::Cell;
 use super::results::read_records;
 use super::worker::{DONE_FILE, ERROR_FILE, SETTINGS_RECORD};
 use crate::config::Config;
@@ -16,8 +16,8 @@ use crate::io::bounded::{read_text, FileKind};
 /// Directory of the per-episode files below a campaign directory.
 pub const EPISODES_DIR: &str = "episodes";
 
-/// A cell's directory: `<out>/episodes/` and its [`GridCell::dir_name`].
-pub fn cell_dir(out: &Path, cell: &impl GridCell) -> PathBuf {
+/// A cell's directory: `<out>/episodes/` and its [`Cell::dir_name`].
+pub fn cell_dir(out: &Path, cell: &Cell) -> PathBuf {
     out.join(EPISODES_DIR).join(cell.dir_name())
 }
 

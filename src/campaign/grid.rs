@@ -1,23 +1,19 @@
-//! The experiment grid: planners × predictors × HDV profiles × α × λ × seeds, its fixed order,
-//! and how it splits into shards.
+//! The experiment grid, the one for every campaign: planners × predictors × HDV profiles ×
+//! scenarios × α × λ × seeds, its fixed order, and how it splits into shards.
 //!
-//! Grid order is planner, predictor and HDV profile (in the order given), then α, λ and seed,
-//! each ascending. Every output of a campaign follows it, so results never depend on which worker
-//! ran which episode.
+//! A campaign on the paper's demand has no scenario axis (its cells run the generated demand at
+//! each λ); a campaign over scenarios of the user's own (`--sumocfg`) has one, and no λ axis
+//! (a scenario's routes are its demand) nor HDV profiles (its drivers are its own).
+//!
+//! Grid order is planner, predictor, HDV profile and scenario (in the order given), then α, λ
+//! and seed, each ascending. Every output of a campaign follows it, so results never depend on
+//! which worker ran which episode.
 
 use std::fmt;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::str::FromStr;
 
 use crate::config::hdv::DEFAULT_PROFILE;
-
-/// A cell of either grid, as the runner and the cell's files know it.
-pub trait GridCell: fmt::Display {
-    /// The cell's directory below `<out>/episodes/`.
-    fn dir_name(&self) -> PathBuf;
-    /// The controller the cell runs, as the CLI names it.
-    fn planner(&self) -> &str;
-}
 
 /// One episode of the grid.
 #[derive(Debug, Clone, PartialEq)]
@@ -26,15 +22,35 @@ pub struct Cell {
     pub planner: String,
     /// CAV penetration α (share of CAVs, 0 to 1).
     pub alpha: f64,
-    /// Total arrival rate λ (veh/h).
+    /// Total arrival rate λ (veh/h) of the paper's demand; 0 on a scenario of the user's own,
+    /// whose routes are its demand.
     pub lambda: f64,
     /// The episode's seed (`scenario.seed`).
     pub seed: u64,
-    /// The HDV driver profile SUMO runs.
+    /// The HDV driver profile SUMO runs (the default on a scenario of the user's own, whose
+    /// drivers are its own).
     pub hdv_profile: String,
     /// The HDV predictor of the planners (`learned`, `constant`) when the campaign has the
     /// predictor axis (`--predictors`); `None`: the configuration's `[predictor] kind`.
     pub predictor: Option<String>,
+    /// The user's SUMO scenario the cell runs (its configuration file, as given); `None`: the
+    /// paper's demand.
+    pub scenario: Option<PathBuf>,
+}
+
+/// A scenario's name in directories and tables: its file name without `.sumocfg`.
+pub fn scenario_name(sumocfg: &Path) -> String {
+    let file = sumocfg.file_name().unwrap_or(sumocfg.as_os_str());
+    let file = file.to_string_lossy();
+    file.strip_suffix(".sumocfg").unwrap_or(&file).to_string()
+}
+
+/// A configuration's file name, as `episode.csv` names its scenario (`A10KW.sumocfg`).
+pub fn file_name_of(sumocfg: &Path) -> String {
+    sumocfg
+        .file_name()
+        .map(|f| f.to_string_lossy().to_string())
+        .unwrap_or_default()
 }
 
 impl Cell {
@@ -48,36 +64,50 @@ impl Cell {
     }
 }
 
-impl GridCell for Cell {
+impl Cell {
+    /// The scenario's name ([`scenario_name`]), on a scenario of the user's own.
+    pub fn scenario_name(&self) -> Option<String> {
+        self.scenario.as_deref().map(scenario_name)
+    }
+
     /// The cell's directory below `<out>/episodes/`: `<planner>/a<α>_l<λ>_s<seed>` for the
     /// default drivers, `<planner>/hdv-<profile>/a<α>_l<λ>_s<seed>` for others, with
-    /// `predictor-<name>/` after the planner on a campaign with the predictor axis.
+    /// `predictor-<name>/` after the planner on a campaign with the predictor axis; on a
+    /// scenario of the user's own `<planner>/<scenario>/a<α>_s<seed>`.
     ///
     /// α and λ use Rust's shortest round-trip formatting, the same as `episode.csv`, so the name
     /// is stable and reads like the values (`a0.4_l2500_s3`).
-    fn dir_name(&self) -> PathBuf {
+    pub fn dir_name(&self) -> PathBuf {
         let mut dir = PathBuf::from(&self.planner);
         if let Some(p) = &self.predictor {
             dir.push(format!("predictor-{p}"));
+        }
+        if let Some(name) = self.scenario_name() {
+            return dir
+                .join(name)
+                .join(format!("a{}_s{}", self.alpha, self.seed));
         }
         if self.hdv_profile != DEFAULT_PROFILE {
             dir.push(format!("hdv-{}", self.hdv_profile));
         }
         dir.join(format!("a{}_l{}_s{}", self.alpha, self.lambda, self.seed))
     }
-
-    fn planner(&self) -> &str {
-        &self.planner
-    }
 }
 
 impl fmt::Display for Cell {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(
-            f,
-            "{} α={} λ={} seed={}",
-            self.planner, self.alpha, self.lambda, self.seed
-        )?;
+        match self.scenario_name() {
+            Some(name) => write!(
+                f,
+                "{} {name} α={} seed={}",
+                self.planner, self.alpha, self.seed
+            )?,
+            None => write!(
+                f,
+                "{} α={} λ={} seed={}",
+                self.planner, self.alpha, self.lambda, self.seed
+            )?,
+        }
         if let Some(p) = &self.predictor {
             write!(f, " predictor={p}")?;
         }
@@ -100,9 +130,12 @@ pub struct Grid {
     pub predictors: Vec<Option<String>>,
     /// HDV driver profiles, in the order given.
     pub profiles: Vec<String>,
+    /// The user's scenarios (configuration files), in the order given, each once; empty for
+    /// the paper's demand.
+    pub scenarios: Vec<PathBuf>,
     /// CAV penetrations α (0 to 1), ascending.
     pub alphas: Vec<f64>,
-    /// Total arrival rates λ (veh/h), ascending.
+    /// Total arrival rates λ (veh/h), ascending; `[0]` over scenarios of the user's own.
     pub lambdas: Vec<f64>,
     /// Episode seeds, ascending and consecutive.
     pub seeds: Vec<u64>,
@@ -145,9 +178,25 @@ impl Grid {
             planners: unique(planners),
             predictors: vec![None],
             profiles: vec![DEFAULT_PROFILE.to_string()],
+            scenarios: Vec::new(),
             alphas: sorted_unique(alphas.to_vec()),
             lambdas: sorted_unique(lambdas.to_vec()),
             seeds: seed_range(seed_base, seeds),
+        }
+    }
+
+    /// The grid over scenarios of the user's own (`scenarios` as given: the caller keeps each
+    /// once): no λ axis, the default drivers' profile (a scenario's drivers are its own).
+    pub fn over_scenarios(
+        planners: &[String],
+        scenarios: Vec<PathBuf>,
+        alphas: &[f64],
+        seed_base: u64,
+        seeds: u64,
+    ) -> Grid {
+        Grid {
+            scenarios,
+            ..Grid::new(planners, alphas, &[0.0], seed_base, seeds)
         }
     }
 
@@ -170,11 +219,20 @@ impl Grid {
         self.predictors.iter().any(Option::is_some)
     }
 
+    /// The scenario axis: each scenario, or the paper's demand alone (`None`).
+    fn scenario_axis(&self) -> Vec<Option<PathBuf>> {
+        if self.scenarios.is_empty() {
+            return vec![None];
+        }
+        self.scenarios.iter().cloned().map(Some).collect()
+    }
+
     /// Number of episodes.
     pub fn len(&self) -> usize {
         self.planners.len()
             * self.predictors.len()
             * self.profiles.len()
+            * self.scenario_axis().len()
             * self.alphas.len()
             * self.lambdas.len()
             * self.seeds.len()
@@ -185,28 +243,31 @@ impl Grid {
         self.len() == 0
     }
 
-    /// All cells in grid order: planner, predictor, profile, α, λ, seed.
+    /// All cells in grid order: planner, predictor, profile, scenario, α, λ, seed.
     pub fn cells(&self) -> Vec<Cell> {
         let mut out = Vec::with_capacity(self.len());
         for p in &self.planners {
             for predictor in &self.predictors {
                 for h in &self.profiles {
-                    let cell = Cell {
-                        planner: p.clone(),
-                        alpha: 0.0,
-                        lambda: 0.0,
-                        seed: 0,
-                        hdv_profile: h.clone(),
-                        predictor: predictor.clone(),
-                    };
-                    out.extend(self.points(&cell));
+                    for scenario in self.scenario_axis() {
+                        let cell = Cell {
+                            planner: p.clone(),
+                            alpha: 0.0,
+                            lambda: 0.0,
+                            seed: 0,
+                            hdv_profile: h.clone(),
+                            predictor: predictor.clone(),
+                            scenario,
+                        };
+                        out.extend(self.points(&cell));
+                    }
                 }
             }
         }
         out
     }
 
-    /// The cells of `like`'s planner, predictor and profile at every α, λ and seed.
+    /// The cells of `like`'s planner, predictor, profile and scenario at every α, λ and seed.
     fn points<'a>(&'a self, like: &'a Cell) -> impl Iterator<Item = Cell> + 'a {
         self.alphas.iter().flat_map(move |&alpha| {
             self.lambdas.iter().flat_map(move |&lambda| {
@@ -278,5 +339,27 @@ impl FromStr for Shard {
 impl fmt::Display for Shard {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(f, "{}/{}", self.index, self.count)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn scenario_cells_run_in_grid_order_and_name_their_directories() {
+        let grid = Grid::over_scenarios(
+            &["bk-pbs".into(), "sumo".into()],
+            vec!["game/A10KW.sumocfg".into(), "ramp.sumocfg".into()],
+            &[0.6, 0.3],
+            4,
+            2,
+        );
+        let cells = grid.cells();
+        assert_eq!((cells.len(), grid.len()), (16, 16));
+        assert_eq!(cells[0].dir_name(), Path::new("bk-pbs/A10KW/a0.3_s4"));
+        assert_eq!(cells[3].dir_name(), Path::new("bk-pbs/A10KW/a0.6_s5"));
+        assert_eq!(cells[4].dir_name(), Path::new("bk-pbs/ramp/a0.3_s4"));
+        assert_eq!(cells[8].to_string(), "sumo A10KW α=0.3 seed=4");
     }
 }

@@ -7,8 +7,8 @@ use std::path::{Path, PathBuf};
 
 use super::grid::Cell;
 use super::table::{key, Axes, CellKey, Row, Table};
-use crate::episode::metrics::Summary;
 use crate::episode::output::{self, WriteError, TIMING_COLUMNS, VEHICLE_COLUMNS};
+use crate::episode::summary::{Summary, Traffic};
 
 /// The collected files of a campaign directory.
 pub const FILES: [&str; 4] = [
@@ -75,7 +75,7 @@ pub enum ResultsError {
 
 /// Header of `episodes.csv` (the episode columns already start with the cell).
 pub fn episodes_header(axes: Axes) -> Vec<String> {
-    axes.header(Summary::columns())
+    axes.header(Summary::columns(Traffic::Demand))
 }
 /// Header of `vehicles.csv`.
 pub fn vehicles_header(axes: Axes) -> Vec<String> {
@@ -141,6 +141,7 @@ pub fn cell_of(axes: Axes, fields: &csv::StringRecord) -> Result<Cell, String> {
         predictor: axes
             .predictor
             .then(|| fields.get(1).unwrap_or("").to_string()),
+        scenario: None,
     })
 }
 

@@ -6,8 +6,8 @@
 use std::path::Path;
 use std::time::Duration;
 
-use super::cell::{CellState, GridCell};
-use super::grid::Shard;
+use super::cell::CellState;
+use super::grid::{Cell, Shard};
 use super::{CampaignError, SettingsError};
 use crate::config::Config;
 
@@ -26,11 +26,8 @@ pub struct Collected {
 
 /// A campaign's validated settings, as the one runner uses them.
 pub trait CampaignSpec {
-    /// One episode of the grid: its directory, its planner, its name in the status lines.
-    type Cell: GridCell;
-
     /// Every cell, in grid order (the order of every collected file).
-    fn cells(&self) -> Vec<Self::Cell>;
+    fn cells(&self) -> Vec<Cell>;
     /// The slice of the grid this run runs.
     fn shard(&self) -> Shard;
     /// Worker processes, at least 1.
@@ -51,9 +48,9 @@ pub trait CampaignSpec {
     /// displayed.
     fn recorded_outside(&self, out: &Path) -> Vec<String>;
     /// Where `cell` stands in `out`.
-    fn readiness(&self, out: &Path, cell: &Self::Cell) -> Readiness;
+    fn readiness(&self, out: &Path, cell: &Cell) -> Readiness;
     /// The full configuration `cell`'s episode runs with.
-    fn episode_config(&self, cell: &Self::Cell) -> Config;
+    fn episode_config(&self, cell: &Cell) -> Config;
     /// Gathers the finished cells found in `out` into its collected files.
     ///
     /// # Errors
@@ -66,7 +63,7 @@ pub trait CampaignSpec {
 /// `shard`, `workers`, `episode_timeout`), written once.
 macro_rules! run_fields {
     () => {
-        fn cells(&self) -> Vec<Self::Cell> {
+        fn cells(&self) -> Vec<Cell> {
             self.grid.cells()
         }
         fn shard(&self) -> Shard {
@@ -82,8 +79,6 @@ macro_rules! run_fields {
 }
 
 impl CampaignSpec for super::Settings {
-    type Cell = super::grid::Cell;
-
     run_fields!();
 
     fn axes(&self) -> String {
@@ -115,10 +110,10 @@ impl CampaignSpec for super::Settings {
         let cells = super::collect::recorded_outside(out, &self.grid);
         cells.iter().map(ToString::to_string).collect()
     }
-    fn readiness(&self, out: &Path, cell: &Self::Cell) -> Readiness {
+    fn readiness(&self, out: &Path, cell: &Cell) -> Readiness {
         super::collect::cell_state(out, self, cell).without_files()
     }
-    fn episode_config(&self, cell: &Self::Cell) -> Config {
+    fn episode_config(&self, cell: &Cell) -> Config {
         super::Settings::episode_config(self, cell)
     }
     fn collect(&self, out: &Path) -> Result<Collected, CampaignError> {
@@ -132,8 +127,6 @@ impl CampaignSpec for super::Settings {
 }
 
 impl CampaignSpec for super::scenarios::ScenarioSettings {
-    type Cell = super::scenarios::ScenarioCell;
-
     run_fields!();
 
     fn axes(&self) -> String {
@@ -156,10 +149,10 @@ impl CampaignSpec for super::scenarios::ScenarioSettings {
     fn recorded_outside(&self, out: &Path) -> Vec<String> {
         super::scenarios::collect::recorded_outside(out, &self.grid)
     }
-    fn readiness(&self, out: &Path, cell: &Self::Cell) -> Readiness {
+    fn readiness(&self, out: &Path, cell: &Cell) -> Readiness {
         super::scenarios::collect::cell_state(out, self, cell).without_files()
     }
-    fn episode_config(&self, cell: &Self::Cell) -> Config {
+    fn episode_config(&self, cell: &Cell) -> Config {
         super::scenarios::ScenarioSettings::episode_config(self, cell)
     }
     fn collect(&self, out: &Path) -> Result<Collected, CampaignError> {

@@ -8,7 +8,7 @@
 use std::path::Path;
 use std::sync::Arc;
 
-use super::cell::{cell_dir, GridCell};
+use super::cell::cell_dir;
 use super::claim::{self, Claim};
 use super::spec::{CampaignSpec, Readiness};
 use super::worker::{self, Outcome, Request};
@@ -54,7 +54,7 @@ pub fn prepare<S: CampaignSpec>(settings: &S, out: &Path) -> Result<Plan, Campai
         }
         requests.push(Request {
             position,
-            planner: cell.planner().to_string(),
+            planner: cell.planner.clone(),
             dir: cell_dir(out, cell),
             config: settings.episode_config(cell),
         });

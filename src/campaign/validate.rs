@@ -8,7 +8,7 @@ use std::collections::HashSet;
 use std::path::{Path, PathBuf};
 
 use super::table::{key, Axes, Table};
-use crate::episode::metrics::Summary;
+use crate::episode::summary::{Summary, Traffic};
 
 /// The first thing wrong with a collected `episodes.csv`.
 #[derive(Debug, thiserror::Error)]
@@ -134,7 +134,7 @@ pub fn check_episodes(path: &Path, axes: Axes, table: &Table) -> Result<(), RowE
         }
         // The cell columns are checked when the row is read.
         for (column, value) in axes
-            .header(Summary::columns())
+            .header(Summary::columns(Traffic::Demand))
             .iter()
             .zip(row.fields.iter())
             .skip(axes.lead_len())
@@ -203,10 +203,13 @@ mod tests {
     #[test]
     fn rules_name_summary_columns() {
         for column in DELAYS.iter().chain([&RATE]) {
-            assert!(Summary::columns().contains(column), "{column}");
+            assert!(
+                Summary::columns(Traffic::Demand).contains(column),
+                "{column}"
+            );
         }
         let lead = crate::campaign::table::CELL_COLUMNS;
-        assert_eq!(&Summary::columns()[..lead.len()], lead);
+        assert_eq!(&Summary::columns(Traffic::Demand)[..lead.len()], lead);
     }
 
     #[test]

@@ -167,14 +167,17 @@ fn run_scenario(e: &Episode) -> Result<()> {
 }
 
 /// The one-line summary of an episode on the user's scenario.
-fn print_scenario_summary(e: &Episode, s: &episode::sumocfg::ScenarioSummary) {
+fn print_scenario_summary(e: &Episode, s: &episode::summary::Summary) {
     let secs = |x: Option<f64>| x.map_or("-".into(), |x| format!("{x:.2} s"));
     let cfg = e.config.scenario.sumocfg.as_ref().expect("a scenario");
-    let cavs = if s.cav_types.is_empty() {
+    let cav_types = s.cav_types.as_deref().unwrap_or_default();
+    let cavs = if cav_types.is_empty() {
         format!("α={}", s.alpha)
     } else {
-        format!("CAVs of type {}", s.cav_types)
+        format!("CAVs of type {cav_types}")
     };
+    let share = s.share.clone().unwrap_or_default();
+    let time_loss = s.time_loss();
     println!(
         "{} {cavs} seed={} on {} (regions {}): inserted {} ({} CAVs, share {:.3}), never \
          inserted {}, in a region {}, arrived {}, crashed {} (controllable {}), mean timeLoss {}, mean delay in \
@@ -182,17 +185,17 @@ fn print_scenario_summary(e: &Episode, s: &episode::sumocfg::ScenarioSummary) {
         s.planner,
         s.seed,
         cfg.display(),
-        s.regions,
+        s.regions.as_deref().unwrap_or_default(),
         s.inserted,
         s.inserted_cav,
-        s.cav_share,
+        share.cav_share,
         s.never_inserted,
-        s.in_region,
+        share.in_region,
         s.arrived,
         s.crashed,
         s.controllable_crashed,
-        secs(s.mean_time_loss_s),
-        secs(s.mean_region_delay_s)
+        secs(time_loss.mean_time_loss_s),
+        secs(time_loss.mean_region_delay_s)
     );
 }
 
@@ -224,18 +227,19 @@ pub fn run(e: Episode) -> Result<()> {
     };
     write_models_record(&e)?;
     let m = &result.summary;
+    let system_delay = m.system.as_ref().and_then(|s| s.system_delay_s);
     println!(
         "{} α={} λ={} seed={}: inserted {}, arrived {}, crashed {} (controllable rate {:.4}), system delay {} s, mean delay (arrived) {} s",
         m.planner,
         m.alpha,
-        m.lambda,
+        m.lambda.unwrap_or_default(),
         m.seed,
         m.inserted,
         m.arrived,
         m.crashed,
-        m.controllable_collision_rate,
-        m.system_delay_s.map_or("n/a".into(), |d| format!("{d:.2}")),
-        m.mean_delay_s.map_or("n/a".into(), |d| format!("{d:.2}"))
+        m.controllable_collision_rate.unwrap_or_default(),
+        system_delay.map_or("n/a".into(), |d| format!("{d:.2}")),
+        m.travel().mean_delay_s.map_or("n/a".into(), |d| format!("{d:.2}"))
     );
     println!("results: {}", e.out.join("episode.csv").display());
     if let Some(t) = &result.trajectories {

@@ -86,6 +86,27 @@ pub fn cells<T: Serialize>(record: &T) -> Result<Vec<Cell>, RecordError> {
     Ok(out)
 }
 
+/// The CSV text of `rows`, under the columns of `template` (a record with every part the
+/// rows have: a part a row lacks is no column).
+pub fn csv_text<T: Serialize>(template: &T, rows: &[T]) -> Vec<u8> {
+    let header: Vec<&str> = cells(template)
+        .expect("a flat record")
+        .into_iter()
+        .map(|c| c.column)
+        .collect();
+    let mut w = csv::Writer::from_writer(Vec::new());
+    w.write_record(&header).expect("writing to memory");
+    for r in rows {
+        let row: Vec<String> = cells(r)
+            .expect("a flat record")
+            .iter()
+            .map(|c| c.value.csv_text())
+            .collect();
+        w.write_record(&row).expect("writing to memory");
+    }
+    w.into_inner().expect("writing to memory")
+}
+
 /// Newtype names that carry a float's decimals ([`Decimals`]); the index is the count.
 const DECIMALS: [&str; 7] = [
     "decimals:0",

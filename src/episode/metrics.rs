@@ -2,12 +2,8 @@
 //! free-flow time t*, the system delay of every demanded vehicle (arrived or not), collision
 //! attribution, and the one-row episode summary.
 
-use std::sync::OnceLock;
-
-use serde::Serialize;
-
 use crate::controller::PlanStats;
-use crate::episode::cells;
+use crate::episode::summary::{Summary, SystemDelay, TravelFigures};
 use crate::model::kinematics::free_flow_time;
 use crate::model::scene::{Kind, Origin};
 
@@ -199,105 +195,6 @@ impl CollisionEvent {
     }
 }
 
-/// The episode's one-row summary (reproducible: no wall-clock figure in it): the one definition
-/// of the `episode.csv` row. Its serde names, in field order, are the columns (the planner's
-/// [`PlanStats`] inline, under theirs); a float's `serialize_with` gives its CSV decimals
-/// ([`cells::decimals`]). Adding a metric is adding a field here and computing it in
-/// [`Summary::compute`].
-#[derive(Debug, Clone, Default, PartialEq, Serialize)]
-pub struct Summary {
-    /// The controller's name (`bk-pbs`, `idm-mobil`...).
-    pub planner: String,
-    /// CAV penetration α (`scenario.alpha`).
-    pub alpha: f64,
-    /// Total arrival rate λ (veh/h, `scenario.lambda`).
-    pub lambda: f64,
-    /// The episode's random seed (`scenario.seed`).
-    pub seed: u64,
-    /// The HDV driver profile SUMO ran (`[hdv] profile`).
-    pub hdv_profile: String,
-    /// The SUMO version that simulated the episode ([`crate::sumo::version::BUILT`]; a run
-    /// against another is refused): results move between SUMO versions.
-    pub sumo_version: String,
-    /// Simulated steps.
-    pub steps: u32,
-    /// Mean system delay per vehicle (s) over every vehicle not crashed, arrived or not (see
-    /// [`VehicleRecord::settle`]); `None` if there is none.
-    #[serde(serialize_with = "cells::opt_decimals::<4, _>")]
-    pub system_delay_s: Option<f64>,
-    /// Total system delay (vehicle-hours) of the same vehicles.
-    #[serde(serialize_with = "cells::decimals::<6, _>")]
-    pub system_delay_veh_h: f64,
-    /// Mean per vehicle of the part of the system delay no controller can remove (s): driving
-    /// at its own desired speed instead of v_max; `None` if there is no vehicle.
-    #[serde(serialize_with = "cells::opt_decimals::<4, _>")]
-    pub own_speed_delay_s: Option<f64>,
-    /// Vehicles the demand scheduled within the horizon.
-    pub scheduled: usize,
-    /// Vehicles SUMO inserted.
-    pub inserted: usize,
-    /// Scheduled but never inserted (SUMO found no room in time).
-    pub never_inserted: usize,
-    /// CAVs among the inserted vehicles.
-    pub inserted_cav: usize,
-    /// Vehicles that left the section without a collision.
-    pub arrived: usize,
-    /// Vehicles removed in collisions (any).
-    pub crashed: usize,
-    /// Vehicles still in the network at the end.
-    pub present: usize,
-    /// Vehicles removed in collisions involving a CAV.
-    pub controllable_crashed: usize,
-    /// Share of the inserted vehicles removed in collisions involving a CAV (0 for none).
-    #[serde(serialize_with = "cells::decimals::<6, _>")]
-    pub controllable_collision_rate: f64,
-    /// Collisions between two HDVs (events), out of any controller's reach.
-    pub hdv_collisions: usize,
-    /// Vehicles removed in collisions between two HDVs.
-    pub hdv_crashed: usize,
-    /// Mean travel delay t_f − t* of the vehicles that arrived (s; `None` if none did).
-    #[serde(serialize_with = "cells::opt_decimals::<4, _>")]
-    pub mean_delay_s: Option<f64>,
-    /// Mean travel delay of the CAVs that arrived (s).
-    #[serde(serialize_with = "cells::opt_decimals::<4, _>")]
-    pub mean_delay_cav_s: Option<f64>,
-    /// Mean travel delay of the HDVs that arrived (s).
-    #[serde(serialize_with = "cells::opt_decimals::<4, _>")]
-    pub mean_delay_hdv_s: Option<f64>,
-    /// Vehicles that arrived per hour of the window in which arrivals were possible (veh/h).
-    #[serde(serialize_with = "cells::decimals::<2, _>")]
-    pub throughput_veh_h: f64,
-    /// That window (s; see [`arrival_window`]).
-    #[serde(serialize_with = "cells::decimals::<4, _>")]
-    pub throughput_window_s: f64,
-    /// Mean speed over all vehicle-steps (m/s).
-    #[serde(serialize_with = "cells::decimals::<4, _>")]
-    pub mean_speed_mps: f64,
-    /// Vehicles standing (< 1 m/s) on the acceleration lane at the end (a jam indicator).
-    pub stranded: usize,
-    /// Planner effort over the episode.
-    pub plan_stats: PlanStats,
-}
-
-impl Summary {
-    /// The `episode.csv` columns, in order.
-    pub fn columns() -> &'static [&'static str] {
-        static COLUMNS: OnceLock<Vec<&'static str>> = OnceLock::new();
-        COLUMNS.get_or_init(|| {
-            Summary::default()
-                .cells()
-                .into_iter()
-                .map(|c| c.column)
-                .collect()
-        })
-    }
-
-    /// The summary's cells, one per column: the typed values the CSV row is written from.
-    pub fn cells(&self) -> Vec<cells::Cell> {
-        cells::cells(self).expect("the summary is a flat record")
-    }
-}
-
 /// Arithmetic mean, summed in order; `None` for no values. The one mean of the project: the
 /// episode summary and the campaign report's tables both use it.
 pub fn mean(xs: impl IntoIterator<Item = f64>) -> Option<f64> {
@@ -342,21 +239,13 @@ pub struct SummaryInput<'a> {
     pub plan_stats: PlanStats,
 }
 
-/// The system-delay figures of the summary, over every record with a system delay.
-struct SystemDelay {
-    mean: Option<f64>,
-    total_veh_h: f64,
-    own_speed_mean: Option<f64>,
-}
-
-impl SystemDelay {
-    fn of(v: &[VehicleRecord]) -> SystemDelay {
-        let delays = || v.iter().filter_map(|r| r.system_delay);
-        SystemDelay {
-            mean: mean(delays()),
-            total_veh_h: delays().sum::<f64>() / 3600.0,
-            own_speed_mean: mean(v.iter().filter_map(|r| r.own_speed_delay)),
-        }
+/// The system delay of `v`, over every record with a system delay.
+fn system_delay(v: &[VehicleRecord]) -> SystemDelay {
+    let delays = || v.iter().filter_map(|r| r.system_delay);
+    SystemDelay {
+        system_delay_s: mean(delays()),
+        system_delay_veh_h: delays().sum::<f64>() / 3600.0,
+        own_speed_delay_s: mean(v.iter().filter_map(|r| r.own_speed_delay)),
     }
 }
 
@@ -378,19 +267,17 @@ impl Summary {
         };
         let window = arrival_window(v, inp.end);
         let arrived = count(&|r| r.outcome == Outcome::Arrived);
-        let system = SystemDelay::of(v);
+        let system = system_delay(v);
         Summary {
             planner: inp.planner.to_string(),
             alpha: inp.alpha,
-            lambda: inp.lambda,
+            lambda: Some(inp.lambda),
             seed: inp.seed,
-            hdv_profile: inp.hdv_profile.to_string(),
+            hdv_profile: Some(inp.hdv_profile.to_string()),
             sumo_version: inp.sumo_version.to_string(),
             steps: inp.steps,
-            system_delay_s: system.mean,
-            system_delay_veh_h: system.total_veh_h,
-            own_speed_delay_s: system.own_speed_mean,
-            scheduled: inp.scheduled,
+            system: Some(system),
+            scheduled: Some(inp.scheduled),
             inserted,
             never_inserted: count(&|r| !r.inserted()),
             inserted_cav: count(&|r| r.inserted() && r.kind == Kind::Cav),
@@ -398,17 +285,20 @@ impl Summary {
             crashed,
             present: count(&|r| r.outcome == Outcome::Present),
             controllable_crashed,
-            controllable_collision_rate: ratio(controllable_crashed as f64, inserted as f64),
+            controllable_collision_rate: Some(ratio(controllable_crashed as f64, inserted as f64)),
             hdv_collisions: inp.collisions.iter().filter(|c| !c.controllable()).count(),
-            hdv_crashed: count(&|r| r.outcome == Outcome::Crashed && !r.controllable_crash),
-            mean_delay_s: delays(None),
-            mean_delay_cav_s: delays(Some(Kind::Cav)),
-            mean_delay_hdv_s: delays(Some(Kind::Hdv)),
-            throughput_veh_h: ratio(arrived as f64, window / 3600.0),
-            throughput_window_s: window,
-            mean_speed_mps: ratio(inp.speed_sum, inp.speed_samples as f64),
-            stranded: inp.stranded,
+            travel: Some(TravelFigures {
+                hdv_crashed: count(&|r| r.outcome == Outcome::Crashed && !r.controllable_crash),
+                mean_delay_s: delays(None),
+                mean_delay_cav_s: delays(Some(Kind::Cav)),
+                mean_delay_hdv_s: delays(Some(Kind::Hdv)),
+                throughput_veh_h: ratio(arrived as f64, window / 3600.0),
+                throughput_window_s: window,
+                mean_speed_mps: ratio(inp.speed_sum, inp.speed_samples as f64),
+                stranded: inp.stranded,
+            }),
             plan_stats: inp.plan_stats,
+            ..Summary::default()
         }
     }
 }
@@ -548,14 +438,14 @@ mod tests {
         );
         assert_eq!(s.inserted_cav, 2);
         assert_eq!(s.controllable_crashed, 2);
-        assert!((s.controllable_collision_rate - 2.0 / 6.0).abs() < 1e-12);
-        assert_eq!(s.mean_delay_s, Some(5.0));
-        assert_eq!(s.mean_delay_cav_s, Some(6.0));
+        assert!((s.controllable_collision_rate.unwrap() - 2.0 / 6.0).abs() < 1e-12);
+        assert_eq!(s.travel().mean_delay_s, Some(5.0));
+        assert_eq!(s.travel().mean_delay_cav_s, Some(6.0));
         // Arrivals possible from 1 + 13 = 14 s (the NaN t* of a vehicle never inserted
         // ignored) to the end at 79.8 s: 65.8 s.
-        assert!((s.throughput_window_s - 65.8).abs() < 1e-9);
-        assert!((s.throughput_veh_h - 2.0 / (65.8 / 3600.0)).abs() < 1e-9);
-        assert_eq!(s.mean_speed_mps, 2.5);
+        assert!((s.travel().throughput_window_s - 65.8).abs() < 1e-9);
+        assert!((s.travel().throughput_veh_h - 2.0 / (65.8 / 3600.0)).abs() < 1e-9);
+        assert_eq!(s.travel().mean_speed_mps, 2.5);
     }
 
     #[test]
@@ -623,15 +513,18 @@ mod tests {
         let s = Summary::compute(&input(&vs, 3));
         let total = 5.880_952 + 75.942_857 + 9.8;
         assert!(
-            close_to(s.system_delay_s, total / 3.0),
+            close_to(s.system.as_ref().unwrap().system_delay_s, total / 3.0),
             "{:?}",
-            s.system_delay_s
+            s.system.as_ref().unwrap().system_delay_s
         );
-        assert!((s.system_delay_veh_h - total / 3600.0).abs() < 1e-9);
+        assert!((s.system.as_ref().unwrap().system_delay_veh_h - total / 3600.0).abs() < 1e-9);
         // Only the present HDV drives slower than v_max by its own choice: 0.476190 s.
-        assert!(close_to(s.own_speed_delay_s, 0.476_190 / 3.0));
+        assert!(close_to(
+            s.system.as_ref().unwrap().own_speed_delay_s,
+            0.476_190 / 3.0
+        ));
         // The paper's delay sees only the arrived vehicle.
-        assert!(close_to(s.mean_delay_s, 5.880_952));
+        assert!(close_to(s.travel().mean_delay_s, 5.880_952));
     }
 
     #[test]
@@ -640,7 +533,10 @@ mod tests {
         let mut inp = input(&vs, 1);
         inp.end = 10.0; // before 1 + 13 s: nobody could have arrived yet
         let s = Summary::compute(&inp);
-        assert_eq!((s.throughput_window_s, s.throughput_veh_h), (0.0, 0.0));
+        assert_eq!(
+            (s.travel().throughput_window_s, s.travel().throughput_veh_h),
+            (0.0, 0.0)
+        );
         assert_eq!(arrival_window(&[], 10.0), 0.0);
     }
 

@@ -23,6 +23,7 @@ pub mod output;
 mod recording;
 pub mod runner;
 mod step_times;
+pub mod summary;
 pub mod sumocfg;
 pub mod trace;
 pub mod trajectories;

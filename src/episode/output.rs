@@ -4,7 +4,8 @@
 use std::path::{Path, PathBuf};
 
 use super::trajectories;
-use crate::episode::metrics::{CollisionEvent, Summary, Timing, VehicleRecord};
+use crate::episode::metrics::{CollisionEvent, Timing, VehicleRecord};
+use crate::episode::summary::{Summary, Traffic};
 use crate::episode::EpisodeResult;
 use crate::io::SetFile;
 pub use crate::io::{write_atomic, WriteError};
@@ -159,7 +160,7 @@ impl EpisodeResult {
     /// `episode.csv` as bytes.
     pub fn episode_csv(&self) -> Vec<u8> {
         csv_bytes(
-            Summary::columns(),
+            Summary::columns(Traffic::Demand),
             std::iter::once(episode_row(&self.summary)),
         )
     }
@@ -237,15 +238,17 @@ mod tests {
         let s = Summary {
             planner: "bk-pbs".into(),
             alpha: 0.6,
-            lambda: 3000.0,
+            lambda: Some(3000.0),
             seed: 7,
-            hdv_profile: "sumo-safe".into(),
+            hdv_profile: Some("sumo-safe".into()),
             sumo_version: "1.28.0".into(),
             steps: 400,
-            system_delay_s: Some(2.0 / 3.0),
-            system_delay_veh_h: 0.0012345678,
-            own_speed_delay_s: Some(0.25),
-            scheduled: 9,
+            system: Some(crate::episode::summary::SystemDelay {
+                system_delay_s: Some(2.0 / 3.0),
+                system_delay_veh_h: 0.0012345678,
+                own_speed_delay_s: Some(0.25),
+            }),
+            scheduled: Some(9),
             inserted: 8,
             never_inserted: 1,
             inserted_cav: 5,
@@ -253,16 +256,18 @@ mod tests {
             crashed: 1,
             present: 1,
             controllable_crashed: 1,
-            controllable_collision_rate: 1.0 / 8.0 + 1e-9,
+            controllable_collision_rate: Some(1.0 / 8.0 + 1e-9),
             hdv_collisions: 0,
-            hdv_crashed: 0,
-            mean_delay_s: Some(1.0 / 3.0),
-            mean_delay_cav_s: None,
-            mean_delay_hdv_s: Some(-0.00004),
-            throughput_veh_h: 270.0 + 1.0 / 7.0,
-            throughput_window_s: 66.8,
-            mean_speed_mps: 29.123456,
-            stranded: 2,
+            travel: Some(crate::episode::summary::TravelFigures {
+                hdv_crashed: 0,
+                mean_delay_s: Some(1.0 / 3.0),
+                mean_delay_cav_s: None,
+                mean_delay_hdv_s: Some(-0.00004),
+                throughput_veh_h: 270.0 + 1.0 / 7.0,
+                throughput_window_s: 66.8,
+                mean_speed_mps: 29.123456,
+                stranded: 2,
+            }),
             plan_stats: crate::controller::PlanStats {
                 searches: 1,
                 nodes_expanded: 2,
@@ -275,9 +280,10 @@ mod tests {
                 time_budget_hits: 9,
                 shield_overrides: 10,
             },
+            ..Summary::default()
         };
         let text = String::from_utf8(csv_bytes(
-            Summary::columns(),
+            Summary::columns(Traffic::Demand),
             std::iter::once(episode_row(&s)),
         ))
         .unwrap();

@@ -15,12 +15,11 @@ use crate::episode::error::EpisodeError;
 use crate::episode::gui::GuiColours;
 use crate::episode::ledger::{Departure, Expected, Ledger};
 use crate::episode::merge_rule::RampMergeRule;
-use crate::episode::metrics::{
-    CollisionEvent, Outcome, Summary, SummaryInput, Timing, VehicleRecord,
-};
+use crate::episode::metrics::{CollisionEvent, Outcome, SummaryInput, Timing, VehicleRecord};
 use crate::episode::observer::{NoObserver, Observer};
 use crate::episode::recording::Recording;
 use crate::episode::step_times::StepTimes;
+use crate::episode::summary::Summary;
 use crate::episode::trajectories::TrajectoryFile;
 use crate::model::road::Road;
 use crate::model::scene::{Kind, Origin};

@@ -65,6 +65,7 @@ mod tests {
             seed,
             hdv_profile: "sumo-safe".into(),
             predictor: Some(predictor.into()),
+            scenario: None,
         };
         let fields = Axes { predictor: true }.row(
             &cell,

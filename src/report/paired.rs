@@ -306,7 +306,7 @@ pub enum PairedError {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::campaign::grid::Cell as GridCell;
+    use crate::campaign::grid::Cell;
 
     /// Results of `rows` (planner, α, seed, mean delay, arrived, crashed) at λ 3000.
     fn results(rows: &[(&str, f64, u64, &str, u32, u32)]) -> Results {
@@ -322,13 +322,14 @@ mod tests {
         ];
         let mut t = Table::new(header.iter().map(|h| h.to_string()).collect());
         for &(planner, alpha, seed, delay, arrived, crashed) in rows {
-            let cell = GridCell {
+            let cell = Cell {
                 planner: planner.into(),
                 alpha,
                 lambda: 3000.0,
                 seed,
                 hdv_profile: "h".into(),
                 predictor: None,
+                scenario: None,
             };
             let fields = [
                 planner.to_string(),

@@ -7,8 +7,7 @@
 use std::collections::BTreeMap;
 
 use super::stats::Estimate;
-use crate::campaign::scenarios::collect::header_of;
-use crate::episode::sumocfg::ScenarioSummary;
+use crate::episode::summary::{Summary, Traffic};
 
 /// One arm's counts, per seed.
 #[derive(Debug, Clone, Default, PartialEq)]
@@ -21,7 +20,7 @@ struct Counts {
 type ByArm = BTreeMap<(String, String, usize), (String, Counts)>;
 
 fn by_arm(episodes: &[csv::StringRecord], planners: &[String]) -> ByArm {
-    let h = header_of::<ScenarioSummary>();
+    let h = Summary::header(Traffic::Scenario);
     let at = |name: &str| h.iter().position(|c| c == name).expect("a summary column");
     let get = |r: &csv::StringRecord, name: &str| r.get(at(name)).unwrap_or("").to_string();
     let num = |r: &csv::StringRecord, name: &str| get(r, name).parse::<f64>().unwrap_or(0.0);
@@ -70,15 +69,15 @@ mod tests {
 
     /// An `episode.csv` row of `planner` on `ramp.sumocfg` at α 0.3 with these counts.
     fn row(planner: &str, inserted: usize, never_inserted: usize) -> csv::StringRecord {
-        let s = ScenarioSummary {
-            scenario: "ramp.sumocfg".into(),
+        let s = Summary {
+            scenario: Some("ramp.sumocfg".into()),
             planner: planner.into(),
             alpha: 0.3,
             inserted,
             never_inserted,
-            ..ScenarioSummary::default()
+            ..Summary::template(Traffic::Scenario)
         };
-        let bytes = crate::episode::sumocfg::csv_of(&[s]);
+        let bytes = Summary::csv(Traffic::Scenario, &[s]);
         let mut r = csv::Reader::from_reader(&bytes[..]);
         r.records().next().unwrap().unwrap()
     }

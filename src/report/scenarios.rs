@@ -33,7 +33,8 @@ use super::stats::{t_975, Estimate};
 use super::{Report, ReportError, REPORT_DIR};
 use crate::campaign::scenarios::collect::header_of;
 use crate::campaign::scenarios::ScenarioResults;
-use crate::episode::sumocfg::{RegionRow, ScenarioSummary};
+use crate::episode::summary::{Summary, Traffic};
+use crate::episode::sumocfg::RegionRow;
 
 /// A reference planner that ran in none of the campaign's episodes.
 #[derive(Debug, thiserror::Error)]
@@ -91,7 +92,7 @@ fn by_region(rows: &[csv::StringRecord]) -> ByRegion {
 
 /// The planners in their first-seen order (the grid's).
 fn planners_of(episodes: &[csv::StringRecord]) -> Vec<String> {
-    let i = column(&header_of::<ScenarioSummary>(), "planner");
+    let i = column(&Summary::header(Traffic::Scenario), "planner");
     let mut out: Vec<String> = Vec::new();
     for r in episodes {
         let p = r.get(i).unwrap_or("").to_string();
@@ -302,7 +303,7 @@ fn paired_csv(regions: &ByRegion, versus: &[String]) -> (String, String) {
 
 /// `paired_collisions.csv`: episodes with a controllable crash, per scenario and α.
 fn collisions_csv(episodes: &[csv::StringRecord], versus: &[String]) -> String {
-    let h = header_of::<ScenarioSummary>();
+    let h = Summary::header(Traffic::Scenario);
     let get = |r: &csv::StringRecord, name: &str| r.get(column(&h, name)).unwrap_or("").to_string();
     // (scenario, α) → planner → (episodes, with a controllable crash)
     let mut counts: BTreeMap<(String, String), BTreeMap<String, (u64, u64)>> = BTreeMap::new();

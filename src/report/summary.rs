@@ -103,7 +103,7 @@ fn column(t: &Table, path: &Path, name: &'static str) -> Result<usize, SummaryEr
     })
 }
 
-/// The `episodes.csv` columns (of [`crate::episode::metrics::Summary::columns`]) averaged per
+/// The `episodes.csv` columns (of [`crate::episode::summary::Summary::columns`]) averaged per
 /// group, in the order of [`Group`]'s estimates.
 const SAMPLED: [&str; N] = [
     "system_delay_s",
@@ -280,7 +280,8 @@ mod tests {
 
     #[test]
     fn sampled_columns_are_episode_summary_columns() {
-        let columns = crate::episode::metrics::Summary::columns();
+        let columns =
+            crate::episode::summary::Summary::columns(crate::episode::summary::Traffic::Demand);
         for name in SAMPLED {
             assert!(columns.contains(&name), "{name}");
         }

@@ -12,19 +12,20 @@
 
 use std::path::{Path, PathBuf};
 
-use super::grid::{ScenarioCell, ScenarioGrid};
 use super::settings::ScenarioSettings;
 pub use crate::campaign::cell::cell_dir;
 use crate::campaign::cell::{
     check_run, check_settings_record, column_value, episode_row, failure_of, rows_counted,
     CellState,
 };
+use crate::campaign::grid::{file_name_of, Cell, Grid};
 use crate::campaign::provenance::check_provenance;
 use crate::campaign::results::{read_records, ResultsError};
 use crate::campaign::validate::{check_rows, Rules};
 use crate::campaign::worker::DONE_FILE;
 use crate::episode::output::TIMING_COLUMNS;
-use crate::episode::sumocfg::{RegionRow, ScenarioSummary, ScenarioVehicle};
+use crate::episode::summary::{Summary, Traffic};
+use crate::episode::sumocfg::{RegionRow, ScenarioVehicle};
 use crate::io::WriteError;
 
 /// The columns that lead the collected vehicle and timing rows.
@@ -56,11 +57,7 @@ pub struct Finished {
 }
 
 /// Where `cell` stands in `out`.
-pub fn cell_state(
-    out: &Path,
-    settings: &ScenarioSettings,
-    cell: &ScenarioCell,
-) -> CellState<Finished> {
+pub fn cell_state(out: &Path, settings: &ScenarioSettings, cell: &Cell) -> CellState<Finished> {
     CellState::of(&cell_dir(out, cell), |dir| finished(dir, settings, cell))
 }
 
@@ -76,12 +73,8 @@ fn vehicle_rows(column: impl Fn(&str) -> String) -> String {
 
 /// The files of `cell` in `dir` if they are whole and this campaign's; otherwise what is
 /// wrong.
-fn finished(
-    dir: &Path,
-    settings: &ScenarioSettings,
-    cell: &ScenarioCell,
-) -> Result<Finished, String> {
-    let header = header_of::<ScenarioSummary>();
+fn finished(dir: &Path, settings: &ScenarioSettings, cell: &Cell) -> Result<Finished, String> {
+    let header = Summary::header(Traffic::Scenario);
     let row = episode_row(dir, &header)?;
     let column = |name: &str| column_value(&header, &row, name);
     let config = settings.episode_config(cell);
@@ -111,7 +104,7 @@ fn finished(
 }
 
 /// Does the `episode.csv` row (its `column`s) belong to `cell`?
-fn is_this_cell(column: &dyn Fn(&str) -> String, cell: &ScenarioCell) -> Result<(), String> {
+fn is_this_cell(column: &dyn Fn(&str) -> String, cell: &Cell) -> Result<(), String> {
     let own = [
         ("scenario", file_name(cell)),
         ("planner", cell.planner.clone()),
@@ -125,15 +118,15 @@ fn is_this_cell(column: &dyn Fn(&str) -> String, cell: &ScenarioCell) -> Result<
 }
 
 /// The cell's configuration file name, as `episode.csv` names its scenario.
-fn file_name(cell: &ScenarioCell) -> String {
-    super::grid::file_name_of(&cell.sumocfg)
+fn file_name(cell: &Cell) -> String {
+    file_name_of(cell.scenario.as_deref().unwrap_or(Path::new("")))
 }
 
 /// The episodes `out`'s collected `episodes.csv` records outside `grid` (a larger grid run
 /// there before), as cells are displayed; collecting this grid would drop them. An unreadable
 /// file records nothing.
-pub fn recorded_outside(out: &Path, grid: &ScenarioGrid) -> Vec<String> {
-    let header = header_of::<ScenarioSummary>();
+pub fn recorded_outside(out: &Path, grid: &Grid) -> Vec<String> {
+    let header = Summary::header(Traffic::Scenario);
     let Ok(rows) = read_records(&out.join("episodes.csv"), &header) else {
         return Vec::new();
     };
@@ -256,7 +249,7 @@ impl ScenarioResults {
         let files = [
             (
                 "episodes.csv",
-                header_of::<ScenarioSummary>(),
+                Summary::header(Traffic::Scenario),
                 &self.episodes,
             ),
             ("regions.csv", header_of::<RegionRow>(), &self.regions),
@@ -297,7 +290,7 @@ impl ScenarioResults {
         Ok(ScenarioResults {
             episodes: checked(
                 "episodes.csv",
-                header_of::<ScenarioSummary>(),
+                Summary::header(Traffic::Scenario),
                 &cell,
                 &EPISODE_RULES,
             )?,
@@ -329,11 +322,11 @@ mod tests {
     /// A collected directory of one episode row and one region row, each edited by `edit`.
     fn collected(edit: impl Fn(String) -> String) -> tempfile::TempDir {
         let d = tempfile::tempdir().unwrap();
-        let episode = ScenarioSummary {
-            scenario: "ramp.sumocfg".into(),
+        let episode = Summary {
+            scenario: Some("ramp.sumocfg".into()),
             planner: "bk-pbs".into(),
             sumo_version: "1.15.0".into(),
-            ..ScenarioSummary::default()
+            ..Summary::template(Traffic::Scenario)
         };
         let region = RegionRow {
             scenario: "ramp.sumocfg".into(),
@@ -342,7 +335,7 @@ mod tests {
             ..RegionRow::default()
         };
         for (name, text) in [
-            ("episodes.csv", csv_of(&[episode])),
+            ("episodes.csv", Summary::csv(Traffic::Scenario, &[episode])),
             ("regions.csv", csv_of(&[region])),
         ] {
             let text = edit(String::from_utf8(text).unwrap());

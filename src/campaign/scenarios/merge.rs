@@ -11,7 +11,7 @@ use super::collect::{header_of, ScenarioResults, CELL_COLUMNS};
 use crate::campaign::comparison::first_difference;
 use crate::campaign::results::{read_records, ResultsError};
 use crate::campaign::SETTINGS_FILE;
-use crate::episode::sumocfg::ScenarioSummary;
+use crate::episode::summary::{Summary, Traffic};
 
 /// Why directories could not be merged.
 #[derive(Debug, thiserror::Error)]
@@ -127,7 +127,7 @@ pub fn merge(dirs: &[PathBuf], allow_mixed: bool) -> Result<ScenarioResults, Mer
             }
         }
     }
-    let h = header_of::<ScenarioSummary>();
+    let h = Summary::header(Traffic::Scenario);
     let col = |name: &str| h.iter().position(|c| c == name).expect("a column");
     let episode_at = [col("scenario"), col("planner"), col("alpha"), col("seed")];
     // Each cell's owner: the first directory holding it.
@@ -221,7 +221,7 @@ fn listed_axes(dir: &Path) -> (Vec<String>, Vec<String>) {
         values
             .iter()
             .filter_map(|v| v.as_str())
-            .map(|v| super::grid::file_name_of(Path::new(v)))
+            .map(|v| crate::campaign::grid::file_name_of(Path::new(v)))
             .collect()
     };
     (list("planners"), list("scenarios"))

@@ -20,10 +20,8 @@
 //! ([`super::tasks`], [`super::run`]) over [`super::CampaignSpec`].
 
 pub mod collect;
-pub mod grid;
 pub mod merge;
 pub mod settings;
 
 pub use collect::ScenarioResults;
-pub use grid::{ScenarioCell, ScenarioGrid};
 pub use settings::{is_scenario_campaign, ScenarioSettings, ScenarioTable};

@@ -20,13 +20,13 @@ use std::time::Duration;
 
 use serde::{Deserialize, Serialize};
 
-use super::grid::{scenario_name, ScenarioCell, ScenarioGrid};
 use crate::campaign::checks::{
     check_planners_and_alphas, check_seeds_and_steps, episode_timeout, origin, parse_list,
     read_doc, read_parts, shard_of, worker_count,
 };
 use crate::campaign::comparison::{campaign_file, run_difference};
-use crate::campaign::grid::{seed_range, sorted_unique, unique, Shard};
+use crate::campaign::grid::Shard;
+use crate::campaign::grid::{scenario_name, Cell, Grid};
 use crate::campaign::settings::{CampaignTable, Overrides, SettingsError};
 use crate::config::Config;
 use crate::sumo::scenario_files;
@@ -83,7 +83,7 @@ pub struct ScenarioSettings {
     /// The `[campaign]` table as resolved.
     pub table: ScenarioTable,
     /// Every episode, normalised.
-    pub grid: ScenarioGrid,
+    pub grid: Grid,
     /// The slice of the grid this run runs.
     pub shard: Shard,
     /// Worker processes, at least 1.
@@ -219,10 +219,14 @@ impl ScenarioSettings {
     }
 
     /// A cell's whole configuration: the shared settings with its scenario, α, seed and steps.
-    pub fn episode_config(&self, cell: &ScenarioCell) -> Config {
+    pub fn episode_config(&self, cell: &Cell) -> Config {
         let mut c = self.config.clone();
-        let i = self.grid.scenarios.iter().position(|s| *s == cell.sumocfg);
-        c.scenario.sumocfg = Some(cell.sumocfg.clone());
+        let i = self
+            .grid
+            .scenarios
+            .iter()
+            .position(|s| Some(s) == cell.scenario.as_ref());
+        c.scenario.sumocfg = cell.scenario.clone();
         c.scenario.alpha = cell.alpha;
         c.scenario.seed = cell.seed;
         c.scenario.steps = i.map_or(c.scenario.steps, |i| self.steps[i]);
@@ -274,7 +278,7 @@ fn checked_grid(
     t: &ScenarioTable,
     o: &Overrides,
     file: Option<&Path>,
-) -> Result<ScenarioGrid, SettingsError> {
+) -> Result<Grid, SettingsError> {
     check_planners_and_alphas(&t.planners, &t.alphas, o, file)?;
     check_seeds_and_steps(t.seeds, t.steps, o, file)?;
     let scenarios = unique_scenarios(&t.scenarios)?;
@@ -283,12 +287,13 @@ fn checked_grid(
             origin: origin(o.sumocfg.is_some(), "--sumocfg", "scenarios", file),
         });
     }
-    Ok(ScenarioGrid {
-        planners: unique(&t.planners),
+    Ok(Grid::over_scenarios(
+        &t.planners,
         scenarios,
-        alphas: sorted_unique(t.alphas.clone()),
-        seeds: seed_range(t.seed_base, t.seeds),
-    })
+        &t.alphas,
+        t.seed_base,
+        t.seeds,
+    ))
 }
 
 /// The scenarios each once, in order; two different files of one name are refused.

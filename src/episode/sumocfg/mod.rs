@@ -39,6 +39,7 @@ use crate::config::Config;
 use crate::controller;
 use crate::episode::error::EpisodeError;
 use crate::episode::metrics::{CollisionEvent, Timing};
+use crate::episode::summary::{Summary, Traffic};
 use crate::model::road::Road;
 use crate::sumo::frame;
 use crate::sumo::route_files::distributions;
@@ -47,7 +48,7 @@ use crate::sumo::{Simulation, StderrCapture};
 
 pub use options::{has_cavs, sumo_options, SumoOptions};
 pub use own_loop::OwnLoop;
-pub use records::{csv_of, ScenarioSummary, ScenarioVehicle};
+pub use records::{csv_of, ScenarioVehicle};
 pub use region_rows::RegionRow;
 pub use round::{Fleet, Round};
 
@@ -55,7 +56,7 @@ pub use round::{Fleet, Round};
 #[derive(Debug, Clone)]
 pub struct ScenarioResult {
     /// The `episode.csv` row.
-    pub summary: ScenarioSummary,
+    pub summary: Summary,
     /// One row per vehicle SUMO inserted, in order of departure, then one per vehicle never
     /// inserted.
     pub vehicles: Vec<ScenarioVehicle>,
@@ -371,7 +372,7 @@ pub fn write(
     result: &ScenarioResult,
     dir: &std::path::Path,
 ) -> Result<Vec<PathBuf>, crate::io::WriteError> {
-    let episode = csv_of(std::slice::from_ref(&result.summary));
+    let episode = Summary::csv(Traffic::Scenario, std::slice::from_ref(&result.summary));
     let vehicles = csv_of(&result.vehicles);
     let regions = csv_of(&result.regions);
     let collisions = crate::episode::output::collisions_csv(&result.collisions);

@@ -1,17 +1,18 @@
 //! What an episode on a user's scenario records: per vehicle SUMO's own trip figures (from its
 //! tripinfo output, unfinished and undeparted trips included, so a vehicle that never arrives
 //! still counts with the time it lost, and one never inserted with its wait) and bkpbs's (who
-//! was a CAV, when it was in the merge region, collisions); one summary row. Its columns differ from the paper demand's `episode.csv`,
-//! whose delays are defined against bkpbs's own insertion; here SUMO's `timeLoss` is the delay.
+//! was a CAV, when it was in the merge region, collisions), and the scenario's part of the
+//! episode's [`Summary`]: its delays are SUMO's `timeLoss`, where the paper demand's are
+//! defined against bkpbs's own insertion.
 
 use std::collections::BTreeMap;
 use std::path::Path;
 
 use serde::Serialize;
 
-use crate::controller::PlanStats;
-use crate::episode::cells::{self, cells};
+use crate::episode::cells;
 use crate::episode::metrics::Outcome;
+use crate::episode::summary::{RegionShare, Summary, TimeLossFigures};
 use crate::model::scene::Kind;
 
 fn kind_name<S: serde::Serializer>(k: &Kind, s: S) -> Result<S::Ok, S::Error> {
@@ -86,130 +87,70 @@ pub struct ScenarioVehicle {
     pub controllable_crash: bool,
 }
 
-/// The one-row summary of an episode on a user's scenario (`episode.csv`).
-#[derive(Debug, Clone, Default, PartialEq, Serialize)]
-pub struct ScenarioSummary {
-    /// The configuration's file name (`A10KW.sumocfg`).
-    pub scenario: String,
-    /// The controller's name.
-    pub planner: String,
-    /// The share α of the scenario's vehicles made CAVs (unused with `cav_types`).
-    pub alpha: f64,
-    /// The vehicle types whose vehicles are the CAVs instead (space-separated), or empty.
-    pub cav_types: String,
-    /// The episode's seed (SUMO's, and the CAV draw's).
-    pub seed: u64,
-    /// The SUMO release that ran it.
-    pub sumo_version: String,
-    /// Simulated steps.
-    pub steps: u32,
-    /// The regions planned, each as the edges its on-ramps join (`; ` between regions).
-    pub regions: String,
-    /// Vehicles SUMO inserted.
-    pub inserted: usize,
-    /// Vehicles whose departure time had come by the episode's end but which SUMO never
-    /// inserted (no room at their departure position): SUMO's pending vehicles after the last
-    /// step, its statistics' `waiting`; the rows of outcome `never_inserted`.
-    pub never_inserted: usize,
-    /// CAVs among them.
-    pub inserted_cav: usize,
-    /// The realised CAV share.
-    #[serde(serialize_with = "cells::decimals::<4, _>")]
-    pub cav_share: f64,
-    /// Vehicles that were in the region.
-    pub in_region: usize,
-    /// Vehicles that reached their route's end.
-    pub arrived: usize,
-    /// Vehicles removed in collisions.
-    pub crashed: usize,
-    /// Vehicles still driving at the end.
-    pub present: usize,
-    /// Vehicles removed in a collision a CAV took part in.
-    pub controllable_crashed: usize,
-    /// Collisions between HDVs only.
-    pub hdv_collisions: usize,
-    /// Mean SUMO `timeLoss` per vehicle not crashed, arrived or not (s).
-    #[serde(serialize_with = "cells::opt_decimals::<4, _>")]
-    pub mean_time_loss_s: Option<f64>,
-    /// The same over the vehicles that were in the region (s).
-    #[serde(serialize_with = "cells::opt_decimals::<4, _>")]
-    pub mean_time_loss_region_s: Option<f64>,
-    /// Mean of `timeLoss` plus `departDelay` (the wait to be inserted) per vehicle not crashed,
-    /// a vehicle never inserted counting with its whole wait to the end (s): a planner that
-    /// holds vehicles at the network's entrance pays for it here, as in the paper demand's
-    /// system delay.
-    #[serde(serialize_with = "cells::opt_decimals::<4, _>")]
-    pub mean_time_loss_with_wait_s: Option<f64>,
-    /// Mean SUMO `timeLoss` per vehicle inserted, a crashed one included and charged its
-    /// unfinished trip: its `timeLoss` when it was removed plus the time from its crash to the
-    /// episode's end, as if it had stood there (s). A planner whose crashes take vehicles off
-    /// the road cannot look faster here than in `mean_time_loss_s`, which leaves them out.
-    #[serde(serialize_with = "cells::opt_decimals::<4, _>")]
-    pub mean_time_loss_crashes_charged_s: Option<f64>,
-    /// Total `timeLoss` of the vehicles not crashed (vehicle-hours).
-    #[serde(serialize_with = "cells::decimals::<6, _>")]
-    pub time_loss_veh_h: f64,
-    /// Mean system delay in its region over the vehicles that were in one, not crashed (s).
-    #[serde(serialize_with = "cells::opt_decimals::<4, _>")]
-    pub mean_region_delay_s: Option<f64>,
-    /// The planners' search effort over the episode, every region's rounds summed (the
-    /// paper's `episode.csv` columns of the same names).
-    pub plan_stats: PlanStats,
-}
-
-impl ScenarioSummary {
-    /// The summary of `vehicles` (`hdv_collisions`: how many collisions involved HDVs only) of
-    /// an episode that ended at `end` (s, SUMO's clock).
-    pub fn of(
-        head: ScenarioSummary,
+impl Summary {
+    /// The summary of a scenario's `vehicles` (`hdv_collisions`: how many collisions involved
+    /// HDVs only) of an episode that ended at `end` (s, SUMO's clock); `head` gives the
+    /// episode's own columns ([`Summary::template`] of
+    /// [`Traffic::Scenario`](crate::episode::summary::Traffic::Scenario) filled in).
+    pub fn of_scenario(
+        head: Summary,
         vehicles: &[ScenarioVehicle],
         hdv_collisions: usize,
         end: f64,
     ) -> Self {
         let count = |f: &dyn Fn(&ScenarioVehicle) -> bool| vehicles.iter().filter(|v| f(v)).count();
-        let mean_of = |loss: &dyn Fn(&ScenarioVehicle) -> Option<f64>,
-                       f: &dyn Fn(&ScenarioVehicle) -> bool| {
-            let losses: Vec<f64> = vehicles
-                .iter()
-                .filter(|v| v.outcome != Outcome::Crashed && f(v))
-                .filter_map(loss)
-                .collect();
-            (!losses.is_empty()).then(|| losses.iter().sum::<f64>() / losses.len() as f64)
-        };
-        let mean = |f: &dyn Fn(&ScenarioVehicle) -> bool| mean_of(&|v| v.time_loss_s, f);
         let inserted = count(&|v| v.outcome != Outcome::NeverInserted);
         let inserted_cav = count(&|v| v.outcome != Outcome::NeverInserted && v.kind == Kind::Cav);
-        ScenarioSummary {
+        Summary {
             inserted,
             never_inserted: vehicles.len() - inserted,
             inserted_cav,
-            cav_share: if inserted == 0 {
-                0.0
-            } else {
-                inserted_cav as f64 / inserted as f64
-            },
-            in_region: count(&|v| v.region_enter_s.is_some()),
+            share: Some(RegionShare {
+                cav_share: if inserted == 0 {
+                    0.0
+                } else {
+                    inserted_cav as f64 / inserted as f64
+                },
+                in_region: count(&|v| v.region_enter_s.is_some()),
+            }),
             arrived: count(&|v| v.outcome == Outcome::Arrived),
             crashed: count(&|v| v.outcome == Outcome::Crashed),
             present: count(&|v| v.outcome == Outcome::Present),
             controllable_crashed: count(&|v| v.controllable_crash),
             hdv_collisions,
-            mean_time_loss_s: mean(&|_| true),
-            mean_time_loss_region_s: mean(&|v| v.region_enter_s.is_some()),
-            mean_time_loss_with_wait_s: mean_of(&time_loss_with_wait, &|_| true),
-            mean_time_loss_crashes_charged_s: mean_crashes_charged(vehicles, end),
-            mean_region_delay_s: {
-                let d: Vec<f64> = vehicles.iter().filter_map(|v| v.region_delay_s).collect();
-                (!d.is_empty()).then(|| d.iter().sum::<f64>() / d.len() as f64)
-            },
-            time_loss_veh_h: vehicles
-                .iter()
-                .filter(|v| v.outcome != Outcome::Crashed)
-                .filter_map(|v| v.time_loss_s)
-                .sum::<f64>()
-                / 3600.0,
+            time_loss: Some(time_loss_figures(vehicles, end)),
             ..head
         }
+    }
+}
+
+/// SUMO's `timeLoss` figures of a scenario's `vehicles`, of an episode that ended at `end`.
+fn time_loss_figures(vehicles: &[ScenarioVehicle], end: f64) -> TimeLossFigures {
+    let mean_of = |loss: &dyn Fn(&ScenarioVehicle) -> Option<f64>,
+                   f: &dyn Fn(&ScenarioVehicle) -> bool| {
+        let losses: Vec<f64> = vehicles
+            .iter()
+            .filter(|v| v.outcome != Outcome::Crashed && f(v))
+            .filter_map(loss)
+            .collect();
+        (!losses.is_empty()).then(|| losses.iter().sum::<f64>() / losses.len() as f64)
+    };
+    let mean = |f: &dyn Fn(&ScenarioVehicle) -> bool| mean_of(&|v| v.time_loss_s, f);
+    TimeLossFigures {
+        mean_time_loss_s: mean(&|_| true),
+        mean_time_loss_region_s: mean(&|v| v.region_enter_s.is_some()),
+        mean_time_loss_with_wait_s: mean_of(&time_loss_with_wait, &|_| true),
+        mean_time_loss_crashes_charged_s: mean_crashes_charged(vehicles, end),
+        mean_region_delay_s: {
+            let d: Vec<f64> = vehicles.iter().filter_map(|v| v.region_delay_s).collect();
+            (!d.is_empty()).then(|| d.iter().sum::<f64>() / d.len() as f64)
+        },
+        time_loss_veh_h: vehicles
+            .iter()
+            .filter(|v| v.outcome != Outcome::Crashed)
+            .filter_map(|v| v.time_loss_s)
+            .sum::<f64>()
+            / 3600.0,
     }
 }
 
@@ -285,22 +226,7 @@ pub fn read_trips(path: &Path) -> Result<BTreeMap<String, Trip>, String> {
 
 /// The CSV text of `rows` (columns: the fields of `T`).
 pub fn csv_of<T: Serialize + Default>(rows: &[T]) -> Vec<u8> {
-    let header: Vec<&str> = cells(&T::default())
-        .expect("a flat record")
-        .into_iter()
-        .map(|c| c.column)
-        .collect();
-    let mut w = csv::Writer::from_writer(Vec::new());
-    w.write_record(&header).expect("writing to memory");
-    for r in rows {
-        let row: Vec<String> = cells(r)
-            .expect("a flat record")
-            .iter()
-            .map(|c| c.value.csv_text())
-            .collect();
-        w.write_record(&row).expect("writing to memory");
-    }
-    w.into_inner().expect("writing to memory")
+    cells::csv_text(&T::default(), rows)
 }
 
 #[cfg(test)]
@@ -330,10 +256,18 @@ mod tests {
                 ..ScenarioVehicle::default()
             },
         ];
-        let s = ScenarioSummary::of(ScenarioSummary::default(), &vehicles, 0, 100.0);
-        assert_eq!(s.mean_time_loss_s, Some(15.0));
+        let s = Summary::of_scenario(
+            Summary::template(crate::episode::summary::Traffic::Scenario),
+            &vehicles,
+            0,
+            100.0,
+        );
+        assert_eq!(s.time_loss().mean_time_loss_s, Some(15.0));
         // (10 + 20 + (2 + 100 − 70)) / 3
-        assert_eq!(s.mean_time_loss_crashes_charged_s, Some(62.0 / 3.0));
+        assert_eq!(
+            s.time_loss().mean_time_loss_crashes_charged_s,
+            Some(62.0 / 3.0)
+        );
         assert_eq!((s.crashed, s.never_inserted, s.inserted), (1, 1, 3));
     }
 }

@@ -20,11 +20,12 @@ use crate::sumo::{RawVehicleState, Simulation, SumoClient, SumoError, VehicleRea
 
 use super::never_inserted::{never_inserted_rows, to_ms};
 use super::passage::{enter, first_region_on, passage, Entry};
-use super::records::{self, ScenarioSummary, ScenarioVehicle};
+use super::records::{self, ScenarioVehicle};
 pub use super::region::Region;
 use super::region_rows::{region_rows, RegionRow};
 use super::round::{crosses_a_region, plan_together, Fleet, Round};
 use super::{becomes_cav, has_cavs, ScenarioResult, SumoOptions};
+use crate::episode::summary::{Summary, Traffic};
 
 /// SUMO's defaults, restored when a CAV leaves the planned part of a region: every safety check
 /// on, and its own lane changes (SUMO's `speedMode` 31 and `laneChangeMode` 1621).
@@ -501,15 +502,15 @@ impl ScenarioRun {
         let (steps, in_scenes, cavs) = self.occupancy;
         let per_step = |n: u64| n as f64 / steps.max(1) as f64;
         let region_head = RegionRow {
-            scenario: head.scenario.clone(),
+            scenario: head.scenario.clone().unwrap_or_default(),
             planner: head.planner.clone(),
             alpha: head.alpha,
             seed: head.seed,
             ..RegionRow::default()
         };
-        let summary = ScenarioSummary {
+        let summary = Summary {
             plan_stats: self.plan_stats,
-            ..ScenarioSummary::of(head, &vehicles, hdv_collisions, self.end)
+            ..Summary::of_scenario(head, &vehicles, hdv_collisions, self.end)
         };
         let mut regions = region_rows(&region_head, &names, &vehicles);
         self.count_never_inserted(&mut regions);
@@ -572,22 +573,23 @@ fn scene_vehicle(
 }
 
 /// The episode's own columns of `episode.csv`: which scenario, planner, CAVs, seed and regions.
-fn summary_head(config: &Config, planner: &str, regions: &[String]) -> ScenarioSummary {
+fn summary_head(config: &Config, planner: &str, regions: &[String]) -> Summary {
     let sc = &config.scenario;
-    ScenarioSummary {
-        scenario: sc
-            .sumocfg
-            .as_deref()
-            .and_then(std::path::Path::file_name)
-            .map(|n| n.to_string_lossy().into_owned())
-            .unwrap_or_default(),
+    Summary {
+        scenario: Some(
+            sc.sumocfg
+                .as_deref()
+                .and_then(std::path::Path::file_name)
+                .map(|n| n.to_string_lossy().into_owned())
+                .unwrap_or_default(),
+        ),
         planner: planner.into(),
         sumo_version: crate::sumo::version::BUILT.into(),
         alpha: sc.alpha,
-        cav_types: sc.cav_types.join(" "),
+        cav_types: Some(sc.cav_types.join(" ")),
         seed: sc.seed,
         steps: sc.steps,
-        regions: regions.join("; "),
-        ..ScenarioSummary::default()
+        regions: Some(regions.join("; ")),
+        ..Summary::template(Traffic::Scenario)
     }
 }
