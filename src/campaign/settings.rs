@@ -21,7 +21,7 @@
 //! `scenario.alpha`, `lambda`, `seed` and `steps` vary per cell or come from the campaign table,
 //! so a campaign file must not set them.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::time::Duration;
 
 use serde::{Deserialize, Serialize};
@@ -37,22 +37,35 @@ pub use super::overrides::Overrides;
 use crate::config::{Config, ConfigError, PredictorKind};
 use crate::controller::PLANNERS;
 
-/// The `[campaign]` table: the grid and how to run it.
+/// Steps of an episode of a campaign on the paper's demand, unless given.
+pub const DEFAULT_STEPS: u32 = 400;
+
+/// The `[campaign]` table, the one of every campaign: the grid and how to run it. A campaign
+/// over scenarios of the user's own lists them (`scenarios`) and has no λ nor HDV profiles
+/// (its routes and drivers are its own), nor steps unless given (each scenario's own interval);
+/// a campaign on the paper's demand has no scenarios. Absent parts are no keys in
+/// `campaign.toml`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct CampaignTable {
+    /// The scenarios' configuration files (`.sumocfg`), a grid axis; empty: the paper's demand.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub scenarios: Vec<PathBuf>,
     /// Controllers to compare; default: every name in [`PLANNERS`].
     pub planners: Vec<String>,
     /// CAV penetrations α.
     pub alphas: Vec<f64>,
-    /// Arrival rates λ (veh/h).
+    /// Arrival rates λ (veh/h) of the paper's demand; none over scenarios.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
     pub lambdas: Vec<f64>,
     /// Seeds per (planner, α, λ).
     pub seeds: u64,
     /// First seed; seeds run `seed_base .. seed_base + seeds`.
     pub seed_base: u64,
-    /// Episode length in steps.
-    pub steps: u32,
+    /// Episode length in steps; default: [`DEFAULT_STEPS`] on the paper's demand, each
+    /// scenario's own interval over scenarios.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub steps: Option<u32>,
     /// Worker processes; default: the number of cores. Does not change results.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub workers: Option<usize>,
@@ -76,12 +89,13 @@ pub struct CampaignTable {
 impl Default for CampaignTable {
     fn default() -> Self {
         CampaignTable {
+            scenarios: Vec::new(),
             planners: PLANNERS.iter().map(|p| p.to_string()).collect(),
             alphas: vec![0.4, 0.5, 0.6, 0.7, 0.8],
             lambdas: vec![2500.0, 3000.0],
             seeds: 5,
             seed_base: 0,
-            steps: 400,
+            steps: None,
             workers: None,
             episode_timeout: None,
             hdv_profiles: Vec::new(),
@@ -144,7 +158,7 @@ fn apply_overrides(table: &mut CampaignTable, o: &Overrides) -> Result<(), Setti
     }
     table.seeds = o.seeds.unwrap_or(table.seeds);
     table.seed_base = o.seed_base.unwrap_or(table.seed_base);
-    table.steps = o.steps.unwrap_or(table.steps);
+    table.steps = o.steps.or(table.steps);
     table.workers = o.workers.or(table.workers);
     table.episode_timeout = o.episode_timeout.or(table.episode_timeout);
     Ok(())
@@ -171,6 +185,7 @@ impl Settings {
         o: &Overrides,
     ) -> Result<Settings, SettingsError> {
         apply_overrides(&mut table, o)?;
+        let steps = *table.steps.get_or_insert(DEFAULT_STEPS);
         // A record of the SUMO that runs, not a choice: a file written by another SUMO runs
         // on this one (and says so in the new campaign.toml).
         table.sumo_version = crate::sumo::version::BUILT.to_string();
@@ -179,7 +194,7 @@ impl Settings {
         let workers = worker_count(table.workers, o.workers.is_some(), file)?;
         let episode_timeout =
             episode_timeout(table.episode_timeout, o.episode_timeout.is_some(), file)?;
-        config.scenario.steps = table.steps;
+        config.scenario.steps = steps;
         if let Some(format) = o.trajectories {
             config.output.trajectories = format;
         }
@@ -303,7 +318,7 @@ fn check_table(
         names_a_cell,
         TOO_LONG,
     )?;
-    check_seeds_and_steps(table.seeds, Some(table.steps), o, file)
+    check_seeds_and_steps(table.seeds, table.steps, o, file)
 }
 
 /// Every (predictor, profile, α, λ) of the grid must make a valid episode configuration, so
@@ -349,7 +364,14 @@ mod tests {
     #[test]
     fn defaults_resolve() {
         let s = Settings::resolve(None, &Overrides::default()).unwrap();
-        assert_eq!(s.table, CampaignTable::default());
+        let steps = Some(DEFAULT_STEPS);
+        assert_eq!(
+            s.table,
+            CampaignTable {
+                steps,
+                ..CampaignTable::default()
+            }
+        );
         assert_eq!(s.config.scenario.steps, 400);
         assert!(s.workers >= 1);
     }

@@ -24,4 +24,4 @@ pub mod merge;
 pub mod settings;
 
 pub use collect::ScenarioResults;
-pub use settings::{is_scenario_campaign, ScenarioSettings, ScenarioTable};
+pub use settings::{is_scenario_campaign, ScenarioSettings};

@@ -18,8 +18,6 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
-use serde::{Deserialize, Serialize};
-
 use crate::campaign::checks::{
     check_planners_and_alphas, check_seeds_and_steps, episode_timeout, origin, parse_list,
     read_doc, read_parts, shard_of, worker_count,
@@ -32,56 +30,11 @@ use crate::config::Config;
 use crate::sumo::scenario_files;
 use crate::sumo::sumocfg::SumoConfig;
 
-/// The `[campaign]` table of a campaign over scenarios.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct ScenarioTable {
-    /// The scenarios' configuration files (`.sumocfg`), a grid axis.
-    pub scenarios: Vec<PathBuf>,
-    /// Controllers to compare; default: every one.
-    pub planners: Vec<String>,
-    /// CAV shares α of each scenario's vehicles.
-    pub alphas: Vec<f64>,
-    /// Seeds per (planner, scenario, α).
-    pub seeds: u64,
-    /// First seed.
-    pub seed_base: u64,
-    /// Steps of every episode; default: each scenario's own interval.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub steps: Option<u32>,
-    /// Worker processes; default: one per core. Does not change results.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub workers: Option<usize>,
-    /// Wall-clock limit of one episode (s); default: none.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub episode_timeout: Option<f64>,
-    /// The SUMO version that runs the campaign (a record, as for the paper's campaigns).
-    pub sumo_version: String,
-}
-
-impl Default for ScenarioTable {
-    /// The paper campaign's planners, α, seeds; no scenario.
-    fn default() -> Self {
-        let paper = CampaignTable::default();
-        ScenarioTable {
-            scenarios: Vec::new(),
-            planners: paper.planners,
-            alphas: paper.alphas,
-            seeds: paper.seeds,
-            seed_base: paper.seed_base,
-            steps: None,
-            workers: None,
-            episode_timeout: None,
-            sumo_version: paper.sumo_version,
-        }
-    }
-}
-
 /// Validated settings of a campaign over scenarios.
 #[derive(Debug, Clone)]
 pub struct ScenarioSettings {
     /// The `[campaign]` table as resolved.
-    pub table: ScenarioTable,
+    pub table: CampaignTable,
     /// Every episode, normalised.
     pub grid: Grid,
     /// The slice of the grid this run runs.
@@ -147,7 +100,7 @@ fn refuse_demand_settings(
     Ok(())
 }
 
-fn apply_overrides(t: &mut ScenarioTable, o: &Overrides) -> Result<(), SettingsError> {
+fn apply_overrides(t: &mut CampaignTable, o: &Overrides) -> Result<(), SettingsError> {
     if let Some(text) = &o.sumocfg {
         t.scenarios = text
             .split(',')
@@ -165,6 +118,8 @@ fn apply_overrides(t: &mut ScenarioTable, o: &Overrides) -> Result<(), SettingsE
     t.seeds = o.seeds.unwrap_or(t.seeds);
     t.seed_base = o.seed_base.unwrap_or(t.seed_base);
     t.steps = o.steps.or(t.steps);
+    // The paper demand's default rates: a scenario's routes are its demand.
+    t.lambdas.clear();
     t.workers = o.workers.or(t.workers);
     t.episode_timeout = o.episode_timeout.or(t.episode_timeout);
     t.sumo_version = crate::sumo::version::BUILT.to_string();
@@ -184,7 +139,7 @@ impl ScenarioSettings {
             None => toml::Table::new(),
         };
         refuse_demand_settings(&doc, o, file)?;
-        let (mut table, mut config): (ScenarioTable, Config) = match file {
+        let (mut table, mut config): (CampaignTable, Config) = match file {
             Some(p) => read_parts(doc, p)?,
             None => Default::default(),
         };
@@ -239,7 +194,7 @@ impl ScenarioSettings {
     /// `campaign.toml`: the shared settings and the table (without workers and timeout, which
     /// do not change results).
     pub fn to_toml(&self) -> String {
-        let table = ScenarioTable {
+        let table = CampaignTable {
             workers: None,
             episode_timeout: None,
             ..self.table.clone()
@@ -258,7 +213,7 @@ impl ScenarioSettings {
     /// As [`ScenarioSettings::resolve`].
     pub fn from_campaign_file(path: &Path) -> Result<ScenarioSettings, SettingsError> {
         let mut s = ScenarioSettings::resolve(Some(path), &Overrides::default())?;
-        let (recorded, _): (ScenarioTable, Config) = read_parts(read_doc(path)?, path)?;
+        let (recorded, _): (CampaignTable, Config) = read_parts(read_doc(path)?, path)?;
         s.table.sumo_version = recorded.sumo_version;
         Ok(s)
     }
@@ -275,7 +230,7 @@ impl ScenarioSettings {
 
 /// The grid, after checking planners, scenarios, α and seeds.
 fn checked_grid(
-    t: &ScenarioTable,
+    t: &CampaignTable,
     o: &Overrides,
     file: Option<&Path>,
 ) -> Result<Grid, SettingsError> {
