@@ -88,6 +88,21 @@ fn a_campaign_over_scenarios_resumes_and_collects_the_same_bytes_however_it_is_r
         2 * 2 * (1 + 2),
         "ramp has one region, A10KW two"
     );
+    // Per region its main carriageway and each on-ramp, adding up to the region's vehicles.
+    let entries = csv_rows(&read(&a, "entries.csv"));
+    let cell = |r: &std::collections::BTreeMap<String, String>| {
+        ["scenario", "planner", "alpha", "seed", "region"].map(|c| r[c].clone())
+    };
+    for region in &regions {
+        let mine: Vec<_> = entries.iter().filter(|e| cell(e) == cell(region)).collect();
+        let ramps = region["region"].split(' ').count();
+        assert_eq!(mine.len(), 1 + ramps, "{region:?}");
+        let sum: usize = mine
+            .iter()
+            .map(|e| e["vehicles"].parse::<usize>().unwrap())
+            .sum();
+        assert_eq!(sum.to_string(), region["vehicles"], "{region:?}");
+    }
 
     // A cell is the episode `bkpbs episode --sumocfg` runs, byte for byte.
     let single = dir.path().join("single");
@@ -108,20 +123,23 @@ fn a_campaign_over_scenarios_resumes_and_collects_the_same_bytes_however_it_is_r
     ]);
     assert_ok(&o);
     let cell = a.join("episodes/bk-pbs/A10KW-0.2/a0.5_s1");
-    for f in [
-        "episode.csv",
-        "vehicles.csv",
-        "regions.csv",
-        "collisions.csv",
-    ] {
+    for f in common::SCENARIO_FILES {
         assert_eq!(read(&cell, f), read(&single, f), "{f}");
     }
 
-    // A re-run finds everything done.
+    // A re-run finds everything done; a cell without its entries.csv (an earlier bkpbs's) runs
+    // again, saying why, and comes back the same.
+    let collected = read(&a, "entries.csv");
+    std::fs::remove_file(cell.join("entries.csv")).unwrap();
     let o = campaign(&scenarios, &a, &["--workers", "2"]);
     assert_ok(&o);
     let said = String::from_utf8_lossy(&o.stdout);
-    assert!(said.contains("already done: 8; to run: 0"), "{said}");
+    assert!(said.contains("already done: 7; to run: 1"), "{said}");
+    assert!(
+        said.contains("runs again: ") && said.contains("entries.csv"),
+        "{said}"
+    );
+    assert_eq!(read(&a, "entries.csv"), collected);
 
     // A narrower grid would drop collected episodes: refused, nothing lost.
     let o = bkpbs(&[
@@ -151,7 +169,7 @@ fn a_campaign_over_scenarios_resumes_and_collects_the_same_bytes_however_it_is_r
             &["--workers", "1", "--shard", shard],
         ));
     }
-    for f in ["episodes.csv", "regions.csv", "vehicles.csv"] {
+    for f in ["episodes.csv", "regions.csv", "entries.csv", "vehicles.csv"] {
         assert_eq!(read(&a, f), read(&b, f), "{f}");
     }
 
@@ -174,6 +192,7 @@ fn a_campaign_over_scenarios_resumes_and_collects_the_same_bytes_however_it_is_r
     for f in [
         "episodes.csv",
         "regions.csv",
+        "entries.csv",
         "vehicles.csv",
         "failures.csv",
     ] {

@@ -205,8 +205,8 @@ impl PyCampaign {
     }
 
     /// Gathers every finished episode into the collected files (grid order: `episodes.csv`,
-    /// `vehicles.csv`, `timings.csv`, `failures.csv`, and over scenarios `regions.csv`) and
-    /// says how many there are.
+    /// `vehicles.csv`, `timings.csv`, `failures.csv`, and over scenarios `regions.csv` and
+    /// `entries.csv`) and says how many there are.
     fn collect<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let collected = match &self.settings {
             Grid::Demand(s) => CampaignSpec::collect(s.as_ref(), &self.out),

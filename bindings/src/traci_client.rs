@@ -180,6 +180,9 @@ impl SumoClient for TraciClient<'_> {
     fn vehicle_max_speed(&self, id: &str) -> Result<f64, SumoError> {
         self.call("vehicle.getMaxSpeed", (id,))
     }
+    fn vehicle_speed_factor(&self, id: &str) -> Result<f64, SumoError> {
+        self.call("vehicle.getSpeedFactor", (id,))
+    }
     fn vehicle_limits(&self, id: &str) -> Result<Limits, SumoError> {
         Ok(Limits {
             accel: self.call("vehicle.getAccel", (id,))?,

@@ -65,7 +65,7 @@ def test_your_own_traci_loop_gets_the_clis_episode(tmp_path: Path, cli: Path, tr
          "--seed", "3", "--steps", "400", "--out", str(tmp_path / "cli")],
         check=True, capture_output=True,
     )
-    for f in ("episode.csv", "vehicles.csv", "regions.csv", "collisions.csv"):
+    for f in ("episode.csv", "vehicles.csv", "regions.csv", "entries.csv", "collisions.csv"):
         assert (tmp_path / "loop" / f).read_bytes() == (tmp_path / "cli" / f).read_bytes(), f
     assert row["scenario"] == "A10KW.sumocfg" and row["steps"] == 400
     assert row["inserted"] == row["arrived"] + row["crashed"] + row["present"] > 100

@@ -101,7 +101,8 @@ def test_a_ray_campaign_over_a_scenario_of_your_own_matches_the_rust_one(tmp_pat
     out = tmp_path / "ray"
     p = campaign("--ray", "--num-cpus", "2", "--out", str(out), *grid)
     assert "to run: 4 on Ray" in p.stdout and "4 episodes collected" in p.stdout
-    for name in ("episodes.csv", "regions.csv", "vehicles.csv", "failures.csv", "campaign.toml"):
+    for name in ("episodes.csv", "regions.csv", "entries.csv", "vehicles.csv", "failures.csv",
+                 "campaign.toml"):
         assert (out / name).read_bytes() == (rust / name).read_bytes(), name
     assert (out / "report" / "paired_regions.csv").is_file()
     c = bkpbs.Campaign(out, sumocfg=[cfg], planners="bk-pbs,sumo", alphas=[0.5], seeds=2,

@@ -107,7 +107,7 @@ def test_a_scenario_grid_travels_through_ray(cluster, tmp_path, cli):
     assert "4 done, 0 failed" in p.stdout and "4 episodes collected" in p.stdout, p.stdout
     local_campaign(cli, tmp_path / "local", *grid)
     same(out, tmp_path / "local", ["episodes.csv", "vehicles.csv", "regions.csv",
-                                   "failures.csv", "campaign.toml"])
+                                   "entries.csv", "failures.csv", "campaign.toml"])
 
 
 def test_a_config_s_model_and_policy_files_travel_through_ray(cluster, tmp_path, cli):

@@ -23,7 +23,7 @@ def test_a_scenario_of_your_own_gives_the_clis_row(tmp_path: Path, cli: Path) ->
          "--seed", "2", "--steps", "250", "--out", str(tmp_path / "cli")],
         check=True, capture_output=True,
     )
-    for f in ("episode.csv", "vehicles.csv", "regions.csv", "collisions.csv"):
+    for f in ("episode.csv", "vehicles.csv", "regions.csv", "entries.csv", "collisions.csv"):
         assert (tmp_path / "py" / f).read_bytes() == (tmp_path / "cli" / f).read_bytes(), f
     assert row["scenario"] == "ramp.sumocfg"
     assert row["planner"] == "bk-pbs" and row["steps"] == 250

@@ -231,5 +231,5 @@ def test_traci_loop_on_a_scenario_of_your_own(tmp_path, cli, backend):
          "--seed", "4", "--steps", "200", "--out", str(tmp_path / "cli")],
         check=True, capture_output=True,
     )
-    for f in ("episode.csv", "vehicles.csv", "regions.csv", "collisions.csv"):
+    for f in ("episode.csv", "vehicles.csv", "regions.csv", "entries.csv", "collisions.csv"):
         assert (tmp_path / "loop" / f).read_bytes() == (tmp_path / "cli" / f).read_bytes(), f

@@ -65,14 +65,17 @@ const LARGEST: f64 = 1e15;
 const TEXT: [&str; 1] = ["sumo_version"];
 
 /// Which columns of a file are names rather than numbers (`text`: any text, `names`: never
-/// empty), and which are delays (may be empty, and down to [`LOWEST_DELAY`]); every other
-/// column holds a non-negative number, and [`RATE`] at most 1.
+/// empty), which are flags (`true` or `false`), and which are delays (may be empty, and down
+/// to [`LOWEST_DELAY`]); every other column holds a non-negative number, and [`RATE`] at
+/// most 1.
 #[derive(Debug, Clone, Copy)]
 pub struct Rules<'a> {
     /// Columns of text that must not be empty.
     pub names: &'a [&'a str],
     /// Columns of text that may be empty.
     pub text: &'a [&'a str],
+    /// Columns of `true` or `false`.
+    pub flags: &'a [&'a str],
     /// Columns of delays.
     pub delays: &'a [&'a str],
 }
@@ -81,6 +84,7 @@ pub struct Rules<'a> {
 const EPISODES: Rules<'static> = Rules {
     names: &TEXT,
     text: &[],
+    flags: &[],
     delays: &DELAYS,
 };
 
@@ -96,6 +100,9 @@ fn problem_under(rules: &Rules, column: &str, value: &str) -> Option<&'static st
     }
     if rules.names.contains(&column) {
         return value.is_empty().then_some("is empty");
+    }
+    if rules.flags.contains(&column) {
+        return (!matches!(value, "true" | "false")).then_some("is neither true nor false");
     }
     let delay = rules.delays.contains(&column);
     if value.is_empty() {

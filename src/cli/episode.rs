@@ -139,12 +139,8 @@ fn run_scenario(e: &Episode) -> Result<()> {
     for note in &r.sumo_notes {
         println!("{note}");
     }
-    for row in r.regions.iter().filter(|row| row.from_ramp == 0) {
-        eprintln!(
-            "warning: region {} received no vehicle from its on-ramp in this episode ({} never \
-             inserted were bound for it): its rows measure traffic past a merge nobody used",
-            row.region, row.never_inserted_ramp
-        );
+    for line in r.no_ramp_traffic_warnings() {
+        eprintln!("{line}");
     }
     for (region, _) in &r.trajectories {
         let d = episode::sumocfg::region_dir(&e.out, region);

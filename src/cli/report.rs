@@ -42,6 +42,7 @@ pub fn print_report(
     let collected: Vec<&str> = [
         "episodes.csv",
         "regions.csv",
+        "entries.csv",
         "vehicles.csv",
         "timings.csv",
         "failures.csv",

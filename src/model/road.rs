@@ -274,6 +274,26 @@ impl Road {
         self.edges.iter().find(|e| &*e.name == name)
     }
 
+    /// The entry (an index of `entries`) a vehicle on edge `code` came in by: 0, the main
+    /// carriageway, for an edge on no on-ramp; for an on-ramp's edge, the ramp whose route
+    /// drives it, or, for a junction lane between a ramp's edges (no route names one), the
+    /// ramp whose stretch before its acceleration lane holds the lane's start (the first
+    /// ramp if none does).
+    pub fn entry_of_edge(&self, code: usize) -> usize {
+        let Some(edge) = self.edges.get(code).filter(|e| e.on_ramp) else {
+            return 0;
+        };
+        let ramps = || self.entries.iter().enumerate().skip(1);
+        if let Some((k, _)) = ramps().find(|(_, e)| e.route.contains(&edge.name)) {
+            return k;
+        }
+        let start = edge.lanes.iter().flatten().map(|l| l.s0).next();
+        let holds = |z: &MergeZone| start.is_some_and(|s| (z.ramp_start..=z.start).contains(&s));
+        (ramps().zip(&self.zones))
+            .find(|(_, z)| holds(z))
+            .map_or(1, |((k, _), _)| k)
+    }
+
     /// The default road (the shipped network), for unit tests and planning without SUMO.
     pub fn paper_default() -> Road {
         let ramp_start = 150.0 - 166.79;
@@ -344,5 +364,31 @@ mod tests {
         assert!(!r.lanes_at(500.0).contains(&0));
         assert!(r.lanes_at(900.0).contains(&0));
         assert!(r.lanes_at(200.0).contains(&0));
+    }
+
+    /// Each ramp's edges, and a junction lane between them, belong to that ramp's entry; the
+    /// carriageway's edges, its acceleration lanes included, to the main one.
+    #[test]
+    fn each_edge_belongs_to_the_entry_its_vehicles_come_by() {
+        let mut r = Road::paper_default();
+        r.zones.push(MergeZone {
+            ramp_start: 280.0,
+            start: 330.0,
+            end: 430.0,
+            weaving: false,
+        });
+        r.entries
+            .push(Entry::new("ramp2", &["ramp2", "main_out"], 40.0));
+        let ramp = |name: &str, s0| EdgeFrame {
+            name: Arc::from(name),
+            lanes: vec![Some(LaneFrame::straight(MERGE_LANE, s0))],
+            on_ramp: true,
+        };
+        r.edges.push(ramp("ramp2", 280.0));
+        r.edges.push(ramp(":j_2", 320.0));
+        let entries: Vec<usize> = (0..r.edges.len()).map(|c| r.entry_of_edge(c)).collect();
+        // main_in, acc, main_out, ramp, ramp2, the junction lane on ramp2.
+        assert_eq!(entries, [0, 0, 0, 1, 2, 2]);
+        assert_eq!(r.entry_of_edge(99), 0);
     }
 }

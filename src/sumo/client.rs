@@ -32,6 +32,9 @@ pub trait SumoClient {
     fn vehicle_size(&self, id: &str) -> Result<(f64, f64), SumoError>;
     /// A vehicle's own top speed (m/s).
     fn vehicle_max_speed(&self, id: &str) -> Result<f64, SumoError>;
+    /// A vehicle's own speed factor: its desired speed is this times the lane's speed limit,
+    /// at most its top speed.
+    fn vehicle_speed_factor(&self, id: &str) -> Result<f64, SumoError>;
     /// A vehicle's own acceleration, deceleration and emergency deceleration (m/s²).
     fn vehicle_limits(&self, id: &str) -> Result<Limits, SumoError>;
     /// Driving distance along the vehicle's route to `pos` on `edge` (negative: off it).
@@ -88,6 +91,9 @@ impl SumoClient for Simulation {
     }
     fn vehicle_max_speed(&self, id: &str) -> Result<f64, SumoError> {
         Simulation::vehicle_max_speed(self, id)
+    }
+    fn vehicle_speed_factor(&self, id: &str) -> Result<f64, SumoError> {
+        Simulation::vehicle_speed_factor(self, id)
     }
     fn vehicle_limits(&self, id: &str) -> Result<Limits, SumoError> {
         Simulation::vehicle_limits(self, id)

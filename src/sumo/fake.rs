@@ -23,6 +23,8 @@ pub(crate) struct FakeVehicle {
     pub size: (f64, f64),
     /// Its own top speed (m/s).
     pub max_speed: f64,
+    /// Its own speed factor (its desired speed over the lane's limit).
+    pub speed_factor: f64,
     /// Its own accelerations (m/s²).
     pub limits: Limits,
     /// What [`SumoClient::driving_distance`] answers for it, whatever the place asked about
@@ -31,14 +33,15 @@ pub(crate) struct FakeVehicle {
 }
 
 impl FakeVehicle {
-    /// A 5 m × 1.8 m vehicle of type `type_id`, SUMO's default passenger car's figures, whose
-    /// route runs through every place asked about.
+    /// A 5 m × 1.8 m vehicle of type `type_id`, SUMO's default passenger car's figures (speed
+    /// factor 1), whose route runs through every place asked about.
     pub fn new(id: &str, type_id: &str) -> FakeVehicle {
         FakeVehicle {
             id: id.into(),
             type_id: type_id.into(),
             size: (5.0, 1.8),
             max_speed: 55.56,
+            speed_factor: 1.0,
             limits: Limits {
                 accel: 2.6,
                 decel: 4.5,
@@ -51,6 +54,15 @@ impl FakeVehicle {
     /// The same vehicle, [`SumoClient::driving_distance`] answering `distance`.
     pub fn distance(self, distance: f64) -> FakeVehicle {
         FakeVehicle { distance, ..self }
+    }
+
+    /// The same vehicle with its own `speed_factor` and top speed `max_speed` (m/s).
+    pub fn desiring(self, speed_factor: f64, max_speed: f64) -> FakeVehicle {
+        FakeVehicle {
+            speed_factor,
+            max_speed,
+            ..self
+        }
     }
 }
 
@@ -319,6 +331,9 @@ impl SumoClient for FakeSumo {
     }
     fn vehicle_max_speed(&self, id: &str) -> Result<f64, SumoError> {
         Ok(self.present("vehicle.getMaxSpeed", id)?.max_speed)
+    }
+    fn vehicle_speed_factor(&self, id: &str) -> Result<f64, SumoError> {
+        Ok(self.present("vehicle.getSpeedFactor", id)?.speed_factor)
     }
     fn vehicle_limits(&self, id: &str) -> Result<Limits, SumoError> {
         Ok(self.present("vehicle.getAccel", id)?.limits)

@@ -300,6 +300,10 @@ int BK(vehicle_max_speed)(const char* id, double* out) {
     return guarded([&] { *out = api::Vehicle::getMaxSpeed(id); });
 }
 
+int BK(vehicle_speed_factor)(const char* id, double* out) {
+    return guarded([&] { *out = api::Vehicle::getSpeedFactor(id); });
+}
+
 int BK(vehicle_limits)(const char* id, double* accel, double* decel, double* emergency) {
     return guarded([&] {
         *accel = api::Vehicle::getAccel(id);

@@ -1,5 +1,5 @@
-//! What bkpbs asks SUMO about one vehicle: its type, size, top speed, accelerations, and how
-//! far its route still runs to a place.
+//! What bkpbs asks SUMO about one vehicle: its type, size, top speed, speed factor,
+//! accelerations, and how far its route still runs to a place.
 
 use std::os::raw::c_char;
 
@@ -58,6 +58,19 @@ impl Simulation {
             ffi::bk_vehicle_max_speed(cid.as_ptr(), &mut speed)
         })?;
         Ok(speed)
+    }
+
+    /// The vehicle's own speed factor: its desired speed is this times the lane's speed limit
+    /// (at most its top speed), drawn by SUMO from its type's `speedFactor` distribution when
+    /// it was loaded, or what was set for it.
+    pub fn vehicle_speed_factor(&self, id: &str) -> Result<f64, SumoError> {
+        let cid = c_string(id)?;
+        let mut factor = 0.0;
+        // SAFETY: a valid C string and out-pointer.
+        decode("vehicle.getSpeedFactor", unsafe {
+            ffi::bk_vehicle_speed_factor(cid.as_ptr(), &mut factor)
+        })?;
+        Ok(factor)
     }
 
     /// The vehicle's own acceleration, deceleration and emergency deceleration (m/s²): its

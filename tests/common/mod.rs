@@ -228,10 +228,11 @@ pub fn assert_same_files(a: &std::path::Path, b: &std::path::Path, names: &[&str
 }
 
 /// The episode files of a scenario episode (`bkpbs episode --sumocfg`) compared between runs.
-pub const SCENARIO_FILES: [&str; 4] = [
+pub const SCENARIO_FILES: [&str; 5] = [
     "episode.csv",
     "vehicles.csv",
     "regions.csv",
+    "entries.csv",
     "collisions.csv",
 ];
 

@@ -3,12 +3,14 @@
 //! A cell is finished exactly when its files are whole and this campaign's: `episode.csv` (the
 //! worker writes it last) holds the one row of this cell — its scenario, planner, α, seed, the
 //! campaign's steps, this SUMO — `vehicles.csv` a row per vehicle inserted or never inserted, `regions.csv` a
-//! row per region, and `settings.toml` the very settings the campaign would run it with. A
-//! damaged, foreign or edited cell runs again, with the reason printed.
+//! row per region, `entries.csv` a row per region and entry (its main carriageway and each of
+//! its on-ramps), and `settings.toml` the very settings the campaign would run it with. A
+//! damaged, foreign or edited cell runs again, with the reason printed (a cell of an earlier
+//! bkpbs, without `entries.csv` or with fewer columns, among them).
 //!
-//! The collected files, in grid order: `episodes.csv` and `regions.csv` (their rows name
-//! their scenario, planner, α and seed already), `vehicles.csv` and `timings.csv` (each row
-//! led by those four), `failures.csv`.
+//! The collected files, in grid order: `episodes.csv`, `regions.csv` and `entries.csv` (their
+//! rows name their scenario, planner, α and seed already), `vehicles.csv` and `timings.csv`
+//! (each row led by those four), `failures.csv`.
 
 use std::path::{Path, PathBuf};
 
@@ -25,7 +27,7 @@ use crate::campaign::validate::{check_rows, Rules};
 use crate::campaign::worker::DONE_FILE;
 use crate::episode::output::TIMING_COLUMNS;
 use crate::episode::summary::{Summary, Traffic};
-use crate::episode::sumocfg::{RegionRow, ScenarioVehicle};
+use crate::episode::sumocfg::{EntryRow, RegionRow, ScenarioVehicle};
 use crate::io::WriteError;
 
 /// The columns that lead the collected vehicle and timing rows.
@@ -50,6 +52,8 @@ pub struct Finished {
     pub episode: csv::StringRecord,
     /// Its `regions.csv` rows.
     pub regions: Vec<csv::StringRecord>,
+    /// Its `entries.csv` rows.
+    pub entries: Vec<csv::StringRecord>,
     /// Its `vehicles.csv` rows.
     pub vehicles: Vec<csv::StringRecord>,
     /// Its `timing.csv` row.
@@ -71,6 +75,15 @@ fn vehicle_rows(column: impl Fn(&str) -> String) -> String {
     }
 }
 
+/// How many `entries.csv` rows the `episode.csv` row's `regions` announces: per region one
+/// for its main carriageway and one per on-ramp, which its name lists by the edge each joins.
+fn entry_rows(regions: &str) -> usize {
+    (regions.split("; "))
+        .filter(|r| !r.is_empty())
+        .map(|r| 1 + r.split(' ').count())
+        .sum()
+}
+
 /// The files of `cell` in `dir` if they are whole and this campaign's; otherwise what is
 /// wrong.
 fn finished(dir: &Path, settings: &ScenarioSettings, cell: &Cell) -> Result<Finished, String> {
@@ -84,6 +97,7 @@ fn finished(dir: &Path, settings: &ScenarioSettings, cell: &Cell) -> Result<Fini
         r if r.is_empty() => 0,
         r => r.split("; ").count(),
     };
+    let entries = entry_rows(&column("regions"));
     let vehicles = rows_counted(
         dir,
         "vehicles.csv",
@@ -91,6 +105,7 @@ fn finished(dir: &Path, settings: &ScenarioSettings, cell: &Cell) -> Result<Fini
         vehicle_rows(column),
     )?;
     let region_rows = rows_counted(dir, "regions.csv", &header_of::<RegionRow>(), regions)?;
+    let entries = rows_counted(dir, "entries.csv", &header_of::<EntryRow>(), entries)?;
     let timing_header: Vec<String> = TIMING_COLUMNS.iter().map(|s| s.to_string()).collect();
     let timing = rows_counted(dir, "timing.csv", &timing_header, 1)?;
     check_settings_record(dir, &config)?;
@@ -98,6 +113,7 @@ fn finished(dir: &Path, settings: &ScenarioSettings, cell: &Cell) -> Result<Fini
     Ok(Finished {
         episode: row,
         regions: region_rows,
+        entries,
         vehicles,
         timing,
     })
@@ -159,6 +175,8 @@ pub struct ScenarioResults {
     pub episodes: Vec<csv::StringRecord>,
     /// `regions.csv`.
     pub regions: Vec<csv::StringRecord>,
+    /// `entries.csv`.
+    pub entries: Vec<csv::StringRecord>,
     /// `vehicles.csv`, each row led by [`CELL_COLUMNS`].
     pub vehicles: Vec<csv::StringRecord>,
     /// `timings.csv`, each row led by [`CELL_COLUMNS`].
@@ -171,6 +189,7 @@ pub struct ScenarioResults {
 const EPISODE_RULES: Rules<'static> = Rules {
     names: &["scenario", "planner", "sumo_version"],
     text: &["cav_types", "regions"],
+    flags: &[],
     delays: &[
         "mean_time_loss_s",
         "mean_time_loss_region_s",
@@ -184,6 +203,7 @@ const EPISODE_RULES: Rules<'static> = Rules {
 const REGION_RULES: Rules<'static> = Rules {
     names: &["scenario", "planner", "region"],
     text: &[],
+    flags: &["ramp_traffic"],
     delays: &[
         "mean_delay_s",
         "mean_delay_cav_s",
@@ -191,7 +211,16 @@ const REGION_RULES: Rules<'static> = Rules {
         "mean_delay_main_s",
         "mean_delay_ramp_s",
         "mean_time_loss_s",
+        "mean_delay_own_s",
     ],
+};
+
+/// The rules of its `entries.csv`.
+const ENTRY_RULES: Rules<'static> = Rules {
+    names: &["scenario", "planner", "region", "entry", "origin"],
+    text: &[],
+    flags: &[],
+    delays: &["mean_delay_s", "mean_delay_own_s"],
 };
 
 /// The header of `failures.csv`.
@@ -212,6 +241,7 @@ pub fn collect(out: &Path, settings: &ScenarioSettings) -> ScenarioResults {
             CellState::Done(done) => {
                 res.episodes.push(done.episode);
                 res.regions.extend(done.regions);
+                res.entries.extend(done.entries);
                 for (rows, into) in [
                     (&done.vehicles, &mut res.vehicles),
                     (&done.timing, &mut res.timings),
@@ -237,7 +267,7 @@ pub fn collect(out: &Path, settings: &ScenarioSettings) -> ScenarioResults {
 }
 
 impl ScenarioResults {
-    /// Writes the five files into `dir`, each atomically; their paths.
+    /// Writes the six files into `dir`, each atomically; their paths.
     pub fn write(&self, dir: &Path) -> Result<Vec<PathBuf>, WriteError> {
         let led = |cols: Vec<String>| {
             let mut h: Vec<String> = CELL_COLUMNS.iter().map(|s| s.to_string()).collect();
@@ -253,6 +283,7 @@ impl ScenarioResults {
                 &self.episodes,
             ),
             ("regions.csv", header_of::<RegionRow>(), &self.regions),
+            ("entries.csv", header_of::<EntryRow>(), &self.entries),
             (
                 "vehicles.csv",
                 led(header_of::<ScenarioVehicle>()),
@@ -300,6 +331,12 @@ impl ScenarioResults {
                 &[&cell[..], &["region"]].concat(),
                 &REGION_RULES,
             )?,
+            entries: checked(
+                "entries.csv",
+                header_of::<EntryRow>(),
+                &[&cell[..], &["region", "entry", "origin"]].concat(),
+                &ENTRY_RULES,
+            )?,
             ..ScenarioResults::default()
         })
     }
@@ -319,7 +356,17 @@ mod tests {
     use super::*;
     use crate::episode::sumocfg::csv_of;
 
-    /// A collected directory of one episode row and one region row, each edited by `edit`.
+    /// A region's name lists the edges its on-ramps join: one entry row for its main
+    /// carriageway and one per ramp.
+    #[test]
+    fn the_regions_announce_their_entry_rows() {
+        assert_eq!(entry_rows(""), 0);
+        assert_eq!(entry_rows("gneE7"), 2);
+        assert_eq!(entry_rows("264308374; 4054057 4054058"), 2 + 3);
+    }
+
+    /// A collected directory of one episode row, one region row and its two entry rows, each
+    /// file edited by `edit`.
     fn collected(edit: impl Fn(String) -> String) -> tempfile::TempDir {
         let d = tempfile::tempdir().unwrap();
         let episode = Summary {
@@ -334,9 +381,19 @@ mod tests {
             region: "gneE7".into(),
             ..RegionRow::default()
         };
+        let entry = |entry: &str, origin: &str| EntryRow {
+            scenario: "ramp.sumocfg".into(),
+            planner: "bk-pbs".into(),
+            region: "gneE7".into(),
+            entry: entry.into(),
+            origin: origin.into(),
+            ..EntryRow::default()
+        };
+        let entries = [entry("main", "main"), entry("gneE14", "ramp")];
         for (name, text) in [
             ("episodes.csv", Summary::csv(Traffic::Scenario, &[episode])),
             ("regions.csv", csv_of(&[region])),
+            ("entries.csv", csv_of(&entries)),
         ] {
             let text = edit(String::from_utf8(text).unwrap());
             std::fs::write(d.path().join(name), text).unwrap();
@@ -374,5 +431,19 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("inserted = '-3' is negative"), "{e}");
+        let maybe = collected(|t| t.replace(",false,", ",maybe,"));
+        let e = ScenarioResults::read(maybe.path()).unwrap_err().to_string();
+        assert!(
+            e.contains("regions.csv, line 2: ramp_traffic = 'maybe' is neither true nor false"),
+            "{e}"
+        );
+        let entry_twice = collected(|t| t.replace("gneE14,ramp", "main,main"));
+        let e = ScenarioResults::read(entry_twice.path())
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("entries.csv, line 3: cell ramp.sumocfg bk-pbs 0 0 gneE7 main main"),
+            "{e}"
+        );
     }
 }

@@ -158,9 +158,11 @@ pub fn merge(dirs: &[PathBuf], allow_mixed: bool) -> Result<ScenarioResults, Mer
             );
         }
     };
-    // regions.csv leads with scenario, planner, alpha, seed; the led files with the same four.
+    // regions.csv and entries.csv lead with scenario, planner, alpha, seed; the led files with
+    // the same four.
     take(&|r| &r.episodes, episode_at, &mut merged.episodes);
     take(&|r| &r.regions, [0, 1, 2, 3], &mut merged.regions);
+    take(&|r| &r.entries, [0, 1, 2, 3], &mut merged.entries);
     take(&|r| &r.vehicles, [0, 1, 2, 3], &mut merged.vehicles);
     take(&|r| &r.timings, [0, 1, 2, 3], &mut merged.timings);
     merged.failures = failures_outside(&parts, &owner);

@@ -9,7 +9,8 @@
 //! campaign.toml                                  the settings; a re-run must agree
 //! episodes/<planner>/<scenario>/a<α>_s<seed>/     the files of `bkpbs episode --sumocfg`
 //!     (+ settings.toml, provenance.toml), or error.txt
-//! episodes.csv regions.csv vehicles.csv timings.csv failures.csv   collected, grid order
+//! episodes.csv regions.csv entries.csv vehicles.csv timings.csv failures.csv
+//!                                                collected, grid order
 //! report/                                        per-region paired comparisons
 //! ```
 //!

@@ -19,12 +19,16 @@
 //! are its trained action space). Campaigns over scenarios run these episodes in worker
 //! processes (`campaign::scenarios`).
 
+mod entry_rows;
+#[cfg(test)]
+mod entry_tests;
 mod never_inserted;
 mod options;
 mod own_loop;
 mod passage;
 mod records;
 mod region;
+mod region_books;
 mod region_rows;
 mod round;
 mod run;
@@ -46,6 +50,7 @@ use crate::sumo::route_files::distributions;
 use crate::sumo::sumocfg::{SumoConfig, SumoConfigError};
 use crate::sumo::{Simulation, StderrCapture};
 
+pub use entry_rows::EntryRow;
 pub use options::{has_cavs, sumo_options, SumoOptions};
 pub use own_loop::OwnLoop;
 pub use records::{csv_of, ScenarioVehicle};
@@ -62,6 +67,9 @@ pub struct ScenarioResult {
     pub vehicles: Vec<ScenarioVehicle>,
     /// One row per merge region (`regions.csv`), in the order of `summary.regions`.
     pub regions: Vec<RegionRow>,
+    /// One row per merge region and entry (`entries.csv`): the regions in the order of
+    /// `regions`, each one's main carriageway first, then its on-ramps along the road.
+    pub entries: Vec<EntryRow>,
     /// Every collision SUMO reported.
     pub collisions: Vec<CollisionEvent>,
     /// The options bkpbs gave SUMO beside the user's configuration.
@@ -82,6 +90,33 @@ pub struct ScenarioResult {
     /// Each region's planners' trace (region name, `trace.jsonl` text), when `output.trace`
     /// asks (`bkpbs episode --trace`).
     pub traces: Vec<(String, String)>,
+}
+
+impl ScenarioResult {
+    /// One `warning:` line per region no vehicle entered from an on-ramp (`regions.csv`'s
+    /// `ramp_traffic` false), naming its ramps: its rows measure traffic past a merge nobody
+    /// used, not merging.
+    pub fn no_ramp_traffic_warnings(&self) -> Vec<String> {
+        let ramp = crate::model::scene::Origin::Ramp.as_str();
+        (self.regions.iter())
+            .filter(|row| !row.ramp_traffic)
+            .map(|row| {
+                let ramps: Vec<&str> = (self.entries.iter())
+                    .filter(|e| e.region == row.region && e.origin == ramp)
+                    .map(|e| e.entry.as_str())
+                    .collect();
+                let plural = if ramps.len() == 1 { "" } else { "s" };
+                format!(
+                    "warning: region {} received no vehicle from its on-ramp{plural} ({}) in this \
+                     episode ({} never inserted were bound for it): its rows measure traffic \
+                     past a merge nobody used",
+                    row.region,
+                    ramps.join(", "),
+                    row.never_inserted_ramp
+                )
+            })
+            .collect()
+    }
 }
 
 /// The directory below an episode's where each region's trajectories go
@@ -375,6 +410,7 @@ pub fn write(
     let episode = Summary::csv(Traffic::Scenario, std::slice::from_ref(&result.summary));
     let vehicles = csv_of(&result.vehicles);
     let regions = csv_of(&result.regions);
+    let entries = csv_of(&result.entries);
     let collisions = crate::episode::output::collisions_csv(&result.collisions);
     let timing = crate::episode::output::timing_csv(&result.timing);
     write_trajectories(result, dir, &collisions)?;
@@ -387,6 +423,7 @@ pub fn write(
             ("sumo_options.txt", Some(options.as_bytes())),
             ("vehicles.csv", Some(&vehicles[..])),
             ("regions.csv", Some(&regions[..])),
+            ("entries.csv", Some(&entries[..])),
             ("collisions.csv", Some(&collisions[..])),
             ("timing.csv", Some(&timing[..])),
             ("episode.csv", Some(&episode[..])),

@@ -85,6 +85,15 @@ pub struct ScenarioVehicle {
     pub crashed_with: String,
     /// Whether a CAV took part in its collision.
     pub controllable_crash: bool,
+    /// The entry by which it came into its first region: `main` (the main carriageway) or the
+    /// SUMO edge id of the on-ramp's first edge in the region; empty if it entered none.
+    pub region_entry: String,
+    /// Its system delay in the region against its own desired speed (s): as `region_delay_s`,
+    /// the free-flow time capped at that speed instead of the region's `v_max`: SUMO's speed
+    /// factor of the vehicle times the speed limit of the region's main carriageway where it
+    /// begins, at most its own top speed; none if crashed or it entered no region.
+    #[serde(serialize_with = "cells::opt_decimals::<4, _>")]
+    pub region_delay_own_s: Option<f64>,
 }
 
 impl Summary {

@@ -62,6 +62,13 @@ pub struct RegionRow {
     /// Mean SUMO `timeLoss` of its vehicles not crashed, over their whole trip (s).
     #[serde(serialize_with = "cells::opt_decimals::<4, _>")]
     pub mean_time_loss_s: Option<f64>,
+    /// Whether any vehicle entered it from an on-ramp: without, its figures are of traffic past
+    /// a merge nobody used (`entries.csv` says which ramp fed it).
+    pub ramp_traffic: bool,
+    /// Mean system delay in the region against each vehicle's own desired speed (s), every
+    /// vehicle not crashed (`vehicles.csv`'s `region_delay_own_s`).
+    #[serde(serialize_with = "cells::opt_decimals::<4, _>")]
+    pub mean_delay_own_s: Option<f64>,
 }
 
 /// The row of each region named in `regions` (in that order, a region no vehicle entered
@@ -98,11 +105,12 @@ fn row_of(head: RegionRow, mine: &[&ScenarioVehicle]) -> RegionRow {
         )
     };
     let ramp = Origin::Ramp.as_str();
+    let from_ramp = count(&|v| v.region_origin == ramp);
     RegionRow {
         vehicles: mine.len(),
         cavs: count(&|v| v.kind == Kind::Cav),
         from_main: count(&|v| v.region_origin == Origin::Main.as_str()),
-        from_ramp: count(&|v| v.region_origin == ramp),
+        from_ramp,
         arrived: count(&|v| v.outcome == Outcome::Arrived),
         crashed: count(&|v| v.outcome == Outcome::Crashed),
         present: count(&|v| v.outcome == Outcome::Present),
@@ -117,6 +125,8 @@ fn row_of(head: RegionRow, mine: &[&ScenarioVehicle]) -> RegionRow {
                 .filter(|v| v.outcome != Outcome::Crashed)
                 .filter_map(|v| v.time_loss_s),
         ),
+        ramp_traffic: from_ramp > 0,
+        mean_delay_own_s: mean(mine.iter().filter_map(|v| v.region_delay_own_s)),
         ..head
     }
 }
@@ -131,6 +141,7 @@ mod tests {
             kind,
             region_origin: origin.into(),
             region_delay_s: Some(delay),
+            region_delay_own_s: Some(delay - 1.0),
             time_loss_s: Some(2.0 * delay),
             outcome: Outcome::Arrived,
             ..ScenarioVehicle::default()
@@ -160,7 +171,12 @@ mod tests {
             (Some(2.0), Some(2.0))
         );
         assert_eq!(a.mean_time_loss_s, Some(6.0));
+        assert_eq!((a.ramp_traffic, a.mean_delay_own_s), (true, Some(2.0)));
         assert_eq!((rows[1].vehicles, rows[1].mean_delay_s), (1, Some(10.0)));
+        assert!(
+            !rows[1].ramp_traffic,
+            "b's only vehicle came by the main road"
+        );
         assert_eq!(rows[1].mean_delay_cav_s, None);
         assert_eq!((rows[2].vehicles, rows[2].mean_delay_s), (0, None));
     }

@@ -19,10 +19,10 @@ use crate::sumo::frame;
 use crate::sumo::{RawVehicleState, Simulation, SumoClient, SumoError, VehicleReadings};
 
 use super::never_inserted::{never_inserted_rows, to_ms};
-use super::passage::{enter, first_region_on, passage, Entry};
+use super::passage::{enter, first_region_on, own_desired_speed, passage, Entry};
 use super::records::{self, ScenarioVehicle};
 pub use super::region::Region;
-use super::region_rows::{region_rows, RegionRow};
+use super::region_books::region_books;
 use super::round::{crosses_a_region, plan_together, Fleet, Round};
 use super::{becomes_cav, has_cavs, ScenarioResult, SumoOptions};
 use crate::episode::summary::{Summary, Traffic};
@@ -39,6 +39,8 @@ struct Line {
     size: (f64, f64),
     /// Its own top speed (m/s), from its SUMO type.
     max_speed: f64,
+    /// Its own speed factor: its desired speed over the lane's limit, drawn by SUMO.
+    speed_factor: f64,
     /// Its own accelerations, from its SUMO type.
     limits: Limits,
     /// The region it entered first, and where and how: its frame position and speed then.
@@ -74,8 +76,8 @@ pub struct ScenarioRun {
     /// SUMO's time after the last step seen (s): at the end, the episode's end.
     end: f64,
     /// Where each vehicle that ever waited would enter a region first (by its route): which
-    /// region, and from where; none for a route through no region.
-    waiting: HashMap<String, Option<(usize, Origin)>>,
+    /// region, and by which of its road's entries; none for a route through no region.
+    waiting: HashMap<String, Option<(usize, usize)>>,
     /// The planners' search effort, over every round of every region.
     plan_stats: PlanStats,
     /// Whether the episode removes the vehicles of a collision (with CAVs; without, SUMO's
@@ -263,6 +265,7 @@ impl ScenarioRun {
             let sumo_type = sim.vehicle_type(&id)?;
             let size = sim.vehicle_size(&id)?;
             let max_speed = sim.vehicle_max_speed(&id)?;
+            let speed_factor = sim.vehicle_speed_factor(&id)?;
             let limits = sim.vehicle_limits(&id)?;
             let drawn = becomes_cav(s, &id, &sumo_type);
             let crosses = || crosses_a_region(sim, &id, regions);
@@ -282,6 +285,7 @@ impl ScenarioRun {
                 },
                 size,
                 max_speed,
+                speed_factor,
                 limits,
                 entry: None,
                 commanded: None,
@@ -445,17 +449,12 @@ impl ScenarioRun {
         (trajectories, traces)
     }
 
-    /// Adds each vehicle still waiting at the end to the row of the region its route enters
-    /// first, by where it enters.
-    fn count_never_inserted(&self, regions: &mut [RegionRow]) {
-        for id in &self.pending {
-            if let Some(&Some((g, origin))) = self.waiting.get(id) {
-                match origin {
-                    Origin::Main => regions[g].never_inserted_main += 1,
-                    Origin::Ramp => regions[g].never_inserted_ramp += 1,
-                }
-            }
-        }
+    /// Where each vehicle still waiting at the end would enter a region first: the region and
+    /// the entry of its road (those whose routes enter none left out).
+    fn never_inserted_entries(&self) -> Vec<(usize, usize)> {
+        (self.pending.iter())
+            .filter_map(|id| *self.waiting.get(id)?)
+            .collect()
     }
 
     /// The rows of the vehicles still waiting at the end, SUMO's `trips` giving their waits;
@@ -470,15 +469,9 @@ impl ScenarioRun {
         })
     }
 
-    /// The records with SUMO's trip figures and each vehicle's delay in its region, and the
-    /// summary.
-    pub fn finish(
-        mut self,
-        planner: &str,
-        options: &SumoOptions,
-    ) -> Result<ScenarioResult, String> {
-        let trips = records::read_trips(&options.tripinfo)?;
-        let (trajectories, traces) = self.take_region_files();
+    /// The records of the vehicles SUMO inserted, with SUMO's trip figures and each one's
+    /// passage through its first region, then those of the vehicles never inserted.
+    fn vehicle_records(&mut self, trips: &BTreeMap<String, records::Trip>) -> Vec<ScenarioVehicle> {
         let mut vehicles: Vec<ScenarioVehicle> = std::mem::take(&mut self.lines)
             .into_iter()
             .map(|l| {
@@ -490,33 +483,42 @@ impl ScenarioRun {
                     v.scheduled_depart_s = v.depart_s.map(|d| to_ms(d - t.depart_delay));
                 }
                 if let Some(e) = l.entry {
-                    passage(&mut v, &e, &self.regions[e.region].config);
+                    let region = &self.regions[e.region];
+                    let own = own_desired_speed(l.speed_factor, l.max_speed, &region.road);
+                    passage(&mut v, &e, region, own);
                 }
                 v
             })
             .collect();
-        vehicles.extend(self.never_inserted(&trips));
+        vehicles.extend(self.never_inserted(trips));
+        vehicles
+    }
+
+    /// The records with SUMO's trip figures and each vehicle's delay in its region, the books
+    /// of each region and entry, and the summary.
+    pub fn finish(
+        mut self,
+        planner: &str,
+        options: &SumoOptions,
+    ) -> Result<ScenarioResult, String> {
+        let trips = records::read_trips(&options.tripinfo)?;
+        let (trajectories, traces) = self.take_region_files();
+        let vehicles = self.vehicle_records(&trips);
         let hdv_collisions = self.collisions.iter().filter(|c| !c.controllable()).count();
         let names: Vec<String> = self.regions.iter().map(|r| r.name.clone()).collect();
         let head = summary_head(&self.config, planner, &names);
         let (steps, in_scenes, cavs) = self.occupancy;
         let per_step = |n: u64| n as f64 / steps.max(1) as f64;
-        let region_head = RegionRow {
-            scenario: head.scenario.clone().unwrap_or_default(),
-            planner: head.planner.clone(),
-            alpha: head.alpha,
-            seed: head.seed,
-            ..RegionRow::default()
-        };
+        let waiting = self.never_inserted_entries();
+        let (regions, entries) = region_books(&head, &self.regions, &vehicles, &waiting);
         let summary = Summary {
             plan_stats: self.plan_stats,
             ..Summary::of_scenario(head, &vehicles, hdv_collisions, self.end)
         };
-        let mut regions = region_rows(&region_head, &names, &vehicles);
-        self.count_never_inserted(&mut regions);
         Ok(ScenarioResult {
             summary,
             regions,
+            entries,
             vehicles,
             collisions: self.collisions,
             sumo_options: options.args.clone(),

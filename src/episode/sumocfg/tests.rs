@@ -19,15 +19,15 @@ use crate::sumo::fake::{FakeSumo, FakeVehicle, Reading, Sent, Step};
 use crate::sumo::SumoClient;
 
 /// SUMO's step length in these tests (the configuration's default).
-const DT: f64 = 0.2;
+pub(super) const DT: f64 = 0.2;
 
 /// The time the `k`-th scripted step (from 1) began: the time the loop books it at.
-fn began(k: u32) -> f64 {
+pub(super) fn began(k: u32) -> f64 {
     f64::from(k - 1) * DT
 }
 
 /// The episode's configuration: CAVs drawn with `alpha` on `seed`.
-fn config(alpha: f64, seed: u64) -> Config {
+pub(super) fn config(alpha: f64, seed: u64) -> Config {
     let mut c = Config::default();
     c.scenario.dt = DT;
     c.scenario.alpha = alpha;
@@ -36,13 +36,13 @@ fn config(alpha: f64, seed: u64) -> Config {
 }
 
 /// The loop over the paper merge's one region, planned by `planner`.
-fn paper_run(config: &Config, planner: &str) -> ScenarioRun {
+pub(super) fn paper_run(config: &Config, planner: &str) -> ScenarioRun {
     let regions = regions(config, vec![Road::paper_default()], planner).unwrap();
     ScenarioRun::new(config, regions)
 }
 
 /// SUMO playing `script`, the loop's edges registered, as the loop's caller does first.
-fn sumo_for(run: &ScenarioRun, script: Vec<Step>) -> FakeSumo {
+pub(super) fn sumo_for(run: &ScenarioRun, script: Vec<Step>) -> FakeSumo {
     let mut sim = FakeSumo::new(DT, script);
     let names = run.edge_names();
     let names: Vec<&str> = names.iter().map(String::as_str).collect();
@@ -51,7 +51,7 @@ fn sumo_for(run: &ScenarioRun, script: Vec<Step>) -> FakeSumo {
 }
 
 /// Steps SUMO `steps` times, the loop booking and planning after each, as `ScenarioRun::run`.
-fn play(run: &mut ScenarioRun, sim: &mut FakeSumo, steps: u32) {
+pub(super) fn play(run: &mut ScenarioRun, sim: &mut FakeSumo, steps: u32) {
     for _ in 0..steps {
         let now = sim.time().unwrap();
         sim.step();
@@ -60,7 +60,7 @@ fn play(run: &mut ScenarioRun, sim: &mut FakeSumo, steps: u32) {
 }
 
 /// The episode's result, SUMO's tripinfo output being `trips` (`<tripinfo>` elements).
-fn finish(mut run: ScenarioRun, trips: &str) -> ScenarioResult {
+pub(super) fn finish(mut run: ScenarioRun, trips: &str) -> ScenarioResult {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("tripinfo.xml");
     std::fs::write(&path, format!("<tripinfos>\n{trips}\n</tripinfos>\n")).unwrap();
@@ -74,7 +74,7 @@ fn finish(mut run: ScenarioRun, trips: &str) -> ScenarioResult {
 }
 
 /// The record of vehicle `id`.
-fn record<'a>(result: &'a ScenarioResult, id: &str) -> &'a super::ScenarioVehicle {
+pub(super) fn record<'a>(result: &'a ScenarioResult, id: &str) -> &'a super::ScenarioVehicle {
     result.vehicles.iter().find(|v| v.id == id).unwrap()
 }
 
