@@ -11,7 +11,6 @@ use pyo3::types::{PyBytes, PyDict, PyList, PyString, PyTuple};
 
 use bkpbs::campaign::collect::cell_dir;
 use bkpbs::campaign::portable;
-use bkpbs::campaign::scenarios::{is_scenario_campaign, ScenarioSettings};
 use bkpbs::campaign::worker::{self, Outcome, Request};
 use bkpbs::campaign::{tasks, CampaignError, CampaignSpec, Overrides, Settings, SettingsError};
 use bkpbs::report::{self as core_report, ReportError};
@@ -59,33 +58,21 @@ fn axis(v: Option<&Bound<'_, PyAny>>) -> PyResult<Option<String>> {
     Ok(Some(parts.join(",")))
 }
 
-/// Which kind of campaign: on the paper's demand, or over scenarios of the user's own.
-enum Grid {
-    Demand(Box<Settings>),
-    Scenarios(Box<ScenarioSettings>),
-}
-
 /// A planners × α × λ × seeds campaign in directory `out`, or planners × scenarios × α ×
 /// seeds with `sumocfg`.
 #[pyclass(name = "Campaign", module = "bkpbs", frozen)]
 pub struct PyCampaign {
-    settings: Grid,
+    settings: Box<Settings>,
     out: PathBuf,
 }
 
 impl PyCampaign {
     fn grid_len(&self) -> usize {
-        match &self.settings {
-            Grid::Demand(s) => s.grid.len(),
-            Grid::Scenarios(s) => s.grid.len(),
-        }
+        self.settings.grid.len()
     }
 
     fn shard_text(&self) -> String {
-        match &self.settings {
-            Grid::Demand(s) => s.shard.to_string(),
-            Grid::Scenarios(s) => s.shard.to_string(),
-        }
+        self.settings.shard.to_string()
     }
 }
 
@@ -126,14 +113,8 @@ impl PyCampaign {
             shard,
             sumocfg: axis(sumocfg)?,
         };
-        let file = config.as_deref();
-        let settings = if is_scenario_campaign(file, &overrides).map_err(settings_error)? {
-            let s = ScenarioSettings::resolve(file, &overrides).map_err(settings_error)?;
-            Grid::Scenarios(Box::new(s))
-        } else {
-            let s = Settings::resolve(file, &overrides).map_err(settings_error)?;
-            Grid::Demand(Box::new(s))
-        };
+        let settings =
+            Box::new(Settings::resolve(config.as_deref(), &overrides).map_err(settings_error)?);
         Ok(PyCampaign { settings, out })
     }
 
@@ -157,10 +138,7 @@ impl PyCampaign {
 
     /// The settings as `campaign.toml` holds them.
     fn settings_toml(&self) -> String {
-        match &self.settings {
-            Grid::Demand(s) => s.to_toml(),
-            Grid::Scenarios(s) => s.to_toml(),
-        }
+        self.settings.to_toml()
     }
 
     /// Every cell of the grid in grid order, each with its directory: planner, α, λ, seed
@@ -168,10 +146,7 @@ impl PyCampaign {
     /// seed.
     fn cells<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyList>> {
         let out = PyList::empty(py);
-        let cells = match &self.settings {
-            Grid::Demand(s) => s.grid.cells(),
-            Grid::Scenarios(s) => s.grid.cells(),
-        };
+        let cells = self.settings.grid.cells();
         for (position, c) in cells.iter().enumerate() {
             let d = PyDict::new(py);
             d.set_item("position", position)?;
@@ -193,11 +168,9 @@ impl PyCampaign {
     /// Readies the directory (checks an earlier run's settings, writes `campaign.toml`) and
     /// returns the unfinished episodes of this shard as tasks, in grid order.
     fn prepare(&self) -> PyResult<Vec<PyCampaignTask>> {
-        let requests = match &self.settings {
-            Grid::Demand(s) => tasks::prepare(s.as_ref(), &self.out).map(|p| p.requests),
-            Grid::Scenarios(s) => tasks::prepare(s.as_ref(), &self.out).map(|p| p.requests),
-        }
-        .map_err(campaign_error)?;
+        let requests = tasks::prepare(self.settings.as_ref(), &self.out)
+            .map(|p| p.requests)
+            .map_err(campaign_error)?;
         Ok(requests
             .into_iter()
             .map(|request| PyCampaignTask { request })
@@ -208,11 +181,8 @@ impl PyCampaign {
     /// `vehicles.csv`, `timings.csv`, `failures.csv`, and over scenarios `regions.csv` and
     /// `entries.csv`) and says how many there are.
     fn collect<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        let collected = match &self.settings {
-            Grid::Demand(s) => CampaignSpec::collect(s.as_ref(), &self.out),
-            Grid::Scenarios(s) => CampaignSpec::collect(s.as_ref(), &self.out),
-        }
-        .map_err(campaign_error)?;
+        let collected =
+            CampaignSpec::collect(self.settings.as_ref(), &self.out).map_err(campaign_error)?;
         let (collected, failed) = (collected.episodes, collected.failures);
         let d = PyDict::new(py);
         d.set_item("grid", self.grid_len())?;

@@ -1,5 +1,5 @@
 //! Reading and checking the settings of either kind of campaign — on the paper's demand
-//! ([`super::settings`]) or over scenarios of the user's own ([`super::scenarios::settings`]):
+//! ([`super::settings`]) or over scenarios of the user's own ([`super::settings::scenarios`]):
 //! the campaign file split into its table and scenario settings, list flags, and values checked
 //! with errors that name the flag, or the key and its file.
 

@@ -136,8 +136,8 @@ pub struct RunSummary {
 }
 
 /// Runs (or resumes) a campaign in `out` with worker processes of `exe` (the `bkpbs` binary),
-/// then collects the results: the paper's demand ([`Settings`]) or scenarios of the user's own
-/// ([`scenarios::ScenarioSettings`]) alike. Prints one status line before and one after; draws a
+/// then collects the results: the paper's demand or scenarios of the user's own alike (one
+/// [`Settings`]). Prints one status line before and one after; draws a
 /// progress bar on stderr only when stderr is a terminal.
 ///
 /// # Errors

@@ -1,7 +1,7 @@
-//! What the one campaign runner asks of a campaign's settings, whatever traffic its cells run:
-//! the paper's generated demand ([`super::Settings`]) or scenarios of the user's own
-//! ([`super::scenarios::ScenarioSettings`]). The claim, the resume check, the preparation of
-//! the requests, the run and the collection are written once, over this trait.
+//! What the one campaign runner asks of a campaign's settings ([`super::Settings`]), whatever
+//! traffic its cells run: the paper's generated demand or scenarios of the user's own. The
+//! claim, the resume check, the preparation of the requests, the run and the collection are
+//! written once, over this trait; where the two traffics' files differ, it says which.
 
 use std::path::Path;
 use std::time::Duration;
@@ -59,30 +59,30 @@ pub trait CampaignSpec {
     fn collect(&self, out: &Path) -> Result<Collected, CampaignError>;
 }
 
-/// The getters both settings types answer from their fields of the same names (`grid`,
-/// `shard`, `workers`, `episode_timeout`), written once.
-macro_rules! run_fields {
-    () => {
-        fn cells(&self) -> Vec<Cell> {
-            self.grid.cells()
-        }
-        fn shard(&self) -> Shard {
-            self.shard
-        }
-        fn workers(&self) -> usize {
-            self.workers
-        }
-        fn episode_timeout(&self) -> Option<Duration> {
-            self.episode_timeout
-        }
-    };
-}
-
 impl CampaignSpec for super::Settings {
-    run_fields!();
-
+    fn cells(&self) -> Vec<Cell> {
+        self.grid.cells()
+    }
+    fn shard(&self) -> Shard {
+        self.shard
+    }
+    fn workers(&self) -> usize {
+        self.workers
+    }
+    fn episode_timeout(&self) -> Option<Duration> {
+        self.episode_timeout
+    }
     fn axes(&self) -> String {
         let g = &self.grid;
+        if self.is_over_scenarios() {
+            return format!(
+                "{} planners × {} scenarios × {} α × {} seeds",
+                g.planners.len(),
+                g.scenarios.len(),
+                g.alphas.len(),
+                g.seeds.len(),
+            );
+        }
         let profiles = match g.profiles.len() {
             1 => String::new(),
             n => format!(" × {n} HDV profiles"),
@@ -107,60 +107,35 @@ impl CampaignSpec for super::Settings {
         Ok(self.scenario_difference(&earlier))
     }
     fn recorded_outside(&self, out: &Path) -> Vec<String> {
+        if self.is_over_scenarios() {
+            return super::scenarios::collect::recorded_outside(out, &self.grid);
+        }
         let cells = super::collect::recorded_outside(out, &self.grid);
         cells.iter().map(ToString::to_string).collect()
     }
     fn readiness(&self, out: &Path, cell: &Cell) -> Readiness {
+        if self.is_over_scenarios() {
+            return super::scenarios::collect::cell_state(out, self, cell).without_files();
+        }
         super::collect::cell_state(out, self, cell).without_files()
     }
     fn episode_config(&self, cell: &Cell) -> Config {
         super::Settings::episode_config(self, cell)
     }
     fn collect(&self, out: &Path) -> Result<Collected, CampaignError> {
+        if self.is_over_scenarios() {
+            let results = super::scenarios::collect::collect(out, self);
+            results.write(out)?;
+            return Ok(Collected {
+                episodes: results.episodes.len(),
+                failures: results.failures.len(),
+            });
+        }
         let results = super::collect::collect(out, self)?;
         results.write(out)?;
         Ok(Collected {
             episodes: results.episodes.rows.len(),
             failures: results.failures.rows.len(),
-        })
-    }
-}
-
-impl CampaignSpec for super::scenarios::ScenarioSettings {
-    run_fields!();
-
-    fn axes(&self) -> String {
-        let g = &self.grid;
-        format!(
-            "{} planners × {} scenarios × {} α × {} seeds",
-            g.planners.len(),
-            g.scenarios.len(),
-            g.alphas.len(),
-            g.seeds.len(),
-        )
-    }
-    fn to_toml(&self) -> String {
-        super::scenarios::ScenarioSettings::to_toml(self)
-    }
-    fn difference_from_file(&self, file: &Path) -> Result<Option<String>, SettingsError> {
-        let earlier = super::scenarios::ScenarioSettings::from_campaign_file(file)?;
-        Ok(self.difference(&earlier))
-    }
-    fn recorded_outside(&self, out: &Path) -> Vec<String> {
-        super::scenarios::collect::recorded_outside(out, &self.grid)
-    }
-    fn readiness(&self, out: &Path, cell: &Cell) -> Readiness {
-        super::scenarios::collect::cell_state(out, self, cell).without_files()
-    }
-    fn episode_config(&self, cell: &Cell) -> Config {
-        super::scenarios::ScenarioSettings::episode_config(self, cell)
-    }
-    fn collect(&self, out: &Path) -> Result<Collected, CampaignError> {
-        let results = super::scenarios::collect::collect(out, self);
-        results.write(out)?;
-        Ok(Collected {
-            episodes: results.episodes.len(),
-            failures: results.failures.len(),
         })
     }
 }

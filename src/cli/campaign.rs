@@ -5,7 +5,6 @@ use std::path::PathBuf;
 use anyhow::{Context, Result};
 use clap::Args;
 
-use bkpbs::campaign::scenarios::{is_scenario_campaign, ScenarioSettings};
 use bkpbs::campaign::{self, Overrides, Settings};
 use bkpbs::config::TrajectoryFormat;
 use bkpbs::report::episode_plots;
@@ -72,15 +71,9 @@ pub struct CampaignArgs {
 
 /// A checked campaign: the grid, shard and scenario settings, and where results go.
 pub struct Campaign {
-    settings: Grid,
+    settings: Box<Settings>,
     out: PathBuf,
     plots: bool,
-}
-
-/// Which kind of campaign: the paper's demand, or scenarios of the user's own.
-enum Grid {
-    Demand(Box<Settings>),
-    Scenarios(Box<ScenarioSettings>),
 }
 
 impl CampaignArgs {
@@ -105,28 +98,14 @@ impl CampaignArgs {
                 .or(self.plots.then_some(TrajectoryFormat::Csv)),
             sumocfg: self.sumocfg,
         };
-        let file = self.config.as_deref();
-        if is_scenario_campaign(file, &overrides)? {
-            let settings = ScenarioSettings::resolve(file, &overrides)?;
-            if self.plots && settings.config.output.trajectories != TrajectoryFormat::Csv {
-                anyhow::bail!(
-                    "--plots draws from trajectories.csv: it needs --trajectories-format csv"
-                );
-            }
-            return Ok(Campaign {
-                settings: Grid::Scenarios(Box::new(settings)),
-                out: self.out,
-                plots: self.plots,
-            });
-        }
-        let settings = Settings::resolve(file, &overrides)?;
+        let settings = Settings::resolve(self.config.as_deref(), &overrides)?;
         if self.plots && settings.config.output.trajectories != TrajectoryFormat::Csv {
             anyhow::bail!(
                 "--plots draws from trajectories.csv: it needs --trajectories-format csv"
             );
         }
         Ok(Campaign {
-            settings: Grid::Demand(Box::new(settings)),
+            settings: Box::new(settings),
             out: self.out,
             plots: self.plots,
         })
@@ -137,23 +116,19 @@ impl CampaignArgs {
 /// any episode failed (after the report, so the finished ones are not lost from view).
 pub fn run(c: Campaign) -> Result<()> {
     let exe = std::env::current_exe().context("cannot locate the bkpbs binary")?;
-    let done = match &c.settings {
-        Grid::Demand(s) => {
-            say_model_warnings(&s.config, &s.table.planners);
-            campaign::run(s.as_ref(), &c.out, &exe)?
-        }
-        Grid::Scenarios(s) => {
-            say_regions_left_to_sumo(s)?;
-            campaign::run(s.as_ref(), &c.out, &exe)?
-        }
-    };
+    let s = c.settings.as_ref();
+    match s.is_over_scenarios() {
+        true => say_regions_left_to_sumo(s)?,
+        false => say_model_warnings(&s.config, &s.table.planners),
+    }
+    let done = campaign::run(s, &c.out, &exe)?;
     if done.collected > 0 {
         print_report(std::slice::from_ref(&c.out), None, false, &[])?;
     }
     if c.plots && done.interrupted.is_none() {
-        let drawn = match &c.settings {
-            Grid::Demand(s) => episode_plots::plot_cells(&c.out, s)?,
-            Grid::Scenarios(s) => episode_plots::plot_scenario_cells(&c.out, s)?,
+        let drawn = match s.is_over_scenarios() {
+            false => episode_plots::plot_cells(&c.out, s)?,
+            true => episode_plots::plot_scenario_cells(&c.out, s)?,
         };
         println!(
             "plots: time–space diagram and speed field of {} cells (in each cell's directory){}",
@@ -187,7 +162,7 @@ pub fn run(c: Campaign) -> Result<()> {
 /// One line per merge region of each scenario that is left to SUMO's drivers, as an episode
 /// on it says at its start (its results are SUMO's own there), and the warnings of learned
 /// files trained on another scenario.
-fn say_regions_left_to_sumo(s: &ScenarioSettings) -> Result<()> {
+fn say_regions_left_to_sumo(s: &Settings) -> Result<()> {
     for cfg in &s.table.scenarios {
         let mut config = s.config.clone();
         config.scenario.sumocfg = Some(cfg.clone());

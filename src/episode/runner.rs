@@ -9,6 +9,7 @@ use std::time::Instant;
 
 use crate::config::Config;
 use crate::controller::{self, CavHandling, Command, Controller, PlanStats};
+use crate::episode::control;
 use crate::episode::demand::{self, PlannedVehicle};
 use crate::episode::entry::EntryControl;
 use crate::episode::error::EpisodeError;
@@ -26,17 +27,6 @@ use crate::model::scene::{Kind, Origin};
 use crate::sumo::files::EpisodeInput;
 use crate::sumo::frame::{self, SumoScene};
 use crate::sumo::{Simulation, StderrCapture, SumoClient, SumoError, VehicleReadings};
-
-/// SUMO speed mode for commanded CAVs: no checks at all, the commanded speed is the speed.
-const SPEED_MODE_COMMANDED: i32 = 0;
-/// SUMO lane-change mode for commanded CAVs: no own changes; requests obeyed without checks.
-const LC_MODE_COMMANDED: i32 = 0;
-/// SUMO lane-change mode for ramp HDVs: no own changes (the merge rule decides when), requests
-/// executed only into safe gaps, adapting speed to find one.
-const LC_MODE_RAMP_HDV: i32 = 0b10_0000_0000;
-/// The same for a ramp HDV stuck at the lane end: requests executed avoiding only immediate
-/// collisions (see `merge_rule`).
-const LC_MODE_RAMP_HDV_FORCED: i32 = 0b01_0000_0000;
 
 /// The end of a route: the section's end, or the end of off-ramp `exit`.
 fn route_end(road: &Road, exit: Option<usize>) -> (&str, f64) {
@@ -279,7 +269,7 @@ impl<'a> Episode<'a> {
         for m in self.merge_rule.requests(&self.sumo_scene.scene) {
             let v = &self.sumo_scene.scene.vehicles[m.vehicle];
             if m.forced {
-                sim.set_lane_change_mode(&v.id, LC_MODE_RAMP_HDV_FORCED)?;
+                control::ramp_hdv_forced(sim, &v.id)?;
             }
             sim.change_lane(&v.id, 1, self.config.scenario.dt)?;
         }
@@ -335,12 +325,11 @@ impl<'a> Episode<'a> {
             Kind::Hdv => {
                 sim.set_max_speed(id, expected.desired_speed)?;
                 if expected.origin == Origin::Ramp {
-                    sim.set_lane_change_mode(id, LC_MODE_RAMP_HDV)?;
+                    control::ramp_hdv_waits_for_the_rule(sim, id)?;
                 }
             }
             Kind::Cav if self.controller.handling() == CavHandling::Commanded => {
-                sim.set_speed_mode(id, SPEED_MODE_COMMANDED)?;
-                sim.set_lane_change_mode(id, LC_MODE_COMMANDED)?;
+                control::take_over(sim, id)?;
             }
             Kind::Cav => {}
         }

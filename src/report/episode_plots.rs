@@ -179,7 +179,7 @@ fn finished_dirs<S: CampaignSpec>(out: &Path, settings: &S) -> Vec<PathBuf> {
 /// parallel.
 pub fn plot_scenario_cells(
     out: &Path,
-    settings: &crate::campaign::scenarios::ScenarioSettings,
+    settings: &crate::campaign::Settings,
 ) -> Result<CellPlots, EpisodePlotError> {
     use rayon::prelude::*;
     let finished = finished_dirs(out, settings);

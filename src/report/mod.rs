@@ -128,7 +128,7 @@ pub enum ReportError {
 fn is_scenario_campaign(dir: &Path) -> bool {
     let file = dir.join(crate::campaign::SETTINGS_FILE);
     file.exists()
-        && crate::campaign::scenarios::is_scenario_campaign(
+        && crate::campaign::settings::is_scenario_campaign(
             Some(&file),
             &crate::campaign::Overrides::default(),
         )

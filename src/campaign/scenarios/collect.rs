@@ -14,7 +14,6 @@
 
 use std::path::{Path, PathBuf};
 
-use super::settings::ScenarioSettings;
 pub use crate::campaign::cell::cell_dir;
 use crate::campaign::cell::{
     check_run, check_settings_record, column_value, episode_row, failure_of, rows_counted,
@@ -23,6 +22,7 @@ use crate::campaign::cell::{
 use crate::campaign::grid::{file_name_of, Cell, Grid};
 use crate::campaign::provenance::check_provenance;
 use crate::campaign::results::{read_records, ResultsError};
+use crate::campaign::settings::Settings;
 use crate::campaign::validate::{check_rows, Rules};
 use crate::campaign::worker::DONE_FILE;
 use crate::episode::output::TIMING_COLUMNS;
@@ -61,7 +61,7 @@ pub struct Finished {
 }
 
 /// Where `cell` stands in `out`.
-pub fn cell_state(out: &Path, settings: &ScenarioSettings, cell: &Cell) -> CellState<Finished> {
+pub fn cell_state(out: &Path, settings: &Settings, cell: &Cell) -> CellState<Finished> {
     CellState::of(&cell_dir(out, cell), |dir| finished(dir, settings, cell))
 }
 
@@ -86,7 +86,7 @@ fn entry_rows(regions: &str) -> usize {
 
 /// The files of `cell` in `dir` if they are whole and this campaign's; otherwise what is
 /// wrong.
-fn finished(dir: &Path, settings: &ScenarioSettings, cell: &Cell) -> Result<Finished, String> {
+fn finished(dir: &Path, settings: &Settings, cell: &Cell) -> Result<Finished, String> {
     let header = Summary::header(Traffic::Scenario);
     let row = episode_row(dir, &header)?;
     let column = |name: &str| column_value(&header, &row, name);
@@ -228,7 +228,7 @@ pub const FAILURE_COLUMNS: [&str; 5] = ["planner", "scenario", "alpha", "seed", 
 
 /// Gathers every finished cell in grid order; the unfinished cells of this run's shard are
 /// failures, with their `error.txt`.
-pub fn collect(out: &Path, settings: &ScenarioSettings) -> ScenarioResults {
+pub fn collect(out: &Path, settings: &Settings) -> ScenarioResults {
     let mut res = ScenarioResults::default();
     for (position, cell) in settings.grid.cells().iter().enumerate() {
         let lead = [

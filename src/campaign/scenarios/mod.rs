@@ -14,15 +14,14 @@
 //! report/                                        per-region paired comparisons
 //! ```
 //!
-//! Modules: [`grid`] (cells and their order), [`settings`] (file and flags), [`collect`]
-//! (resume state, gathering). `--trajectories` writes each cell's region trajectories
+//! The grid is the one of every campaign ([`super::grid`], with its scenario axis), and so are
+//! the settings ([`super::Settings`], resolved over scenarios in [`super::settings::scenarios`]);
+//! here are [`collect`] (resume state, gathering) and [`merge`] (shards gathered). `--trajectories` writes each cell's region trajectories
 //! (`trajectories/<region>/`, as `bkpbs episode --sumocfg`), which `--plots` draws. The claim,
 //! the preparation, the run and the collection are the paper campaign's own
 //! ([`super::tasks`], [`super::run`]) over [`super::CampaignSpec`].
 
 pub mod collect;
 pub mod merge;
-pub mod settings;
 
 pub use collect::ScenarioResults;
-pub use settings::{is_scenario_campaign, ScenarioSettings};

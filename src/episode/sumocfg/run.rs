@@ -25,12 +25,8 @@ pub use super::region::Region;
 use super::region_books::region_books;
 use super::round::{crosses_a_region, plan_together, Fleet, Round};
 use super::{becomes_cav, has_cavs, ScenarioResult, SumoOptions};
+use crate::episode::control;
 use crate::episode::summary::{Summary, Traffic};
-
-/// SUMO's defaults, restored when a CAV leaves the planned part of a region: every safety check
-/// on, and its own lane changes (SUMO's `speedMode` 31 and `laneChangeMode` 1621).
-const SPEED_MODE_SUMO: i32 = 31;
-const LC_MODE_SUMO: i32 = 0b110_0101_0101;
 
 /// A vehicle of the scenario, as far as bkpbs follows it.
 struct Line {
@@ -404,8 +400,7 @@ impl ScenarioRun {
             && region.road.lanes_at(front).contains(&lane);
         let commanded = region.commanded();
         if planned && commanded && line.commanded != Some(g) {
-            sim.set_speed_mode(&line.record.id, 0)?;
-            sim.set_lane_change_mode(&line.record.id, 0)?;
+            control::take_over(sim, &line.record.id)?;
             line.commanded = Some(g);
         }
         let ramp = first && entry.origin == Origin::Ramp;
@@ -425,9 +420,7 @@ impl ScenarioRun {
             if line.commanded.is_some() && line.commanded != planned_by[k] {
                 line.commanded = None;
                 if line.record.outcome == Outcome::Present {
-                    sim.set_speed(&line.record.id, -1.0)?;
-                    sim.set_speed_mode(&line.record.id, SPEED_MODE_SUMO)?;
-                    sim.set_lane_change_mode(&line.record.id, LC_MODE_SUMO)?;
+                    control::hand_back(sim, &line.record.id)?;
                 }
             }
         }

@@ -34,8 +34,11 @@ use super::checks::{
 use super::comparison::{campaign_file, run_difference};
 use super::grid::{Cell, Grid, Shard};
 pub use super::overrides::Overrides;
+pub mod scenarios;
+
 use crate::config::{Config, ConfigError, PredictorKind};
 use crate::controller::PLANNERS;
+pub use scenarios::{is_scenario_campaign, ScenarioRecord};
 
 /// Steps of an episode of a campaign on the paper's demand, unless given.
 pub const DEFAULT_STEPS: u32 = 400;
@@ -118,8 +121,12 @@ pub struct Settings {
     pub workers: usize,
     /// Wall-clock limit of one episode, if any.
     pub episode_timeout: Option<Duration>,
-    /// Scenario settings shared by all cells; `scenario.steps` already set.
+    /// Scenario settings shared by all cells; `scenario.steps` already set (on the paper's
+    /// demand).
     pub config: Config,
+    /// Over scenarios of the user's own, each scenario's steps and file digests, in the order
+    /// of `grid.scenarios`; empty on the paper's demand.
+    pub scenario_records: Vec<ScenarioRecord>,
 }
 
 /// A campaign file split into its two parts; without a file, both parts' defaults.
@@ -167,7 +174,13 @@ fn apply_overrides(table: &mut CampaignTable, o: &Overrides) -> Result<(), Setti
 impl Settings {
     /// Reads the optional campaign file, applies the flags and validates everything, so that a
     /// bad setting stops the campaign before any episode runs.
+    ///
+    /// A campaign over scenarios of the user's own (`--sumocfg`, or a file whose table lists
+    /// `scenarios`) resolves as [`scenarios`] says.
     pub fn resolve(file: Option<&Path>, o: &Overrides) -> Result<Settings, SettingsError> {
+        if is_scenario_campaign(file, o)? {
+            return scenarios::resolve(file, o);
+        }
         let parts = match file {
             Some(p) => read_file(p)?,
             None => FileParts::default(),
@@ -222,11 +235,20 @@ impl Settings {
             workers,
             episode_timeout,
             config,
+            scenario_records: Vec::new(),
         })
+    }
+
+    /// Whether the campaign runs over scenarios of the user's own (else the paper's demand).
+    pub fn is_over_scenarios(&self) -> bool {
+        !self.grid.scenarios.is_empty()
     }
 
     /// The configuration of one cell's episode.
     pub fn episode_config(&self, cell: &Cell) -> Config {
+        if cell.scenario.is_some() {
+            return scenarios::episode_config(self, cell);
+        }
         let mut c = self.config.clone();
         c.scenario.alpha = cell.alpha;
         c.scenario.lambda = cell.lambda;
@@ -247,19 +269,20 @@ impl Settings {
             episode_timeout: None,
             ..self.table.clone()
         };
-        campaign_file(
-            "# bkpbs campaign settings; rerun with: bkpbs campaign --config campaign.toml --out DIR",
-            &table,
-            &self.config,
-        )
+        let header = match self.is_over_scenarios() {
+            true => "# bkpbs campaign over scenarios; rerun with: bkpbs campaign --config campaign.toml --out DIR",
+            false => "# bkpbs campaign settings; rerun with: bkpbs campaign --config campaign.toml --out DIR",
+        };
+        campaign_file(header, &table, &self.config)
     }
 
     /// Reads the settings a campaign directory was made with (its `campaign.toml`).
     /// The file's `sumo_version` is kept: it records which SUMO ran the campaign.
     pub fn from_campaign_file(path: &Path) -> Result<Settings, SettingsError> {
-        let parts = read_file(path)?;
-        let recorded = parts.table.sumo_version.clone();
-        let mut settings = Settings::from_parts(parts, Some(path), &Overrides::default())?;
+        let recorded = read_parts::<CampaignTable>(read_doc(path)?, path)?
+            .0
+            .sumo_version;
+        let mut settings = Settings::resolve(Some(path), &Overrides::default())?;
         settings.table.sumo_version = recorded;
         Ok(settings)
     }

@@ -16,40 +16,24 @@
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
-use std::time::Duration;
 
 use crate::campaign::checks::{
     check_planners_and_alphas, check_seeds_and_steps, episode_timeout, origin, parse_list,
     read_doc, read_parts, shard_of, worker_count,
 };
-use crate::campaign::comparison::{campaign_file, run_difference};
-use crate::campaign::grid::Shard;
+
 use crate::campaign::grid::{scenario_name, Cell, Grid};
-use crate::campaign::settings::{CampaignTable, Overrides, SettingsError};
+use crate::campaign::settings::{CampaignTable, Overrides, Settings, SettingsError};
 use crate::config::Config;
 use crate::sumo::scenario_files;
 use crate::sumo::sumocfg::SumoConfig;
 
-/// Validated settings of a campaign over scenarios.
-#[derive(Debug, Clone)]
-pub struct ScenarioSettings {
-    /// The `[campaign]` table as resolved.
-    pub table: CampaignTable,
-    /// Every episode, normalised.
-    pub grid: Grid,
-    /// The slice of the grid this run runs.
-    pub shard: Shard,
-    /// Worker processes, at least 1.
-    pub workers: usize,
-    /// Wall-clock limit of one episode, if any.
-    pub episode_timeout: Option<Duration>,
-    /// Settings shared by every cell (planner parameters, SUMO options, `scenario.regions`).
-    pub config: Config,
-    /// Each scenario's steps, in the order of `grid.scenarios`.
-    steps: Vec<u32>,
-    /// Per scenario (in grid order), the digests of its files
-    /// ([`crate::sumo::scenario_files::digests`]), which every cell's settings record carries.
-    digests: Vec<BTreeMap<String, String>>,
+/// What every cell of one scenario of a campaign runs with: its steps and the digests of its
+/// files ([`crate::sumo::scenario_files::digests`]), which every cell's settings record carries.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ScenarioRecord {
+    steps: u32,
+    digests: BTreeMap<String, String>,
 }
 
 /// Is this campaign one over scenarios of the user's own: `--sumocfg` given, or a file whose
@@ -126,106 +110,65 @@ fn apply_overrides(t: &mut CampaignTable, o: &Overrides) -> Result<(), SettingsE
     Ok(())
 }
 
-impl ScenarioSettings {
-    /// Reads the campaign file (if any), applies the flags and checks every value, every
-    /// scenario (readable, the planners' step length, an interval) and every cell's
-    /// configuration.
-    ///
-    /// # Errors
-    /// The first problem found, naming its flag or key and file.
-    pub fn resolve(file: Option<&Path>, o: &Overrides) -> Result<ScenarioSettings, SettingsError> {
-        let doc = match file {
-            Some(p) => read_doc(p)?,
-            None => toml::Table::new(),
-        };
-        refuse_demand_settings(&doc, o, file)?;
-        let (mut table, mut config): (CampaignTable, Config) = match file {
-            Some(p) => read_parts(doc, p)?,
-            None => Default::default(),
-        };
-        if let Some(format) = o.trajectories {
-            config.output.trajectories = format;
-        }
-        apply_overrides(&mut table, o)?;
-        let shard = shard_of(o)?;
-        let workers = worker_count(table.workers, o.workers.is_some(), file)?;
-        let timeout = episode_timeout(table.episode_timeout, o.episode_timeout.is_some(), file)?;
-        let grid = checked_grid(&table, o, file)?;
-        let steps = scenario_steps(&grid.scenarios, table.steps, config.scenario.dt)?;
-        let digests = grid
-            .scenarios
-            .iter()
-            .map(|path| scenario_files::digests(path))
-            .collect::<Result<_, _>>()?;
-        let settings = ScenarioSettings {
-            table,
-            grid,
-            shard,
-            workers,
-            episode_timeout: timeout,
-            config,
-            steps,
-            digests,
-        };
-        for cell in settings.grid.cells() {
-            settings.episode_config(&cell).validate()?;
-        }
-        Ok(settings)
+/// The settings of a campaign over scenarios: reads the campaign file (if any), applies the
+/// flags and checks every value, every scenario (readable, the planners' step length, an
+/// interval) and every cell's configuration.
+///
+/// # Errors
+/// The first problem found, naming its flag or key and file.
+pub(crate) fn resolve(file: Option<&Path>, o: &Overrides) -> Result<Settings, SettingsError> {
+    let doc = match file {
+        Some(p) => read_doc(p)?,
+        None => toml::Table::new(),
+    };
+    refuse_demand_settings(&doc, o, file)?;
+    let (mut table, mut config): (CampaignTable, Config) = match file {
+        Some(p) => read_parts(doc, p)?,
+        None => Default::default(),
+    };
+    if let Some(format) = o.trajectories {
+        config.output.trajectories = format;
     }
+    apply_overrides(&mut table, o)?;
+    let shard = shard_of(o)?;
+    let workers = worker_count(table.workers, o.workers.is_some(), file)?;
+    let timeout = episode_timeout(table.episode_timeout, o.episode_timeout.is_some(), file)?;
+    let grid = checked_grid(&table, o, file)?;
+    let steps = scenario_steps(&grid.scenarios, table.steps, config.scenario.dt)?;
+    let scenario_records = (grid.scenarios.iter().zip(steps))
+        .map(|(path, steps)| {
+            let digests = scenario_files::digests(path)?;
+            Ok(ScenarioRecord { steps, digests })
+        })
+        .collect::<Result<_, SettingsError>>()?;
+    let settings = Settings {
+        table,
+        grid,
+        shard,
+        workers,
+        episode_timeout: timeout,
+        config,
+        scenario_records,
+    };
+    for cell in settings.grid.cells() {
+        settings.episode_config(&cell).validate()?;
+    }
+    Ok(settings)
+}
 
-    /// A cell's whole configuration: the shared settings with its scenario, α, seed and steps.
-    pub fn episode_config(&self, cell: &Cell) -> Config {
-        let mut c = self.config.clone();
-        let i = self
-            .grid
-            .scenarios
-            .iter()
-            .position(|s| Some(s) == cell.scenario.as_ref());
-        c.scenario.sumocfg = cell.scenario.clone();
-        c.scenario.alpha = cell.alpha;
-        c.scenario.seed = cell.seed;
-        c.scenario.steps = i.map_or(c.scenario.steps, |i| self.steps[i]);
-        if let Some(i) = i {
-            c.scenario.sumocfg_digests = self.digests[i].clone();
-        }
-        c
+/// A cell's whole configuration on its scenario: the shared settings with its scenario, α,
+/// seed and steps.
+pub(crate) fn episode_config(settings: &Settings, cell: &Cell) -> Config {
+    let mut c = settings.config.clone();
+    let i = (settings.grid.scenarios.iter()).position(|s| Some(s) == cell.scenario.as_ref());
+    c.scenario.sumocfg = cell.scenario.clone();
+    c.scenario.alpha = cell.alpha;
+    c.scenario.seed = cell.seed;
+    if let Some(record) = i.map(|i| &settings.scenario_records[i]) {
+        c.scenario.steps = record.steps;
+        c.scenario.sumocfg_digests = record.digests.clone();
     }
-
-    /// `campaign.toml`: the shared settings and the table (without workers and timeout, which
-    /// do not change results).
-    pub fn to_toml(&self) -> String {
-        let table = CampaignTable {
-            workers: None,
-            episode_timeout: None,
-            ..self.table.clone()
-        };
-        campaign_file(
-            "# bkpbs campaign over scenarios; rerun with: bkpbs campaign --config campaign.toml --out DIR",
-            &table,
-            &self.config,
-        )
-    }
-
-    /// The settings recorded in a campaign directory's `campaign.toml`, with the SUMO version
-    /// that ran it.
-    ///
-    /// # Errors
-    /// As [`ScenarioSettings::resolve`].
-    pub fn from_campaign_file(path: &Path) -> Result<ScenarioSettings, SettingsError> {
-        let mut s = ScenarioSettings::resolve(Some(path), &Overrides::default())?;
-        let (recorded, _): (CampaignTable, Config) = read_parts(read_doc(path)?, path)?;
-        s.table.sumo_version = recorded.sumo_version;
-        Ok(s)
-    }
-
-    /// The first setting, dotted, in which `earlier` runs a cell differently: the shared
-    /// settings, the steps, the SUMO version. Other axes may differ: a grid may grow.
-    pub fn difference(&self, earlier: &ScenarioSettings) -> Option<String> {
-        run_difference(
-            (&self.config, &self.table),
-            (&earlier.config, &earlier.table),
-        )
-    }
+    c
 }
 
 /// The grid, after checking planners, scenarios, α and seeds.
