@@ -354,7 +354,7 @@ fn to_csv(header: &[String], rows: &[csv::StringRecord]) -> Vec<u8> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::episode::sumocfg::csv_of;
+    use crate::episode::sumocfg::{csv_of, RegionKey};
 
     /// A region's name lists the edges its on-ramps join: one entry row for its main
     /// carriageway and one per ramp.
@@ -375,16 +375,18 @@ mod tests {
             sumo_version: "1.15.0".into(),
             ..Summary::template(Traffic::Scenario)
         };
-        let region = RegionRow {
+        let key = RegionKey {
             scenario: "ramp.sumocfg".into(),
             planner: "bk-pbs".into(),
             region: "gneE7".into(),
+            ..RegionKey::default()
+        };
+        let region = RegionRow {
+            key: key.clone(),
             ..RegionRow::default()
         };
         let entry = |entry: &str, origin: &str| EntryRow {
-            scenario: "ramp.sumocfg".into(),
-            planner: "bk-pbs".into(),
-            region: "gneE7".into(),
+            key: key.clone(),
             entry: entry.into(),
             origin: origin.into(),
             ..EntryRow::default()

@@ -6,6 +6,7 @@
 use serde::Serialize;
 
 use super::records::ScenarioVehicle;
+use super::region_rows::RegionKey;
 use crate::episode::cells;
 use crate::episode::metrics::{mean, Outcome};
 use crate::model::road::Road;
@@ -14,16 +15,8 @@ use crate::model::scene::{Kind, Origin};
 /// The figures of one entry of a merge region (an `entries.csv` row).
 #[derive(Debug, Clone, Default, PartialEq, Serialize)]
 pub struct EntryRow {
-    /// The configuration's file name.
-    pub scenario: String,
-    /// The controller's name.
-    pub planner: String,
-    /// The share α of the scenario's vehicles made CAVs.
-    pub alpha: f64,
-    /// The episode's seed.
-    pub seed: u64,
-    /// The region (as `regions.csv`'s `region`).
-    pub region: String,
+    /// Its episode and region (the lead columns, inline, as `regions.csv`'s).
+    pub key: RegionKey,
     /// The entry: `main`, the main carriageway, or the SUMO edge id of an on-ramp's first edge
     /// in the region (as `vehicles.csv`'s `region_entry`).
     pub entry: String,
@@ -85,7 +78,7 @@ pub fn region_entries(name: &str, road: &Road) -> (String, Vec<String>) {
 /// enters a region, that region's index in `regions` and the entry's. `head` gives the
 /// episode's columns.
 pub fn entry_rows(
-    head: &EntryRow,
+    head: &RegionKey,
     regions: &[(String, Vec<String>)],
     vehicles: &[ScenarioVehicle],
     waiting: &[(usize, usize)],
@@ -99,11 +92,14 @@ pub fn entry_rows(
                 .filter(|v| v.region_origin == origin)
                 .collect();
             let row = EntryRow {
-                region: region.clone(),
+                key: RegionKey {
+                    region: region.clone(),
+                    ..head.clone()
+                },
                 entry: entry.clone(),
                 origin: origin.into(),
                 never_inserted: waiting.iter().filter(|&&w| w == (g, k)).count(),
-                ..head.clone()
+                ..EntryRow::default()
             };
             rows.push(row_of(row, &mine));
         }
@@ -163,11 +159,11 @@ mod tests {
             ("b".to_string(), vec!["main".to_string(), "rb".into()]),
         ];
         let waiting = [(0, 2), (1, 1), (1, 1)];
-        let rows = entry_rows(&EntryRow::default(), &regions, &vehicles, &waiting);
+        let rows = entry_rows(&RegionKey::default(), &regions, &vehicles, &waiting);
         let got: Vec<(&str, &str, &str, usize, usize)> = (rows.iter())
             .map(|r| {
                 (
-                    &*r.region,
+                    &*r.key.region,
                     &*r.entry,
                     &*r.origin,
                     r.vehicles,

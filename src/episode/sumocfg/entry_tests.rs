@@ -56,7 +56,10 @@ fn run_on(road: Road) -> ScenarioRun {
 /// Whether the entry rows of `region` add up to its `regions.csv` row: every vehicle, and
 /// every one never inserted, booked at exactly one entry.
 fn assert_entries_add_up(row: &RegionRow, entries: &[EntryRow]) {
-    let mine: Vec<&EntryRow> = entries.iter().filter(|e| e.region == row.region).collect();
+    let mine: Vec<&EntryRow> = entries
+        .iter()
+        .filter(|e| e.key.region == row.key.region)
+        .collect();
     let sum = |f: &dyn Fn(&EntryRow) -> usize| mine.iter().map(|e| f(e)).sum::<usize>();
     let ramps = |f: &dyn Fn(&EntryRow) -> usize| {
         (mine.iter())

@@ -54,7 +54,7 @@ pub use entry_rows::EntryRow;
 pub use options::{has_cavs, sumo_options, SumoOptions};
 pub use own_loop::OwnLoop;
 pub use records::{csv_of, ScenarioVehicle};
-pub use region_rows::RegionRow;
+pub use region_rows::{RegionKey, RegionRow};
 pub use round::{Fleet, Round};
 
 /// What an episode on a user's scenario produced.
@@ -102,7 +102,7 @@ impl ScenarioResult {
             .filter(|row| !row.ramp_traffic)
             .map(|row| {
                 let ramps: Vec<&str> = (self.entries.iter())
-                    .filter(|e| e.region == row.region && e.origin == ramp)
+                    .filter(|e| e.key.region == row.key.region && e.origin == ramp)
                     .map(|e| e.entry.as_str())
                     .collect();
                 let plural = if ramps.len() == 1 { "" } else { "s" };
@@ -110,7 +110,7 @@ impl ScenarioResult {
                     "warning: region {} received no vehicle from its on-ramp{plural} ({}) in this \
                      episode ({} never inserted were bound for it): its rows measure traffic \
                      past a merge nobody used",
-                    row.region,
+                    row.key.region,
                     ramps.join(", "),
                     row.never_inserted_ramp
                 )

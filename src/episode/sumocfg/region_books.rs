@@ -5,7 +5,7 @@
 use super::entry_rows::{entry_rows, origin_of, region_entries, EntryRow};
 use super::records::ScenarioVehicle;
 use super::region::Region;
-use super::region_rows::{region_rows, RegionRow};
+use super::region_rows::{region_rows, RegionKey, RegionRow};
 use crate::episode::summary::Summary;
 use crate::model::scene::Origin;
 
@@ -18,30 +18,23 @@ pub(super) fn region_books(
     vehicles: &[ScenarioVehicle],
     waiting: &[(usize, usize)],
 ) -> (Vec<RegionRow>, Vec<EntryRow>) {
-    let region_head = RegionRow {
+    let key = RegionKey {
         scenario: head.scenario.clone().unwrap_or_default(),
         planner: head.planner.clone(),
         alpha: head.alpha,
         seed: head.seed,
-        ..RegionRow::default()
+        region: String::new(),
     };
     let names: Vec<String> = regions.iter().map(|r| r.name.clone()).collect();
-    let mut rows = region_rows(&region_head, &names, vehicles);
+    let mut rows = region_rows(&key, &names, vehicles);
     for &(g, k) in waiting {
         match origin_of(k) {
             Origin::Main => rows[g].never_inserted_main += 1,
             Origin::Ramp => rows[g].never_inserted_ramp += 1,
         }
     }
-    let entry_head = EntryRow {
-        scenario: head.scenario.clone().unwrap_or_default(),
-        planner: head.planner.clone(),
-        alpha: head.alpha,
-        seed: head.seed,
-        ..EntryRow::default()
-    };
     let entries: Vec<(String, Vec<String>)> = (regions.iter())
         .map(|r| region_entries(&r.name, &r.road))
         .collect();
-    (rows, entry_rows(&entry_head, &entries, vehicles, waiting))
+    (rows, entry_rows(&key, &entries, vehicles, waiting))
 }

@@ -10,9 +10,10 @@ use crate::episode::cells;
 use crate::episode::metrics::{mean, Outcome};
 use crate::model::scene::{Kind, Origin};
 
-/// The figures of one merge region (a `regions.csv` row).
+/// Which episode and merge region a row of `regions.csv` or `entries.csv` is of: their lead
+/// columns.
 #[derive(Debug, Clone, Default, PartialEq, Serialize)]
-pub struct RegionRow {
+pub struct RegionKey {
     /// The configuration's file name.
     pub scenario: String,
     /// The controller's name.
@@ -23,6 +24,13 @@ pub struct RegionRow {
     pub seed: u64,
     /// The region: the edges its on-ramps join (as `vehicles.csv`'s `region`).
     pub region: String,
+}
+
+/// The figures of one merge region (a `regions.csv` row).
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct RegionRow {
+    /// Its episode and region (the lead columns, inline).
+    pub key: RegionKey,
     /// Vehicles whose first region it was.
     pub vehicles: usize,
     /// CAVs among them.
@@ -74,7 +82,7 @@ pub struct RegionRow {
 /// The row of each region named in `regions` (in that order, a region no vehicle entered
 /// included), over `vehicles`; `head` gives the episode's columns.
 pub fn region_rows(
-    head: &RegionRow,
+    head: &RegionKey,
     regions: &[String],
     vehicles: &[ScenarioVehicle],
 ) -> Vec<RegionRow> {
@@ -83,19 +91,17 @@ pub fn region_rows(
         .map(|name| {
             let mine: Vec<&ScenarioVehicle> =
                 vehicles.iter().filter(|v| v.region == *name).collect();
-            row_of(
-                RegionRow {
-                    region: name.clone(),
-                    ..head.clone()
-                },
-                &mine,
-            )
+            let key = RegionKey {
+                region: name.clone(),
+                ..head.clone()
+            };
+            row_of(key, &mine)
         })
         .collect()
 }
 
-/// `head` filled in with the figures of the vehicles `mine`.
-fn row_of(head: RegionRow, mine: &[&ScenarioVehicle]) -> RegionRow {
+/// The row of region `key` with the figures of the vehicles `mine`.
+fn row_of(key: RegionKey, mine: &[&ScenarioVehicle]) -> RegionRow {
     let count = |f: &dyn Fn(&ScenarioVehicle) -> bool| mine.iter().filter(|v| f(v)).count();
     let delay = |f: &dyn Fn(&ScenarioVehicle) -> bool| {
         mean(
@@ -127,7 +133,8 @@ fn row_of(head: RegionRow, mine: &[&ScenarioVehicle]) -> RegionRow {
         ),
         ramp_traffic: from_ramp > 0,
         mean_delay_own_s: mean(mine.iter().filter_map(|v| v.region_delay_own_s)),
-        ..head
+        key,
+        ..RegionRow::default()
     }
 }
 
@@ -157,7 +164,7 @@ mod tests {
             vehicle("", Kind::Hdv, "", 0.0),
         ];
         let regions = ["a".to_string(), "b".into(), "c".into()];
-        let rows = region_rows(&RegionRow::default(), &regions, &vehicles);
+        let rows = region_rows(&RegionKey::default(), &regions, &vehicles);
         assert_eq!(rows.len(), 3);
         let a = &rows[0];
         assert_eq!((a.vehicles, a.cavs, a.from_main, a.from_ramp), (2, 1, 1, 1));
