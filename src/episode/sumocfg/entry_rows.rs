@@ -6,9 +6,9 @@
 use serde::Serialize;
 
 use super::records::ScenarioVehicle;
-use super::region_rows::RegionKey;
+use super::region_rows::{Outcomes, RegionKey};
 use crate::episode::cells;
-use crate::episode::metrics::{mean, Outcome};
+use crate::episode::metrics::mean;
 use crate::model::road::Road;
 use crate::model::scene::{Kind, Origin};
 
@@ -29,14 +29,8 @@ pub struct EntryRow {
     /// Vehicles SUMO never inserted (waiting at the end) whose route enters their first
     /// region by this entry.
     pub never_inserted: usize,
-    /// Of its vehicles, those that reached their route's end.
-    pub arrived: usize,
-    /// Those removed in collisions.
-    pub crashed: usize,
-    /// Those still driving at the end.
-    pub present: usize,
-    /// Those removed in a collision a CAV took part in.
-    pub controllable_crashed: usize,
+    /// What became of its vehicles (inline, as `regions.csv`'s).
+    pub outcomes: Outcomes,
     /// Their mean system delay in the region (s), against the region's `v_max`.
     #[serde(serialize_with = "cells::opt_decimals::<4, _>")]
     pub mean_delay_s: Option<f64>,
@@ -113,10 +107,7 @@ fn row_of(head: EntryRow, mine: &[&ScenarioVehicle]) -> EntryRow {
     EntryRow {
         vehicles: mine.len(),
         cavs: count(&|v| v.kind == Kind::Cav),
-        arrived: count(&|v| v.outcome == Outcome::Arrived),
-        crashed: count(&|v| v.outcome == Outcome::Crashed),
-        present: count(&|v| v.outcome == Outcome::Present),
-        controllable_crashed: count(&|v| v.controllable_crash),
+        outcomes: Outcomes::of(mine),
         mean_delay_s: mean(mine.iter().filter_map(|v| v.region_delay_s)),
         mean_delay_own_s: mean(mine.iter().filter_map(|v| v.region_delay_own_s)),
         ..head
@@ -126,6 +117,7 @@ fn row_of(head: EntryRow, mine: &[&ScenarioVehicle]) -> EntryRow {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::episode::metrics::Outcome;
 
     fn vehicle(region: &str, origin: &str, entry: &str, delay: f64) -> ScenarioVehicle {
         ScenarioVehicle {
@@ -183,7 +175,7 @@ mod tests {
         );
         assert_eq!(rows[2].mean_delay_s, Some(7.0));
         assert_eq!(rows[2].mean_delay_own_s, Some(3.5));
-        assert_eq!((rows[4].mean_delay_s, rows[4].arrived), (None, 0));
+        assert_eq!((rows[4].mean_delay_s, rows[4].outcomes.arrived), (None, 0));
     }
 
     #[test]

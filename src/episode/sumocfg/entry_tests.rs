@@ -71,10 +71,13 @@ fn assert_entries_add_up(row: &RegionRow, entries: &[EntryRow]) {
     assert_eq!(sum(&|e| e.vehicles), row.vehicles, "{row:?}");
     assert_eq!(sum(&|e| e.cavs), row.cavs);
     assert_eq!(sum(&|e| e.never_inserted), never);
-    assert_eq!(sum(&|e| e.arrived), row.arrived);
-    assert_eq!(sum(&|e| e.crashed), row.crashed);
-    assert_eq!(sum(&|e| e.present), row.present);
-    assert_eq!(sum(&|e| e.controllable_crashed), row.controllable_crashed);
+    assert_eq!(sum(&|e| e.outcomes.arrived), row.outcomes.arrived);
+    assert_eq!(sum(&|e| e.outcomes.crashed), row.outcomes.crashed);
+    assert_eq!(sum(&|e| e.outcomes.present), row.outcomes.present);
+    assert_eq!(
+        sum(&|e| e.outcomes.controllable_crashed),
+        row.outcomes.controllable_crashed
+    );
     assert_eq!(ramps(&|e| e.vehicles), row.from_ramp);
     assert_eq!(ramps(&|e| e.never_inserted), row.never_inserted_ramp);
 }
@@ -83,7 +86,7 @@ fn assert_entries_add_up(row: &RegionRow, entries: &[EntryRow]) {
 fn entry_counts(result: &ScenarioResult) -> Vec<(&str, &str, usize, usize, usize)> {
     (result.entries.iter())
         .map(|e| {
-            let counts = (e.vehicles, e.never_inserted, e.arrived);
+            let counts = (e.vehicles, e.never_inserted, e.outcomes.arrived);
             (&*e.entry, &*e.origin, counts.0, counts.1, counts.2)
         })
         .collect()

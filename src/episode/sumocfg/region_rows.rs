@@ -26,6 +26,33 @@ pub struct RegionKey {
     pub region: String,
 }
 
+/// What became of a group of vehicles of a region (columns of `regions.csv` and
+/// `entries.csv`).
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct Outcomes {
+    /// Those that reached their route's end.
+    pub arrived: usize,
+    /// Those removed in collisions.
+    pub crashed: usize,
+    /// Those still driving at the end.
+    pub present: usize,
+    /// Those removed in a collision a CAV took part in.
+    pub controllable_crashed: usize,
+}
+
+impl Outcomes {
+    /// The outcomes of `vehicles`.
+    pub fn of(vehicles: &[&ScenarioVehicle]) -> Outcomes {
+        let count = |o: Outcome| vehicles.iter().filter(|v| v.outcome == o).count();
+        Outcomes {
+            arrived: count(Outcome::Arrived),
+            crashed: count(Outcome::Crashed),
+            present: count(Outcome::Present),
+            controllable_crashed: vehicles.iter().filter(|v| v.controllable_crash).count(),
+        }
+    }
+}
+
 /// The figures of one merge region (a `regions.csv` row).
 #[derive(Debug, Clone, Default, PartialEq, Serialize)]
 pub struct RegionRow {
@@ -44,14 +71,8 @@ pub struct RegionRow {
     pub never_inserted_main: usize,
     /// The same, entering it from an on-ramp.
     pub never_inserted_ramp: usize,
-    /// Of its vehicles, those that reached their route's end.
-    pub arrived: usize,
-    /// Those removed in collisions.
-    pub crashed: usize,
-    /// Those still driving at the end.
-    pub present: usize,
-    /// Those removed in a collision a CAV took part in.
-    pub controllable_crashed: usize,
+    /// What became of its vehicles (inline).
+    pub outcomes: Outcomes,
     /// Mean system delay in the region (s), every vehicle not crashed.
     #[serde(serialize_with = "cells::opt_decimals::<4, _>")]
     pub mean_delay_s: Option<f64>,
@@ -117,10 +138,7 @@ fn row_of(key: RegionKey, mine: &[&ScenarioVehicle]) -> RegionRow {
         cavs: count(&|v| v.kind == Kind::Cav),
         from_main: count(&|v| v.region_origin == Origin::Main.as_str()),
         from_ramp,
-        arrived: count(&|v| v.outcome == Outcome::Arrived),
-        crashed: count(&|v| v.outcome == Outcome::Crashed),
-        present: count(&|v| v.outcome == Outcome::Present),
-        controllable_crashed: count(&|v| v.controllable_crash),
+        outcomes: Outcomes::of(mine),
         mean_delay_s: delay(&|_| true),
         mean_delay_cav_s: delay(&|v| v.kind == Kind::Cav),
         mean_delay_hdv_s: delay(&|v| v.kind == Kind::Hdv),
