@@ -238,7 +238,7 @@ fn scenario_header<T: serde::Serialize + Default>() -> Vec<String> {
 
 #[test]
 fn every_column_of_every_episode_file_is_documented_in_the_metrics_chapter() {
-    use bkpbs::episode::output::{COLLISION_COLUMNS, TIMING_COLUMNS, VEHICLE_COLUMNS};
+    use bkpbs::episode::rows::{CollisionRow, TimingRow, VehicleRow};
     use bkpbs::episode::summary::{Summary, Traffic};
     use bkpbs::episode::sumocfg::{EntryRow, RegionRow, ScenarioVehicle};
     let metrics = std::fs::read_to_string(root().join("docs/src/metrics.md")).unwrap();
@@ -266,17 +266,17 @@ fn every_column_of_every_episode_file_is_documented_in_the_metrics_chapter() {
         ),
         (
             "### `vehicles.csv`".into(),
-            VEHICLE_COLUMNS.to_vec(),
+            VehicleRow::columns().to_vec(),
             "vehicles.csv".into(),
         ),
         (
             "### `collisions.csv`".into(),
-            COLLISION_COLUMNS.to_vec(),
+            CollisionRow::columns().to_vec(),
             "collisions.csv".into(),
         ),
         (
             "### `timing.csv`".into(),
-            TIMING_COLUMNS.to_vec(),
+            TimingRow::columns().to_vec(),
             "timing.csv".into(),
         ),
     ];

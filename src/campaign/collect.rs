@@ -21,7 +21,7 @@ use super::results::{self, episodes_header, Results, ResultsError};
 use super::settings::Settings;
 use super::table::{key, Axes, Row, CELL_COLUMNS};
 use super::worker::DONE_FILE;
-use crate::episode::output::{TIMING_COLUMNS, VEHICLE_COLUMNS};
+use crate::episode::rows::{TimingRow, VehicleRow};
 
 /// A finished cell's files as read by the check, for the collection to gather.
 #[derive(Debug, Clone, PartialEq)]
@@ -59,10 +59,10 @@ fn finished_row(dir: &Path, settings: &Settings, cell: &Cell) -> Result<Finished
     let vehicles = rows_counted(
         dir,
         "vehicles.csv",
-        &strings(&VEHICLE_COLUMNS),
+        &strings(VehicleRow::columns()),
         column("scheduled"),
     )?;
-    let timing = rows_counted(dir, "timing.csv", &strings(&TIMING_COLUMNS), 1)?;
+    let timing = rows_counted(dir, "timing.csv", &strings(TimingRow::columns()), 1)?;
     let config = settings.episode_config(cell);
     check_settings_record(dir, &config)?;
     check_provenance(dir, &config)?;

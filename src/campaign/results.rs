@@ -7,7 +7,8 @@ use std::path::{Path, PathBuf};
 
 use super::grid::Cell;
 use super::table::{key, Axes, CellKey, Row, Table};
-use crate::episode::output::{self, WriteError, TIMING_COLUMNS, VEHICLE_COLUMNS};
+use crate::episode::output::{self, WriteError};
+use crate::episode::rows::{TimingRow, VehicleRow};
 use crate::episode::summary::{Summary, Traffic};
 
 /// The collected files of a campaign directory.
@@ -79,11 +80,11 @@ pub fn episodes_header(axes: Axes) -> Vec<String> {
 }
 /// Header of `vehicles.csv`.
 pub fn vehicles_header(axes: Axes) -> Vec<String> {
-    with_cell_columns(axes, &VEHICLE_COLUMNS)
+    with_cell_columns(axes, VehicleRow::columns())
 }
 /// Header of `timings.csv`.
 pub fn timings_header(axes: Axes) -> Vec<String> {
-    with_cell_columns(axes, &TIMING_COLUMNS)
+    with_cell_columns(axes, TimingRow::columns())
 }
 /// Header of `failures.csv`.
 pub fn failures_header(axes: Axes) -> Vec<String> {

@@ -86,14 +86,16 @@ pub fn cells<T: Serialize>(record: &T) -> Result<Vec<Cell>, RecordError> {
     Ok(out)
 }
 
+/// The columns of `record`, in field order.
+pub fn columns_of<T: Serialize>(record: &T) -> Vec<&'static str> {
+    let cells = cells(record).expect("a flat record");
+    cells.into_iter().map(|c| c.column).collect()
+}
+
 /// The CSV text of `rows`, under the columns of `template` (a record with every part the
 /// rows have: a part a row lacks is no column).
 pub fn csv_text<T: Serialize>(template: &T, rows: &[T]) -> Vec<u8> {
-    let header: Vec<&str> = cells(template)
-        .expect("a flat record")
-        .into_iter()
-        .map(|c| c.column)
-        .collect();
+    let header = columns_of(template);
     let mut w = csv::Writer::from_writer(Vec::new());
     w.write_record(&header).expect("writing to memory");
     for r in rows {

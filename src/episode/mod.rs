@@ -22,6 +22,7 @@ pub mod models_used;
 pub mod observer;
 pub mod output;
 mod recording;
+pub mod rows;
 pub mod runner;
 mod step_times;
 pub mod summary;

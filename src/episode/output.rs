@@ -4,170 +4,35 @@
 use std::path::{Path, PathBuf};
 
 use super::trajectories;
-use crate::episode::metrics::{CollisionEvent, Timing, VehicleRecord};
+use crate::episode::cells;
+use crate::episode::metrics::{CollisionEvent, Timing};
+use crate::episode::rows::{CollisionRow, TimingRow, VehicleRow};
 use crate::episode::summary::{Summary, Traffic};
 use crate::episode::EpisodeResult;
 use crate::io::SetFile;
 pub use crate::io::{write_atomic, WriteError};
 
-fn opt(x: Option<f64>, decimals: usize) -> String {
-    x.map(|v| format!("{v:.decimals$}")).unwrap_or_default()
-}
-
-/// A figure of an insertion: empty for a vehicle never inserted (and for a NaN).
-fn at_insertion(r: &VehicleRecord, x: f64, decimals: usize) -> String {
-    opt(Some(x).filter(|x| r.inserted() && x.is_finite()), decimals)
-}
-
-fn csv_bytes(header: &[&str], rows: impl Iterator<Item = Vec<String>>) -> Vec<u8> {
-    let mut w = csv::Writer::from_writer(Vec::new());
-    w.write_record(header).expect("writing to memory");
-    for r in rows {
-        w.write_record(&r).expect("writing to memory");
-    }
-    w.into_inner().expect("writing to memory")
-}
-
-/// The summary as one `episode.csv` row (its columns are [`Summary::columns`]).
-fn episode_row(s: &Summary) -> Vec<String> {
-    s.cells().iter().map(|c| c.value.csv_text()).collect()
-}
-
-/// Columns of `timing.csv`.
-pub const TIMING_COLUMNS: [&str; 9] = [
-    "plan_ms_median",
-    "plan_ms_p99",
-    "plan_ms_max",
-    "sumo_ms_per_step",
-    "episode_ms_per_step",
-    "wall_s",
-    "shield_ms_median",
-    "shield_ms_p99",
-    "shield_ms_max",
-];
-
 /// `timing.csv` of an episode's `timing` as bytes.
 pub fn timing_csv(timing: &Timing) -> Vec<u8> {
-    csv_bytes(&TIMING_COLUMNS, std::iter::once(timing_row(timing)))
-}
-
-fn timing_row(t: &Timing) -> Vec<String> {
-    [
-        t.plan_ms_median,
-        t.plan_ms_p99,
-        t.plan_ms_max,
-        t.sumo_ms_per_step,
-        t.episode_ms_per_step,
-        t.wall_s,
-        t.shield_ms_median,
-        t.shield_ms_p99,
-        t.shield_ms_max,
-    ]
-    .iter()
-    .map(|x| format!("{x:.4}"))
-    .collect()
-}
-
-/// Columns of `vehicles.csv`.
-pub const VEHICLE_COLUMNS: [&str; 22] = [
-    "id",
-    "type",
-    "origin",
-    "scheduled_depart_s",
-    "scheduled_speed_mps",
-    "insert_lane",
-    "insert_time_s",
-    "entry_delay_s",
-    "insert_speed_mps",
-    "desired_speed_mps",
-    "distance_m",
-    "t_star_s",
-    "outcome",
-    "arrival_time_s",
-    "travel_time_s",
-    "time_in_network_s",
-    "delay_s",
-    "distance_covered_m",
-    "system_delay_s",
-    "crash_time_s",
-    "crashed_with",
-    "controllable_crash",
-];
-
-fn vehicle_row(r: &VehicleRecord) -> Vec<String> {
-    vec![
-        r.id.clone(),
-        r.kind.as_str().into(),
-        r.origin.as_str().into(),
-        format!("{:.2}", r.scheduled_depart),
-        format!("{:.2}", r.scheduled_speed),
-        match r.inserted() {
-            true => r.insert_lane.to_string(),
-            false => String::new(),
-        },
-        at_insertion(r, r.insert_time, 2),
-        at_insertion(r, r.entry_delay(), 2),
-        at_insertion(r, r.insert_speed, 2),
-        format!("{:.2}", r.desired_speed),
-        opt(Some(r.distance).filter(|d| d.is_finite()), 3),
-        opt(Some(r.t_star).filter(|t| t.is_finite()), 4),
-        r.outcome.as_str().into(),
-        opt(r.arrival_time, 4),
-        opt(r.travel_time(), 4),
-        opt(r.time_in_network(), 4),
-        opt(r.delay(), 4),
-        opt(r.system_delay.map(|_| r.covered), 3),
-        opt(r.system_delay, 4),
-        opt(r.crash_time, 2),
-        r.crashed_with.join(" "),
-        r.controllable_crash.to_string(),
-    ]
-}
-
-/// Columns of `collisions.csv`.
-pub const COLLISION_COLUMNS: [&str; 8] = [
-    "time_s",
-    "collider",
-    "collider_type",
-    "victim",
-    "victim_type",
-    "lane",
-    "position_m",
-    "controllable",
-];
-
-fn collision_row(c: &CollisionEvent) -> Vec<String> {
-    let kind =
-        |k: Option<crate::model::scene::Kind>| k.map_or("unknown", |k| k.as_str()).to_string();
-    vec![
-        format!("{:.2}", c.time),
-        c.collider.clone(),
-        kind(c.collider_kind),
-        c.victim.clone(),
-        kind(c.victim_kind),
-        c.lane.clone(),
-        format!("{:.2}", c.position),
-        c.controllable().to_string(),
-    ]
+    cells::csv_text(&TimingRow::default(), &[TimingRow::of(timing)])
 }
 
 /// `collisions.csv` of `events` as bytes.
 pub fn collisions_csv(events: &[CollisionEvent]) -> Vec<u8> {
-    csv_bytes(&COLLISION_COLUMNS, events.iter().map(collision_row))
+    let rows: Vec<CollisionRow> = events.iter().map(CollisionRow::of).collect();
+    cells::csv_text(&CollisionRow::default(), &rows)
 }
 
 impl EpisodeResult {
     /// `episode.csv` as bytes.
     pub fn episode_csv(&self) -> Vec<u8> {
-        csv_bytes(
-            Summary::columns(Traffic::Demand),
-            std::iter::once(episode_row(&self.summary)),
-        )
+        Summary::csv(Traffic::Demand, std::slice::from_ref(&self.summary))
     }
 
     /// `vehicles.csv` as bytes.
     pub fn vehicles_csv(&self) -> Vec<u8> {
-        csv_bytes(&VEHICLE_COLUMNS, self.vehicles.iter().map(vehicle_row))
+        let rows: Vec<VehicleRow> = self.vehicles.iter().map(VehicleRow::of).collect();
+        cells::csv_text(&VehicleRow::default(), &rows)
     }
 
     /// `collisions.csv` as bytes.
@@ -282,11 +147,7 @@ mod tests {
             },
             ..Summary::default()
         };
-        let text = String::from_utf8(csv_bytes(
-            Summary::columns(Traffic::Demand),
-            std::iter::once(episode_row(&s)),
-        ))
-        .unwrap();
+        let text = String::from_utf8(Summary::csv(Traffic::Demand, &[s])).unwrap();
         assert_eq!(
             text,
             "planner,alpha,lambda,seed,hdv_profile,sumo_version,steps,system_delay_s,system_delay_veh_h,\

@@ -25,7 +25,7 @@ use crate::campaign::results::{read_records, ResultsError};
 use crate::campaign::settings::Settings;
 use crate::campaign::validate::{check_rows, Rules};
 use crate::campaign::worker::DONE_FILE;
-use crate::episode::output::TIMING_COLUMNS;
+use crate::episode::rows::TimingRow;
 use crate::episode::summary::{Summary, Traffic};
 use crate::episode::sumocfg::{EntryRow, RegionRow, ScenarioVehicle};
 use crate::io::WriteError;
@@ -106,7 +106,7 @@ fn finished(dir: &Path, settings: &Settings, cell: &Cell) -> Result<Finished, St
     )?;
     let region_rows = rows_counted(dir, "regions.csv", &header_of::<RegionRow>(), regions)?;
     let entries = rows_counted(dir, "entries.csv", &header_of::<EntryRow>(), entries)?;
-    let timing_header: Vec<String> = TIMING_COLUMNS.iter().map(|s| s.to_string()).collect();
+    let timing_header: Vec<String> = TimingRow::columns().iter().map(|s| s.to_string()).collect();
     let timing = rows_counted(dir, "timing.csv", &timing_header, 1)?;
     check_settings_record(dir, &config)?;
     check_provenance(dir, &config)?;
@@ -274,7 +274,7 @@ impl ScenarioResults {
             h.extend(cols);
             h
         };
-        let timing: Vec<String> = TIMING_COLUMNS.iter().map(|s| s.to_string()).collect();
+        let timing: Vec<String> = TimingRow::columns().iter().map(|s| s.to_string()).collect();
         let failures: Vec<String> = FAILURE_COLUMNS.iter().map(|s| s.to_string()).collect();
         let files = [
             (

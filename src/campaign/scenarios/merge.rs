@@ -11,7 +11,12 @@ use super::collect::{header_of, ScenarioResults, CELL_COLUMNS};
 use crate::campaign::comparison::first_difference;
 use crate::campaign::results::{read_records, ResultsError};
 use crate::campaign::SETTINGS_FILE;
+use crate::episode::rows::TimingRow;
 use crate::episode::summary::{Summary, Traffic};
+
+fn strings(cols: &[&str]) -> Vec<String> {
+    cols.iter().map(|s| s.to_string()).collect()
+}
 
 /// Why directories could not be merged.
 #[derive(Debug, thiserror::Error)]
@@ -87,9 +92,7 @@ fn read_part(dir: &Path) -> Result<Part, MergeError> {
     };
     let mut results = ScenarioResults::read(dir)?;
     let vehicles = led(header_of::<crate::episode::sumocfg::ScenarioVehicle>());
-    let timings = led(crate::episode::output::TIMING_COLUMNS
-        .map(String::from)
-        .to_vec());
+    let timings = led(strings(TimingRow::columns()));
     let failures = super::collect::FAILURE_COLUMNS.map(String::from).to_vec();
     results.vehicles = read_records(&dir.join("vehicles.csv"), &vehicles)?;
     results.timings = read_records(&dir.join("timings.csv"), &timings)?;
