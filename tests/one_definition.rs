@@ -174,11 +174,19 @@ fn definitions(structs: &[Struct]) -> [OneDefinition; 2] {
             vocabulary: vocabulary(structs, cell_file, Some("Cell")),
             min_shared: 3,
             required: &["planner", "seed"],
-            not_copies: &[(
-                "src/train/collect.rs: EpisodeSpec",
-                "an episode of a training collection's cycling plan, not of a campaign grid \
-                 (the train layer lies below campaign)",
-            )],
+            not_copies: &[
+                (
+                    "src/train/collect.rs: EpisodeSpec",
+                    "an episode of a training collection's cycling plan, not of a campaign grid \
+                     (the train layer lies below campaign)",
+                ),
+                (
+                    "src/episode/sumocfg/region_rows.rs: RegionKey",
+                    "the lead columns a scenario episode writes into its own regions.csv and \
+                     entries.csv rows (the episode layer lies below campaign); it goes when the \
+                     collection adds every file's lead columns from the cell",
+                ),
+            ],
         },
     ]
 }
