@@ -16,7 +16,8 @@
 //! config.scenario.steps = 100;
 //! let result = run_episode(&config, PlannerKind::BkPbs.name())?;
 //! let s = &result.summary;
-//! println!("arrived {} of {}, mean delay {:?} s", s.arrived, s.inserted, s.mean_delay_s);
+//! let delay = s.travel().mean_delay_s; // the paper demand's part of the summary
+//! println!("arrived {} of {}, mean delay {delay:?} s", s.arrived, s.inserted);
 //! assert!(s.inserted > 0 && s.arrived <= s.inserted);
 //! let out = tempfile::tempdir()?;
 //! result.write(out.path())?; // episode.csv, vehicles.csv, collisions.csv, timing.csv
