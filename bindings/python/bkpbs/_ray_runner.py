@@ -21,8 +21,10 @@ import csv
 import hashlib
 import os
 import shutil
+import signal
 import sys
 import tempfile
+import threading
 import time
 from collections import deque
 from typing import Any, Deque, Dict, List, Optional, Sequence, Tuple
@@ -112,13 +114,26 @@ def _duration(seconds: float) -> str:
     return f"{seconds // 3600} h {seconds % 3600 // 60:02d} min"
 
 
+class _Stop:
+    """Ctrl-C while the run waits: noted here and acted on between two short waits, as a
+    ``KeyboardInterrupt`` raised inside one of Ray's own calls can be lost there (the driver
+    then ran every remaining episode and exited 0, seen with Ray 2.x)."""
+
+    def __init__(self) -> None:
+        self.requested = False
+
+    def __call__(self, signum: int, frame: Any) -> None:
+        self.requested = True
+
+
 class _Run:
     """One pass over the tasks: submission bounded by the cluster's CPUs, results stored as they
     come, lost tasks retried, a progress line per finished episode."""
 
     def __init__(self, ray: Any, tasks: Sequence[CampaignTask], out: Optional[str],
-                 max_retries: int):
+                 max_retries: int, stop: Optional[_Stop] = None):
         self.ray, self.out, self.max_retries = ray, out, max_retries
+        self.stop = stop
         self.remote = ray.remote(max_calls=1, num_cpus=1, max_retries=0)(_run_remote)
         self.base = os.getcwd()
         self.inputs = _Inputs(ray, self.base)
@@ -135,12 +150,22 @@ class _Run:
             self._submit()
             if finished:
                 self._progress()
-            ready, _ = self.ray.wait(list(self.running), num_returns=1)
+            ready = self._next_finished()
             task = self.running.pop(ready[0])
             finished = self._finish(task, ready[0])
         if finished:
             self._progress()
         return self.failures
+
+    def _next_finished(self) -> List[Any]:
+        """Waits for the next finished task; a Ctrl-C noted meanwhile stops the run."""
+        while True:
+            if self.stop is not None and self.stop.requested:
+                raise KeyboardInterrupt
+            timeout = None if self.stop is None else 0.5
+            ready, _ = self.ray.wait(list(self.running), num_returns=1, timeout=timeout)
+            if ready:
+                return ready
 
     def _submit(self) -> None:
         """Submits waiting tasks while the cluster has a CPU for each (so "running" means it)."""
@@ -249,8 +274,14 @@ def run_on_ray(
         else:
             ray.init(address=address)
         started = True
+    # Ctrl-C is noted and acted on between waits (see `_Stop`); a signal handler can only be
+    # set from the main thread, elsewhere Python's own KeyboardInterrupt stays.
+    stop = _Stop() if threading.current_thread() is threading.main_thread() else None
+    previous = signal.signal(signal.SIGINT, stop) if stop is not None else None
     try:
-        return _Run(ray, tasks, out, max_retries).run()
+        return _Run(ray, tasks, out, max_retries, stop).run()
     finally:
+        if stop is not None:
+            signal.signal(signal.SIGINT, previous if previous is not None else signal.SIG_DFL)
         if started:
             ray.shutdown()
