@@ -240,13 +240,13 @@ fn scenario_header<T: serde::Serialize + Default>() -> Vec<String> {
 fn every_column_of_every_episode_file_is_documented_in_the_metrics_chapter() {
     use bkpbs::episode::rows::{CollisionRow, TimingRow, VehicleRow};
     use bkpbs::episode::summary::{Summary, Traffic};
-    use bkpbs::episode::sumocfg::{EntryRow, RegionRow, ScenarioVehicle};
+    use bkpbs::episode::sumocfg::{RegionEntryRow, RegionRow, ScenarioVehicle};
     let metrics = std::fs::read_to_string(root().join("docs/src/metrics.md")).unwrap();
     let scenario = [
         ("Its `episode.csv`", Summary::header(Traffic::Scenario)),
         ("Its `vehicles.csv`", scenario_header::<ScenarioVehicle>()),
         ("`regions.csv`", scenario_header::<RegionRow>()),
-        ("`entries.csv`", scenario_header::<EntryRow>()),
+        ("`entries.csv`", scenario_header::<RegionEntryRow>()),
     ];
     let scenario: Vec<(&str, Vec<&str>, String)> = scenario
         .iter()

@@ -27,7 +27,7 @@ use crate::campaign::validate::{check_rows, Rules};
 use crate::campaign::worker::DONE_FILE;
 use crate::episode::rows::TimingRow;
 use crate::episode::summary::{Summary, Traffic};
-use crate::episode::sumocfg::{EntryRow, RegionRow, ScenarioVehicle};
+use crate::episode::sumocfg::{RegionEntryRow, RegionRow, ScenarioVehicle};
 use crate::io::WriteError;
 
 /// The columns that lead the collected vehicle and timing rows.
@@ -105,7 +105,7 @@ fn finished(dir: &Path, settings: &Settings, cell: &Cell) -> Result<Finished, St
         vehicle_rows(column),
     )?;
     let region_rows = rows_counted(dir, "regions.csv", &header_of::<RegionRow>(), regions)?;
-    let entries = rows_counted(dir, "entries.csv", &header_of::<EntryRow>(), entries)?;
+    let entries = rows_counted(dir, "entries.csv", &header_of::<RegionEntryRow>(), entries)?;
     let timing_header: Vec<String> = TimingRow::columns().iter().map(|s| s.to_string()).collect();
     let timing = rows_counted(dir, "timing.csv", &timing_header, 1)?;
     check_settings_record(dir, &config)?;
@@ -283,7 +283,7 @@ impl ScenarioResults {
                 &self.episodes,
             ),
             ("regions.csv", header_of::<RegionRow>(), &self.regions),
-            ("entries.csv", header_of::<EntryRow>(), &self.entries),
+            ("entries.csv", header_of::<RegionEntryRow>(), &self.entries),
             (
                 "vehicles.csv",
                 led(header_of::<ScenarioVehicle>()),
@@ -333,7 +333,7 @@ impl ScenarioResults {
             )?,
             entries: checked(
                 "entries.csv",
-                header_of::<EntryRow>(),
+                header_of::<RegionEntryRow>(),
                 &[&cell[..], &["region", "entry", "origin"]].concat(),
                 &ENTRY_RULES,
             )?,
@@ -385,11 +385,11 @@ mod tests {
             key: key.clone(),
             ..RegionRow::default()
         };
-        let entry = |entry: &str, origin: &str| EntryRow {
+        let entry = |entry: &str, origin: &str| RegionEntryRow {
             key: key.clone(),
             entry: entry.into(),
             origin: origin.into(),
-            ..EntryRow::default()
+            ..RegionEntryRow::default()
         };
         let entries = [entry("main", "main"), entry("gneE14", "ramp")];
         for (name, text) in [

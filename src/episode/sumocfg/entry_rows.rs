@@ -14,7 +14,7 @@ use crate::model::scene::{Kind, Origin};
 
 /// The figures of one entry of a merge region (an `entries.csv` row).
 #[derive(Debug, Clone, Default, PartialEq, Serialize)]
-pub struct EntryRow {
+pub struct RegionEntryRow {
     /// Its episode and region (the lead columns, inline, as `regions.csv`'s).
     pub key: RegionKey,
     /// The entry: `main`, the main carriageway, or the SUMO edge id of an on-ramp's first edge
@@ -76,7 +76,7 @@ pub fn entry_rows(
     regions: &[(String, Vec<String>)],
     vehicles: &[ScenarioVehicle],
     waiting: &[(usize, usize)],
-) -> Vec<EntryRow> {
+) -> Vec<RegionEntryRow> {
     let mut rows = Vec::new();
     for (g, (region, entries)) in regions.iter().enumerate() {
         for (k, entry) in entries.iter().enumerate() {
@@ -85,7 +85,7 @@ pub fn entry_rows(
                 .filter(|v| v.region == *region && v.region_entry == *entry)
                 .filter(|v| v.region_origin == origin)
                 .collect();
-            let row = EntryRow {
+            let row = RegionEntryRow {
                 key: RegionKey {
                     region: region.clone(),
                     ..head.clone()
@@ -93,7 +93,7 @@ pub fn entry_rows(
                 entry: entry.clone(),
                 origin: origin.into(),
                 never_inserted: waiting.iter().filter(|&&w| w == (g, k)).count(),
-                ..EntryRow::default()
+                ..RegionEntryRow::default()
             };
             rows.push(row_of(row, &mine));
         }
@@ -102,9 +102,9 @@ pub fn entry_rows(
 }
 
 /// `head` filled in with the figures of the vehicles `mine`.
-fn row_of(head: EntryRow, mine: &[&ScenarioVehicle]) -> EntryRow {
+fn row_of(head: RegionEntryRow, mine: &[&ScenarioVehicle]) -> RegionEntryRow {
     let count = |f: &dyn Fn(&ScenarioVehicle) -> bool| mine.iter().filter(|v| f(v)).count();
-    EntryRow {
+    RegionEntryRow {
         vehicles: mine.len(),
         cavs: count(&|v| v.kind == Kind::Cav),
         outcomes: Outcomes::of(mine),

@@ -4,7 +4,7 @@
 
 use std::sync::Arc;
 
-use super::entry_rows::EntryRow;
+use super::entry_rows::RegionEntryRow;
 use super::run::ScenarioRun;
 use super::tests::{began, config, finish, paper_run, play, record, sumo_for};
 use super::{regions, RegionRow, ScenarioResult};
@@ -55,13 +55,13 @@ fn run_on(road: Road) -> ScenarioRun {
 
 /// Whether the entry rows of `region` add up to its `regions.csv` row: every vehicle, and
 /// every one never inserted, booked at exactly one entry.
-fn assert_entries_add_up(row: &RegionRow, entries: &[EntryRow]) {
-    let mine: Vec<&EntryRow> = entries
+fn assert_entries_add_up(row: &RegionRow, entries: &[RegionEntryRow]) {
+    let mine: Vec<&RegionEntryRow> = entries
         .iter()
         .filter(|e| e.key.region == row.key.region)
         .collect();
-    let sum = |f: &dyn Fn(&EntryRow) -> usize| mine.iter().map(|e| f(e)).sum::<usize>();
-    let ramps = |f: &dyn Fn(&EntryRow) -> usize| {
+    let sum = |f: &dyn Fn(&RegionEntryRow) -> usize| mine.iter().map(|e| f(e)).sum::<usize>();
+    let ramps = |f: &dyn Fn(&RegionEntryRow) -> usize| {
         (mine.iter())
             .filter(|e| e.origin == "ramp")
             .map(|e| f(e))

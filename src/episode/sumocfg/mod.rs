@@ -50,7 +50,7 @@ use crate::sumo::route_files::distributions;
 use crate::sumo::sumocfg::{SumoConfig, SumoConfigError};
 use crate::sumo::{Simulation, StderrCapture};
 
-pub use entry_rows::EntryRow;
+pub use entry_rows::RegionEntryRow;
 pub use options::{has_cavs, sumo_options, SumoOptions};
 pub use own_loop::OwnLoop;
 pub use records::{csv_of, ScenarioVehicle};
@@ -69,7 +69,7 @@ pub struct ScenarioResult {
     pub regions: Vec<RegionRow>,
     /// One row per merge region and entry (`entries.csv`): the regions in the order of
     /// `regions`, each one's main carriageway first, then its on-ramps along the road.
-    pub entries: Vec<EntryRow>,
+    pub entries: Vec<RegionEntryRow>,
     /// Every collision SUMO reported.
     pub collisions: Vec<CollisionEvent>,
     /// The options bkpbs gave SUMO beside the user's configuration.

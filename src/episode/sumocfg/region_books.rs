@@ -2,7 +2,7 @@
 //! both from the same vehicle records and from where each vehicle SUMO never inserted would
 //! have come into a region, so that a region's entry rows add up to its row.
 
-use super::entry_rows::{entry_rows, origin_of, region_entries, EntryRow};
+use super::entry_rows::{entry_rows, origin_of, region_entries, RegionEntryRow};
 use super::records::ScenarioVehicle;
 use super::region::Region;
 use super::region_rows::{region_rows, RegionKey, RegionRow};
@@ -17,7 +17,7 @@ pub(super) fn region_books(
     regions: &[Region],
     vehicles: &[ScenarioVehicle],
     waiting: &[(usize, usize)],
-) -> (Vec<RegionRow>, Vec<EntryRow>) {
+) -> (Vec<RegionRow>, Vec<RegionEntryRow>) {
     let key = RegionKey {
         scenario: head.scenario.clone().unwrap_or_default(),
         planner: head.planner.clone(),
