@@ -66,16 +66,6 @@ pub struct PyCampaign {
     out: PathBuf,
 }
 
-impl PyCampaign {
-    fn grid_len(&self) -> usize {
-        self.settings.grid.len()
-    }
-
-    fn shard_text(&self) -> String {
-        self.settings.shard.to_string()
-    }
-}
-
 #[pymethods]
 impl PyCampaign {
     /// The settings of `bkpbs campaign`: `config` is a campaign TOML file, the keywords its
@@ -127,13 +117,13 @@ impl PyCampaign {
     /// Episodes in the whole grid.
     #[getter]
     fn grid_size(&self) -> usize {
-        self.grid_len()
+        self.settings.grid.len()
     }
 
     /// This run's shard, `"k/n"`.
     #[getter]
     fn shard(&self) -> String {
-        self.shard_text()
+        self.settings.shard.to_string()
     }
 
     /// The settings as `campaign.toml` holds them.
@@ -185,7 +175,7 @@ impl PyCampaign {
             CampaignSpec::collect(self.settings.as_ref(), &self.out).map_err(campaign_error)?;
         let (collected, failed) = (collected.episodes, collected.failures);
         let d = PyDict::new(py);
-        d.set_item("grid", self.grid_len())?;
+        d.set_item("grid", self.settings.grid.len())?;
         d.set_item("collected", collected)?;
         d.set_item("failed", failed)?;
         d.set_item("episodes_csv", self.out.join("episodes.csv"))?;
@@ -196,8 +186,8 @@ impl PyCampaign {
         format!(
             "Campaign(out='{}', episodes={}, shard='{}')",
             self.out.display(),
-            self.grid_len(),
-            self.shard_text()
+            self.settings.grid.len(),
+            self.settings.shard
         )
     }
 }

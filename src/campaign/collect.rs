@@ -96,7 +96,8 @@ pub fn axes_of(grid: &Grid) -> Axes {
     }
 }
 
-fn strings(cols: &[&str]) -> Vec<String> {
+/// Column names as owned strings (a header to compare a file's with).
+pub(crate) fn strings(cols: &[&str]) -> Vec<String> {
     cols.iter().map(|s| s.to_string()).collect()
 }
 

@@ -19,6 +19,7 @@ use crate::campaign::cell::{
     check_run, check_settings_record, column_value, episode_row, failure_of, rows_counted,
     CellState,
 };
+use crate::campaign::collect::strings;
 use crate::campaign::grid::{file_name_of, Cell, Grid};
 use crate::campaign::provenance::check_provenance;
 use crate::campaign::results::{read_records, ResultsError};
@@ -35,14 +36,7 @@ pub const CELL_COLUMNS: [&str; 4] = ["scenario", "planner", "alpha", "seed"];
 
 /// The header `T`'s rows are written with.
 pub fn header_of<T: serde::Serialize + Default>() -> Vec<String> {
-    let text = crate::episode::sumocfg::csv_of::<T>(&[]);
-    let line = String::from_utf8_lossy(&text);
-    let mut r = csv::Reader::from_reader(line.as_bytes());
-    r.headers()
-        .expect("a header written by csv")
-        .iter()
-        .map(String::from)
-        .collect()
+    strings(&crate::episode::cells::columns_of(&T::default()))
 }
 
 /// A finished cell's files, for the collection.
@@ -106,7 +100,7 @@ fn finished(dir: &Path, settings: &Settings, cell: &Cell) -> Result<Finished, St
     )?;
     let region_rows = rows_counted(dir, "regions.csv", &header_of::<RegionRow>(), regions)?;
     let entries = rows_counted(dir, "entries.csv", &header_of::<RegionEntryRow>(), entries)?;
-    let timing_header: Vec<String> = TimingRow::columns().iter().map(|s| s.to_string()).collect();
+    let timing_header = strings(TimingRow::columns());
     let timing = rows_counted(dir, "timing.csv", &timing_header, 1)?;
     check_settings_record(dir, &config)?;
     check_provenance(dir, &config)?;
@@ -274,7 +268,7 @@ impl ScenarioResults {
             h.extend(cols);
             h
         };
-        let timing: Vec<String> = TimingRow::columns().iter().map(|s| s.to_string()).collect();
+        let timing = strings(TimingRow::columns());
         let failures: Vec<String> = FAILURE_COLUMNS.iter().map(|s| s.to_string()).collect();
         let files = [
             (

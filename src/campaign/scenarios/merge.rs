@@ -8,15 +8,12 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use super::collect::{header_of, ScenarioResults, CELL_COLUMNS};
+use crate::campaign::collect::strings;
 use crate::campaign::comparison::first_difference;
 use crate::campaign::results::{read_records, ResultsError};
 use crate::campaign::SETTINGS_FILE;
 use crate::episode::rows::TimingRow;
 use crate::episode::summary::{Summary, Traffic};
-
-fn strings(cols: &[&str]) -> Vec<String> {
-    cols.iter().map(|s| s.to_string()).collect()
-}
 
 /// Why directories could not be merged.
 #[derive(Debug, thiserror::Error)]
