@@ -157,7 +157,10 @@ fn a_campaign_over_scenarios_resumes_and_collects_the_same_bytes_however_it_is_r
         "--out",
         a.to_str().unwrap(),
     ]);
-    refused_naming(&o, &["4 episodes outside this grid", "bk-pbs ramp.sumocfg"]);
+    refused_naming(
+        &o,
+        &["4 episodes outside this grid", "bk-pbs ramp α=0.5 seed=0"],
+    );
     assert_eq!(csv_rows(&read(&a, "episodes.csv")).len(), 8);
 
     // Two shards of one worker each collect what the whole grid on two workers did.
@@ -310,4 +313,70 @@ fn plots_draw_each_cells_merge_regions() {
     }
     let said = String::from_utf8_lossy(&o.stdout);
     assert!(said.contains("speed field of 1 cells"), "{said}");
+}
+
+/// The predictor axis over a scenario: one campaign runs each planner under each predictor,
+/// each cell the very episode of a campaign whose configuration names that predictor, its
+/// files naming the predictor after the planner, and the report pairs the arms per region.
+#[test]
+fn the_predictor_axis_runs_over_scenarios_as_one_campaign() {
+    let dir = tempfile::tempdir().unwrap();
+    let (ramp, _) = games(dir.path());
+    let ramp = ramp.to_str().unwrap();
+    let (both, alone) = (dir.path().join("both"), dir.path().join("constant"));
+    let run = |out: &Path, extra: &[&str]| {
+        let mut args = vec!["campaign", "--sumocfg", ramp, "--planners", "bk-pbs"];
+        args.extend_from_slice(&["--alphas", "0.5", "--seeds", "2", "--steps", "100"]);
+        args.extend_from_slice(&["--out", out.to_str().unwrap()]);
+        args.extend_from_slice(extra);
+        bkpbs(&args)
+    };
+    let axis = ["--predictors", "learned,constant"];
+    assert_ok(&run(&both, &axis));
+    let config = dir.path().join("constant.toml");
+    std::fs::write(&config, "[predictor]\nkind = \"constant\"\n").unwrap();
+    assert_ok(&run(&alone, &["--config", config.to_str().unwrap()]));
+
+    for file in ["episodes.csv", "regions.csv", "entries.csv", "vehicles.csv"] {
+        let rows = raw_rows(&read(&both, file));
+        let header = &rows[0];
+        let at = header.iter().position(|c| c == "predictor").expect(file);
+        assert_eq!(header[at - 1], "planner", "{file}");
+        // The constant arm's rows, without the predictor column, are the other campaign's.
+        let constant: Vec<Vec<String>> = (rows.iter().skip(1))
+            .filter(|r| r[at] == "constant")
+            .map(|r| [&r[..at], &r[at + 1..]].concat())
+            .collect();
+        let other = raw_rows(&read(&alone, file));
+        assert_eq!(constant, other[1..], "{file}");
+        assert_eq!(rows.len() - 1, 2 * constant.len(), "{file}");
+    }
+    let again = run(&both, &axis);
+    assert_ok(&again);
+    let said = String::from_utf8_lossy(&again.stdout) + String::from_utf8_lossy(&again.stderr);
+    assert!(said.contains("× 2 predictors"), "{said}");
+    assert!(said.contains("already done: 4"), "{said}");
+
+    let o = bkpbs(&[
+        "report",
+        both.to_str().unwrap(),
+        "--versus",
+        "bk-pbs+constant",
+    ]);
+    assert_ok(&o);
+    let paired = csv_rows(&read(&both, "report/paired_regions.csv"));
+    let arms: Vec<(&str, &str)> = (paired.iter())
+        .map(|r| (r["reference"].as_str(), r["planner"].as_str()))
+        .collect();
+    assert_eq!(arms, [("bk-pbs+constant", "bk-pbs+learned")]);
+}
+
+/// A CSV file's rows, header first, as text.
+fn raw_rows(bytes: &[u8]) -> Vec<Vec<String>> {
+    let mut r = csv::ReaderBuilder::new()
+        .has_headers(false)
+        .from_reader(bytes);
+    r.records()
+        .map(|rec| rec.unwrap().iter().map(String::from).collect())
+        .collect()
 }

@@ -1,7 +1,7 @@
 //! Campaigns for other schedulers (Ray, `python -m bkpbs.campaign`): `Campaign` lists the grid
 //! and its unfinished episodes and collects the directory; a `CampaignTask` runs one episode in
-//! the calling process. All of it is the core's `campaign::tasks` (or, over scenarios of the
-//! user's own, `campaign::scenarios`), so the directory is the one `bkpbs campaign` writes and
+//! the calling process. All of it is the core's `campaign::tasks` (the paper's demand and
+//! scenarios of the user's own alike), so the directory is the one `bkpbs campaign` writes and
 //! `bkpbs report` reads.
 
 use std::path::PathBuf;

@@ -1,7 +1,6 @@
-//! A cell's files in a campaign directory, for either kind of campaign — on the paper's demand
-//! ([`super::collect`]) or over scenarios of the user's own ([`super::scenarios::collect`]):
-//! where they lie, where the cell stands, and the checks of a finished cell that do not depend
-//! on its traffic. Each kind adds the checks of its own files.
+//! A cell's files in a campaign directory, for every kind of campaign: where they lie, where
+//! the cell stands, and the checks of a finished cell's files ([`super::collect`] puts them
+//! together).
 
 use std::fmt;
 use std::path::{Path, PathBuf};

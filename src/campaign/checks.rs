@@ -61,14 +61,6 @@ pub enum SettingsError {
         /// The name as given.
         name: String,
     },
-    /// A setting a campaign over scenarios of the user's own does not take yet.
-    #[error("{origin}: {why}")]
-    NotYetWithScenarios {
-        /// The flag, or the key and its file.
-        origin: String,
-        /// What to do instead.
-        why: &'static str,
-    },
     /// An entry of a numeric list flag does not parse.
     #[error("{origin}: '{value}' is not a number")]
     NotANumber {

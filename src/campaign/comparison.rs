@@ -94,7 +94,7 @@ pub(super) fn run_difference<T: Serialize>(a: (&Config, &T), b: (&Config, &T)) -
 }
 
 /// The first dotted key in which `a` and `b` differ, if any.
-pub(super) fn first_difference(a: &toml::Value, b: &toml::Value, path: &str) -> Option<String> {
+pub(crate) fn first_difference(a: &toml::Value, b: &toml::Value, path: &str) -> Option<String> {
     match (a, b) {
         (toml::Value::Table(x), toml::Value::Table(y)) => {
             let mut keys: Vec<&String> = x.keys().chain(y.keys()).collect();

@@ -1,26 +1,28 @@
-//! Experiment campaigns: every episode of a planners × HDV profiles × α × λ × seeds grid, run
-//! in parallel worker processes, resumable after any interruption, collected into one set of CSV
-//! files.
+//! Experiment campaigns: every episode of a planners × predictors × HDV profiles × scenarios ×
+//! α × λ × seeds grid, run in parallel worker processes, resumable after any interruption,
+//! collected into one set of CSV files. A campaign on the paper's demand has no scenario axis; a
+//! campaign over scenarios of the user's own (`bkpbs campaign --sumocfg A.sumocfg,B.sumocfg`)
+//! has one, and no λ nor HDV profiles (its routes and drivers are its own).
 //!
 //! Layout of a campaign directory `<out>`:
 //!
 //! ```text
 //! campaign.toml                      the settings (grid and scenario); a re-run must agree
 //! episodes/<planner>/[hdv-<profile>/]a<α>_l<λ>_s<seed>/   (hdv-<profile>/: a profile other than sumo-safe)
+//! episodes/<planner>/<scenario>/a<α>_s<seed>/             (over scenarios)
 //!     episode.csv vehicles.csv collisions.csv timing.csv settings.toml provenance.toml [sumo.log]   a finished cell
+//!     (over scenarios regions.csv entries.csv besides)
 //!     error.txt                                                       a failed one
-//! episodes.csv vehicles.csv timings.csv failures.csv                  collected, grid order
+//! episodes.csv [regions.csv entries.csv] vehicles.csv timings.csv failures.csv   collected, grid order
 //! report/                                                             tables and figures
 //! ```
 //!
-//! Modules: [`grid`] (cells, order, shards), [`settings`] (file and flags), [`claim`] (one
-//! set of settings per directory at a time), [`worker`] and
-//! [`pool`] (the two ends of the worker processes), [`cell`] (a cell's files, either kind of
-//! campaign), [`collect`] (resume state, gathering),
-//! [`results`] (the collected files), [`tasks`] (the same run for other schedulers),
-//! [`portable`] (an episode whose inputs and results travel as bytes, for a cluster without
-//! shared storage),
-//! [`scenarios`] (the grid over scenarios of the user's own, `--sumocfg`).
+//! Modules: [`grid`] (cells, order, shards), [`settings`] (file and flags, over scenarios
+//! resolved in [`settings::scenarios`]), [`claim`] (one set of settings per directory at a
+//! time), [`worker`] and [`pool`] (the two ends of the worker processes), [`cell`] (a cell's
+//! files), [`collect`] (resume state, gathering), [`results`] (the collected files, read,
+//! checked, merged), [`tasks`] (the same run for other schedulers), [`portable`] (an episode
+//! whose inputs and results travel as bytes, for a cluster without shared storage).
 
 pub mod cell;
 mod checks;
@@ -34,7 +36,6 @@ pub mod pool;
 pub mod portable;
 pub mod provenance;
 pub mod results;
-pub mod scenarios;
 pub mod settings;
 pub mod spec;
 pub mod table;

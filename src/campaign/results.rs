@@ -1,23 +1,19 @@
-//! The collected results of a campaign directory: `episodes.csv`, `vehicles.csv`,
-//! `timings.csv` and `failures.csv`, each row led by its cell (planner, alpha, lambda, seed),
-//! in grid order. Read, merged across shard directories, and written atomically here.
+//! The collected results of a campaign directory, for every kind of campaign: `episodes.csv`,
+//! `vehicles.csv`, `timings.csv` and `failures.csv` (over scenarios `regions.csv` and
+//! `entries.csv` besides), each row naming its cell (the lead columns of the grid's axes,
+//! [`Axes`]), in grid order. Read and checked, merged across shard directories, and written
+//! atomically here.
 
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
-use super::grid::Cell;
-use super::table::{key, Axes, CellKey, Row, Table};
+use super::grid::{file_name_of, Cell};
+use super::table::{cell_of, key, Axes, CellKey, Row, Table};
+use crate::episode::cells::columns_of;
 use crate::episode::output::{self, WriteError};
 use crate::episode::rows::{TimingRow, VehicleRow};
 use crate::episode::summary::{Summary, Traffic};
-
-/// The collected files of a campaign directory.
-pub const FILES: [&str; 4] = [
-    "episodes.csv",
-    "vehicles.csv",
-    "timings.csv",
-    "failures.csv",
-];
+use crate::episode::sumocfg::{RegionEntryRow, RegionRow, ScenarioVehicle};
 
 /// Why collected results cannot be read or merged.
 #[derive(Debug, thiserror::Error)]
@@ -58,8 +54,9 @@ pub enum ResultsError {
         /// The file of the later directory that disagrees.
         second: PathBuf,
     },
-    /// Merged directories differ in their axes (one has the predictor axis, one not).
-    #[error("{first} and {second} have different axes (one names a predictor per cell): report them apart")]
+    /// Merged directories differ in their axes (one has the predictor axis, one not; one is a
+    /// campaign over scenarios of the user's own, one on the paper's demand).
+    #[error("{first} and {second} have different axes (one names a predictor or a scenario per cell): report them apart")]
     Axes {
         /// The first directory's `episodes.csv`.
         first: PathBuf,
@@ -74,43 +71,60 @@ pub enum ResultsError {
     Row(#[from] super::validate::RowError),
 }
 
-/// Header of `episodes.csv` (the episode columns already start with the cell).
+/// Header of `episodes.csv` (an episode's columns already start with its cell).
 pub fn episodes_header(axes: Axes) -> Vec<String> {
-    axes.header(Summary::columns(Traffic::Demand))
+    match axes.scenario {
+        true => axes.header(Summary::columns(Traffic::Scenario)),
+        false => axes.header(Summary::columns(Traffic::Demand)),
+    }
 }
 /// Header of `vehicles.csv`.
 pub fn vehicles_header(axes: Axes) -> Vec<String> {
-    with_cell_columns(axes, VehicleRow::columns())
+    match axes.scenario {
+        true => led(axes.lead(), &columns_of(&ScenarioVehicle::default())),
+        false => led(axes.lead(), VehicleRow::columns()),
+    }
 }
 /// Header of `timings.csv`.
 pub fn timings_header(axes: Axes) -> Vec<String> {
-    with_cell_columns(axes, TimingRow::columns())
+    led(axes.lead(), TimingRow::columns())
 }
 /// Header of `failures.csv`.
 pub fn failures_header(axes: Axes) -> Vec<String> {
-    with_cell_columns(axes, &["error"])
+    led(axes.failure_lead(), &["error"])
+}
+/// Header of `regions.csv` (a campaign over scenarios; its rows name their cell already).
+pub fn regions_header(axes: Axes) -> Vec<String> {
+    axes.header(&columns_of(&RegionRow::default()))
+}
+/// Header of `entries.csv` (likewise).
+pub fn entries_header(axes: Axes) -> Vec<String> {
+    axes.header(&columns_of(&RegionEntryRow::default()))
 }
 
-fn with_cell_columns(axes: Axes, rest: &[&str]) -> Vec<String> {
-    let columns: Vec<&str> = super::table::CELL_COLUMNS
-        .iter()
-        .chain(rest)
-        .copied()
-        .collect();
-    axes.header(&columns)
+/// Column names as owned strings (a header to compare a file's with).
+pub fn strings(cols: &[&str]) -> Vec<String> {
+    cols.iter().map(|s| s.to_string()).collect()
 }
 
-/// The four collected files of one directory (or of several, merged).
+fn led(lead: Vec<String>, rest: &[&str]) -> Vec<String> {
+    lead.into_iter().chain(strings(rest)).collect()
+}
+
+/// The collected files of one directory (or of several, merged).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Results {
-    /// The optional axes the files' lead columns name.
+    /// The axes the files' lead columns name.
     pub axes: Axes,
-    /// Planner order of the grid (rows are sorted by it, then HDV profile, α, λ, seed).
+    /// Planner order of the grid (rows are sorted by it, then predictor, HDV profile,
+    /// scenario, α, λ, seed).
     pub planners: Vec<String>,
     /// HDV profile order of the grid.
     pub profiles: Vec<String>,
     /// Predictor order of the grid (empty without the predictor axis).
     pub predictors: Vec<String>,
+    /// Scenario order of the grid, by configuration file name (empty on the paper's demand).
+    pub scenarios: Vec<String>,
     /// `episodes.csv`: one summary row per finished episode.
     pub episodes: Table,
     /// `vehicles.csv`: one row per vehicle of every finished episode.
@@ -119,6 +133,11 @@ pub struct Results {
     pub timings: Table,
     /// `failures.csv`: one row per unfinished episode, with its error message.
     pub failures: Table,
+    /// `regions.csv` over scenarios: one row per merge region of every finished episode
+    /// (empty, and not written, on the paper's demand).
+    pub regions: Table,
+    /// `entries.csv` over scenarios: one row per region and entry of every finished episode.
+    pub entries: Table,
 }
 
 impl Default for Results {
@@ -127,22 +146,17 @@ impl Default for Results {
     }
 }
 
-/// The cell columns of a row of a file with these `axes` as a [`Cell`]; the offending text if
-/// a value does not parse.
-pub fn cell_of(axes: Axes, fields: &csv::StringRecord) -> Result<Cell, String> {
-    let skip = usize::from(axes.predictor);
-    let get = |i: usize| fields.get(if i == 0 { 0 } else { i + skip }).unwrap_or("");
-    let num = |i: usize| get(i).parse::<f64>().map_err(|_| get(i).to_string());
-    Ok(Cell {
-        planner: get(0).to_string(),
-        alpha: num(1)?,
-        lambda: num(2)?,
-        seed: get(3).parse().map_err(|_| get(3).to_string())?,
-        hdv_profile: get(4).to_string(),
-        predictor: axes
-            .predictor
-            .then(|| fields.get(1).unwrap_or("").to_string()),
-        scenario: None,
+/// The cell a row of a file with `header` names ([`super::table::cell_of`]), or the error
+/// naming the file and line.
+fn cell_in(
+    path: &Path,
+    header: &[String],
+    fields: &csv::StringRecord,
+) -> Result<Cell, ResultsError> {
+    cell_of(header, fields).map_err(|value| ResultsError::Cell {
+        path: path.to_path_buf(),
+        line: fields.position().map_or(0, |p| p.line()),
+        value,
     })
 }
 
@@ -188,16 +202,11 @@ pub fn read_records(
         .collect()
 }
 
-/// Reads a collected CSV file that must have exactly `header` (starting with the cell columns
-/// of `axes`).
-pub fn read_table(path: &Path, axes: Axes, header: &[String]) -> Result<Table, ResultsError> {
+/// Reads a collected CSV file that must have exactly `header` (naming each row's cell).
+pub fn read_table(path: &Path, header: &[String]) -> Result<Table, ResultsError> {
     let mut table = Table::new(header.to_vec());
     for fields in read_records(path, header)? {
-        let cell = cell_of(axes, &fields).map_err(|value| ResultsError::Cell {
-            path: path.to_path_buf(),
-            line: fields.position().map_or(0, |p| p.line()),
-            value,
-        })?;
+        let cell = cell_in(path, header, &fields)?;
         table.rows.push(Row { cell, fields });
     }
     Ok(table)
@@ -212,6 +221,18 @@ fn rows_by_cell(table: &Table) -> HashMap<CellKey, Vec<&csv::StringRecord>> {
     by_cell
 }
 
+/// The grid order a campaign directory was run with (its `campaign.toml`): names seen only in
+/// the rows follow in order of appearance.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Order {
+    /// Planners, as given.
+    pub planners: Vec<String>,
+    /// HDV profiles, as given.
+    pub profiles: Vec<String>,
+    /// Scenarios, by their configuration's file name.
+    pub scenarios: Vec<String>,
+}
+
 impl Results {
     /// Empty files whose lead columns name `axes`.
     pub fn empty(axes: Axes) -> Results {
@@ -220,64 +241,113 @@ impl Results {
             planners: Vec::new(),
             profiles: Vec::new(),
             predictors: Vec::new(),
+            scenarios: Vec::new(),
             episodes: Table::new(episodes_header(axes)),
             vehicles: Table::new(vehicles_header(axes)),
             timings: Table::new(timings_header(axes)),
             failures: Table::new(failures_header(axes)),
+            regions: Table::new(regions_header(axes)),
+            entries: Table::new(entries_header(axes)),
         }
     }
 
-    /// Reads a campaign directory's collected files; `failures.csv` and `timings.csv` may be
-    /// missing. `planners` and `profiles` give the grid's order (those seen only in the rows
-    /// follow in order of appearance). The axes are those `episodes.csv`'s header names.
-    pub fn read(
-        dir: &Path,
-        planners: &[String],
-        profiles: &[String],
-    ) -> Result<Results, ResultsError> {
+    /// The collected files, by name, in the order they are written: a campaign over scenarios
+    /// has `regions.csv` and `entries.csv` besides.
+    pub fn files(&self) -> Vec<(&'static str, &Table)> {
+        let mut files = vec![("episodes.csv", &self.episodes)];
+        if self.axes.scenario {
+            files.extend([
+                ("regions.csv", &self.regions),
+                ("entries.csv", &self.entries),
+            ]);
+        }
+        files.extend([
+            ("vehicles.csv", &self.vehicles),
+            ("timings.csv", &self.timings),
+            ("failures.csv", &self.failures),
+        ]);
+        files
+    }
+
+    fn tables_mut(&mut self) -> [&mut Table; 6] {
+        [
+            &mut self.episodes,
+            &mut self.vehicles,
+            &mut self.timings,
+            &mut self.failures,
+            &mut self.regions,
+            &mut self.entries,
+        ]
+    }
+
+    /// Reads a campaign directory's collected files, the rows the report counts checked
+    /// ([`super::validate::check_table`]); `failures.csv` and `timings.csv` may be missing.
+    /// `order` gives the grid's order. The axes are those `episodes.csv`'s header names.
+    pub fn read(dir: &Path, order: &Order) -> Result<Results, ResultsError> {
         let episodes_path = dir.join("episodes.csv");
         let axes = Axes::of_header(&header_of(&episodes_path)?);
-        let episodes = read_table(&episodes_path, axes, &episodes_header(axes))?;
-        super::validate::check_episodes(&episodes_path, axes, &episodes)?;
         let mut res = Results {
-            planners: planners.to_vec(),
-            profiles: profiles.to_vec(),
-            episodes,
-            vehicles: read_table(&dir.join("vehicles.csv"), axes, &vehicles_header(axes))?,
+            planners: order.planners.clone(),
+            profiles: order.profiles.clone(),
+            scenarios: order.scenarios.clone(),
             ..Results::empty(axes)
         };
-        for (name, table, header) in [
-            ("timings.csv", &mut res.timings, timings_header(axes)),
-            ("failures.csv", &mut res.failures, failures_header(axes)),
-        ] {
-            let p = dir.join(name);
-            if p.exists() {
-                *table = read_table(&p, axes, &header)?;
+        let optional = ["timings.csv", "failures.csv"];
+        for (name, table) in res.files_mut() {
+            let path = dir.join(name);
+            if optional.contains(&name) && !path.exists() {
+                continue;
+            }
+            *table = read_table(&path, &table.header)?;
+            if let Some(checks) = super::validate::checks_of(name, axes) {
+                super::validate::check_table(&path, table, checks)?;
             }
         }
         res.note_order();
         Ok(res)
     }
 
-    /// Appends the planners, profiles and predictors seen in the rows but not yet in the order.
+    /// [`Results::files`], to fill.
+    fn files_mut(&mut self) -> Vec<(&'static str, &mut Table)> {
+        let scenario = self.axes.scenario;
+        let names = [
+            "episodes.csv",
+            "vehicles.csv",
+            "timings.csv",
+            "failures.csv",
+        ];
+        let [e, v, t, f, r, n] = self.tables_mut();
+        let mut files: Vec<_> = names.into_iter().zip([e, v, t, f]).collect();
+        if scenario {
+            files.extend([("regions.csv", r), ("entries.csv", n)]);
+        }
+        files
+    }
+
+    /// Appends the planners, profiles, predictors and scenarios seen in the rows but not yet in
+    /// the order.
     fn note_order(&mut self) {
+        let seen = |names: &mut Vec<String>, name: &str| {
+            if !names.iter().any(|n| n == name) {
+                names.push(name.to_string());
+            }
+        };
         for t in [
             &self.episodes,
             &self.vehicles,
             &self.timings,
             &self.failures,
+            &self.regions,
+            &self.entries,
         ] {
             for r in &t.rows {
-                if !self.planners.contains(&r.cell.planner) {
-                    self.planners.push(r.cell.planner.clone());
-                }
-                if !self.profiles.contains(&r.cell.hdv_profile) {
-                    self.profiles.push(r.cell.hdv_profile.clone());
-                }
+                seen(&mut self.planners, &r.cell.planner);
+                seen(&mut self.profiles, &r.cell.hdv_profile);
                 if let Some(p) = &r.cell.predictor {
-                    if !self.predictors.contains(p) {
-                        self.predictors.push(p.clone());
-                    }
+                    seen(&mut self.predictors, p);
+                }
+                if let Some(s) = &r.cell.scenario {
+                    seen(&mut self.scenarios, &file_name_of(s));
                 }
             }
         }
@@ -294,23 +364,25 @@ impl Results {
                 .collect()
         };
         let (planner_rank, profile_rank) = (rank(&self.planners), rank(&self.profiles));
-        let predictor_rank = rank(&self.predictors);
+        let (predictor_rank, scenario_rank) = (rank(&self.predictors), rank(&self.scenarios));
         let predictor = |r: &Row| r.cell.predictor.as_ref().map(|p| predictor_rank[p]);
+        let scenario = |r: &Row| {
+            r.cell
+                .scenario
+                .as_ref()
+                .map(|s| scenario_rank[&file_name_of(s)])
+        };
         let order = |a: &Row, b: &Row| {
             planner_rank[&a.cell.planner]
                 .cmp(&planner_rank[&b.cell.planner])
                 .then(predictor(a).cmp(&predictor(b)))
                 .then(profile_rank[&a.cell.hdv_profile].cmp(&profile_rank[&b.cell.hdv_profile]))
+                .then(scenario(a).cmp(&scenario(b)))
                 .then(a.cell.alpha.total_cmp(&b.cell.alpha))
                 .then(a.cell.lambda.total_cmp(&b.cell.lambda))
                 .then(a.cell.seed.cmp(&b.cell.seed))
         };
-        for t in [
-            &mut self.episodes,
-            &mut self.vehicles,
-            &mut self.timings,
-            &mut self.failures,
-        ] {
+        for t in self.tables_mut() {
             t.rows.sort_by(order);
         }
     }
@@ -333,6 +405,7 @@ impl Results {
                 (&mut merged.planners, &part.planners),
                 (&mut merged.profiles, &part.profiles),
                 (&mut merged.predictors, &part.predictors),
+                (&mut merged.scenarios, &part.scenarios),
             ] {
                 for name in theirs {
                     if !mine.contains(name) {
@@ -397,6 +470,8 @@ impl Results {
             for (mine, theirs) in [
                 (&mut self.vehicles, &part.vehicles),
                 (&mut self.timings, &part.timings),
+                (&mut self.regions, &part.regions),
+                (&mut self.entries, &part.entries),
             ] {
                 mine.rows.extend(
                     theirs
@@ -415,19 +490,144 @@ impl Results {
         }
     }
 
-    /// Writes the four files into `dir`, each atomically.
+    /// Writes the collected files ([`Results::files`]) into `dir`, each atomically.
     pub fn write(&self, dir: &Path) -> Result<Vec<PathBuf>, ResultsError> {
         let mut paths = Vec::new();
-        for (name, table) in FILES.iter().zip([
-            &self.episodes,
-            &self.vehicles,
-            &self.timings,
-            &self.failures,
-        ]) {
+        for (name, table) in self.files() {
             let p = dir.join(name);
             output::write_atomic(&p, &table.to_csv())?;
             paths.push(p);
         }
         Ok(paths)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::episode::sumocfg::{csv_of, RegionKey};
+
+    /// A collected directory of a campaign over scenarios: one episode row, one region row and
+    /// its two entry rows, each file edited by `edit`, and no vehicle.
+    fn collected(edit: impl Fn(String) -> String) -> tempfile::TempDir {
+        let d = tempfile::tempdir().unwrap();
+        let episode = Summary {
+            scenario: Some("ramp.sumocfg".into()),
+            planner: "bk-pbs".into(),
+            sumo_version: "1.15.0".into(),
+            ..Summary::template(Traffic::Scenario)
+        };
+        let key = RegionKey {
+            scenario: "ramp.sumocfg".into(),
+            planner: "bk-pbs".into(),
+            region: "gneE7".into(),
+            ..RegionKey::default()
+        };
+        let region = RegionRow {
+            key: key.clone(),
+            ..RegionRow::default()
+        };
+        let entry = |entry: &str, origin: &str| RegionEntryRow {
+            key: key.clone(),
+            entry: entry.into(),
+            origin: origin.into(),
+            ..RegionEntryRow::default()
+        };
+        let entries = [entry("main", "main"), entry("gneE14", "ramp")];
+        let axes = Axes {
+            scenario: true,
+            ..Axes::default()
+        };
+        for (name, text) in [
+            ("episodes.csv", Summary::csv(Traffic::Scenario, &[episode])),
+            ("regions.csv", csv_of(&[region])),
+            ("entries.csv", csv_of(&entries)),
+            ("vehicles.csv", Table::new(vehicles_header(axes)).to_csv()),
+        ] {
+            let text = edit(String::from_utf8(text).unwrap());
+            std::fs::write(d.path().join(name), text).unwrap();
+        }
+        d
+    }
+
+    fn read_error(dir: &tempfile::TempDir) -> String {
+        Results::read(dir.path(), &Order::default())
+            .unwrap_err()
+            .to_string()
+    }
+
+    /// The scenario report once counted a region row of seed `x` as seed 0, and a row twice
+    /// twice.
+    #[test]
+    fn collected_rows_out_of_range_or_twice_are_refused_naming_them() {
+        let res = Results::read(collected(|t| t).path(), &Order::default()).unwrap();
+        assert!(res.axes.scenario);
+        assert_eq!(res.scenarios, ["ramp.sumocfg"]);
+        let bad_seed = collected(|t| {
+            t.replace("gneE7", "gneE7-")
+                .replacen(",0,gneE7-", ",x,gneE7-", 1)
+        });
+        let e = read_error(&bad_seed);
+        assert!(e.contains("regions.csv, line 2: bad cell value 'x'"), "{e}");
+        let twice = collected(|t| match t.lines().nth(1) {
+            Some(row) => format!("{t}{row}\n"),
+            None => t,
+        });
+        let e = read_error(&twice);
+        assert!(
+            e.contains("episodes.csv, line 3: cell bk-pbs ramp α=0 seed=0 appears twice"),
+            "{e}"
+        );
+        let negative =
+            collected(|t| t.replacen("bk-pbs,0,,0,1.15.0,0,,0,", "bk-pbs,0,,0,1.15.0,0,,-3,", 1));
+        assert!(read_error(&negative).contains("inserted = '-3' is negative"));
+        let maybe = collected(|t| t.replace(",false,", ",maybe,"));
+        let e = read_error(&maybe);
+        assert!(
+            e.contains("regions.csv, line 2: ramp_traffic = 'maybe' is neither true nor false"),
+            "{e}"
+        );
+        let entry_twice = collected(|t| t.replace("gneE14,ramp", "main,main"));
+        let e = read_error(&entry_twice);
+        assert!(
+            e.contains("entries.csv, line 3: cell bk-pbs ramp α=0 seed=0 gneE7 main main"),
+            "{e}"
+        );
+    }
+
+    /// A paper row and a scenario row name their cells by the columns of their axes.
+    #[test]
+    fn cells_are_read_by_the_names_of_their_columns() {
+        let paper = Axes::default();
+        let cell = Cell {
+            planner: "bk-pbs".into(),
+            alpha: 0.4,
+            lambda: 2500.0,
+            seed: 3,
+            hdv_profile: "paper".into(),
+            predictor: None,
+            scenario: None,
+        };
+        let lead = paper.lead();
+        let row = csv::StringRecord::from(Axes::values(&cell, &lead));
+        assert_eq!(cell_of(&lead, &row), Ok(cell.clone()));
+        let over = Axes {
+            scenario: true,
+            ..Axes::default()
+        };
+        let cell = Cell {
+            scenario: Some("ramp.sumocfg".into()),
+            lambda: 0.0,
+            hdv_profile: crate::config::hdv::DEFAULT_PROFILE.into(),
+            ..cell
+        };
+        for lead in [over.lead(), over.failure_lead()] {
+            let row = csv::StringRecord::from(Axes::values(&cell, &lead));
+            assert_eq!(cell_of(&lead, &row), Ok(cell.clone()), "{lead:?}");
+        }
+        assert_eq!(
+            over.failure_lead(),
+            ["planner", "scenario", "alpha", "seed"]
+        );
     }
 }

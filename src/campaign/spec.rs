@@ -74,9 +74,13 @@ impl CampaignSpec for super::Settings {
     }
     fn axes(&self) -> String {
         let g = &self.grid;
+        let predictors = match g.has_predictor_axis() {
+            false => String::new(),
+            true => format!(" × {} predictors", g.predictors.len()),
+        };
         if self.is_over_scenarios() {
             return format!(
-                "{} planners × {} scenarios × {} α × {} seeds",
+                "{} planners{predictors} × {} scenarios × {} α × {} seeds",
                 g.planners.len(),
                 g.scenarios.len(),
                 g.alphas.len(),
@@ -86,10 +90,6 @@ impl CampaignSpec for super::Settings {
         let profiles = match g.profiles.len() {
             1 => String::new(),
             n => format!(" × {n} HDV profiles"),
-        };
-        let predictors = match g.has_predictor_axis() {
-            false => String::new(),
-            true => format!(" × {} predictors", g.predictors.len()),
         };
         format!(
             "{} planners{predictors}{profiles} × {} α × {} λ × {} seeds",
@@ -107,30 +107,16 @@ impl CampaignSpec for super::Settings {
         Ok(self.scenario_difference(&earlier))
     }
     fn recorded_outside(&self, out: &Path) -> Vec<String> {
-        if self.is_over_scenarios() {
-            return super::scenarios::collect::recorded_outside(out, &self.grid);
-        }
         let cells = super::collect::recorded_outside(out, &self.grid);
         cells.iter().map(ToString::to_string).collect()
     }
     fn readiness(&self, out: &Path, cell: &Cell) -> Readiness {
-        if self.is_over_scenarios() {
-            return super::scenarios::collect::cell_state(out, self, cell).without_files();
-        }
         super::collect::cell_state(out, self, cell).without_files()
     }
     fn episode_config(&self, cell: &Cell) -> Config {
         super::Settings::episode_config(self, cell)
     }
     fn collect(&self, out: &Path) -> Result<Collected, CampaignError> {
-        if self.is_over_scenarios() {
-            let results = super::scenarios::collect::collect(out, self);
-            results.write(out)?;
-            return Ok(Collected {
-                episodes: results.episodes.len(),
-                failures: results.failures.len(),
-            });
-        }
         let results = super::collect::collect(out, self)?;
         results.write(out)?;
         Ok(Collected {

@@ -1,60 +1,145 @@
-//! One collected CSV file in memory: a header and rows, each row led by the cell (planner, α,
-//! λ, seed, HDV profile) it belongs to. Apart from the reading and merging of results
+//! One collected CSV file in memory: a header and rows, each row led by the cell it belongs to
+//! (on the paper's demand planner, α, λ, seed, HDV profile; over scenarios scenario, planner,
+//! α, seed). Apart from the reading and merging of results
 //! ([`super::results`]) so that the checks of the rows ([`super::validate`]) can use it without
 //! the two importing each other.
 
-use super::grid::Cell;
+use std::path::PathBuf;
 
-/// The columns that name a cell; every collected file starts with them (and an episode's own
-/// `episode.csv`), with [`PREDICTOR_COLUMN`] after the planner on a grid with that axis.
+use super::grid::{file_name_of, Cell};
+use crate::config::hdv::DEFAULT_PROFILE;
+
+/// The columns that name a cell on the paper's demand; every collected file starts with them
+/// (and an episode's own `episode.csv`), with [`PREDICTOR_COLUMN`] after the planner on a grid
+/// with that axis (as in every file of a campaign over scenarios with it).
 pub const CELL_COLUMNS: [&str; 5] = ["planner", "alpha", "lambda", "seed", "hdv_profile"];
 
 /// The lead column of the predictor axis (`--predictors`).
 pub const PREDICTOR_COLUMN: &str = "predictor";
 
-/// Which optional axes a campaign's collected files name in their lead columns; a grid without
-/// them keeps the columns (and directory names) it always had.
+/// The columns that name a cell of a campaign over scenarios of the user's own in its led
+/// collected files (`vehicles.csv`, `timings.csv`); its episodes', regions' and entries' rows
+/// name them already, among their own columns.
+pub const SCENARIO_CELL_COLUMNS: [&str; 4] = ["scenario", "planner", "alpha", "seed"];
+
+/// The lead columns of a scenario campaign's `failures.csv` (before `error`).
+const SCENARIO_FAILURE_COLUMNS: [&str; 4] = ["planner", "scenario", "alpha", "seed"];
+
+/// Which axes beyond the paper grid's a campaign's collected files name in their lead columns;
+/// a grid without them keeps the columns (and directory names) it always had.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct Axes {
     /// The predictor axis: a `predictor` column after `planner`.
     pub predictor: bool,
+    /// The scenario axis (a campaign over scenarios of the user's own): the cell is named by
+    /// [`SCENARIO_CELL_COLUMNS`] (no λ, no HDV profile).
+    pub scenario: bool,
 }
 
 impl Axes {
-    /// The axes of a file with `header`.
+    /// The axes of a collected `episodes.csv` with `header`.
     pub fn of_header(header: &[String]) -> Axes {
         Axes {
-            predictor: header.get(1).is_some_and(|c| c == PREDICTOR_COLUMN),
+            predictor: header.iter().any(|c| c == PREDICTOR_COLUMN),
+            scenario: header.first().is_some_and(|c| c == "scenario"),
         }
     }
 
-    /// `columns` (led by [`CELL_COLUMNS`], as an episode writes them) with these axes' lead
-    /// columns.
-    pub fn header(self, columns: &[&str]) -> Vec<String> {
-        let mut out: Vec<String> = columns.iter().map(|c| c.to_string()).collect();
+    /// `columns` (an episode's own, led by the cell columns) with these axes' lead columns.
+    pub fn header<S: AsRef<str>>(self, columns: &[S]) -> Vec<String> {
+        let mut out: Vec<String> = columns.iter().map(|c| c.as_ref().to_string()).collect();
         if self.predictor {
-            out.insert(1, PREDICTOR_COLUMN.to_string());
+            out.insert(predictor_at(columns), PREDICTOR_COLUMN.to_string());
         }
         out
     }
 
-    /// `fields` (led by the [`CELL_COLUMNS`] values) with `cell`'s values of these axes.
-    pub fn row<'a>(
+    /// `fields` (a row of an episode's own file whose columns are, or begin with, `columns`)
+    /// with `cell`'s values of these axes.
+    pub fn row<'a, S: AsRef<str>>(
         self,
         cell: &Cell,
+        columns: &[S],
         fields: impl IntoIterator<Item = &'a str>,
     ) -> csv::StringRecord {
         let mut fields: Vec<&str> = fields.into_iter().collect();
         if self.predictor {
-            fields.insert(1, cell.predictor.as_deref().unwrap_or(""));
+            let predictor = cell.predictor.as_deref().unwrap_or("");
+            fields.insert(predictor_at(columns), predictor);
         }
         csv::StringRecord::from(fields)
     }
 
-    /// How many lead columns name the cell.
-    pub fn lead_len(self) -> usize {
-        CELL_COLUMNS.len() + usize::from(self.predictor)
+    /// The columns that lead a row of `vehicles.csv` and `timings.csv`, naming its cell.
+    pub fn lead(self) -> Vec<String> {
+        match self.scenario {
+            true => self.header(&SCENARIO_CELL_COLUMNS),
+            false => self.header(&CELL_COLUMNS),
+        }
     }
+
+    /// The columns that lead a row of `failures.csv` (before its `error`).
+    pub fn failure_lead(self) -> Vec<String> {
+        match self.scenario {
+            true => self.header(&SCENARIO_FAILURE_COLUMNS),
+            false => self.lead(),
+        }
+    }
+
+    /// The values of `columns` (cell columns, as in [`Axes::lead`]) for `cell`, as the
+    /// episodes write them.
+    pub fn values(cell: &Cell, columns: &[String]) -> Vec<String> {
+        columns.iter().map(|c| cell_value(cell, c)).collect()
+    }
+}
+
+/// Where the predictor column goes among an episode's own `columns`: right after `planner`.
+fn predictor_at<S: AsRef<str>>(columns: &[S]) -> usize {
+    let planner = columns.iter().position(|c| c.as_ref() == "planner");
+    planner.map_or(1, |i| i + 1)
+}
+
+/// The value of the cell column `column` for `cell`, as the episodes write it: α and λ in
+/// Rust's shortest round-trip form, the scenario by its configuration's file name.
+fn cell_value(cell: &Cell, column: &str) -> String {
+    match column {
+        "planner" => cell.planner.clone(),
+        "alpha" => cell.alpha.to_string(),
+        "lambda" => cell.lambda.to_string(),
+        "seed" => cell.seed.to_string(),
+        "hdv_profile" => cell.hdv_profile.clone(),
+        PREDICTOR_COLUMN => cell.predictor.clone().unwrap_or_default(),
+        "scenario" => cell
+            .scenario
+            .as_deref()
+            .map(file_name_of)
+            .unwrap_or_default(),
+        _ => String::new(),
+    }
+}
+
+/// The cell a row of a file with `header` names: its cell columns found by name (a file
+/// without λ or HDV profile, a scenario's, has 0 and the default drivers); the offending text
+/// if a value does not parse.
+pub fn cell_of(header: &[String], fields: &csv::StringRecord) -> Result<Cell, String> {
+    let get = |name: &str| {
+        let i = header.iter().position(|c| c == name)?;
+        Some(fields.get(i).unwrap_or(""))
+    };
+    let num = |name: &str| match get(name) {
+        None => Ok(0.0),
+        Some(v) => v.parse::<f64>().map_err(|_| v.to_string()),
+    };
+    let seed = get("seed").unwrap_or("");
+    Ok(Cell {
+        planner: get("planner").unwrap_or("").to_string(),
+        alpha: num("alpha")?,
+        lambda: num("lambda")?,
+        seed: seed.parse().map_err(|_| seed.to_string())?,
+        hdv_profile: get("hdv_profile").unwrap_or(DEFAULT_PROFILE).to_string(),
+        predictor: get(PREDICTOR_COLUMN).map(String::from),
+        scenario: get("scenario").map(PathBuf::from),
+    })
 }
 
 /// One CSV row and the cell it belongs to.
@@ -101,8 +186,16 @@ impl Table {
 }
 
 /// Identity of a cell for lookups: planner, α and λ (by value), seed, HDV profile,
-/// predictor.
-pub type CellKey = (String, u64, u64, u64, String, Option<String>);
+/// predictor, scenario (by its configuration's file name, as the rows name it).
+pub type CellKey = (
+    String,
+    u64,
+    u64,
+    u64,
+    String,
+    Option<String>,
+    Option<String>,
+);
 
 /// Identity of a cell for lookups (α and λ by value).
 pub fn key(c: &Cell) -> CellKey {
@@ -113,5 +206,6 @@ pub fn key(c: &Cell) -> CellKey {
         c.seed,
         c.hdv_profile.clone(),
         c.predictor.clone(),
+        c.scenario.as_deref().map(file_name_of),
     )
 }

@@ -1,5 +1,5 @@
-//! Checks of a collected `episodes.csv` (and, over scenarios, `regions.csv`) before `bkpbs
-//! report` counts it: a hand-edited or damaged file once went into the tables as it was (a row
+//! Checks of a collected `episodes.csv` (and, over scenarios, `regions.csv` and
+//! `entries.csv`) before `bkpbs report` counts it: a hand-edited or damaged file once went into the tables as it was (a row
 //! twice counted twice, `NaN` shown as `NaN ± NaN`, a delay of −999 s bolded as the best, a
 //! collision rate of 7.5; over scenarios a seed of `x` counted as seed 0). Both grids' rows
 //! pass the same rules ([`problem`]), each file naming its own text and optional columns.
@@ -8,7 +8,6 @@ use std::collections::HashSet;
 use std::path::{Path, PathBuf};
 
 use super::table::{key, Axes, Table};
-use crate::episode::summary::{Summary, Traffic};
 
 /// The first thing wrong with a collected `episodes.csv`.
 #[derive(Debug, thiserror::Error)]
@@ -88,7 +87,67 @@ const EPISODES: Rules<'static> = Rules {
     delays: &DELAYS,
 };
 
+/// The rules of a scenario campaign's `episodes.csv`.
+const SCENARIO_EPISODES: Rules<'static> = Rules {
+    names: &["sumo_version"],
+    text: &["cav_types", "regions"],
+    flags: &[],
+    delays: &[
+        "mean_time_loss_s",
+        "mean_time_loss_region_s",
+        "mean_time_loss_with_wait_s",
+        "mean_time_loss_crashes_charged_s",
+        "mean_region_delay_s",
+    ],
+};
+
+/// The rules of its `regions.csv`.
+const REGIONS: Rules<'static> = Rules {
+    names: &["region"],
+    text: &[],
+    flags: &["ramp_traffic"],
+    delays: &[
+        "mean_delay_s",
+        "mean_delay_cav_s",
+        "mean_delay_hdv_s",
+        "mean_delay_main_s",
+        "mean_delay_ramp_s",
+        "mean_time_loss_s",
+        "mean_delay_own_s",
+    ],
+};
+
+/// The rules of its `entries.csv`.
+const ENTRIES: Rules<'static> = Rules {
+    names: &["region", "entry", "origin"],
+    text: &[],
+    flags: &[],
+    delays: &["mean_delay_s", "mean_delay_own_s"],
+};
+
+/// The checks of a collected file: its rules, and the columns besides the cell's that make a
+/// row's key (each key once).
+#[derive(Debug, Clone, Copy)]
+pub struct Checks {
+    rules: &'static Rules<'static>,
+    key: &'static [&'static str],
+}
+
+/// The checks of the collected file `name` of a campaign with `axes`; none for the files the
+/// report does not count (`vehicles.csv`, `timings.csv`, `failures.csv`).
+pub fn checks_of(name: &str, axes: Axes) -> Option<Checks> {
+    let (rules, key) = match (name, axes.scenario) {
+        ("episodes.csv", false) => (&EPISODES, &[][..]),
+        ("episodes.csv", true) => (&SCENARIO_EPISODES, &[][..]),
+        ("regions.csv", _) => (&REGIONS, &["region"][..]),
+        ("entries.csv", _) => (&ENTRIES, &["region", "entry", "origin"][..]),
+        _ => return None,
+    };
+    Some(Checks { rules, key })
+}
+
 /// What `column` may hold under the paper grid's rules, as a reason if `value` breaks it.
+#[cfg(test)]
 fn problem(column: &str, value: &str) -> Option<&'static str> {
     problem_under(&EPISODES, column, value)
 }
@@ -126,27 +185,47 @@ fn problem_under(rules: &Rules, column: &str, value: &str) -> Option<&'static st
     }
 }
 
-/// Checks every row of `table`, read from `path` with the lead columns of `axes`: each cell
-/// once, every value in range.
-pub fn check_episodes(path: &Path, axes: Axes, table: &Table) -> Result<(), RowError> {
+/// The columns that name a row's cell (checked when the row is read).
+const CELL: [&str; 7] = [
+    "planner",
+    "predictor",
+    "alpha",
+    "lambda",
+    "seed",
+    "hdv_profile",
+    "scenario",
+];
+
+/// Checks every row of `table`, read from `path`, under `checks`: each key (the cell and the
+/// key columns) once, every other value in range.
+///
+/// # Errors
+/// The first row that repeats a key or holds a value out of range, naming line, column and
+/// value.
+pub fn check_table(path: &Path, table: &Table, checks: Checks) -> Result<(), RowError> {
+    let at: Vec<usize> = (checks.key.iter())
+        .filter_map(|k| table.column(k))
+        .collect();
     let mut seen = HashSet::new();
     for row in &table.rows {
         let line = row.fields.position().map_or(0, |p| p.line());
-        if !seen.insert(key(&row.cell)) {
+        let within: Vec<&str> = at
+            .iter()
+            .map(|&i| row.fields.get(i).unwrap_or(""))
+            .collect();
+        if !seen.insert((key(&row.cell), within.join("\u{0}"))) {
+            let cell = [row.cell.to_string()]
+                .into_iter()
+                .chain(within.iter().map(|s| s.to_string()));
             return Err(RowError::Duplicate {
                 path: path.to_path_buf(),
                 line,
-                cell: row.cell.to_string(),
+                cell: cell.collect::<Vec<_>>().join(" "),
             });
         }
-        // The cell columns are checked when the row is read.
-        for (column, value) in axes
-            .header(Summary::columns(Traffic::Demand))
-            .iter()
-            .zip(row.fields.iter())
-            .skip(axes.lead_len())
-        {
-            if let Some(reason) = problem(column, value) {
+        let values = table.header.iter().zip(row.fields.iter());
+        for (column, value) in values.filter(|(c, _)| !CELL.contains(&c.as_str())) {
+            if let Some(reason) = problem_under(checks.rules, column, value) {
                 return Err(RowError::Value {
                     path: path.to_path_buf(),
                     line,
@@ -160,52 +239,11 @@ pub fn check_episodes(path: &Path, axes: Axes, table: &Table) -> Result<(), RowE
     Ok(())
 }
 
-/// Checks every row of a file at `path` of `header` under `rules`: each row's `key` columns
-/// once, every value in range.
-///
-/// # Errors
-/// The first row that repeats a key or holds a value out of range, naming line, column and
-/// value.
-pub fn check_rows(
-    path: &Path,
-    header: &[String],
-    rows: &[csv::StringRecord],
-    key: &[&str],
-    rules: &Rules,
-) -> Result<(), RowError> {
-    let at: Vec<usize> = key
-        .iter()
-        .filter_map(|k| header.iter().position(|h| h == k))
-        .collect();
-    let mut seen = HashSet::new();
-    for row in rows {
-        let line = row.position().map_or(0, |p| p.line());
-        let cell: Vec<&str> = at.iter().map(|&i| row.get(i).unwrap_or("")).collect();
-        if !seen.insert(cell.join("\u{0}")) {
-            return Err(RowError::Duplicate {
-                path: path.to_path_buf(),
-                line,
-                cell: cell.join(" "),
-            });
-        }
-        for (column, value) in header.iter().zip(row.iter()) {
-            if let Some(reason) = problem_under(rules, column, value) {
-                return Err(RowError::Value {
-                    path: path.to_path_buf(),
-                    line,
-                    column: column.clone(),
-                    value: value.to_string(),
-                    reason,
-                });
-            }
-        }
-    }
-    Ok(())
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::campaign::results::{entries_header, regions_header};
+    use crate::episode::summary::{Summary, Traffic};
 
     #[test]
     fn rules_name_summary_columns() {
@@ -217,6 +255,15 @@ mod tests {
         }
         let lead = crate::campaign::table::CELL_COLUMNS;
         assert_eq!(&Summary::columns(Traffic::Demand)[..lead.len()], lead);
+        let named = |rules: &Rules, header: &[String]| {
+            let all = [rules.names, rules.text, rules.flags, rules.delays].concat();
+            for column in all {
+                assert!(header.iter().any(|h| h == column), "{column}");
+            }
+        };
+        named(&SCENARIO_EPISODES, &Summary::header(Traffic::Scenario));
+        named(&REGIONS, &regions_header(Axes::default()));
+        named(&ENTRIES, &entries_header(Axes::default()));
     }
 
     #[test]

@@ -4,7 +4,7 @@
 //! pairs the predictors cell by cell and seed by seed, as it pairs planners.
 
 use crate::campaign::results::Results;
-use crate::campaign::table::{Axes, Table};
+use crate::campaign::table::Table;
 
 /// `results` with every row's planner replaced by its arm and the predictor column dropped;
 /// results without the predictor axis as they are.
@@ -17,6 +17,8 @@ pub fn by_arm(mut results: Results) -> Results {
         &mut results.vehicles,
         &mut results.timings,
         &mut results.failures,
+        &mut results.regions,
+        &mut results.entries,
     ] {
         to_arms(table);
     }
@@ -31,19 +33,27 @@ pub fn by_arm(mut results: Results) -> Results {
         })
         .collect();
     results.predictors.clear();
-    results.axes = Axes::default();
+    results.axes.predictor = false;
     results
 }
 
-/// The table's rows named by their arm, without the predictor column.
+/// The table's rows named by their arm, without the predictor column (a table without one,
+/// an empty `regions.csv` on the paper's demand, as it is).
 fn to_arms(table: &mut Table) {
-    table.header.remove(1);
+    let (Some(planner), Some(predictor)) = (table.column("planner"), table.column("predictor"))
+    else {
+        return;
+    };
+    table.header.remove(predictor);
     for row in &mut table.rows {
         let arm = row.cell.arm();
         let mut fields = csv::StringRecord::new();
-        fields.push_field(&arm);
-        for f in row.fields.iter().skip(2) {
-            fields.push_field(f);
+        for (i, f) in row.fields.iter().enumerate() {
+            match i {
+                _ if i == planner => fields.push_field(&arm),
+                _ if i == predictor => {}
+                _ => fields.push_field(f),
+            }
         }
         row.fields = fields;
         row.cell.planner = arm;
@@ -55,7 +65,7 @@ fn to_arms(table: &mut Table) {
 mod tests {
     use super::*;
     use crate::campaign::grid::Cell;
-    use crate::campaign::table::Row;
+    use crate::campaign::table::{Axes, Row, CELL_COLUMNS};
 
     fn row(planner: &str, predictor: &str, seed: u64) -> Row {
         let cell = Cell {
@@ -67,8 +77,13 @@ mod tests {
             predictor: Some(predictor.into()),
             scenario: None,
         };
-        let fields = Axes { predictor: true }.row(
+        let axes = Axes {
+            predictor: true,
+            ..Axes::default()
+        };
+        let fields = axes.row(
             &cell,
+            &CELL_COLUMNS,
             [
                 planner,
                 "0.5",
@@ -83,7 +98,10 @@ mod tests {
 
     #[test]
     fn each_planner_under_each_predictor_is_an_arm() {
-        let axes = Axes { predictor: true };
+        let axes = Axes {
+            predictor: true,
+            ..Axes::default()
+        };
         let mut results = Results::empty(axes);
         results.episodes.header = axes.header(&[
             "planner",

@@ -31,7 +31,8 @@ pub mod versions;
 
 use std::path::{Path, PathBuf};
 
-use crate::campaign::results::{Results, ResultsError};
+use crate::campaign::grid::file_name_of;
+use crate::campaign::results::{Order, Results, ResultsError};
 use crate::campaign::{Settings, SETTINGS_FILE};
 use crate::episode::output::{self, WriteError};
 use crate::report::paired::{Paired, PairedError};
@@ -106,61 +107,9 @@ pub enum ReportError {
     /// The paired comparisons could not be made (an unknown reference, a damaged column).
     #[error(transparent)]
     Paired(#[from] PairedError),
-    /// Campaigns over scenarios given with one on the paper's demand.
-    #[error(
-        "{dir} is not a campaign over scenarios of your own like the others: the two kinds of \
-         campaign have other columns and are not merged"
-    )]
-    ScenarioMerge {
-        /// The directory of the other kind.
-        dir: PathBuf,
-    },
-    /// Directories of a campaign over scenarios could not be merged.
-    #[error(transparent)]
-    ScenarioMerging(#[from] crate::campaign::scenarios::merge::MergeError),
     /// A reference planner of a campaign over scenarios did not run in it.
     #[error(transparent)]
     Reference(#[from] scenarios::UnknownReference),
-}
-
-/// Does `dir` hold a campaign over scenarios of the user's own (its `campaign.toml` lists
-/// `scenarios`)? Its report is [`scenarios::report`]; merging several is not done yet.
-fn is_scenario_campaign(dir: &Path) -> bool {
-    let file = dir.join(crate::campaign::SETTINGS_FILE);
-    file.exists()
-        && crate::campaign::settings::is_scenario_campaign(
-            Some(&file),
-            &crate::campaign::Overrides::default(),
-        )
-        .unwrap_or(false)
-}
-
-/// Merges the collected files of several directories of one campaign over scenarios into
-/// `out`, with the first one's `campaign.toml` when `out` has none (so that `bkpbs report OUT`
-/// reads it again).
-fn merge_scenario_campaigns(
-    dirs: &[PathBuf],
-    out: &Path,
-    allow_mixed: bool,
-) -> Result<(), ReportError> {
-    for dir in dirs {
-        if !dir.join("episodes.csv").is_file() {
-            return Err(ReportError::NotACampaign { dir: dir.clone() });
-        }
-    }
-    let merged = crate::campaign::scenarios::merge::merge(dirs, allow_mixed)?;
-    merged.write(out)?;
-    let settings = out.join(crate::campaign::SETTINGS_FILE);
-    if !settings.exists() {
-        let first = dirs[0].join(crate::campaign::SETTINGS_FILE);
-        let text = crate::io::bounded::read_bytes(&first, crate::io::bounded::FileKind::Config)
-            .map_err(|e| ReportError::Settings {
-                path: first.clone(),
-                message: e.to_string(),
-            })?;
-        output::write_atomic(&settings, &text)?;
-    }
-    Ok(())
 }
 
 /// What a report produced.
@@ -173,25 +122,21 @@ pub struct Report {
     pub out: PathBuf,
 }
 
-/// The planner order a campaign directory was run with (from its `campaign.toml`), or none.
 /// Refuses directories whose campaigns ran with different settings (steps, any scenario or
 /// model setting; the grid may differ): merged, their episodes would be averaged as one. A
 /// directory without `campaign.toml` has nothing to compare.
 fn same_settings(dirs: &[PathBuf]) -> Result<(), ReportError> {
-    let mut first: Option<(&PathBuf, Settings)> = None;
+    let mut first: Option<(&PathBuf, RunSettings)> = None;
     for dir in dirs {
         let path = dir.join(SETTINGS_FILE);
         if !path.is_file() {
             continue;
         }
-        let settings = Settings::from_campaign_file(&path).map_err(|e| ReportError::Settings {
-            path: path.clone(),
-            message: e.to_string(),
-        })?;
+        let settings = RunSettings::read(&path)?;
         match &first {
             None => first = Some((dir, settings)),
             Some((first_dir, earlier)) => {
-                if let Some(key) = settings.scenario_difference(earlier) {
+                if let Some(key) = settings.difference(earlier) {
                     return Err(ReportError::MixedSettings {
                         first: (*first_dir).clone(),
                         other: dir.clone(),
@@ -204,13 +149,58 @@ fn same_settings(dirs: &[PathBuf]) -> Result<(), ReportError> {
     Ok(())
 }
 
-/// The planner and HDV-profile order a campaign directory was run with (from its
-/// `campaign.toml`), or none.
-fn grid_order(dir: &Path) -> Result<(Vec<String>, Vec<String>), ReportError> {
+/// What a directory's episodes ran with, to compare with another's: on the paper's demand its
+/// resolved settings; over scenarios its `campaign.toml` without the grid's axes (resolving it
+/// would read the scenarios, which need not be on the machine that reports).
+enum RunSettings {
+    Demand(Box<Settings>),
+    Scenarios(toml::Value),
+}
+
+impl RunSettings {
+    fn read(path: &Path) -> Result<RunSettings, ReportError> {
+        let bad = |message: String| ReportError::Settings {
+            path: path.to_path_buf(),
+            message,
+        };
+        let text = crate::io::bounded::read_text(path, crate::io::bounded::FileKind::Config)
+            .map_err(|e| bad(e.to_string()))?;
+        let mut doc: toml::Table =
+            toml::from_str(&text).map_err(|e| bad(e.message().to_string()))?;
+        let Some(toml::Value::Table(c)) = doc.get_mut("campaign") else {
+            return Settings::from_campaign_file(path)
+                .map(|s| RunSettings::Demand(Box::new(s)))
+                .map_err(|e| bad(e.to_string()));
+        };
+        if !c.contains_key("scenarios") {
+            return Settings::from_campaign_file(path)
+                .map(|s| RunSettings::Demand(Box::new(s)))
+                .map_err(|e| bad(e.to_string()));
+        }
+        for key in ["scenarios", "planners", "alphas", "seeds", "seed_base"] {
+            c.remove(key);
+        }
+        Ok(RunSettings::Scenarios(toml::Value::Table(doc)))
+    }
+
+    /// The first setting (dotted key) in which the two differ, if any.
+    fn difference(&self, other: &RunSettings) -> Option<String> {
+        match (self, other) {
+            (RunSettings::Demand(a), RunSettings::Demand(b)) => a.scenario_difference(b),
+            (RunSettings::Scenarios(a), RunSettings::Scenarios(b)) => {
+                crate::campaign::comparison::first_difference(a, b, "")
+            }
+            _ => Some("campaign.scenarios".into()),
+        }
+    }
+}
+
+/// The grid order a campaign directory was run with (from its `campaign.toml`), or none.
+fn grid_order(dir: &Path) -> Result<Order, ReportError> {
     let path = dir.join(SETTINGS_FILE);
     let Ok(text) = crate::io::bounded::read_text(&path, crate::io::bounded::FileKind::Config)
     else {
-        return Ok(Default::default());
+        return Ok(Order::default());
     };
     let bad = |message: String| ReportError::Settings {
         path: path.clone(),
@@ -231,7 +221,15 @@ fn grid_order(dir: &Path) -> Result<(Vec<String>, Vec<String>), ReportError> {
     if profiles.is_empty() {
         profiles = names("hdv", "profile");
     }
-    Ok((names("campaign", "planners"), profiles))
+    let scenarios = names("campaign", "scenarios");
+    Ok(Order {
+        planners: names("campaign", "planners"),
+        profiles,
+        scenarios: scenarios
+            .iter()
+            .map(|s| file_name_of(Path::new(s)))
+            .collect(),
+    })
 }
 
 /// Reads (and merges) the campaign directories, writes tables and figures into
@@ -250,22 +248,18 @@ pub fn run_versus(
     versus: &[String],
 ) -> Result<Report, ReportError> {
     let first = dirs.first().ok_or(ReportError::NoDirs)?;
-    if let Some(dir) = dirs.iter().find(|d| is_scenario_campaign(d)) {
-        if let Some(other) = dirs.iter().find(|d| !is_scenario_campaign(d)) {
-            return Err(ReportError::ScenarioMerge { dir: other.clone() });
-        }
-        let out = out.unwrap_or(first);
-        if dirs.len() > 1 {
-            merge_scenario_campaigns(dirs, out, allow_mixed)?;
-        }
-        return scenarios::report(if dirs.len() > 1 { out } else { dir }, out, versus);
-    }
     if !allow_mixed {
         same_settings(dirs)?;
     }
     let out = out.unwrap_or(first).to_path_buf();
     let (results, mut files) = gather(dirs, &out, allow_mixed)?;
     let results = arms::by_arm(results);
+    if results.axes.scenario {
+        let mut report = scenarios::report(&results, &out, versus)?;
+        files.append(&mut report.files);
+        report.files = files;
+        return Ok(report);
+    }
     let episodes = out.join("episodes.csv");
     let summary = Summary::from_results(&results, &episodes)?;
     let by_entry = entries::rows(&results);
@@ -309,8 +303,7 @@ fn gather(
         if !dir.join("episodes.csv").is_file() {
             return Err(ReportError::NotACampaign { dir: dir.clone() });
         }
-        let (planners, profiles) = grid_order(dir)?;
-        parts.push((dir.clone(), Results::read(dir, &planners, &profiles)?));
+        parts.push((dir.clone(), Results::read(dir, &grid_order(dir)?)?));
     }
     versions::label_if_mixed(&mut parts, allow_mixed)?;
     let mut files = Vec::new();

@@ -31,10 +31,9 @@ use super::scenario_inserted::inserted_tables;
 use super::signif::fisher_exact;
 use super::stats::{t_975, Estimate};
 use super::{Report, ReportError, REPORT_DIR};
-use crate::campaign::scenarios::collect::header_of;
-use crate::campaign::scenarios::ScenarioResults;
+use crate::campaign::results::Results;
+use crate::campaign::table::Table;
 use crate::episode::summary::{Summary, Traffic};
-use crate::episode::sumocfg::RegionRow;
 
 /// A reference planner that ran in none of the campaign's episodes.
 #[derive(Debug, thiserror::Error)]
@@ -67,9 +66,8 @@ fn column(header: &[String], name: &str) -> usize {
         .expect("a column of the record")
 }
 
-fn by_region(rows: &[csv::StringRecord]) -> ByRegion {
-    let h = header_of::<RegionRow>();
-    let get = |r: &csv::StringRecord, name: &str| r.get(column(&h, name)).unwrap_or("").to_string();
+fn by_region(rows: &[csv::StringRecord], h: &[String]) -> ByRegion {
+    let get = |r: &csv::StringRecord, name: &str| r.get(column(h, name)).unwrap_or("").to_string();
     let num = |r: &csv::StringRecord, name: &str| get(r, name).parse::<f64>().ok();
     let mut out = ByRegion::new();
     for r in rows {
@@ -136,14 +134,20 @@ fn paired_t(d: &[f64]) -> Option<PairedT> {
     })
 }
 
-/// Writes the report of the campaign over scenarios in `dir` into `<out>/report/`, comparing
-/// every planner with the `versus` planners (default: `bk-pbs` when it ran).
+/// The rows of `table`, as read.
+fn records(table: &Table) -> Vec<csv::StringRecord> {
+    table.rows.iter().map(|r| r.fields.clone()).collect()
+}
+
+/// Writes the report of the campaign over scenarios whose collected files are `res` (by arm,
+/// [`super::arms::by_arm`]) into `<out>/report/`, comparing every planner with the `versus` planners (default: `bk-pbs` when
+/// it ran).
 ///
 /// # Errors
-/// The collected files are unreadable, a reference did not run, or a file cannot be written.
-pub fn report(dir: &Path, out: &Path, versus: &[String]) -> Result<Report, ReportError> {
-    let res = ScenarioResults::read(dir)?;
-    let planners = planners_of(&res.episodes);
+/// A reference did not run, or a file cannot be written.
+pub fn report(res: &Results, out: &Path, versus: &[String]) -> Result<Report, ReportError> {
+    let (episodes, regions) = (records(&res.episodes), records(&res.regions));
+    let planners = planners_of(&episodes);
     let versus: Vec<String> = match versus {
         [] => planners
             .iter()
@@ -158,17 +162,14 @@ pub fn report(dir: &Path, out: &Path, versus: &[String]) -> Result<Report, Repor
             known: planners.join(", "),
         }));
     }
-    let regions = by_region(&res.regions);
+    let regions = by_region(&regions, &res.regions.header);
     let (paired, paired_md) = paired_csv(&regions, &versus);
-    let (inserted, inserted_md) = inserted_tables(&res.episodes, &planners);
+    let (inserted, inserted_md) = inserted_tables(&episodes, &planners);
     let markdown = inserted_md + &unused_merges_md(&regions) + &paired_md;
     let files = [
         ("regions.csv", summary_csv(&regions)),
         ("paired_regions.csv", paired),
-        (
-            "paired_collisions.csv",
-            collisions_csv(&res.episodes, &versus),
-        ),
+        ("paired_collisions.csv", collisions_csv(&episodes, &versus)),
         ("inserted.csv", inserted),
     ];
     let report_dir = out.join(REPORT_DIR);

@@ -141,6 +141,19 @@ fn read_file(path: &Path) -> Result<FileParts, SettingsError> {
     Ok(FileParts { table, config })
 }
 
+/// The predictor axis `--predictors` gives, in place of the table's; an empty list refused.
+fn apply_predictors(table: &mut CampaignTable, o: &Overrides) -> Result<(), SettingsError> {
+    if let Some(text) = &o.predictors {
+        table.predictors = parse_list("--predictors", text)?;
+        if table.predictors.is_empty() {
+            return Err(SettingsError::Empty {
+                origin: "--predictors".into(),
+            });
+        }
+    }
+    Ok(())
+}
+
 /// Replaces the table's values by the flags that are set.
 fn apply_overrides(table: &mut CampaignTable, o: &Overrides) -> Result<(), SettingsError> {
     if let Some(text) = &o.planners {
@@ -155,14 +168,7 @@ fn apply_overrides(table: &mut CampaignTable, o: &Overrides) -> Result<(), Setti
     if let Some(text) = &o.hdv_profiles {
         table.hdv_profiles = parse_list("--hdv-profiles", text)?;
     }
-    if let Some(text) = &o.predictors {
-        table.predictors = parse_list("--predictors", text)?;
-        if table.predictors.is_empty() {
-            return Err(SettingsError::Empty {
-                origin: "--predictors".into(),
-            });
-        }
-    }
+    apply_predictors(table, o)?;
     table.seeds = o.seeds.unwrap_or(table.seeds);
     table.seed_base = o.seed_base.unwrap_or(table.seed_base);
     table.steps = o.steps.or(table.steps);
@@ -246,14 +252,17 @@ impl Settings {
 
     /// The configuration of one cell's episode.
     pub fn episode_config(&self, cell: &Cell) -> Config {
-        if cell.scenario.is_some() {
-            return scenarios::episode_config(self, cell);
-        }
-        let mut c = self.config.clone();
-        c.scenario.alpha = cell.alpha;
-        c.scenario.lambda = cell.lambda;
-        c.scenario.seed = cell.seed;
-        c.hdv.profile = cell.hdv_profile.clone();
+        let mut c = match cell.scenario {
+            Some(_) => scenarios::episode_config(self, cell),
+            None => {
+                let mut c = self.config.clone();
+                c.scenario.alpha = cell.alpha;
+                c.scenario.lambda = cell.lambda;
+                c.scenario.seed = cell.seed;
+                c.hdv.profile = cell.hdv_profile.clone();
+                c
+            }
+        };
         if let Some(p) = &cell.predictor {
             c.predictor.kind = predictor_kind(p).expect("checked when the settings resolved");
         }

@@ -11,7 +11,7 @@
 //! ```
 //!
 //! The scenarios bring their demand and drivers, so `lambdas` and `hdv_profiles` have no
-//! place here; each scenario runs its own `begin`–`end` unless `steps` shortens it. Every
+//! place here (`predictors`, the predictor axis, has, as on the paper's demand); each scenario runs its own `begin`–`end` unless `steps` shortens it. Every
 //! scenario is read and its step length checked before the first episode starts.
 
 use std::collections::BTreeMap;
@@ -73,14 +73,6 @@ fn refuse_demand_settings(
             });
         }
     }
-    let set = o.predictors.is_some();
-    if set || keys.iter().any(|k| k == "predictors") {
-        return Err(SettingsError::NotYetWithScenarios {
-            origin: origin(set, "--predictors", "predictors", file),
-            why: "the predictor axis runs on the paper's demand only so far; run one campaign \
-                  over your scenarios per [predictor] kind (in its --config)",
-        });
-    }
     Ok(())
 }
 
@@ -99,6 +91,7 @@ fn apply_overrides(t: &mut CampaignTable, o: &Overrides) -> Result<(), SettingsE
     if let Some(text) = &o.alphas {
         t.alphas = parse_list("--alphas", text)?;
     }
+    super::apply_predictors(t, o)?;
     t.seeds = o.seeds.unwrap_or(t.seeds);
     t.seed_base = o.seed_base.unwrap_or(t.seed_base);
     t.steps = o.steps.or(t.steps);
@@ -157,7 +150,7 @@ pub(crate) fn resolve(file: Option<&Path>, o: &Overrides) -> Result<Settings, Se
 }
 
 /// A cell's whole configuration on its scenario: the shared settings with its scenario, α,
-/// seed and steps.
+/// seed and steps (its predictor is the grid's, [`Settings::episode_config`]).
 pub(crate) fn episode_config(settings: &Settings, cell: &Cell) -> Config {
     let mut c = settings.config.clone();
     let i = (settings.grid.scenarios.iter()).position(|s| Some(s) == cell.scenario.as_ref());
@@ -179,19 +172,18 @@ fn checked_grid(
 ) -> Result<Grid, SettingsError> {
     check_planners_and_alphas(&t.planners, &t.alphas, o, file)?;
     check_seeds_and_steps(t.seeds, t.steps, o, file)?;
+    super::check_predictors(&t.predictors, o, file)?;
     let scenarios = unique_scenarios(&t.scenarios)?;
     if scenarios.is_empty() {
         return Err(SettingsError::Empty {
             origin: origin(o.sumocfg.is_some(), "--sumocfg", "scenarios", file),
         });
     }
-    Ok(Grid::over_scenarios(
-        &t.planners,
-        scenarios,
-        &t.alphas,
-        t.seed_base,
-        t.seeds,
-    ))
+    let grid = Grid::over_scenarios(&t.planners, scenarios, &t.alphas, t.seed_base, t.seeds);
+    Ok(match t.predictors.is_empty() {
+        true => grid,
+        false => grid.with_predictors(&t.predictors),
+    })
 }
 
 /// The scenarios each once, in order; two different files of one name are refused.

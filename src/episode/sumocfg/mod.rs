@@ -17,7 +17,7 @@
 //! of the lane it drives on, and within its type's `accel`, `decel` and `emergencyDecel` (the
 //! search planners' primitives and IDM+MOBIL's accelerations; the `rl-ppo` policy's primitives
 //! are its trained action space). Campaigns over scenarios run these episodes in worker
-//! processes (`campaign::scenarios`).
+//! processes (`campaign`, over the grid's scenario axis).
 
 mod entry_rows;
 #[cfg(test)]
