@@ -22,6 +22,7 @@ fn _bkpbs(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add("SUMO_VERSION", bkpbs::sumo::version::BUILT)?;
     m.add("PLANNERS", controller::planners(m.py())?)?;
+    m.add("COMMANDED_MODES", bkpbs::episode::control::COMMANDED_MODES)?;
     m.add_class::<controller::PyController>()?;
     m.add_class::<controller::PyManeuver>()?;
     m.add_class::<campaign::PyCampaign>()?;

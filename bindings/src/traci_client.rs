@@ -215,4 +215,20 @@ impl SumoClient for TraciClient<'_> {
     fn set_color(&mut self, id: &str, [r, g, b]: [u8; 3]) -> Result<(), SumoError> {
         self.command("vehicle.setColor", (id, (r, g, b, 255u8)))
     }
+    fn add_vehicle(
+        &mut self,
+        id: &str,
+        route: &str,
+        type_id: &str,
+        lane: i32,
+        speed: f64,
+    ) -> Result<(), SumoError> {
+        // As the core's own loop adds one: now, at the lane's start, at this speed.
+        let (lane, speed) = (lane.to_string(), format!("{speed:.6}"));
+        let args = (id, route, type_id, "now", lane, "base", speed);
+        self.command("vehicle.add", args)
+    }
+    fn set_max_speed(&mut self, id: &str, speed: f64) -> Result<(), SumoError> {
+        self.command("vehicle.setMaxSpeed", (id, speed))
+    }
 }

@@ -19,6 +19,10 @@ const LC_MODE_RAMP_HDV: i32 = 0b10_0000_0000;
 /// collisions (see `merge_rule`).
 const LC_MODE_RAMP_HDV_FORCED: i32 = 0b01_0000_0000;
 
+/// The speed mode and lane-change mode of a commanded CAV (for a caller's own TraCI loop, which
+/// sets them itself: the Python `bkpbs.sumo.apply`).
+pub const COMMANDED_MODES: (i32, i32) = (SPEED_MODE_COMMANDED, LC_MODE_COMMANDED);
+
 /// A planner takes CAV `id` over: SUMO drives it exactly as commanded.
 pub fn take_over(sim: &mut impl SumoClient, id: &str) -> Result<(), SumoError> {
     sim.set_speed_mode(id, SPEED_MODE_COMMANDED)?;

@@ -184,7 +184,14 @@ impl<'a> Episode<'a> {
         let loop_start = Instant::now();
         let (config, road) = (self.config, self.road.clone());
         lock_step(&mut sim, &frame::edge_names(&road), config, |sim, plan| {
-            self.step(sim, plan)
+            // The time of the state this step produces, on SUMO's clock: SUMO's own outputs
+            // (FCD, tripinfo, collisions) label the state after a step with the time the step
+            // started, and a vehicle added now departs at this time. `sim.time()` after the
+            // step is one step later.
+            let now = sim.time()?;
+            self.admit(sim, now)?;
+            self.times.sumo_step(sim)?;
+            self.after_step(sim, now, plan)
         })?;
         let steps = config.scenario.steps;
         let at = |step| step_error(config.scenario.dt, step);
@@ -197,7 +204,7 @@ impl<'a> Episode<'a> {
 
     /// Asks SUMO, for every vehicle still in the network, how far it still has to go along
     /// its route: what it covered counts in its system delay.
-    fn measure_remaining(&mut self, sim: &Simulation) -> Result<(), SumoError> {
+    fn measure_remaining(&mut self, sim: &impl SumoClient) -> Result<(), SumoError> {
         let present: Vec<(usize, String, Option<usize>)> = self
             .ledger
             .present()
@@ -221,15 +228,14 @@ impl<'a> Episode<'a> {
             .count()
     }
 
-    /// One SUMO step and, unless it is the last, one planning round.
-    fn step(&mut self, sim: &mut Simulation, plan: bool) -> Result<(), SumoError> {
-        // The time of the state this step produces, on SUMO's clock: SUMO's own outputs (FCD,
-        // tripinfo, collisions) label the state after a step with the time the step started,
-        // and a vehicle added now departs at this time. `sim.time()` after the step is one
-        // step later.
-        let now = sim.time()?;
-        self.admit(sim, now)?;
-        self.times.sumo_step(sim)?;
+    /// What follows a SUMO step that began at `now`: departures, collisions and arrivals
+    /// booked, the scene read and, when `plan` (not after the last step), one planning round.
+    fn after_step(
+        &mut self,
+        sim: &mut impl SumoClient,
+        now: f64,
+        plan: bool,
+    ) -> Result<(), SumoError> {
         self.book_departures(sim, now)?;
         // Read before the collided vehicles are removed: their state at this time counts, as
         // in SUMO's own outputs (a vehicle may collide in the step it was inserted).
@@ -245,7 +251,7 @@ impl<'a> Episode<'a> {
     }
 
     /// Adds the vehicles the entry gate lets in at `now`.
-    fn admit(&mut self, sim: &mut Simulation, now: f64) -> Result<(), SumoError> {
+    fn admit(&mut self, sim: &mut impl SumoClient, now: f64) -> Result<(), SumoError> {
         for a in self.entry.admit(now, &self.sumo_scene.scene) {
             let v = &a.vehicle;
             let through = match v.origin {
@@ -265,7 +271,7 @@ impl<'a> Episode<'a> {
 
     /// One planning round on this step's scene: ramp HDVs' merge requests, then the
     /// controller's maneuvers, sent to SUMO when it commands the CAVs.
-    fn plan(&mut self, sim: &mut Simulation) -> Result<(), SumoError> {
+    fn plan(&mut self, sim: &mut impl SumoClient) -> Result<(), SumoError> {
         for m in self.merge_rule.requests(&self.sumo_scene.scene) {
             let v = &self.sumo_scene.scene.vehicles[m.vehicle];
             if m.forced {
@@ -292,7 +298,7 @@ impl<'a> Episode<'a> {
 
     /// Opens a ledger line for each vehicle SUMO inserted in this step, after taking control
     /// of it.
-    fn book_departures(&mut self, sim: &mut Simulation, now: f64) -> Result<(), SumoError> {
+    fn book_departures(&mut self, sim: &mut impl SumoClient, now: f64) -> Result<(), SumoError> {
         for id in sim.departed()? {
             let sumo_type = sim.vehicle_type(&id)?;
             let kind = Kind::from_type_id(&sumo_type).unwrap_or(Kind::Hdv);
@@ -316,7 +322,7 @@ impl<'a> Episode<'a> {
     /// changing lanes only when the merge rule says), a commanded CAV exactly as commanded.
     fn take_control(
         &self,
-        sim: &mut Simulation,
+        sim: &mut impl SumoClient,
         id: &str,
         kind: Kind,
         expected: &Expected,
@@ -338,7 +344,7 @@ impl<'a> Episode<'a> {
 
     /// Removes the vehicles of this step's collisions from SUMO (telling the observer), then
     /// books the collisions.
-    fn book_collisions(&mut self, sim: &mut Simulation, now: f64) -> Result<(), SumoError> {
+    fn book_collisions(&mut self, sim: &mut impl SumoClient, now: f64) -> Result<(), SumoError> {
         let collisions = sim.collisions()?;
         let mut removed: Vec<&str> = Vec::new();
         for c in &collisions {
@@ -388,7 +394,7 @@ impl<'a> Episode<'a> {
     }
 
     /// Sends the controller's maneuvers to SUMO.
-    fn apply(&mut self, sim: &mut Simulation) -> Result<(), SumoError> {
+    fn apply(&mut self, sim: &mut impl SumoClient) -> Result<(), SumoError> {
         send_commands(sim, &self.sumo_scene, &self.commands, &self.config.scenario)
     }
 
@@ -493,3 +499,7 @@ pub(crate) fn lock_step(
     }
     Ok(())
 }
+
+#[cfg(test)]
+#[path = "runner_tests.rs"]
+mod tests;

@@ -1,12 +1,13 @@
-//! The SUMO calls an episode on a user's scenario makes, as one trait: answered by the
-//! in-process libsumo [`Simulation`] for `bkpbs episode --sumocfg`, or by the caller's own TraCI
-//! loop (the Python `Controller(sumocfg=…)`), so that both keep one set of books and plan alike.
+//! The SUMO calls an episode makes between two steps, as one trait: answered by the in-process
+//! libsumo [`Simulation`] for `bkpbs episode`, by the caller's own TraCI loop (the Python
+//! `Controller(sumocfg=…)`), so that both keep one set of books and plan alike, or by a scripted
+//! fake in the loops' unit tests.
 
 use super::{Collision, RawVehicleState, Simulation, SumoError, VehicleReadings};
 use crate::model::scene::Limits;
 
-/// What an episode on a user's scenario asks of SUMO between two steps. The caller steps SUMO;
-/// every call here reads or commands the state after a step.
+/// What an episode asks of SUMO between two steps. The caller steps SUMO; every call here reads
+/// or commands the state after a step (or, [`SumoClient::add_vehicle`], before the next).
 pub trait SumoClient {
     /// SUMO's simulation time (s).
     fn time(&self) -> Result<f64, SumoError>;
@@ -51,6 +52,19 @@ pub trait SumoClient {
     fn change_lane(&mut self, id: &str, lane_index: i32, duration: f64) -> Result<(), SumoError>;
     /// Takes a vehicle out of the simulation now.
     fn remove_vehicle(&mut self, id: &str) -> Result<(), SumoError>;
+    /// Adds a vehicle departing now from the start of `route`, on lane `lane` of its first edge,
+    /// at `speed` (m/s); SUMO inserts it in the coming step if there is room, else retries.
+    fn add_vehicle(
+        &mut self,
+        id: &str,
+        route: &str,
+        type_id: &str,
+        lane: i32,
+        speed: f64,
+    ) -> Result<(), SumoError>;
+    /// A vehicle's own top speed (m/s), which SUMO's car-following models take as its desired
+    /// speed.
+    fn set_max_speed(&mut self, id: &str, speed: f64) -> Result<(), SumoError>;
     /// Colours a vehicle in sumo-gui (red, green, blue).
     fn set_color(&mut self, id: &str, rgb: [u8; 3]) -> Result<(), SumoError>;
 }
@@ -118,6 +132,19 @@ impl SumoClient for Simulation {
     }
     fn remove_vehicle(&mut self, id: &str) -> Result<(), SumoError> {
         Simulation::remove_vehicle(self, id)
+    }
+    fn add_vehicle(
+        &mut self,
+        id: &str,
+        route: &str,
+        type_id: &str,
+        lane: i32,
+        speed: f64,
+    ) -> Result<(), SumoError> {
+        Simulation::add_vehicle(self, id, route, type_id, lane, speed)
+    }
+    fn set_max_speed(&mut self, id: &str, speed: f64) -> Result<(), SumoError> {
+        Simulation::set_max_speed(self, id, speed)
     }
     fn set_color(&mut self, id: &str, rgb: [u8; 3]) -> Result<(), SumoError> {
         Simulation::set_color(self, id, rgb)

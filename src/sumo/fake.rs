@@ -174,6 +174,10 @@ pub(crate) enum Sent {
     Remove(String),
     /// Its colour in sumo-gui.
     Color(String, [u8; 3]),
+    /// A vehicle added to depart now: its route, type, lane and speed.
+    Add(String, String, String, i32, f64),
+    /// Its own top speed.
+    MaxSpeed(String, f64),
 }
 
 impl Sent {
@@ -185,7 +189,9 @@ impl Sent {
             | Sent::LaneChangeMode(id, _)
             | Sent::ChangeLane(id, _, _)
             | Sent::Remove(id)
-            | Sent::Color(id, _) => id,
+            | Sent::Color(id, _)
+            | Sent::Add(id, ..)
+            | Sent::MaxSpeed(id, _) => id,
         }
     }
 }
@@ -362,6 +368,23 @@ impl SumoClient for FakeSumo {
         self.send("vehicle.remove", Sent::Remove(id.into()))?;
         self.gone.insert(id.into());
         Ok(())
+    }
+    /// Recorded only: the script says when SUMO inserts it.
+    fn add_vehicle(
+        &mut self,
+        id: &str,
+        route: &str,
+        type_id: &str,
+        lane: i32,
+        speed: f64,
+    ) -> Result<(), SumoError> {
+        let (route, type_id) = (route.to_string(), type_id.to_string());
+        self.sent
+            .push(Sent::Add(id.into(), route, type_id, lane, speed));
+        Ok(())
+    }
+    fn set_max_speed(&mut self, id: &str, speed: f64) -> Result<(), SumoError> {
+        self.send("vehicle.setMaxSpeed", Sent::MaxSpeed(id.into(), speed))
     }
 }
 

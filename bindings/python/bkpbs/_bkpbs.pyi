@@ -16,6 +16,9 @@ __version__: str
 SUMO_VERSION: str
 #: The planner names ``Controller`` and ``run_episode`` accept.
 PLANNERS: List[str]
+#: SUMO's ``speedMode`` and ``laneChangeMode`` of a commanded CAV, as the core sets them
+#: (``bkpbs.sumo.apply`` switches each CAV to them once).
+COMMANDED_MODES: Tuple[int, int]
 
 class BkpbsError(ValueError):
     """Bad input: unknown planner, α outside [0, 1], unknown or invalid configuration key,

@@ -11,7 +11,7 @@ import weakref
 from dataclasses import dataclass
 from typing import Any, Dict, List, Mapping, MutableSet, Optional
 
-from ._bkpbs import Maneuver
+from ._bkpbs import COMMANDED_MODES, Maneuver
 
 
 @dataclass
@@ -126,8 +126,8 @@ def apply(
 ) -> None:
     """Sends maneuvers to SUMO as the episode runner does.
 
-    Each CAV is first switched to commanded mode (``setSpeedMode 0``, ``setLaneChangeMode 0``:
-    SUMO's own checks off, the controller alone decides), then gets ``setSpeed`` every step and
+    Each CAV is first switched to commanded mode (``COMMANDED_MODES``, the core's: speed mode 0
+    and lane-change mode 0, SUMO's own checks off, the controller alone decides), then gets ``setSpeed`` every step and
     ``changeLane(id, sumo_lane_index, dt)`` when its maneuver starts a lane change.
     ``commanded`` is the set of vehicles already switched (default: one per ``traci_module``);
     vehicles absent from ``maneuvers`` are dropped from it, so a reused id is switched again.
@@ -139,8 +139,9 @@ def apply(
     for vid, m in maneuvers.items():
         try:
             if vid not in seen:
-                vehicle.setSpeedMode(vid, 0)
-                vehicle.setLaneChangeMode(vid, 0)
+                speed_mode, lane_change_mode = COMMANDED_MODES
+                vehicle.setSpeedMode(vid, speed_mode)
+                vehicle.setLaneChangeMode(vid, lane_change_mode)
                 seen.add(vid)
             vehicle.setSpeed(vid, m.speed)
             if m.lane_change is not None and m.sumo_lane_index is not None:
