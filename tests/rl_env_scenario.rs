@@ -8,10 +8,11 @@ mod common;
 
 use bkpbs::config::Config;
 use bkpbs::episode::sumocfg::{self, ScenarioResult};
+use bkpbs::episode::Ran;
 use bkpbs::policy::model_file;
 use bkpbs::policy::network::{greedy, masked_log_softmax, ActorCritic};
 use bkpbs::policy::observation::OBS_DIM;
-use bkpbs::train::ppo::env::{Agents, Finished, MergeEnv};
+use bkpbs::train::ppo::env::{Agents, MergeEnv};
 use bkpbs::train::ppo::reward::RewardSettings;
 use common::{bkpbs, game_copy};
 use nalgebra::DMatrix;
@@ -51,7 +52,7 @@ fn drive(env: &mut MergeEnv, net: &ActorCritic) -> (ScenarioResult, usize) {
         }
     }
     match env.result() {
-        Some(Finished::Scenario(r)) => (r.clone(), decisions),
+        Some(Ran::Scenario(r)) => ((**r).clone(), decisions),
         other => panic!("a scenario's result expected, got {other:?}"),
     }
 }

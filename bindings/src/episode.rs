@@ -9,7 +9,8 @@ use pyo3::types::PyDict;
 use bkpbs::controller::{UnknownPlanner, PLANNERS};
 use bkpbs::episode::demand;
 use bkpbs::episode::output;
-use bkpbs::episode::{self, EpisodeResult};
+use bkpbs::episode::summary::Summary;
+use bkpbs::episode::{self};
 use bkpbs::model::road::EMBEDDED_NET;
 use bkpbs::sumo::files;
 
@@ -20,9 +21,9 @@ use crate::run_slot::{cell_table, cells_dict, run_detached};
 /// precision (a float is the `f64` itself, not its CSV text; empty cells are `None`).
 pub(crate) fn summary_dict<'py>(
     py: Python<'py>,
-    r: &EpisodeResult,
+    summary: &Summary,
 ) -> PyResult<Bound<'py, PyDict>> {
-    cells_dict(py, r.summary.cells())
+    cells_dict(py, summary.cells())
 }
 
 /// Runs one episode of `planner` at penetration `alpha`, arrival rate `lam` (veh/h) and
@@ -49,29 +50,22 @@ pub fn run_episode<'py>(
     if !PLANNERS.contains(&planner) {
         return Err(bad_input(UnknownPlanner(planner.to_string())));
     }
-    if let Some(sumocfg) = sumocfg {
-        if let Some(lam) = lam {
-            return Err(crate::scenario::lam_with_sumocfg(lam));
+    let config = match sumocfg {
+        Some(sumocfg) => {
+            if let Some(lam) = lam {
+                return Err(crate::scenario::lam_with_sumocfg(lam));
+            }
+            let table = cell_table(alpha, None, seed)?;
+            crate::scenario::resolve_with(&sumocfg, config, overrides, table)?
         }
-        let call = crate::scenario::ScenarioCall {
-            planner,
-            alpha,
-            seed,
-            sumocfg,
-            config,
-            overrides,
-            out,
-        };
-        return crate::scenario::run(py, call);
-    }
-    let config = crate::config::resolve(config, overrides, cell_table(alpha, lam, seed)?)?;
-    let result = run_detached(py, planner, || episode::run(&config, planner))?;
+        None => crate::config::resolve(config, overrides, cell_table(alpha, lam, seed)?)?,
+    };
+    let ran = run_detached(py, planner, || episode::ran::run(&config, planner))?;
     if let Some(dir) = out {
-        result
-            .write(&dir)
+        ran.write(&dir)
             .map_err(|e| pyo3::exceptions::PyOSError::new_err(e.to_string()))?;
     }
-    summary_dict(py, &result)
+    summary_dict(py, ran.summary())
 }
 
 fn write(path: &Path, text: &str) -> PyResult<()> {

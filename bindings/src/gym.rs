@@ -9,7 +9,7 @@ use pyo3::types::{PyBytes, PyDict};
 use bkpbs::config::Config;
 use bkpbs::planner::primitives::Primitive;
 use bkpbs::policy::observation::{feature_names, OBS_DIM};
-use bkpbs::train::ppo::env::{Agents, EnvError, Finished, MergeEnv};
+use bkpbs::train::ppo::env::{Agents, EnvError, MergeEnv};
 use bkpbs::train::ppo::reward::RewardSettings;
 
 use crate::errors::{bad_input, episode_error};
@@ -190,11 +190,9 @@ impl PyMergeEnv {
 
     /// The finished episode's summary (the values of `episode.csv`, at full precision), once done.
     fn summary<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyDict>>> {
-        match self.env.as_ref().and_then(|e| e.result()) {
-            Some(Finished::Merge(r)) => crate::episode::summary_dict(py, r).map(Some),
-            Some(Finished::Scenario(r)) => crate::scenario::summary_dict(py, r).map(Some),
-            None => Ok(None),
-        }
+        let ran = self.env.as_ref().and_then(|e| e.result());
+        ran.map(|r| crate::episode::summary_dict(py, r.summary()))
+            .transpose()
     }
 
     /// Ends the running episode (its agents idle to the end) and frees the simulation; the

@@ -197,7 +197,7 @@ pub(crate) fn run_cell_recording(req: &Request, record: &Config) -> Result<(), S
     IN_EPISODE.store(true, Ordering::SeqCst);
     let run = panic::catch_unwind(AssertUnwindSafe(|| {
         injected_fault(req);
-        Ran::run(req)
+        run_episode(req)
     }));
     IN_EPISODE.store(false, Ordering::SeqCst);
     let result = match run {
@@ -218,37 +218,17 @@ pub(crate) fn run_cell_recording(req: &Request, record: &Config) -> Result<(), S
     let provenance_file = req.dir.join(super::provenance::PROVENANCE_RECORD);
     io::write_atomic(&req.dir.join(SETTINGS_RECORD), record.as_bytes())
         .and_then(|()| io::write_atomic(&provenance_file, provenance.to_toml().as_bytes()))
-        .and_then(|()| result.write(&req.dir))
+        .and_then(|()| result.write(&req.dir).map(drop))
         .map_err(|e| e.to_string())
 }
 
-/// A finished episode of either kind of campaign: on the paper's demand, or on a scenario of
-/// the user's own (`scenario.sumocfg` set), whose files differ.
-enum Ran {
-    Demand(Box<episode::EpisodeResult>),
-    Scenario(Box<episode::sumocfg::ScenarioResult>),
-}
-
-impl Ran {
-    fn run(req: &Request) -> Result<Ran, String> {
-        let (config, planner) = (&req.config, &req.planner);
-        let ran = match &config.scenario.sumocfg {
-            Some(cfg) => {
-                same_scenario(cfg, &config.scenario.sumocfg_digests)?;
-                episode::sumocfg::run(config, planner).map(|r| Ran::Scenario(Box::new(r)))
-            }
-            None => episode::run(config, planner).map(|r| Ran::Demand(Box::new(r))),
-        };
-        ran.map_err(|e| e.to_string())
+/// Runs the request's episode (a scenario's files first checked against the campaign's record).
+fn run_episode(req: &Request) -> Result<episode::Ran, String> {
+    let config = &req.config;
+    if let Some(cfg) = &config.scenario.sumocfg {
+        same_scenario(cfg, &config.scenario.sumocfg_digests)?;
     }
-
-    /// Writes the episode's files into `dir`, `episode.csv` last.
-    fn write(&self, dir: &Path) -> Result<(), crate::io::WriteError> {
-        match self {
-            Ran::Demand(r) => r.write(dir).map(drop),
-            Ran::Scenario(r) => episode::sumocfg::write(r, dir).map(drop),
-        }
-    }
+    episode::ran::run(config, &req.planner).map_err(|e| e.to_string())
 }
 
 /// Refuses to run a scenario whose files are not those the campaign recorded when it started

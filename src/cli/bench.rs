@@ -44,11 +44,7 @@ impl BenchArgs {
         for p in &planners {
             p.check(&config)?;
         }
-        if config.scenario.sumocfg.is_some() {
-            bkpbs::sumo::frame::scenario_roads(&config.scenario)?;
-        } else {
-            bkpbs::sumo::frame::scenario_road(&config.scenario)?;
-        }
+        bkpbs::sumo::frame::scenario_roads(&config.scenario)?;
         for &t in &self.threads {
             bkpbs::io::cores::check("--threads", t).map_err(anyhow::Error::msg)?;
         }

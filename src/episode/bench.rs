@@ -7,8 +7,6 @@ use crate::config::Config;
 use crate::episode::demand;
 use crate::episode::metrics::percentile;
 use crate::episode::{self, sumocfg, EpisodeError};
-use crate::episode::{Driver, Observer};
-use crate::model::scene::{Kind, Scene};
 use crate::sumo::files::EpisodeInput;
 use crate::sumo::Simulation;
 
@@ -38,26 +36,6 @@ pub struct BenchRow {
     pub cavs_per_step: f64,
 }
 
-/// Counts the vehicles and CAVs of every step's scene.
-#[derive(Default)]
-struct Occupancy {
-    steps: u64,
-    vehicles: u64,
-    cavs: u64,
-}
-
-impl Observer for Occupancy {
-    fn observe(&mut self, scene: &Scene) {
-        self.steps += 1;
-        self.vehicles += scene.vehicles.len() as u64;
-        self.cavs += scene
-            .vehicles
-            .iter()
-            .filter(|v| v.kind == Kind::Cav)
-            .count() as u64;
-    }
-}
-
 /// A rayon pool of `threads` threads for the planners.
 fn pool(threads: usize) -> rayon::ThreadPool {
     rayon::ThreadPoolBuilder::new()
@@ -66,50 +44,22 @@ fn pool(threads: usize) -> rayon::ThreadPool {
         .expect("a thread pool")
 }
 
-/// One timed episode of `planner` on a rayon pool of `threads` threads: the row's figures.
+/// One timed episode of `planner` on a rayon pool of `threads` threads: the row's figures
+/// (on a scenario, planning per step is every region's together).
 fn timed_episode(config: &Config, planner: &str, threads: usize) -> Result<[f64; 9], EpisodeError> {
-    if config.scenario.sumocfg.is_some() {
-        return timed_scenario(config, planner, threads);
-    }
-    let planned = demand::generate_for(config)?;
-    let mut seen = Occupancy::default();
-    let r = pool(threads)
-        .install(|| episode::run_observed(config, Driver::Named(planner), &planned, &mut seen))?;
-    let t = &r.timing;
+    let r = pool(threads).install(|| episode::ran::run(config, planner))?;
+    let t = r.timing();
     let steps = config.scenario.steps as f64;
-    let per_step = |n: u64| n as f64 / seen.steps.max(1) as f64;
     Ok([
         t.episode_ms_per_step,
         t.plan_ms_median,
         t.plan_ms_p99,
         t.plan_ms_max,
-        r.summary.plan_stats.nodes_expanded as f64 / steps,
+        r.summary().plan_stats.nodes_expanded as f64 / steps,
         t.shield_ms_median,
         t.shield_ms_max,
-        per_step(seen.vehicles),
-        per_step(seen.cavs),
-    ])
-}
-
-/// One timed episode of `planner` on the user's scenario: the row's figures (planning per step
-/// is every region's together; no node count is kept there, so that figure is NaN).
-fn timed_scenario(
-    config: &Config,
-    planner: &str,
-    threads: usize,
-) -> Result<[f64; 9], EpisodeError> {
-    let r = pool(threads).install(|| sumocfg::run(config, planner))?;
-    let t = &r.timing;
-    Ok([
-        t.episode_ms_per_step,
-        t.plan_ms_median,
-        t.plan_ms_p99,
-        t.plan_ms_max,
-        f64::NAN,
-        t.shield_ms_median,
-        t.shield_ms_max,
-        r.vehicles_per_step,
-        r.cavs_per_step,
+        r.vehicles_per_step(),
+        r.cavs_per_step(),
     ])
 }
 
@@ -243,6 +193,6 @@ pub fn table(rows: &[BenchRow]) -> String {
     out += "(ms; planning figures are per step for all CAVs together, the shield's part of it \
             apart, medians over the repeats; ×N: the planner on N threads; veh/step and CAVs: on \
             the section per step, on average; on a scenario of your own, in its regions, planning \
-            all regions together, and no node count: NaN)\n";
+            and nodes all regions together)\n";
     out
 }

@@ -1,4 +1,4 @@
-//! One episode and what it needs: the demand, SUMO's entry gate, the ramp HDVs' merge rule, the
+//! One episode and what it needs: one entry point for either traffic ([`ran`]), the demand, SUMO's entry gate, the ramp HDVs' merge rule, the
 //! runner that keeps SUMO and a controller in lock-step, the metrics and the CSV files it writes,
 //! the side-by-side benchmark, the trace of what the planner saw and did (`trace.jsonl`), and
 //! the trajectories of every vehicle (`trajectories.csv`).
@@ -21,6 +21,7 @@ pub mod metrics;
 pub mod models_used;
 pub mod observer;
 pub mod output;
+pub mod ran;
 mod recording;
 pub mod rows;
 pub mod runner;
@@ -32,4 +33,5 @@ pub mod trajectories;
 
 pub use error::{sumo_errors, EpisodeError};
 pub use observer::{NoObserver, Observer};
+pub use ran::Ran;
 pub use runner::{run, run_observed, run_with_demand, Driver, EpisodeResult};

@@ -50,6 +50,10 @@ pub struct EpisodeResult {
     pub trajectories: Option<TrajectoryFile>,
     /// What SUMO printed to stderr (captured unless `sumo.verbose`).
     pub sumo_log: String,
+    /// Vehicles in the scene per step, on average.
+    pub vehicles_per_step: f64,
+    /// CAVs in the scene per step, on average.
+    pub cavs_per_step: f64,
 }
 
 /// Who drives the CAVs: a planner by name, built by [`controller::by_name`] once SUMO has given
@@ -152,6 +156,8 @@ struct Episode<'a> {
     recording: Recording,
     /// CAV colours in sumo-gui, when shown there.
     gui: Option<GuiColours>,
+    /// Steps seen, and the vehicles and CAVs in their scenes.
+    occupancy: (u64, u64, u64),
 }
 
 impl<'a> Episode<'a> {
@@ -176,6 +182,7 @@ impl<'a> Episode<'a> {
             times: StepTimes::new(config.scenario.steps),
             recording: Recording::new(config.output.trajectories),
             gui: config.sumo.gui.then(GuiColours::default),
+            occupancy: (0, 0, 0),
             road,
         }
     }
@@ -243,11 +250,21 @@ impl<'a> Episode<'a> {
         self.book_collisions(sim, now)?;
         self.ledger.book_arrivals(sim.arrived()?, now);
         self.build_scene(now);
+        self.count_occupancy();
         self.observer.observe(&self.sumo_scene.scene);
         if plan {
             self.plan(sim)?;
         }
         Ok(())
+    }
+
+    /// Counts this step's scene: its vehicles and CAVs.
+    fn count_occupancy(&mut self) {
+        let vehicles = &self.sumo_scene.scene.vehicles;
+        let cavs = vehicles.iter().filter(|v| v.kind == Kind::Cav).count();
+        self.occupancy.0 += 1;
+        self.occupancy.1 += vehicles.len() as u64;
+        self.occupancy.2 += cavs as u64;
     }
 
     /// Adds the vehicles the entry gate lets in at `now`.
@@ -420,6 +437,8 @@ impl<'a> Episode<'a> {
             stranded,
             plan_stats: self.plan_stats,
         });
+        let (steps, vehicles, cavs) = self.occupancy;
+        let per_step = |n: u64| n as f64 / steps.max(1) as f64;
         EpisodeResult {
             summary,
             vehicles: books.vehicles,
@@ -427,6 +446,8 @@ impl<'a> Episode<'a> {
             timing: self.times.timing(loop_s, sc.steps),
             trajectories: self.recording.finish(),
             sumo_log: String::new(),
+            vehicles_per_step: per_step(vehicles),
+            cavs_per_step: per_step(cavs),
         }
     }
 }

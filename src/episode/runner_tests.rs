@@ -53,6 +53,30 @@ fn run_script(planned: &[PlannedVehicle], script: Vec<Step>) -> (FakeSumo, Episo
     (sim, result)
 }
 
+/// A CAV on the main road and an HDV on the ramp, both scheduled at 0.
+fn a_cav_and_a_ramp_hdv() -> [PlannedVehicle; 2] {
+    [
+        planned("main.0", Kind::Cav, Origin::Main, 0.0),
+        planned("ramp.0", Kind::Hdv, Origin::Ramp, 0.0),
+    ]
+}
+
+/// Their first step: both inserted, 10 m into their first edges.
+fn both_enter() -> Step {
+    Step::default()
+        .depart(FakeVehicle::new("main.0", "cav"))
+        .depart(FakeVehicle::new("ramp.0", "hdv"))
+        .read(Reading::on("main.0", "main_in", 0, 10.0, 25.0))
+        .read(Reading::on("ramp.0", "ramp", 0, 10.0, 25.0))
+}
+
+/// Their second: 5 m further.
+fn both_drive_on() -> Step {
+    Step::default()
+        .read(Reading::on("main.0", "main_in", 0, 15.0, 25.0))
+        .read(Reading::on("ramp.0", "ramp", 0, 15.0, 25.0))
+}
+
 fn record<'a>(result: &'a EpisodeResult, id: &str) -> &'a VehicleRecord {
     let found = result.vehicles.iter().find(|v| v.id == id);
     found.unwrap_or_else(|| panic!("no record of {id}"))
@@ -63,20 +87,8 @@ fn record<'a>(result: &'a EpisodeResult, id: &str) -> &'a VehicleRecord {
 /// changes lanes only when the merge rule says.
 #[test]
 fn a_cav_is_taken_over_and_a_ramp_hdv_waits_for_the_merge_rule() {
-    let demand = [
-        planned("main.0", Kind::Cav, Origin::Main, 0.0),
-        planned("ramp.0", Kind::Hdv, Origin::Ramp, 0.0),
-    ];
-    let script = vec![
-        Step::default()
-            .depart(FakeVehicle::new("main.0", "cav"))
-            .depart(FakeVehicle::new("ramp.0", "hdv"))
-            .read(Reading::on("main.0", "main_in", 0, 10.0, 25.0))
-            .read(Reading::on("ramp.0", "ramp", 0, 10.0, 25.0)),
-        Step::default()
-            .read(Reading::on("main.0", "main_in", 0, 15.0, 25.0))
-            .read(Reading::on("ramp.0", "ramp", 0, 15.0, 25.0)),
-    ];
+    let demand = a_cav_and_a_ramp_hdv();
+    let script = vec![both_enter(), both_drive_on()];
     let (sim, result) = run_script(&demand, script);
     let cav = sim.sent_to("main.0");
     assert_eq!(
@@ -109,20 +121,10 @@ fn a_cav_is_taken_over_and_a_ramp_hdv_waits_for_the_merge_rule() {
 /// other; with a CAV in it, it is controllable.
 #[test]
 fn a_collision_removes_both_and_is_controllable_with_a_cav_in_it() {
-    let demand = [
-        planned("main.0", Kind::Cav, Origin::Main, 0.0),
-        planned("ramp.0", Kind::Hdv, Origin::Ramp, 0.0),
-    ];
+    let demand = a_cav_and_a_ramp_hdv();
     let script = vec![
-        Step::default()
-            .depart(FakeVehicle::new("main.0", "cav"))
-            .depart(FakeVehicle::new("ramp.0", "hdv"))
-            .read(Reading::on("main.0", "main_in", 0, 10.0, 25.0))
-            .read(Reading::on("ramp.0", "ramp", 0, 10.0, 25.0)),
-        Step::default()
-            .read(Reading::on("main.0", "main_in", 0, 15.0, 25.0))
-            .read(Reading::on("ramp.0", "ramp", 0, 15.0, 25.0))
-            .collide("ramp.0", "main.0"),
+        both_enter(),
+        both_drive_on().collide("ramp.0", "main.0"),
         Step::default(),
     ];
     let (sim, result) = run_script(&demand, script);

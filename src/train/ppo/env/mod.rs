@@ -25,8 +25,8 @@ mod remote;
 use super::reward::RewardSettings;
 use crate::config::Config;
 use crate::episode::demand::PlannedVehicle;
-use crate::episode::sumocfg::{self, Fleet, ScenarioResult};
-use crate::episode::{self, Driver, EpisodeError, EpisodeResult, Observer};
+use crate::episode::sumocfg::{self, Fleet};
+use crate::episode::{self, Driver, EpisodeError, Observer, Ran};
 use crate::model::scene::{Kind, Scene};
 use crate::planner::primitives::Primitive;
 use crate::policy::actions::{Mask, IDLE};
@@ -108,16 +108,7 @@ struct Decision {
 /// A step of the episode thread: agents to decide, or the end.
 enum Event {
     Decide(Box<Decision>),
-    Finished(Box<Result<Finished, EpisodeError>>),
-}
-
-/// A finished episode's results.
-#[derive(Debug, Clone)]
-pub enum Finished {
-    /// On the paper's merge: its metrics and vehicles.
-    Merge(EpisodeResult),
-    /// On a user's scenario: its rows, as `bkpbs episode --sumocfg` writes them.
-    Scenario(ScenarioResult),
+    Finished(Box<Result<Ran, EpisodeError>>),
 }
 
 /// A running episode stepped from outside.
@@ -134,7 +125,7 @@ pub struct MergeEnv {
     reward: RewardSettings,
     single: bool,
     done: bool,
-    result: Option<Finished>,
+    result: Option<Ran>,
 }
 
 impl MergeEnv {
@@ -199,7 +190,7 @@ impl MergeEnv {
     }
 
     /// The finished episode's results (metrics, vehicles), once done.
-    pub fn result(&self) -> Option<&Finished> {
+    pub fn result(&self) -> Option<&Ran> {
         self.result.as_ref()
     }
 
@@ -378,7 +369,9 @@ fn episode_thread(
     };
     let mut observer = CrashLog(crashed);
     let result = episode::run_observed(&config, Driver::Given(&mut ctl), &demand, &mut observer);
-    let _ = events.send(Event::Finished(Box::new(result.map(Finished::Merge))));
+    let _ = events.send(Event::Finished(Box::new(
+        result.map(|r| Ran::Demand(Box::new(r))),
+    )));
 }
 
 /// The episode on the user's scenario of `config`, every region's CAVs (or one among HDVs)
@@ -395,7 +388,9 @@ fn scenario_thread(
     };
     let round = Box::new(Remote::new(events.clone(), actions));
     let result = sumocfg::run_together(&config, "rl-env", round, fleet);
-    let _ = events.send(Event::Finished(Box::new(result.map(Finished::Scenario))));
+    let _ = events.send(Event::Finished(Box::new(
+        result.map(|r| Ran::Scenario(Box::new(r))),
+    )));
 }
 
 /// Records the vehicles removed in collisions, for the controller to report.
