@@ -15,7 +15,7 @@ use crate::episode::metrics::{CollisionEvent, FreeFlow, Outcome, VehicleRecord};
 use crate::model::kinematics::free_flow_time;
 use crate::model::road::Road;
 use crate::model::scene::{Kind, Origin};
-use crate::sumo::{frame, Collision, VehicleReadings};
+use crate::sumo::{frame, VehicleReadings};
 
 /// A vehicle's line in the ledger: its record, and where it was last seen on the section
 /// (for interpolating its arrival and for the distance it covered).
@@ -178,33 +178,23 @@ impl<'a> Ledger<'a> {
         });
     }
 
-    /// Books the collisions SUMO reported at `now`: each becomes an event, and each vehicle in
-    /// one is marked crashed, with whom.
-    pub fn book_collisions(&mut self, collisions: Vec<Collision>, now: f64) {
-        for c in collisions {
-            let kind_of = |id: &str, type_id: &str| {
-                Kind::from_type_id(type_id)
-                    .or_else(|| self.index.get(id).map(|&k| self.tracked[k].record.kind))
-            };
-            let event = CollisionEvent {
-                time: now,
-                collider_kind: kind_of(&c.collider, &c.collider_type),
-                victim_kind: kind_of(&c.victim, &c.victim_type),
-                collider: c.collider,
-                victim: c.victim,
-                lane: c.lane,
-                position: c.position,
-            };
+    /// The kind of vehicle `id`, if it has a line: a collision's vehicle whose SUMO type does
+    /// not say.
+    pub fn kind_of(&self, id: &str) -> Option<Kind> {
+        self.index.get(id).map(|&k| self.tracked[k].record.kind)
+    }
+
+    /// Books the collisions of a step ([`crate::episode::collisions`]): each vehicle in one is
+    /// marked crashed, with whom, and the events kept.
+    pub fn book_collisions(&mut self, events: Vec<CollisionEvent>) {
+        for event in events {
             let controllable = event.controllable();
-            for (me, other) in [
-                (&event.collider, &event.victim),
-                (&event.victim, &event.collider),
-            ] {
-                if let Some(&k) = self.index.get(me.as_str()) {
+            for (me, other) in event.pairs() {
+                if let Some(&k) = self.index.get(me) {
                     let r = &mut self.tracked[k].record;
                     r.outcome = Outcome::Crashed;
-                    r.crash_time.get_or_insert(now);
-                    r.crashed_with.push(other.clone());
+                    r.crash_time.get_or_insert(event.time);
+                    r.crashed_with.push(other.to_string());
                     r.controllable_crash |= controllable;
                 }
             }

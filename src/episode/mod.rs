@@ -10,6 +10,7 @@
 
 pub mod bench;
 pub mod cells;
+pub mod collisions;
 pub mod control;
 pub mod demand;
 pub mod entry;

@@ -9,6 +9,7 @@ use std::time::Instant;
 
 use crate::config::Config;
 use crate::controller::{self, CavHandling, Command, Controller, PlanStats};
+use crate::episode::collisions::{take_collisions, Crashes};
 use crate::episode::control;
 use crate::episode::demand::{self, PlannedVehicle};
 use crate::episode::entry::EntryControl;
@@ -362,18 +363,12 @@ impl<'a> Episode<'a> {
     /// Removes the vehicles of this step's collisions from SUMO (telling the observer), then
     /// books the collisions.
     fn book_collisions(&mut self, sim: &mut impl SumoClient, now: f64) -> Result<(), SumoError> {
-        let collisions = sim.collisions()?;
-        let mut removed: Vec<&str> = Vec::new();
-        for c in &collisions {
-            for id in [c.collider.as_str(), c.victim.as_str()] {
-                if !removed.contains(&id) {
-                    sim.remove_vehicle(id)?;
-                    self.observer.removed_in_collision(id);
-                    removed.push(id);
-                }
-            }
-        }
-        self.ledger.book_collisions(collisions, now);
+        let mut crashes = DemandCrashes {
+            ledger: &self.ledger,
+            observer: &mut *self.observer,
+        };
+        let events = take_collisions(sim, now, &mut crashes)?;
+        self.ledger.book_collisions(events);
         Ok(())
     }
 
@@ -449,6 +444,25 @@ impl<'a> Episode<'a> {
             vehicles_per_step: per_step(vehicles),
             cavs_per_step: per_step(cavs),
         }
+    }
+}
+
+/// The paper demand's vehicles in a collision: told apart by their SUMO type (`cav`, `hdv`) or
+/// their line, every one removed, the observer told.
+struct DemandCrashes<'a, 'b> {
+    ledger: &'a Ledger<'b>,
+    observer: &'a mut dyn Observer,
+}
+
+impl Crashes for DemandCrashes<'_, '_> {
+    fn kind_of(&self, id: &str, type_id: &str) -> Option<Kind> {
+        Kind::from_type_id(type_id).or_else(|| self.ledger.kind_of(id))
+    }
+    fn removes(&self, _id: &str) -> bool {
+        true
+    }
+    fn removed(&mut self, id: &str) {
+        self.observer.removed_in_collision(id);
     }
 }
 

@@ -25,6 +25,7 @@ pub use super::region::Region;
 use super::region_books::region_books;
 use super::round::{crosses_a_region, plan_together, Fleet, Round};
 use super::{becomes_cav, has_cavs, ScenarioResult, SumoOptions};
+use crate::episode::collisions::{take_collisions, Crashes};
 use crate::episode::control;
 use crate::episode::summary::{Summary, Traffic};
 
@@ -293,33 +294,28 @@ impl ScenarioRun {
     /// Books each collision (a CAV in it makes it controllable) and, in an episode with CAVs,
     /// removes both vehicles; without, SUMO does what its `collision.action` says.
     fn book_collisions(&mut self, sim: &mut impl SumoClient, now: f64) -> Result<(), SumoError> {
-        for c in sim.collisions()? {
-            let kind = |id: &str| self.index.get(id).map(|&k| self.lines[k].record.kind);
-            let event = CollisionEvent {
-                time: now,
-                collider_kind: kind(&c.collider),
-                victim_kind: kind(&c.victim),
-                collider: c.collider.clone(),
-                victim: c.victim.clone(),
-                lane: c.lane.clone(),
-                position: c.position,
-            };
-            for (me, other) in [(&c.collider, &c.victim), (&c.victim, &c.collider)] {
+        let mut crashes = ScenarioCrashes {
+            index: &self.index,
+            lines: &self.lines,
+            removes: self.removes_crashed,
+            crashed: &mut self.crashed,
+        };
+        for event in take_collisions(sim, now, &mut crashes)? {
+            let controllable = event.controllable();
+            for (me, other) in event.pairs() {
                 let Some(&k) = self.index.get(me) else {
                     continue;
                 };
                 let r = &mut self.lines[k].record;
                 if self.removes_crashed && r.outcome == Outcome::Present {
-                    sim.remove_vehicle(me)?;
                     r.outcome = Outcome::Crashed;
                     r.crash_time_s = Some(now);
-                    self.crashed.push(Arc::from(me.as_str()));
                 }
                 if !r.crashed_with.is_empty() {
                     r.crashed_with.push(' ');
                 }
                 r.crashed_with.push_str(other);
-                r.controllable_crash |= event.controllable();
+                r.controllable_crash |= controllable;
             }
             self.collisions.push(event);
         }
@@ -523,6 +519,28 @@ impl ScenarioRun {
             trajectories,
             traces,
         })
+    }
+}
+
+/// A scenario's vehicles in a collision: told apart by their draw, removed (once, while
+/// present) only in an episode with CAVs.
+struct ScenarioCrashes<'a> {
+    index: &'a HashMap<String, usize>,
+    lines: &'a [Line],
+    removes: bool,
+    crashed: &'a mut Vec<Arc<str>>,
+}
+
+impl Crashes for ScenarioCrashes<'_> {
+    fn kind_of(&self, id: &str, _type_id: &str) -> Option<Kind> {
+        self.index.get(id).map(|&k| self.lines[k].record.kind)
+    }
+    fn removes(&self, id: &str) -> bool {
+        let present = |&k: &usize| self.lines[k].record.outcome == Outcome::Present;
+        self.removes && self.index.get(id).is_some_and(present)
+    }
+    fn removed(&mut self, id: &str) {
+        self.crashed.push(Arc::from(id));
     }
 }
 
