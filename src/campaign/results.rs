@@ -13,7 +13,7 @@ use crate::episode::cells::columns_of;
 use crate::episode::output::{self, WriteError};
 use crate::episode::rows::{TimingRow, VehicleRow};
 use crate::episode::summary::{Summary, Traffic};
-use crate::episode::sumocfg::{RegionEntryRow, RegionRow, ScenarioVehicle};
+use crate::episode::sumocfg::{RegionEntryRow, RegionRow};
 
 /// Why collected results cannot be read or merged.
 #[derive(Debug, thiserror::Error)]
@@ -71,19 +71,21 @@ pub enum ResultsError {
     Row(#[from] super::validate::RowError),
 }
 
+/// The traffic of a campaign with `axes`: a scenario axis means scenarios of the user's own.
+fn traffic_of(axes: Axes) -> Traffic {
+    match axes.scenario {
+        true => Traffic::Scenario,
+        false => Traffic::Demand,
+    }
+}
+
 /// Header of `episodes.csv` (an episode's columns already start with its cell).
 pub fn episodes_header(axes: Axes) -> Vec<String> {
-    match axes.scenario {
-        true => axes.header(Summary::columns(Traffic::Scenario)),
-        false => axes.header(Summary::columns(Traffic::Demand)),
-    }
+    axes.header(Summary::columns(traffic_of(axes)))
 }
 /// Header of `vehicles.csv`.
 pub fn vehicles_header(axes: Axes) -> Vec<String> {
-    match axes.scenario {
-        true => led(axes.lead(), &columns_of(&ScenarioVehicle::default())),
-        false => led(axes.lead(), VehicleRow::columns()),
-    }
+    led(axes.lead(), VehicleRow::columns(traffic_of(axes)))
 }
 /// Header of `timings.csv`.
 pub fn timings_header(axes: Axes) -> Vec<String> {

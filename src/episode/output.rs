@@ -32,7 +32,7 @@ impl EpisodeResult {
     /// `vehicles.csv` as bytes.
     pub fn vehicles_csv(&self) -> Vec<u8> {
         let rows: Vec<VehicleRow> = self.vehicles.iter().map(VehicleRow::of).collect();
-        cells::csv_text(&VehicleRow::default(), &rows)
+        VehicleRow::csv(Traffic::Demand, &rows)
     }
 
     /// `collisions.csv` as bytes.

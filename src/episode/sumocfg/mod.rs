@@ -408,7 +408,7 @@ pub fn write(
     dir: &std::path::Path,
 ) -> Result<Vec<PathBuf>, crate::io::WriteError> {
     let episode = Summary::csv(Traffic::Scenario, std::slice::from_ref(&result.summary));
-    let vehicles = csv_of(&result.vehicles);
+    let vehicles = records::vehicles_csv(&result.vehicles);
     let regions = csv_of(&result.regions);
     let entries = csv_of(&result.entries);
     let collisions = crate::episode::output::collisions_csv(&result.collisions);

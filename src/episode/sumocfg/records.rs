@@ -12,28 +12,20 @@ use serde::Serialize;
 
 use crate::episode::cells;
 use crate::episode::metrics::Outcome;
-use crate::episode::summary::{RegionShare, Summary, TimeLossFigures};
+use crate::episode::rows::{EntryDelay, Passage, TripFigures, VehicleRow};
+use crate::episode::summary::{RegionShare, Summary, TimeLossFigures, Traffic};
 use crate::model::scene::Kind;
 
-fn kind_name<S: serde::Serializer>(k: &Kind, s: S) -> Result<S::Ok, S::Error> {
-    s.serialize_str(k.as_str())
-}
-
-fn outcome_name<S: serde::Serializer>(o: &Outcome, s: S) -> Result<S::Ok, S::Error> {
-    s.serialize_str(o.as_str())
-}
-
-/// One vehicle of the scenario (a `vehicles.csv` row): one SUMO inserted, or one whose
-/// departure time came but which SUMO never inserted (outcome `never_inserted`).
-#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+/// One vehicle of the scenario as the episode books it: one SUMO inserted, or one whose
+/// departure time came but which SUMO never inserted (outcome `never_inserted`). Its
+/// `vehicles.csv` row is [`VehicleRow::of_scenario`].
+#[derive(Debug, Clone, Default, PartialEq)]
 pub struct ScenarioVehicle {
     /// SUMO's vehicle id.
     pub id: String,
     /// Its SUMO vehicle type.
-    #[serde(rename = "type")]
     pub sumo_type: String,
-    /// `cav` or `hdv`.
-    #[serde(serialize_with = "kind_name")]
+    /// CAV or HDV.
     pub kind: Kind,
     /// The first merge region it entered (the edges its on-ramps join), empty if none.
     pub region: String,
@@ -41,47 +33,35 @@ pub struct ScenarioVehicle {
     pub region_origin: String,
     /// Its departure time in the scenario (s): SUMO's `depart` of the vehicle (of its flow's
     /// schedule), when it wanted to enter; `depart_s` less `depart_delay_s` once inserted.
-    #[serde(serialize_with = "cells::opt_decimals::<2, _>")]
     pub scheduled_depart_s: Option<f64>,
     /// When SUMO inserted it (s); none if it never did.
-    #[serde(serialize_with = "cells::opt_decimals::<2, _>")]
     pub depart_s: Option<f64>,
     /// When it was first seen in the region (s).
-    #[serde(serialize_with = "cells::opt_decimals::<2, _>")]
     pub region_enter_s: Option<f64>,
     /// When it was last seen in the region (s).
-    #[serde(serialize_with = "cells::opt_decimals::<2, _>")]
     pub region_leave_s: Option<f64>,
     /// How far it drove in the region between its first and last reading there (m).
-    #[serde(serialize_with = "cells::opt_decimals::<2, _>")]
     pub region_distance_m: Option<f64>,
     /// Its system delay in the region (s): the time between those readings less the free-flow
     /// time over that distance from the speed it entered with (`metrics`' t*, at the region's
     /// `v_max`); a vehicle still there at the end counts to its last reading; none if crashed.
-    #[serde(serialize_with = "cells::opt_decimals::<4, _>")]
     pub region_delay_s: Option<f64>,
-    /// `arrived`, `crashed`, `present` (still driving at the end) or `never_inserted`.
-    #[serde(serialize_with = "outcome_name")]
+    /// Arrived, crashed, present (still driving at the end) or never inserted.
     pub outcome: Outcome,
     /// When it arrived at its route's end (s).
-    #[serde(serialize_with = "cells::opt_decimals::<2, _>")]
     pub arrival_s: Option<f64>,
     /// SUMO's `timeLoss` (s): time lost against driving at its ideal speed, to its arrival or to
     /// the episode's end.
-    #[serde(serialize_with = "cells::opt_decimals::<2, _>")]
     pub time_loss_s: Option<f64>,
     /// SUMO's `departDelay` (s): how long it waited to be inserted after its departure time
     /// (no room at its departure position), which `timeLoss` leaves out; for a vehicle never
     /// inserted, its wait from its departure time to the episode's end.
-    #[serde(serialize_with = "cells::opt_decimals::<2, _>")]
     pub depart_delay_s: Option<f64>,
     /// SUMO's `routeLength` (m) driven.
-    #[serde(serialize_with = "cells::opt_decimals::<2, _>")]
     pub route_length_m: Option<f64>,
     /// When it was removed in a collision (s).
-    #[serde(serialize_with = "cells::opt_decimals::<2, _>")]
     pub crash_time_s: Option<f64>,
-    /// Who it collided with.
+    /// Who it collided with, space-separated.
     pub crashed_with: String,
     /// Whether a CAV took part in its collision.
     pub controllable_crash: bool,
@@ -92,8 +72,49 @@ pub struct ScenarioVehicle {
     /// the free-flow time capped at that speed instead of the region's `v_max`: SUMO's speed
     /// factor of the vehicle times the speed limit of the region's main carriageway where it
     /// begins, at most its own top speed; none if crashed or it entered no region.
-    #[serde(serialize_with = "cells::opt_decimals::<4, _>")]
     pub region_delay_own_s: Option<f64>,
+}
+
+impl VehicleRow {
+    /// The `vehicles.csv` row of scenario vehicle `v`.
+    pub fn of_scenario(v: &ScenarioVehicle) -> VehicleRow {
+        VehicleRow {
+            id: v.id.clone(),
+            type_name: v.sumo_type.clone(),
+            passage: Some(Passage {
+                kind: v.kind.as_str().into(),
+                region: v.region.clone(),
+                region_origin: v.region_origin.clone(),
+                scheduled_depart_s: v.scheduled_depart_s,
+                depart_s: v.depart_s,
+                region_enter_s: v.region_enter_s,
+                region_leave_s: v.region_leave_s,
+                region_distance_m: v.region_distance_m,
+                region_delay_s: v.region_delay_s,
+            }),
+            outcome: v.outcome.as_str().into(),
+            trip: Some(TripFigures {
+                arrival_s: v.arrival_s,
+                time_loss_s: v.time_loss_s,
+                depart_delay_s: v.depart_delay_s,
+                route_length_m: v.route_length_m,
+            }),
+            crash_time_s: v.crash_time_s,
+            crashed_with: v.crashed_with.clone(),
+            controllable_crash: v.controllable_crash,
+            entry: Some(EntryDelay {
+                region_entry: v.region_entry.clone(),
+                region_delay_own_s: v.region_delay_own_s,
+            }),
+            ..VehicleRow::default()
+        }
+    }
+}
+
+/// The `vehicles.csv` text of the scenario's `vehicles`.
+pub fn vehicles_csv(vehicles: &[ScenarioVehicle]) -> Vec<u8> {
+    let rows: Vec<VehicleRow> = vehicles.iter().map(VehicleRow::of_scenario).collect();
+    VehicleRow::csv(Traffic::Scenario, &rows)
 }
 
 impl Summary {
@@ -249,6 +270,43 @@ mod tests {
             crash_time_s: crash,
             ..ScenarioVehicle::default()
         }
+    }
+
+    /// A scenario's `vehicles.csv` keeps the columns, decimals and empty fields its rows had
+    /// when the scenario vehicle was its own serde record (a crashed truck's row, as an
+    /// rl-ppo episode on SUMO's `ramp` game wrote it).
+    #[test]
+    fn vehicles_csv_keeps_its_columns_decimals_and_empty_fields() {
+        let truck = ScenarioVehicle {
+            id: "highway1.10".into(),
+            sumo_type: "truck".into(),
+            kind: Kind::Hdv,
+            region: "gneE7".into(),
+            region_origin: "main".into(),
+            scheduled_depart_s: Some(14.4),
+            depart_s: Some(14.4),
+            region_enter_s: Some(14.4),
+            region_leave_s: Some(39.6),
+            region_distance_m: Some(675.0249),
+            outcome: Outcome::Crashed,
+            time_loss_s: Some(0.94),
+            depart_delay_s: Some(0.0),
+            route_length_m: Some(679.52),
+            crash_time_s: Some(39.8),
+            crashed_with: "highway1.11".into(),
+            controllable_crash: true,
+            region_entry: "main".into(),
+            ..ScenarioVehicle::default()
+        };
+        assert_eq!(
+            String::from_utf8(vehicles_csv(&[truck])).unwrap(),
+            "id,type,kind,region,region_origin,scheduled_depart_s,depart_s,region_enter_s,\
+             region_leave_s,region_distance_m,region_delay_s,outcome,arrival_s,time_loss_s,\
+             depart_delay_s,route_length_m,crash_time_s,crashed_with,controllable_crash,\
+             region_entry,region_delay_own_s\n\
+             highway1.10,truck,hdv,gneE7,main,14.40,14.40,14.40,39.60,675.02,,crashed,,0.94,0.00,\
+             679.52,39.80,highway1.11,true,main,\n"
+        );
     }
 
     /// A crash takes a vehicle off the road early: left out, it lowers the mean `timeLoss`;
