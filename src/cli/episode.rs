@@ -8,8 +8,6 @@ use clap::Args;
 use bkpbs::config::{Config, PredictorKind, Scenario};
 use bkpbs::controller::PlannerKind;
 use bkpbs::episode;
-use bkpbs::episode::trace::Tracer;
-use bkpbs::episode::Driver;
 use bkpbs::sumo::files as sumo_files;
 
 use super::scenario::{ScenarioArgs, TrajectoryArgs};
@@ -118,22 +116,9 @@ fn write_models_record(e: &Episode) -> Result<()> {
     Ok(())
 }
 
-/// Runs the user's scenario, writes its files and prints its summary.
-fn run_scenario(e: &Episode) -> Result<()> {
-    let mut config = e.config.clone();
-    config.output.trace = e.trace;
-    for line in bkpbs::sumo::frame::scenario_left_to_sumo(&config.scenario)? {
-        println!("{line}");
-    }
-    let r = episode::sumocfg::run(&config, e.planner.name())
-        .map_err(|err| keep_sumo_log(err, &e.out))?;
-    episode::sumocfg::write(&r, &e.out).with_context(|| {
-        format!(
-            "episode finished but its results could not be saved in {}",
-            e.out.display()
-        )
-    })?;
-    write_models_record(e)?;
+/// What an episode on the user's scenario prints: its summary, the options bkpbs set, its
+/// regions' warnings, trajectories and traces.
+fn print_scenario(e: &Episode, r: &episode::sumocfg::ScenarioResult) {
     print_scenario_summary(e, &r.summary);
     println!("SUMO options bkpbs set: {}", r.sumo_options.join(" "));
     for note in &r.sumo_notes {
@@ -158,8 +143,6 @@ fn run_scenario(e: &Episode) -> Result<()> {
             e.out.display()
         );
     }
-    println!("results: {}", e.out.join("episode.csv").display());
-    Ok(())
 }
 
 /// The one-line summary of an episode on the user's scenario.
@@ -197,31 +180,31 @@ fn print_scenario_summary(e: &Episode, s: &episode::summary::Summary) {
 
 /// Runs the episode, writes its files and prints its summary and where the files are.
 pub fn run(e: Episode) -> Result<()> {
-    if e.config.scenario.sumocfg.is_some() {
-        return run_scenario(&e);
+    let mut config = e.config.clone();
+    config.output.trace = e.trace;
+    for line in bkpbs::sumo::frame::scenario_left_to_sumo(&config.scenario)? {
+        println!("{line}");
     }
-    let saving = || {
+    let ran =
+        episode::ran::run(&config, e.planner.name()).map_err(|err| keep_sumo_log(err, &e.out))?;
+    ran.write(&e.out).with_context(|| {
         format!(
             "episode finished but its results could not be saved in {}",
             e.out.display()
         )
-    };
-    let result = if e.trace {
-        let demand = episode::demand::generate_for(&e.config)?;
-        let mut tracer = Tracer::new(&e.config);
-        let planner = Driver::Named(e.planner.name());
-        let result = episode::run_observed(&e.config, planner, &demand, &mut tracer)
-            .map_err(|err| keep_sumo_log(err, &e.out))?;
-        result.write(&e.out).with_context(saving)?;
-        tracer.write(&e.out).with_context(saving)?;
-        result
-    } else {
-        let result =
-            episode::run(&e.config, e.planner.name()).map_err(|err| keep_sumo_log(err, &e.out))?;
-        result.write(&e.out).with_context(saving)?;
-        result
-    };
+    })?;
     write_models_record(&e)?;
+    match &ran {
+        episode::Ran::Demand(r) => print_demand(&e, r),
+        episode::Ran::Scenario(r) => print_scenario(&e, r),
+    }
+    println!("results: {}", e.out.join("episode.csv").display());
+    Ok(())
+}
+
+/// What an episode on the paper's demand prints: its summary, where its trajectories and
+/// trace are.
+fn print_demand(e: &Episode, result: &episode::EpisodeResult) {
     let m = &result.summary;
     let system_delay = m.system.as_ref().and_then(|s| s.system_delay_s);
     println!(
@@ -237,7 +220,6 @@ pub fn run(e: Episode) -> Result<()> {
         system_delay.map_or("n/a".into(), |d| format!("{d:.2}")),
         m.travel().mean_delay_s.map_or("n/a".into(), |d| format!("{d:.2}"))
     );
-    println!("results: {}", e.out.join("episode.csv").display());
     if let Some(t) = &result.trajectories {
         println!(
             "trajectories: {} (`bkpbs plot {}` draws them)",
@@ -252,5 +234,4 @@ pub fn run(e: Episode) -> Result<()> {
             e.out.display()
         );
     }
-    Ok(())
 }

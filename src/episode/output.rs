@@ -8,6 +8,7 @@ use crate::episode::cells;
 use crate::episode::metrics::{CollisionEvent, Timing};
 use crate::episode::rows::{CollisionRow, TimingRow, VehicleRow};
 use crate::episode::summary::{Summary, Traffic};
+use crate::episode::trace::TRACE_FILE;
 use crate::episode::EpisodeResult;
 use crate::io::SetFile;
 pub use crate::io::{write_atomic, WriteError};
@@ -57,7 +58,8 @@ impl EpisodeResult {
             self.episode_csv(),
         );
         let log = (!self.sumo_log.is_empty()).then_some(self.sumo_log.as_bytes());
-        let mut files: Vec<SetFile> = vec![("sumo.log", log)];
+        let trace = self.trace.as_deref().map(str::as_bytes);
+        let mut files: Vec<SetFile> = vec![("sumo.log", log), (TRACE_FILE, trace)];
         for name in trajectories::FILE_NAMES {
             let mine = self.trajectories.as_ref().filter(|t| t.name == name);
             files.push((name, mine.map(|t| &t.bytes[..])));

@@ -22,6 +22,7 @@ use crate::episode::observer::{NoObserver, Observer};
 use crate::episode::recording::Recording;
 use crate::episode::step_times::StepTimes;
 use crate::episode::summary::Summary;
+use crate::episode::trace::Tracer;
 use crate::episode::trajectories::TrajectoryFile;
 use crate::model::road::Road;
 use crate::model::scene::{Kind, Origin};
@@ -51,6 +52,8 @@ pub struct EpisodeResult {
     pub trajectories: Option<TrajectoryFile>,
     /// What SUMO printed to stderr (captured unless `sumo.verbose`).
     pub sumo_log: String,
+    /// The planner's trace (`trace.jsonl` text), when `output.trace` asks.
+    pub trace: Option<String>,
     /// Vehicles in the scene per step, on average.
     pub vehicles_per_step: f64,
     /// CAVs in the scene per step, on average.
@@ -109,7 +112,7 @@ pub fn run_observed(
     } else {
         StderrCapture::start()
     };
-    let outcome = (|| {
+    let outcome = (|| -> Result<EpisodeResult, EpisodeError> {
         let sim = Simulation::start(&input.command_line(config), config.sumo.stall_limit())
             .map_err(|cause| EpisodeError::Start {
                 net: config
@@ -127,14 +130,49 @@ pub fn run_observed(
             }
             Driver::Given(c) => c,
         };
-        controller.set_tracing(observer.wants_beliefs());
-        Episode::new(config, controller, planned, road, observer).run(sim)
+        let mut traced = Traced {
+            observer,
+            tracer: config.output.trace.then(|| Tracer::new(config)),
+        };
+        controller.set_tracing(traced.wants_beliefs());
+        let mut result = Episode::new(config, controller, planned, road, &mut traced).run(sim)?;
+        result.trace = traced.tracer.map(|t| t.text().to_string());
+        Ok(result)
     })();
     let sumo_log = capture.map(StderrCapture::finish).unwrap_or_default();
     let mut result = outcome.map_err(|e| e.with_sumo_log(sumo_log.clone()))?;
     result.sumo_log = sumo_log;
     result.timing.wall_s = wall.elapsed().as_secs_f64();
     Ok(result)
+}
+
+/// The caller's observer and, when `output.trace` asks, the episode's own trace beside it.
+struct Traced<'a> {
+    observer: &'a mut dyn Observer,
+    tracer: Option<Tracer>,
+}
+
+impl Observer for Traced<'_> {
+    fn observe(&mut self, scene: &crate::model::scene::Scene) {
+        self.observer.observe(scene);
+    }
+    fn planned(
+        &mut self,
+        scene: &crate::model::scene::Scene,
+        commands: &[Command],
+        c: &dyn Controller,
+    ) {
+        self.observer.planned(scene, commands, c);
+        if let Some(t) = &mut self.tracer {
+            t.planned(scene, commands, c);
+        }
+    }
+    fn removed_in_collision(&mut self, id: &str) {
+        self.observer.removed_in_collision(id);
+    }
+    fn wants_beliefs(&self) -> bool {
+        self.observer.wants_beliefs() || self.tracer.is_some()
+    }
 }
 
 /// The episode being run: the lock-step loop's own state, and the parts it composes.
@@ -441,6 +479,7 @@ impl<'a> Episode<'a> {
             timing: self.times.timing(loop_s, sc.steps),
             trajectories: self.recording.finish(),
             sumo_log: String::new(),
+            trace: None,
             vehicles_per_step: per_step(vehicles),
             cavs_per_step: per_step(cavs),
         }
