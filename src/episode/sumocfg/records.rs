@@ -10,6 +10,7 @@ use std::path::Path;
 
 use serde::Serialize;
 
+use crate::config::Config;
 use crate::episode::cells;
 use crate::episode::metrics::Outcome;
 use crate::episode::rows::{EntryDelay, Passage, TripFigures, VehicleRow};
@@ -118,6 +119,29 @@ pub fn vehicles_csv(vehicles: &[ScenarioVehicle]) -> Vec<u8> {
 }
 
 impl Summary {
+    /// The episode's own columns of `episode.csv` on a scenario: which scenario, planner,
+    /// CAVs, seed and `regions` (the rest [`Summary::of_scenario`] fills in).
+    pub fn head_of_scenario(config: &Config, planner: &str, regions: &[String]) -> Summary {
+        let sc = &config.scenario;
+        Summary {
+            scenario: Some(
+                sc.sumocfg
+                    .as_deref()
+                    .and_then(Path::file_name)
+                    .map(|n| n.to_string_lossy().into_owned())
+                    .unwrap_or_default(),
+            ),
+            planner: planner.into(),
+            sumo_version: crate::sumo::version::BUILT.into(),
+            alpha: sc.alpha,
+            cav_types: Some(sc.cav_types.join(" ")),
+            seed: sc.seed,
+            steps: sc.steps,
+            regions: Some(regions.join("; ")),
+            ..Summary::template(Traffic::Scenario)
+        }
+    }
+
     /// The summary of a scenario's `vehicles` (`hdv_collisions`: how many collisions involved
     /// HDVs only) of an episode that ended at `end` (s, SUMO's clock); `head` gives the
     /// episode's own columns ([`Summary::template`] of

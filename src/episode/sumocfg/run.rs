@@ -27,7 +27,7 @@ use super::round::{crosses_a_region, plan_together, Fleet, Round};
 use super::{becomes_cav, has_cavs, ScenarioResult, SumoOptions};
 use crate::episode::collisions::{take_collisions, Crashes};
 use crate::episode::control;
-use crate::episode::summary::{Summary, Traffic};
+use crate::episode::summary::Summary;
 
 /// A vehicle of the scenario, as far as bkpbs follows it.
 struct Line {
@@ -495,7 +495,7 @@ impl ScenarioRun {
         let vehicles = self.vehicle_records(&trips);
         let hdv_collisions = self.collisions.iter().filter(|c| !c.controllable()).count();
         let names: Vec<String> = self.regions.iter().map(|r| r.name.clone()).collect();
-        let head = summary_head(&self.config, planner, &names);
+        let head = Summary::head_of_scenario(&self.config, planner, &names);
         let (steps, in_scenes, cavs) = self.occupancy;
         let per_step = |n: u64| n as f64 / steps.max(1) as f64;
         let waiting = self.never_inserted_entries();
@@ -582,27 +582,5 @@ fn scene_vehicle(
         max_speed: top,
         limits: line.limits,
         ..frame::state_sized(&region.road, who, raw, (front, lane), line.size)
-    }
-}
-
-/// The episode's own columns of `episode.csv`: which scenario, planner, CAVs, seed and regions.
-fn summary_head(config: &Config, planner: &str, regions: &[String]) -> Summary {
-    let sc = &config.scenario;
-    Summary {
-        scenario: Some(
-            sc.sumocfg
-                .as_deref()
-                .and_then(std::path::Path::file_name)
-                .map(|n| n.to_string_lossy().into_owned())
-                .unwrap_or_default(),
-        ),
-        planner: planner.into(),
-        sumo_version: crate::sumo::version::BUILT.into(),
-        alpha: sc.alpha,
-        cav_types: Some(sc.cav_types.join(" ")),
-        seed: sc.seed,
-        steps: sc.steps,
-        regions: Some(regions.join("; ")),
-        ..Summary::template(Traffic::Scenario)
     }
 }
