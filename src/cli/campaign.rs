@@ -117,19 +117,13 @@ impl CampaignArgs {
 pub fn run(c: Campaign) -> Result<()> {
     let exe = std::env::current_exe().context("cannot locate the bkpbs binary")?;
     let s = c.settings.as_ref();
-    match s.is_over_scenarios() {
-        true => say_regions_left_to_sumo(s)?,
-        false => say_model_warnings(&s.config, &s.table.planners),
-    }
+    say_before_the_run(s)?;
     let done = campaign::run(s, &c.out, &exe)?;
     if done.collected > 0 {
         print_report(std::slice::from_ref(&c.out), None, false, &[])?;
     }
     if c.plots && done.interrupted.is_none() {
-        let drawn = match s.is_over_scenarios() {
-            false => episode_plots::plot_cells(&c.out, s)?,
-            true => episode_plots::plot_scenario_cells(&c.out, s)?,
-        };
+        let drawn = episode_plots::plot_cells(&c.out, s)?;
         println!(
             "plots: time–space diagram and speed field of {} cells (in each cell's directory){}",
             drawn.plotted,
@@ -159,15 +153,21 @@ pub fn run(c: Campaign) -> Result<()> {
     Ok(())
 }
 
-/// One line per merge region of each scenario that is left to SUMO's drivers, as an episode
-/// on it says at its start (its results are SUMO's own there), and the warnings of learned
-/// files trained on another scenario.
-fn say_regions_left_to_sumo(s: &Settings) -> Result<()> {
-    for cfg in &s.table.scenarios {
+/// Before the run, for each scenario of the campaign (the paper's demand: its one): one line
+/// per merge region left to SUMO's drivers, as an episode on it says at its start (its results
+/// are SUMO's own there), and the warnings of learned files trained on another scenario.
+fn say_before_the_run(s: &Settings) -> Result<()> {
+    let scenarios: Vec<Option<&std::path::PathBuf>> = match s.table.scenarios.is_empty() {
+        true => vec![None],
+        false => s.table.scenarios.iter().map(Some).collect(),
+    };
+    for cfg in scenarios {
         let mut config = s.config.clone();
-        config.scenario.sumocfg = Some(cfg.clone());
-        for line in bkpbs::sumo::frame::scenario_left_to_sumo(&config.scenario)? {
-            println!("campaign: {}: {line}", cfg.display());
+        if let Some(cfg) = cfg {
+            config.scenario.sumocfg = Some(cfg.clone());
+            for line in bkpbs::sumo::frame::scenario_left_to_sumo(&config.scenario)? {
+                println!("campaign: {}: {line}", cfg.display());
+            }
         }
         say_model_warnings(&config, &s.table.planners);
     }

@@ -174,33 +174,8 @@ fn finished_dirs<S: CampaignSpec>(out: &Path, settings: &S) -> Vec<PathBuf> {
     finished.map(|(_, c)| cell_dir(out, c)).collect()
 }
 
-/// Draws the figures of every finished cell of a campaign run over scenarios of the user's own
-/// (its shard), each region's in its trajectory directory (`trajectories/<region>/`), in
-/// parallel.
-pub fn plot_scenario_cells(
-    out: &Path,
-    settings: &crate::campaign::Settings,
-) -> Result<CellPlots, EpisodePlotError> {
-    use rayon::prelude::*;
-    let finished = finished_dirs(out, settings);
-    let mut summary = CellPlots::default();
-    let mut regions = Vec::new();
-    for dir in &finished {
-        let found = crate::episode::sumocfg::region_dirs(dir);
-        if found.is_empty() {
-            summary.without_trajectories += 1;
-        } else {
-            summary.plotted += 1;
-        }
-        regions.extend(found);
-    }
-    let drawn: Result<Vec<_>, EpisodePlotError> =
-        regions.par_iter().map(|d| plot_tracks(d)).collect();
-    drawn?;
-    Ok(summary)
-}
-
-/// Draws the figures of every finished cell of a campaign run (its shard), in parallel.
+/// Draws the figures of every finished cell of a campaign run (its shard), in parallel: a
+/// scenario cell's of each of its regions (`trajectories/<region>/`), as [`plot_dir`] does.
 pub fn plot_cells(
     out: &Path,
     settings: &crate::campaign::Settings,
