@@ -22,6 +22,17 @@ pub const PREDICTOR_COLUMN: &str = "predictor";
 /// name them already, among their own columns.
 pub const SCENARIO_CELL_COLUMNS: [&str; 4] = ["scenario", "planner", "alpha", "seed"];
 
+/// Every column that can name a cell, whatever the campaign's axes.
+pub const ANY_CELL_COLUMN: [&str; 7] = [
+    "planner",
+    PREDICTOR_COLUMN,
+    "alpha",
+    "lambda",
+    "seed",
+    "hdv_profile",
+    "scenario",
+];
+
 /// The lead columns of a scenario campaign's `failures.csv` (before `error`).
 const SCENARIO_FAILURE_COLUMNS: [&str; 4] = ["planner", "scenario", "alpha", "seed"];
 

@@ -7,7 +7,7 @@
 use std::collections::HashSet;
 use std::path::{Path, PathBuf};
 
-use super::table::{key, Axes, Table};
+use super::table::{key, Axes, Table, ANY_CELL_COLUMN};
 
 /// The first thing wrong with a collected `episodes.csv`.
 #[derive(Debug, thiserror::Error)]
@@ -185,17 +185,6 @@ fn problem_under(rules: &Rules, column: &str, value: &str) -> Option<&'static st
     }
 }
 
-/// The columns that name a row's cell (checked when the row is read).
-const CELL: [&str; 7] = [
-    "planner",
-    "predictor",
-    "alpha",
-    "lambda",
-    "seed",
-    "hdv_profile",
-    "scenario",
-];
-
 /// Checks every row of `table`, read from `path`, under `checks`: each key (the cell and the
 /// key columns) once, every other value in range.
 ///
@@ -224,7 +213,9 @@ pub fn check_table(path: &Path, table: &Table, checks: Checks) -> Result<(), Row
             });
         }
         let values = table.header.iter().zip(row.fields.iter());
-        for (column, value) in values.filter(|(c, _)| !CELL.contains(&c.as_str())) {
+        // The cell's columns are checked when the row is read.
+        let cell = |c: &String| ANY_CELL_COLUMN.contains(&c.as_str());
+        for (column, value) in values.filter(|(c, _)| !cell(c)) {
             if let Some(reason) = problem_under(checks.rules, column, value) {
                 return Err(RowError::Value {
                     path: path.to_path_buf(),
