@@ -207,6 +207,34 @@ pub trait Controller: Send {
     fn lane_change_cancelled(&mut self, _id: &str) {}
 }
 
+/// A controller the caller keeps, lent to an episode: it is the controller it borrows.
+impl<C: Controller + ?Sized> Controller for &mut C {
+    fn name(&self) -> &'static str {
+        (**self).name()
+    }
+    fn handling(&self) -> CavHandling {
+        (**self).handling()
+    }
+    fn plan(&mut self, scene: &Scene, out: &mut Vec<Command>) {
+        (**self).plan(scene, out);
+    }
+    fn last_shield_ms(&self) -> f64 {
+        (**self).last_shield_ms()
+    }
+    fn last_stats(&self) -> PlanStats {
+        (**self).last_stats()
+    }
+    fn set_tracing(&mut self, on: bool) {
+        (**self).set_tracing(on);
+    }
+    fn beliefs(&self) -> Vec<CavBelief> {
+        (**self).beliefs()
+    }
+    fn lane_change_cancelled(&mut self, id: &str) {
+        (**self).lane_change_cancelled(id);
+    }
+}
+
 /// Why a controller could not be built: an unknown name, or a predictor model or policy file
 /// the configuration names that cannot be used.
 #[derive(Debug, thiserror::Error)]

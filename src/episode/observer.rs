@@ -1,5 +1,5 @@
-//! The runner's window for onlookers: an [`Observer`] sees each step's scene, what the
-//! controller decided on it and which vehicles collided, without touching the runner.
+//! The episode's window for onlookers: an [`Observer`] sees each step's scenes, what the
+//! controller decided on it and which vehicles collided, without touching the loop.
 //!
 //! It exists so that recording data (the predictor's training set, `trace.jsonl`, benchmarks,
 //! the RL environment) is a caller's business: the lock-step loop stays one loop, and each
@@ -9,7 +9,7 @@ use crate::controller::{Command, Controller};
 use crate::model::scene::Scene;
 
 /// Sees the scene of every step, before the controller plans: for recording data (e.g. the
-/// predictor's training set) without touching the runner.
+/// predictor's training set) without touching the loop.
 pub trait Observer {
     /// Sees the scene of one step, as the controller is about to plan on it.
     fn observe(&mut self, scene: &Scene);
@@ -25,6 +25,22 @@ pub trait Observer {
     /// Whether [`Observer::planned`] needs the controller's beliefs (turns its tracing on).
     fn wants_beliefs(&self) -> bool {
         false
+    }
+}
+
+/// An observer the caller keeps, lent to an episode: it is the observer it borrows.
+impl<O: Observer + ?Sized> Observer for &mut O {
+    fn observe(&mut self, scene: &Scene) {
+        (**self).observe(scene);
+    }
+    fn planned(&mut self, scene: &Scene, commands: &[Command], controller: &dyn Controller) {
+        (**self).planned(scene, commands, controller);
+    }
+    fn removed_in_collision(&mut self, id: &str) {
+        (**self).removed_in_collision(id);
+    }
+    fn wants_beliefs(&self) -> bool {
+        (**self).wants_beliefs()
     }
 }
 

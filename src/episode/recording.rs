@@ -9,11 +9,8 @@
 
 use crate::config::{Scenario, TrajectoryFormat};
 use crate::controller::Command;
-use crate::episode::ledger::Tracked;
 use crate::episode::trajectories::{Sent, TrajectoryFile, TrajectoryLog, TrajectoryRow};
-use crate::model::road::Road;
-use crate::model::scene::VehicleState;
-use crate::sumo::{frame, RawVehicleState};
+use crate::sumo::frame;
 
 /// The trajectory rows of an episode, when `output.trajectories` asks for them.
 pub struct Recording {
@@ -44,21 +41,13 @@ impl Recording {
         }
     }
 
-    /// Records the reading `raw` of `who`, with its state in the road frame (`None` off the
-    /// merge section); `in_scene` when it is the scene's next vehicle, whose maneuver will be
-    /// sent.
-    pub fn push(
-        &mut self,
-        road: &Road,
-        who: &Tracked,
-        raw: &RawVehicleState,
-        state: Option<&VehicleState>,
-        in_scene: bool,
-    ) {
+    /// Records a reading's `row` ([`TrajectoryRow::of_reading`]); `in_scene` when it is the
+    /// scene's next vehicle, whose maneuver will be sent.
+    pub fn push(&mut self, row: TrajectoryRow, in_scene: bool) {
         let Some(log) = &mut self.log else {
             return;
         };
-        let row = log.push(trajectory_row(road, who, raw, state));
+        let row = log.push(row);
         if in_scene {
             self.scene_rows.push(row);
         }
@@ -85,17 +74,4 @@ impl Recording {
     pub fn finish(self) -> Option<TrajectoryFile> {
         self.log.map(TrajectoryLog::finish)
     }
-}
-
-/// A reading as a trajectory row (without the maneuver, which comes after planning). `state`
-/// is the scene's own translation into the road frame, so the two never disagree.
-fn trajectory_row(
-    road: &Road,
-    who: &Tracked,
-    raw: &RawVehicleState,
-    state: Option<&VehicleState>,
-) -> TrajectoryRow {
-    let record = &who.record;
-    let identity = (who.id.clone(), record.kind, record.origin);
-    TrajectoryRow::of_reading(road, identity, raw, state)
 }

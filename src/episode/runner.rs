@@ -1,33 +1,34 @@
-//! One episode: SUMO and a controller in lock-step for H steps, with every vehicle accounted for.
+//! An episode of the paper's generated demand on its merge: the demand is the source of
+//! traffic ([`Traffic`]) of the one lock-step loop ([`Lockstep`]), its merge one region planned
+//! by the chosen controller.
 //!
-//! Each step: SUMO advances; departures, collisions and arrivals are booked; every vehicle's state
-//! is read in one call and turned into a
-//! [`Scene`](crate::model::scene::Scene); ramp HDVs draw their merge decisions; the
-//! controller plans; its maneuvers go back to SUMO as speed and lane-change commands.
+//! What the demand does its own way: its entry gate inserts the vehicles the demand scheduled,
+//! the planner takes every CAV over as SUMO inserts it, each HDV drives at its drawn desired
+//! speed and a ramp HDV changes lanes only when the merge rule says, every vehicle is seen with
+//! the config's size, and the [`Ledger`] books each scheduled departure (a vehicle never
+//! inserted included) and the distance each covered.
 
 use std::time::Instant;
 
 use crate::config::Config;
-use crate::controller::{self, CavHandling, Command, Controller, PlanStats};
-use crate::episode::collisions::{take_collisions, Crashes};
+use crate::controller::{self, Controller};
 use crate::episode::control;
 use crate::episode::demand::{self, PlannedVehicle};
 use crate::episode::entry::EntryControl;
 use crate::episode::error::EpisodeError;
-use crate::episode::gui::GuiColours;
-use crate::episode::ledger::{Departure, Expected, Ledger};
+use crate::episode::ledger::{Departure, Expected, Ledger, Tracked};
+use crate::episode::lockstep::{Lockstep, Traffic};
 use crate::episode::merge_rule::RampMergeRule;
 use crate::episode::metrics::{CollisionEvent, Outcome, SummaryInput, Timing, VehicleRecord};
 use crate::episode::observer::{NoObserver, Observer};
-use crate::episode::recording::Recording;
-use crate::episode::step_times::StepTimes;
+use crate::episode::planning::Planning;
+use crate::episode::region::Region;
 use crate::episode::summary::Summary;
-use crate::episode::trace::Tracer;
-use crate::episode::trajectories::TrajectoryFile;
+use crate::episode::trajectories::{TrajectoryFile, TrajectoryRow};
 use crate::model::road::Road;
 use crate::model::scene::{Kind, Origin};
 use crate::sumo::files::EpisodeInput;
-use crate::sumo::frame::{self, SumoScene};
+use crate::sumo::frame;
 use crate::sumo::{Simulation, StderrCapture, SumoClient, SumoError, VehicleReadings};
 
 /// The end of a route: the section's end, or the end of off-ramp `exit`.
@@ -122,21 +123,13 @@ pub fn run_observed(
                     .unwrap_or_else(|| "(embedded)".into()),
                 cause,
             })?;
-        let mut built;
-        let controller: &mut dyn Controller = match driver {
-            Driver::Named(name) => {
-                built = controller::by_name(name, config, &road)?;
-                built.as_mut()
-            }
-            Driver::Given(c) => c,
+        let controller: Box<dyn Controller + '_> = match driver {
+            Driver::Named(name) => controller::by_name(name, config, &road)?,
+            Driver::Given(c) => Box::new(c),
         };
-        let mut traced = Traced {
-            observer,
-            tracer: config.output.trace.then(|| Tracer::new(config)),
-        };
-        controller.set_tracing(traced.wants_beliefs());
-        let mut result = Episode::new(config, controller, planned, road, &mut traced).run(sim)?;
-        result.trace = traced.tracer.map(|t| t.text().to_string());
+        let mut episode = demand_episode(config, planned, road, controller, Box::new(observer));
+        episode.run(sim, config)?;
+        let result = finish(episode);
         Ok(result)
     })();
     let sumo_log = capture.map(StderrCapture::finish).unwrap_or_default();
@@ -146,177 +139,102 @@ pub fn run_observed(
     Ok(result)
 }
 
-/// The caller's observer and, when `output.trace` asks, the episode's own trace beside it.
-struct Traced<'a> {
-    observer: &'a mut dyn Observer,
-    tracer: Option<Tracer>,
-}
-
-impl Observer for Traced<'_> {
-    fn observe(&mut self, scene: &crate::model::scene::Scene) {
-        self.observer.observe(scene);
-    }
-    fn planned(
-        &mut self,
-        scene: &crate::model::scene::Scene,
-        commands: &[Command],
-        c: &dyn Controller,
-    ) {
-        self.observer.planned(scene, commands, c);
-        if let Some(t) = &mut self.tracer {
-            t.planned(scene, commands, c);
-        }
-    }
-    fn removed_in_collision(&mut self, id: &str) {
-        self.observer.removed_in_collision(id);
-    }
-    fn wants_beliefs(&self) -> bool {
-        self.observer.wants_beliefs() || self.tracer.is_some()
-    }
-}
-
-/// The episode being run: the lock-step loop's own state, and the parts it composes.
-struct Episode<'a> {
+/// The episode of `planned` on the merge of `road`, `controller` driving its CAVs and
+/// `observer` watching.
+fn demand_episode<'a>(
     config: &'a Config,
-    controller: &'a mut dyn Controller,
-    observer: &'a mut dyn Observer,
+    planned: &'a [PlannedVehicle],
     road: Road,
+    controller: Box<dyn Controller + 'a>,
+    observer: Box<dyn Observer + 'a>,
+) -> Lockstep<'a, Demand<'a>> {
+    let demand = Demand::new(config, planned, &road);
+    let region = Region::new(config.clone(), road, Some(controller));
+    let planning = Planning::new(vec![region], observer, None, config.scenario.steps);
+    Lockstep::new(demand, planning)
+}
+
+/// The paper's generated demand on its merge, as the loop's source of traffic: the entry gate
+/// inserts the demand's vehicles, the planner takes every CAV over as SUMO inserts it, ramp
+/// HDVs change lanes only when the merge rule says, and the [`Ledger`] keeps the books.
+struct Demand<'a> {
+    config: &'a Config,
     entry: EntryControl,
     merge_rule: RampMergeRule,
-    readings: VehicleReadings,
-    /// This step's scene, with the SUMO edge of each vehicle for the commands back.
-    sumo_scene: SumoScene,
-    commands: Vec<Command>,
     /// Who is where: every vehicle's record, the collisions.
     ledger: Ledger<'a>,
-    /// The planner's search effort, over all rounds.
-    plan_stats: PlanStats,
-    times: StepTimes,
-    recording: Recording,
-    /// CAV colours in sumo-gui, when shown there.
-    gui: Option<GuiColours>,
-    /// Steps seen, and the vehicles and CAVs in their scenes.
-    occupancy: (u64, u64, u64),
+    /// Vehicles standing on the acceleration lane after the last step (a jam indicator).
+    stranded: usize,
 }
 
-impl<'a> Episode<'a> {
-    fn new(
-        config: &'a Config,
-        controller: &'a mut dyn Controller,
-        planned: &'a [PlannedVehicle],
-        road: Road,
-        observer: &'a mut dyn Observer,
-    ) -> Self {
-        Episode {
+impl<'a> Demand<'a> {
+    fn new(config: &'a Config, planned: &'a [PlannedVehicle], road: &Road) -> Self {
+        Demand {
             config,
-            controller,
-            observer,
-            entry: EntryControl::new(config, &road, planned),
+            entry: EntryControl::new(config, road, planned),
             merge_rule: RampMergeRule::new(config),
-            readings: VehicleReadings::default(),
-            sumo_scene: SumoScene::new(&road),
-            commands: Vec::new(),
-            ledger: Ledger::new(config, &road, planned),
-            plan_stats: PlanStats::default(),
-            times: StepTimes::new(config.scenario.steps),
-            recording: Recording::new(config.output.trajectories),
-            gui: config.sumo.gui.then(GuiColours::default),
-            occupancy: (0, 0, 0),
-            road,
+            ledger: Ledger::new(config, road, planned),
+            stranded: 0,
         }
     }
 
-    fn run(mut self, mut sim: Simulation) -> Result<EpisodeResult, EpisodeError> {
-        let loop_start = Instant::now();
-        let (config, road) = (self.config, self.road.clone());
-        lock_step(&mut sim, &frame::edge_names(&road), config, |sim, plan| {
-            // The time of the state this step produces, on SUMO's clock: SUMO's own outputs
-            // (FCD, tripinfo, collisions) label the state after a step with the time the step
-            // started, and a vehicle added now departs at this time. `sim.time()` after the
-            // step is one step later.
-            let now = sim.time()?;
-            self.admit(sim, now)?;
-            self.times.sumo_step(sim)?;
-            self.after_step(sim, now, plan)
-        })?;
-        let steps = config.scenario.steps;
-        let at = |step| step_error(config.scenario.dt, step);
-        let loop_s = loop_start.elapsed().as_secs_f64();
-        let stranded = self.standing_on_acceleration_lane();
-        self.measure_remaining(&sim).map_err(at(steps))?;
-        sim.close().map_err(at(steps))?;
-        Ok(self.finish(loop_s, stranded))
+    /// Sets how SUMO drives a vehicle just inserted: an HDV at its desired speed (a ramp HDV
+    /// changing lanes only when the merge rule says), a commanded CAV exactly as commanded.
+    fn take_control(
+        sim: &mut impl SumoClient,
+        id: &str,
+        kind: Kind,
+        expected: &Expected,
+        commanded: bool,
+    ) -> Result<(), SumoError> {
+        match kind {
+            Kind::Hdv => {
+                sim.set_max_speed(id, expected.desired_speed)?;
+                if expected.origin == Origin::Ramp {
+                    control::ramp_hdv_waits_for_the_rule(sim, id)?;
+                }
+            }
+            Kind::Cav if commanded => control::take_over(sim, id)?,
+            Kind::Cav => {}
+        }
+        Ok(())
     }
 
     /// Asks SUMO, for every vehicle still in the network, how far it still has to go along
     /// its route: what it covered counts in its system delay.
-    fn measure_remaining(&mut self, sim: &impl SumoClient) -> Result<(), SumoError> {
+    fn measure_remaining(&mut self, sim: &impl SumoClient, road: &Road) -> Result<(), SumoError> {
         let present: Vec<(usize, String, Option<usize>)> = self
             .ledger
             .present()
             .map(|(k, id, exit)| (k, id.to_string(), exit))
             .collect();
         for (k, id, exit) in present {
-            let (edge, pos) = route_end(&self.road, exit);
+            let (edge, pos) = route_end(road, exit);
             let remaining = sim.driving_distance(&id, edge, pos)?;
             self.ledger.note_remaining(k, remaining);
         }
         Ok(())
     }
+}
 
-    /// Vehicles standing on the acceleration lane: at the end, the stranded (a jam indicator).
-    fn standing_on_acceleration_lane(&self) -> usize {
-        self.sumo_scene
-            .scene
-            .vehicles
-            .iter()
-            .filter(|v| !v.on_ramp && v.lane == crate::model::road::MERGE_LANE && v.speed < 1.0)
-            .count()
-    }
-
-    /// What follows a SUMO step that began at `now`: departures, collisions and arrivals
-    /// booked, the scene read and, when `plan` (not after the last step), one planning round.
-    fn after_step(
+impl Traffic for Demand<'_> {
+    /// Adds the vehicles the entry gate lets in at `now`.
+    fn admit(
         &mut self,
         sim: &mut impl SumoClient,
         now: f64,
-        plan: bool,
+        regions: &[Region],
     ) -> Result<(), SumoError> {
-        self.book_departures(sim, now)?;
-        // Read before the collided vehicles are removed: their state at this time counts, as
-        // in SUMO's own outputs (a vehicle may collide in the step it was inserted).
-        sim.read_vehicles(&mut self.readings)?;
-        self.book_collisions(sim, now)?;
-        self.ledger.book_arrivals(sim.arrived()?, now);
-        self.build_scene(now);
-        self.count_occupancy();
-        self.observer.observe(&self.sumo_scene.scene);
-        if plan {
-            self.plan(sim)?;
-        }
-        Ok(())
-    }
-
-    /// Counts this step's scene: its vehicles and CAVs.
-    fn count_occupancy(&mut self) {
-        let vehicles = &self.sumo_scene.scene.vehicles;
-        let cavs = vehicles.iter().filter(|v| v.kind == Kind::Cav).count();
-        self.occupancy.0 += 1;
-        self.occupancy.1 += vehicles.len() as u64;
-        self.occupancy.2 += cavs as u64;
-    }
-
-    /// Adds the vehicles the entry gate lets in at `now`.
-    fn admit(&mut self, sim: &mut impl SumoClient, now: f64) -> Result<(), SumoError> {
-        for a in self.entry.admit(now, &self.sumo_scene.scene) {
+        let (road, scene) = (&regions[0].road, &regions[0].scene.scene);
+        for a in self.entry.admit(now, scene) {
             let v = &a.vehicle;
             let through = match v.origin {
-                Origin::Main => self.road.first_through_lane(),
+                Origin::Main => road.first_through_lane(),
                 Origin::Ramp => 0,
             };
             sim.add_vehicle(
                 &v.id,
-                &demand::route_name(&self.road, v),
+                &demand::route_name(road, v),
                 v.kind.as_str(),
                 (v.depart_lane as usize + through) as i32,
                 a.speed,
@@ -325,42 +243,22 @@ impl<'a> Episode<'a> {
         Ok(())
     }
 
-    /// One planning round on this step's scene: ramp HDVs' merge requests, then the
-    /// controller's maneuvers, sent to SUMO when it commands the CAVs.
-    fn plan(&mut self, sim: &mut impl SumoClient) -> Result<(), SumoError> {
-        for m in self.merge_rule.requests(&self.sumo_scene.scene) {
-            let v = &self.sumo_scene.scene.vehicles[m.vehicle];
-            if m.forced {
-                control::ramp_hdv_forced(sim, &v.id)?;
-            }
-            sim.change_lane(&v.id, 1, self.config.scenario.dt)?;
-        }
-        self.commands.clear();
-        let scene = &self.sumo_scene.scene;
-        self.times.plan(self.controller, scene, &mut self.commands);
-        self.plan_stats += self.controller.last_stats();
-        self.observer
-            .planned(&self.sumo_scene.scene, &self.commands, &*self.controller);
-        if self.controller.handling() == CavHandling::Commanded {
-            self.apply(sim)?;
-            self.recording
-                .record_sent(&self.commands, &self.config.scenario);
-            if let Some(gui) = &mut self.gui {
-                gui.update(sim, &self.sumo_scene.scene, &self.commands)?;
-            }
-        }
-        Ok(())
-    }
-
     /// Opens a ledger line for each vehicle SUMO inserted in this step, after taking control
     /// of it.
-    fn book_departures(&mut self, sim: &mut impl SumoClient, now: f64) -> Result<(), SumoError> {
+    fn book_departures(
+        &mut self,
+        sim: &mut impl SumoClient,
+        now: f64,
+        regions: &[Region],
+    ) -> Result<(), SumoError> {
+        let road = &regions[0].road;
+        let commanded = regions[0].commanded();
         for id in sim.departed()? {
             let sumo_type = sim.vehicle_type(&id)?;
             let kind = Kind::from_type_id(&sumo_type).unwrap_or(Kind::Hdv);
             let expected = self.ledger.expected(&id, now);
-            self.take_control(sim, &id, kind, &expected)?;
-            let (end_edge, end_pos) = route_end(&self.road, expected.exit);
+            Self::take_control(sim, &id, kind, &expected, commanded)?;
+            let (end_edge, end_pos) = route_end(road, expected.exit);
             let distance = sim.driving_distance(&id, end_edge, end_pos)?;
             let departure = Departure {
                 id,
@@ -374,204 +272,153 @@ impl<'a> Episode<'a> {
         Ok(())
     }
 
-    /// Sets how SUMO drives a vehicle just inserted: an HDV at its desired speed (a ramp HDV
-    /// changing lanes only when the merge rule says), a commanded CAV exactly as commanded.
-    fn take_control(
-        &self,
-        sim: &mut impl SumoClient,
-        id: &str,
-        kind: Kind,
-        expected: &Expected,
-    ) -> Result<(), SumoError> {
-        match kind {
-            Kind::Hdv => {
-                sim.set_max_speed(id, expected.desired_speed)?;
-                if expected.origin == Origin::Ramp {
-                    control::ramp_hdv_waits_for_the_rule(sim, id)?;
-                }
-            }
-            Kind::Cav if self.controller.handling() == CavHandling::Commanded => {
-                control::take_over(sim, id)?;
-            }
-            Kind::Cav => {}
-        }
-        Ok(())
+    /// Told apart by their SUMO type (`cav`, `hdv`) or their line.
+    fn kind_of(&self, id: &str, type_id: &str) -> Option<Kind> {
+        Kind::from_type_id(type_id).or_else(|| self.ledger.kind_of(id))
     }
 
-    /// Removes the vehicles of this step's collisions from SUMO (telling the observer), then
-    /// books the collisions.
-    fn book_collisions(&mut self, sim: &mut impl SumoClient, now: f64) -> Result<(), SumoError> {
-        let mut crashes = DemandCrashes {
-            ledger: &self.ledger,
-            observer: &mut *self.observer,
-        };
-        let events = take_collisions(sim, now, &mut crashes)?;
+    /// Every vehicle of a collision is removed.
+    fn removes(&self, _id: &str) -> bool {
+        true
+    }
+
+    fn book_collisions(&mut self, events: Vec<CollisionEvent>, _now: f64) {
         self.ledger.book_collisions(events);
-        Ok(())
     }
 
-    /// This step's scene from the readings: each reading of a vehicle on the section is noted
-    /// in the ledger, recorded, and (unless it just crashed) put in the scene.
-    fn build_scene(&mut self, now: f64) {
-        self.ledger.match_readings(&self.readings);
+    fn book_arrivals(&mut self, arrived: Vec<String>, now: f64) {
+        self.ledger.book_arrivals(arrived, now);
+    }
+
+    /// The merge's scene from the readings: each reading of a vehicle on the section is noted
+    /// in the ledger, recorded, and (unless it just crashed) put in the scene, with the
+    /// config's vehicle size.
+    fn build_scenes(
+        &mut self,
+        _sim: &mut impl SumoClient,
+        readings: &VehicleReadings,
+        regions: &mut [Region],
+        now: f64,
+    ) -> Result<(), SumoError> {
+        let region = &mut regions[0];
         let sc = &self.config.scenario;
-        self.sumo_scene.clear(now);
-        self.recording.begin_step(now);
-        for (i, raw) in self.readings.states.iter().enumerate() {
+        self.ledger.match_readings(readings);
+        for (i, raw) in readings.states.iter().enumerate() {
             let Some(k) = self.ledger.slot(i) else {
                 continue;
             };
-            let Some(position) = frame::frame_position(&self.road, raw) else {
-                let t = self.ledger.tracked(k);
-                self.recording.push(&self.road, t, raw, None, false);
+            let Some(position) = frame::frame_position(&region.road, raw) else {
+                let row = trajectory_row(&region.road, self.ledger.tracked(k), raw, None);
+                region.recording.push(row, false);
                 continue;
             };
             let t = self.ledger.note_reading(k, now, position, raw.speed);
             // Removed from SUMO after this reading: not in the scene.
             let in_scene = t.record.outcome != Outcome::Crashed;
-            if !in_scene && !self.recording.is_on() {
+            if !in_scene && !region.recording.is_on() {
                 continue;
             }
             // One translation into the road frame, for the scene and the trajectory row alike.
             let (front, lane) = position;
-            let vehicle = frame::state_at(&self.road, sc, t.identity(), raw, front, lane);
-            self.recording
-                .push(&self.road, t, raw, Some(&vehicle), in_scene);
+            let vehicle = frame::state_at(&region.road, sc, t.identity(), raw, front, lane);
+            let row = trajectory_row(&region.road, t, raw, Some(&vehicle));
+            region.recording.push(row, in_scene);
             if in_scene {
-                self.sumo_scene.push(vehicle, raw.edge_code);
+                region.scene.push(vehicle, raw.edge_code);
             }
         }
+        Ok(())
     }
 
-    /// Sends the controller's maneuvers to SUMO.
-    fn apply(&mut self, sim: &mut impl SumoClient) -> Result<(), SumoError> {
-        send_commands(sim, &self.sumo_scene, &self.commands, &self.config.scenario)
-    }
-
-    fn finish(self, loop_s: f64, stranded: usize) -> EpisodeResult {
-        let sc = &self.config.scenario;
-        // The time of the last state: a vehicle still in the network was last seen then.
-        let end = self.sumo_scene.scene.time;
-        let books = self.ledger.close(end);
-        let summary = Summary::compute(&SummaryInput {
-            planner: self.controller.name(),
-            hdv_profile: &self.config.hdv.profile,
-            sumo_version: crate::sumo::version::BUILT,
-            alpha: sc.alpha,
-            lambda: sc.lambda,
-            seed: sc.seed,
-            steps: sc.steps,
-            end,
-            scheduled: books.scheduled,
-            vehicles: &books.vehicles,
-            collisions: &books.collisions,
-            speed_sum: books.speed_sum,
-            speed_samples: books.speed_samples,
-            stranded,
-            plan_stats: self.plan_stats,
-        });
-        let (steps, vehicles, cavs) = self.occupancy;
-        let per_step = |n: u64| n as f64 / steps.max(1) as f64;
-        EpisodeResult {
-            summary,
-            vehicles: books.vehicles,
-            collisions: books.collisions,
-            timing: self.times.timing(loop_s, sc.steps),
-            trajectories: self.recording.finish(),
-            sumo_log: String::new(),
-            trace: None,
-            vehicles_per_step: per_step(vehicles),
-            cavs_per_step: per_step(cavs),
-        }
-    }
-}
-
-/// The paper demand's vehicles in a collision: told apart by their SUMO type (`cav`, `hdv`) or
-/// their line, every one removed, the observer told.
-struct DemandCrashes<'a, 'b> {
-    ledger: &'a Ledger<'b>,
-    observer: &'a mut dyn Observer,
-}
-
-impl Crashes for DemandCrashes<'_, '_> {
-    fn kind_of(&self, id: &str, type_id: &str) -> Option<Kind> {
-        Kind::from_type_id(type_id).or_else(|| self.ledger.kind_of(id))
-    }
-    fn removes(&self, _id: &str) -> bool {
-        true
-    }
-    fn removed(&mut self, id: &str) {
-        self.observer.removed_in_collision(id);
-    }
-}
-
-/// Sends `commands` for the vehicles of `scene` to SUMO: speeds in one batch, then lane changes
-/// (into the SUMO lane of the target frame lane, where there is one).
-pub(crate) fn send_commands(
-    sim: &mut impl SumoClient,
-    scene: &SumoScene,
-    commands: &[Command],
-    sc: &crate::config::Scenario,
-) -> Result<(), SumoError> {
-    let vehicles = &scene.scene.vehicles;
-    let speeds: Vec<(&str, f64)> = commands
-        .iter()
-        .map(|c| {
-            let speed = frame::commanded_speed(c.maneuver.speed, sc);
-            (&*vehicles[c.vehicle].id, speed)
-        })
-        .collect();
-    sim.set_speeds(&speeds)?;
-    for c in commands {
-        let v = &vehicles[c.vehicle];
-        if let Some(dir) = c.maneuver.lane_change {
-            let target = v.lane + dir.offset();
-            if let Some(idx) = scene.sumo_lane_index(c.vehicle, target) {
-                sim.change_lane(&v.id, idx, sc.dt)?;
+    /// The ramp HDVs' merge requests on this step's scene.
+    fn before_plan(
+        &mut self,
+        sim: &mut impl SumoClient,
+        regions: &[Region],
+    ) -> Result<(), SumoError> {
+        let scene = &regions[0].scene.scene;
+        for m in self.merge_rule.requests(scene) {
+            let v = &scene.vehicles[m.vehicle];
+            if m.forced {
+                control::ramp_hdv_forced(sim, &v.id)?;
             }
+            sim.change_lane(&v.id, 1, self.config.scenario.dt)?;
         }
+        Ok(())
     }
-    Ok(())
-}
 
-/// The error of SUMO failing at `step`, on a clock of `dt` seconds per step.
-pub(crate) fn step_error(dt: f64, step: u32) -> impl Fn(SumoError) -> EpisodeError {
-    move |cause| EpisodeError::Step {
-        step,
-        time: step as f64 * dt,
-        cause,
+    /// The vehicles stranded on the acceleration lane, and how far each vehicle still in the
+    /// network has to go.
+    fn at_the_end(&mut self, sim: &impl SumoClient, regions: &[Region]) -> Result<(), SumoError> {
+        self.stranded = standing_on_acceleration_lane(&regions[0].scene.scene);
+        self.measure_remaining(sim, &regions[0].road)
     }
 }
 
-/// The lock-step loop of an episode: `scenario.steps` calls of `step` (told whether to plan:
-/// not after the last), the frame's `edge_names` registered first (readings carry their
-/// codes), and a stop signal seen between two steps ending it.
-pub(crate) fn lock_step(
-    sim: &mut Simulation,
-    edge_names: &[&str],
-    config: &Config,
-    mut step: impl FnMut(&mut Simulation, bool) -> Result<(), SumoError>,
-) -> Result<(), EpisodeError> {
-    let steps = config.scenario.steps;
-    let at = |step| step_error(config.scenario.dt, step);
-    sim.set_edge_codes(edge_names).map_err(at(0))?;
-    let mut progress = config.output.progress.then(|| {
-        let user = crate::io::watchdog::user_stderr();
-        crate::io::progress::Progress::on_fd("episode", steps.into(), "steps", user)
+/// Vehicles standing on the acceleration lane: at the end, the stranded (a jam indicator).
+fn standing_on_acceleration_lane(scene: &crate::model::scene::Scene) -> usize {
+    (scene.vehicles.iter())
+        .filter(|v| !v.on_ramp && v.lane == crate::model::road::MERGE_LANE && v.speed < 1.0)
+        .count()
+}
+
+/// A reading of a vehicle of the ledger as a trajectory row (without the maneuver, which comes
+/// after planning). `state` is the scene's own translation into the road frame, so the two
+/// never disagree.
+fn trajectory_row(
+    road: &Road,
+    who: &Tracked,
+    raw: &crate::sumo::RawVehicleState,
+    state: Option<&crate::model::scene::VehicleState>,
+) -> TrajectoryRow {
+    let record = &who.record;
+    let identity = (who.id.clone(), record.kind, record.origin);
+    TrajectoryRow::of_reading(road, identity, raw, state)
+}
+
+/// What the episode of `demand` produced, once SUMO has closed.
+fn finish(episode: Lockstep<'_, Demand<'_>>) -> EpisodeResult {
+    let Lockstep {
+        traffic,
+        mut planning,
+        ..
+    } = episode;
+    let sc = &traffic.config.scenario;
+    let region = &planning.regions[0];
+    // The time of the last state: a vehicle still in the network was last seen then.
+    let end = region.scene.scene.time;
+    let planner = region.controller.as_ref().map_or("", |c| c.name());
+    let books = traffic.ledger.close(end);
+    let summary = Summary::compute(&SummaryInput {
+        planner,
+        hdv_profile: &traffic.config.hdv.profile,
+        sumo_version: crate::sumo::version::BUILT,
+        alpha: sc.alpha,
+        lambda: sc.lambda,
+        seed: sc.seed,
+        steps: sc.steps,
+        end,
+        scheduled: books.scheduled,
+        vehicles: &books.vehicles,
+        collisions: &books.collisions,
+        speed_sum: books.speed_sum,
+        speed_samples: books.speed_samples,
+        stranded: traffic.stranded,
+        plan_stats: planning.plan_stats,
     });
-    for k in 0..steps {
-        if let Some(signal) = crate::io::interrupt::requested() {
-            return Err(EpisodeError::Interrupted { step: k, signal });
-        }
-        step(sim, k + 1 < steps).map_err(at(k))?;
-        if let Some(p) = &mut progress {
-            p.advance(1);
-        }
+    let (vehicles_per_step, cavs_per_step) = planning.per_step();
+    let (mut trajectories, mut traces) = planning.take_files();
+    EpisodeResult {
+        summary,
+        vehicles: books.vehicles,
+        collisions: books.collisions,
+        timing: planning.timing.take().expect("timed when the episode ran"),
+        trajectories: trajectories.pop().map(|(_, file)| file),
+        sumo_log: String::new(),
+        trace: traces.pop().map(|(_, text)| text),
+        vehicles_per_step,
+        cavs_per_step,
     }
-    if let Some(p) = &progress {
-        p.finish();
-    }
-    Ok(())
 }
 
 #[cfg(test)]

@@ -3,7 +3,6 @@
 //! vehicle SUMO never inserts.
 
 use super::*;
-use crate::controller::Controller;
 use crate::episode::observer::NoObserver;
 use crate::model::scene::{Kind, Origin};
 use crate::sumo::fake::{FakeSumo, FakeVehicle, Reading, Sent, Step};
@@ -36,20 +35,20 @@ fn run_script(planned: &[PlannedVehicle], script: Vec<Step>) -> (FakeSumo, Episo
         ..Config::default()
     };
     let road = frame::embedded_road();
-    let mut controller = controller::by_name("idm-mobil", &config, &road).unwrap();
-    let controller: &mut dyn Controller = controller.as_mut();
-    let mut observer = NoObserver;
+    let controller = controller::by_name("idm-mobil", &config, &road).unwrap();
     let steps = script.len();
     let mut sim = FakeSumo::new(config.scenario.dt, script);
     sim.set_edge_codes(&frame::edge_names(&road)).unwrap();
-    let mut episode = Episode::new(&config, controller, planned, road, &mut observer);
+    let mut episode = demand_episode(&config, planned, road, controller, Box::new(NoObserver));
     for k in 0..steps {
         let now = sim.time().unwrap();
-        episode.admit(&mut sim, now).unwrap();
+        let regions = &episode.planning.regions;
+        episode.traffic.admit(&mut sim, now, regions).unwrap();
         sim.step();
         episode.after_step(&mut sim, now, k + 1 < steps).unwrap();
     }
-    let result = episode.finish(0.0, 0);
+    episode.planning.close_timing(0.0, steps as u32);
+    let result = finish(episode);
     (sim, result)
 }
 

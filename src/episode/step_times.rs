@@ -7,9 +7,7 @@
 
 use std::time::Instant;
 
-use crate::controller::{Command, Controller};
 use crate::episode::metrics::{percentile, Timing};
-use crate::model::scene::Scene;
 use crate::sumo::{Simulation, SumoError};
 
 /// The durations of an episode's SUMO steps and planning rounds.
@@ -43,20 +41,7 @@ impl StepTimes {
         Ok(())
     }
 
-    /// One planning round of `controller` on `scene`, timed, with the shield's part of it.
-    pub fn plan(
-        &mut self,
-        controller: &mut dyn Controller,
-        scene: &Scene,
-        commands: &mut Vec<Command>,
-    ) {
-        let t1 = Instant::now();
-        controller.plan(scene, commands);
-        self.plan_ms.push(t1.elapsed().as_secs_f64() * 1e3);
-        self.shield_ms.push(controller.last_shield_ms());
-    }
-
-    /// A planning round timed by the caller (several controllers' plans in one step): it took
+    /// A planning round (every region's planner in one step): it took
     /// `plan_ms`, of which the shields' part `shield_ms`.
     pub fn add_round(&mut self, plan_ms: f64, shield_ms: f64) {
         self.plan_ms.push(plan_ms);

@@ -50,7 +50,7 @@ fn two_ramps() -> Road {
 /// The loop over one region of `road`, SUMO's drivers driving everybody (α 0).
 fn run_on(road: Road) -> ScenarioRun {
     let c = config(0.0, 7);
-    ScenarioRun::new(&c, regions(&c, vec![road], "sumo").unwrap())
+    ScenarioRun::of_regions(&c, regions(&c, vec![road], "sumo").unwrap())
 }
 
 /// Whether the entry rows of `region` add up to its `regions.csv` row: every vehicle, and

@@ -22,15 +22,14 @@
 mod entry_rows;
 #[cfg(test)]
 mod entry_tests;
+mod fleet;
 mod never_inserted;
 mod options;
 mod own_loop;
 mod passage;
 mod records;
-mod region;
 mod region_books;
 mod region_rows;
-mod round;
 mod run;
 #[cfg(test)]
 mod tests;
@@ -43,6 +42,7 @@ use crate::config::Config;
 use crate::controller;
 use crate::episode::error::EpisodeError;
 use crate::episode::metrics::{CollisionEvent, Timing};
+use crate::episode::region::Region;
 use crate::episode::summary::{Summary, Traffic};
 use crate::model::road::Road;
 use crate::sumo::frame;
@@ -50,12 +50,13 @@ use crate::sumo::route_files::distributions;
 use crate::sumo::sumocfg::{SumoConfig, SumoConfigError};
 use crate::sumo::{Simulation, StderrCapture};
 
+pub use crate::episode::round::Round;
 pub use entry_rows::RegionEntryRow;
+pub use fleet::Fleet;
 pub use options::{has_cavs, sumo_options, SumoOptions};
 pub use own_loop::OwnLoop;
 pub use records::{csv_of, ScenarioVehicle};
 pub use region_rows::{RegionKey, RegionRow};
-pub use round::{Fleet, Round};
 
 /// What an episode on a user's scenario produced.
 #[derive(Debug, Clone)]
@@ -218,7 +219,7 @@ fn check_cav_types(
 /// region to plan, an unknown planner, or SUMO failing.
 pub fn run(config: &Config, planner: &str) -> Result<ScenarioResult, EpisodeError> {
     run_planned(config, planner, |roads| {
-        Ok(run::ScenarioRun::new(
+        Ok(run::ScenarioRun::of_regions(
             config,
             regions(config, roads, planner)?,
         ))
@@ -239,7 +240,7 @@ pub fn run_together(
     run_planned(config, name, |roads| {
         let regions = roads
             .into_iter()
-            .map(|road| run::Region::new(region_config(config, &road), road, None))
+            .map(|road| Region::new(region_config(config, &road), road, None))
             .collect();
         Ok(run::ScenarioRun::planned_together(
             config, regions, round, fleet,
@@ -271,7 +272,7 @@ fn run_planned(
         })?;
         check_cav_types(&sim, config, &path)?;
         let mut run = make(roads)?;
-        run.run(sim)?;
+        run.run(sim, config)?;
         Ok::<_, EpisodeError>(run.finish(planner, &options))
     })();
     let sumo_log = capture.map(StderrCapture::finish).unwrap_or_default();
@@ -288,13 +289,13 @@ fn regions(
     config: &Config,
     roads: Vec<Road>,
     planner: &str,
-) -> Result<Vec<run::Region>, EpisodeError> {
+) -> Result<Vec<Region<'static>>, EpisodeError> {
     roads
         .into_iter()
         .map(|road| {
             let c = region_config(config, &road);
             let controller = controller::by_name(planner, &c, &road)?;
-            Ok(run::Region::new(c, road, Some(controller)))
+            Ok(Region::new(c, road, Some(controller)))
         })
         .collect()
 }
@@ -386,20 +387,6 @@ pub fn sumo_alone_ms_per_step(config: &Config) -> Result<f64, EpisodeError> {
     })();
     let log = capture.map(StderrCapture::finish).unwrap_or_default();
     timed.map_err(|e: EpisodeError| e.with_sumo_log(log))
-}
-
-/// The edges the region's on-ramps join: the first edge of each ramp's route off the ramp.
-pub(crate) fn merge_edges(road: &Road) -> Vec<String> {
-    road.entries
-        .iter()
-        .skip(1)
-        .filter_map(|e| {
-            e.route
-                .iter()
-                .find(|edge| road.edge(edge).is_some_and(|f| !f.on_ramp))
-                .map(|edge| edge.to_string())
-        })
-        .collect()
 }
 
 /// Writes the episode's files into `dir` as one set, `episode.csv` last.

@@ -9,7 +9,7 @@ use std::path::PathBuf;
 
 use crate::config::Config;
 use crate::episode::error::EpisodeError;
-use crate::episode::runner::step_error;
+use crate::episode::lockstep::step_error;
 use crate::sumo::{frame, SumoClient};
 
 use super::run::ScenarioRun;
@@ -48,7 +48,7 @@ impl OwnLoop {
         let dir = scratch_dir()?;
         let options = sumo_options(config, &cfg, dir.path());
         Ok(OwnLoop {
-            run: ScenarioRun::new(config, regions(config, roads, planner)?),
+            run: ScenarioRun::of_regions(config, regions(config, roads, planner)?),
             planner: planner.to_string(),
             config: config.clone(),
             sumocfg,
@@ -84,7 +84,7 @@ impl OwnLoop {
             ));
         }
         check_cav_types(sim, &self.config, &self.sumocfg)?;
-        let names = self.run.edge_names();
+        let names = self.run.planning.edge_names();
         let names: Vec<&str> = names.iter().map(String::as_str).collect();
         let at = step_error(self.config.scenario.dt, 0);
         sim.set_edge_codes(&names).map_err(&at)?;
@@ -118,7 +118,7 @@ impl OwnLoop {
 
     /// The names of every region's edges, in the order of their codes in the readings.
     pub fn edge_names(&self) -> Vec<String> {
-        self.run.edge_names()
+        self.run.planning.edge_names()
     }
 
     /// Whether SUMO has been closed, so that its tripinfo output is complete.

@@ -10,8 +10,8 @@ use crate::sumo::{RawVehicleState, SumoClient, SumoError};
 
 use super::entry_rows::{entry_name, origin_of};
 use super::records::ScenarioVehicle;
-use super::region::Region;
 use crate::episode::metrics::Outcome;
+use crate::episode::region::Region;
 
 /// A vehicle's passage through the first region it entered.
 #[derive(Clone, Copy)]

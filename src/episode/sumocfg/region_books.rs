@@ -4,8 +4,8 @@
 
 use super::entry_rows::{entry_rows, origin_of, region_entries, RegionEntryRow};
 use super::records::ScenarioVehicle;
-use super::region::Region;
 use super::region_rows::{region_rows, RegionKey, RegionRow};
+use crate::episode::region::Region;
 use crate::episode::summary::Summary;
 use crate::model::scene::Origin;
 

@@ -1,31 +1,30 @@
-//! The lock-step loop of an episode on a user's scenario: SUMO steps, departures get their
-//! CAV draw, collisions and arrivals are booked, and each merge region's vehicles are read into
-//! its own scene and planned by its own controller, the regions in parallel (each
-//! deterministic, and none sees another's vehicles or state).
+//! A user's SUMO scenario as the source of traffic of the one lock-step loop
+//! ([`Lockstep`]): SUMO inserts the scenario's vehicles, each gets its CAV draw as it
+//! departs, and each merge region's vehicles are read into its own scene (each with its own
+//! type's size and limits) and planned by its own controller, the regions in parallel (each
+//! deterministic, and none sees another's vehicles or state). A region's planner takes a CAV
+//! over as it enters the part it drives and hands it back as it leaves.
 
 use std::collections::{BTreeMap, HashMap};
-use std::sync::Arc;
 
 use crate::config::Config;
-use crate::controller::PlanStats;
-use crate::episode::error::EpisodeError;
-use crate::episode::metrics::{CollisionEvent, Outcome, Timing};
-use crate::episode::step_times::StepTimes;
-use crate::episode::trajectories::TrajectoryFile;
-use crate::episode::Observer;
+use crate::episode::lockstep::{Lockstep, Traffic};
+use crate::episode::metrics::{CollisionEvent, Outcome};
+use crate::episode::planning::Planning;
+use crate::episode::region::Region;
+use crate::episode::round::Round;
+use crate::episode::NoObserver;
 use crate::model::road::MERGE_LANE;
 use crate::model::scene::{Kind, Limits, Origin, VehicleState};
 use crate::sumo::frame;
-use crate::sumo::{RawVehicleState, Simulation, SumoClient, SumoError, VehicleReadings};
+use crate::sumo::{RawVehicleState, SumoClient, SumoError, VehicleReadings};
 
+use super::fleet::{crosses_a_region, Fleet};
 use super::never_inserted::{never_inserted_rows, to_ms};
 use super::passage::{enter, first_region_on, own_desired_speed, passage, Entry};
 use super::records::{self, ScenarioVehicle};
-pub use super::region::Region;
 use super::region_books::region_books;
-use super::round::{crosses_a_region, plan_together, Fleet, Round};
 use super::{becomes_cav, has_cavs, ScenarioResult, SumoOptions};
-use crate::episode::collisions::{take_collisions, Crashes};
 use crate::episode::control;
 use crate::episode::summary::Summary;
 
@@ -46,27 +45,14 @@ struct Line {
     commanded: Option<usize>,
 }
 
-/// A region's trace: its name and its `trace.jsonl` text.
-type RegionTrace = (String, String);
-
-/// The loop's state.
-pub struct ScenarioRun {
+/// A user's scenario as the loop's source of traffic: its books.
+pub struct ScenarioTraffic {
     config: Config,
-    regions: Vec<Region>,
     lines: Vec<Line>,
     index: HashMap<String, usize>,
-    readings: VehicleReadings,
     collisions: Vec<CollisionEvent>,
-    times: StepTimes,
-    /// Steps seen, and the vehicles and planned CAVs in the regions' scenes over them.
-    occupancy: (u64, u64, u64),
-    timing: Option<Timing>,
-    /// Plans every region at once in place of their own planners, when given.
-    round: Option<Box<dyn Round>>,
     /// Which departing vehicles are CAVs.
     fleet: Fleet,
-    /// The vehicles removed in collisions since the last planning round.
-    crashed: Vec<Arc<str>>,
     /// The vehicles whose departure time had come but which SUMO had not inserted, after the
     /// last step seen: at the end, the vehicles never inserted.
     pending: Vec<String>,
@@ -75,110 +61,158 @@ pub struct ScenarioRun {
     /// Where each vehicle that ever waited would enter a region first (by its route): which
     /// region, and by which of its road's entries; none for a route through no region.
     waiting: HashMap<String, Option<(usize, usize)>>,
-    /// The planners' search effort, over every round of every region.
-    plan_stats: PlanStats,
     /// Whether the episode removes the vehicles of a collision (with CAVs; without, SUMO's
     /// own `collision.action` does what the configuration says).
     removes_crashed: bool,
 }
 
+/// An episode on a user's scenario: its traffic in lock-step with its regions' planning.
+pub type ScenarioRun = Lockstep<'static, ScenarioTraffic>;
+
 impl ScenarioRun {
-    pub fn new(config: &Config, mut regions: Vec<Region>) -> Self {
-        let mut offset = 0;
-        for r in &mut regions {
-            r.code_offset = offset;
-            offset += r.road.edges.len() as i32;
-        }
-        ScenarioRun {
-            config: config.clone(),
-            regions,
-            lines: Vec::new(),
-            index: HashMap::new(),
-            readings: VehicleReadings::default(),
-            collisions: Vec::new(),
-            times: StepTimes::new(config.scenario.steps),
-            occupancy: (0, 0, 0),
-            timing: None,
-            round: None,
-            fleet: Fleet::Drawn,
-            crashed: Vec::new(),
-            pending: Vec::new(),
-            end: 0.0,
-            waiting: HashMap::new(),
-            plan_stats: PlanStats::default(),
-            removes_crashed: has_cavs(&config.scenario),
-        }
+    /// The episode of `config`'s scenario with `regions`, each planned by its own planner.
+    pub fn of_regions(config: &Config, regions: Vec<Region<'static>>) -> Self {
+        Self::with_round(config, regions, None, Fleet::Drawn)
     }
 
     /// The episode with `round` planning every region (theirs without planners) and `fleet`
     /// deciding the CAVs.
     pub fn planned_together(
         config: &Config,
-        regions: Vec<Region>,
+        regions: Vec<Region<'static>>,
         round: Box<dyn Round>,
         fleet: Fleet,
     ) -> Self {
-        ScenarioRun {
-            round: Some(round),
+        Self::with_round(config, regions, Some(round), fleet)
+    }
+
+    fn with_round(
+        config: &Config,
+        regions: Vec<Region<'static>>,
+        round: Option<Box<dyn Round>>,
+        fleet: Fleet,
+    ) -> Self {
+        let traffic = ScenarioTraffic {
+            config: config.clone(),
+            lines: Vec::new(),
+            index: HashMap::new(),
+            collisions: Vec::new(),
             fleet,
-            ..ScenarioRun::new(config, regions)
-        }
-    }
-
-    /// The names of every region's edges, in the order of their codes in the readings.
-    pub fn edge_names(&self) -> Vec<String> {
-        self.regions
-            .iter()
-            .flat_map(|r| frame::edge_names(&r.road))
-            .map(String::from)
-            .collect()
-    }
-
-    /// Runs the episode's steps, then closes SUMO (which writes the tripinfo output).
-    pub fn run(&mut self, mut sim: Simulation) -> Result<(), EpisodeError> {
-        let config = self.config.clone();
-        let names = self.edge_names();
-        let names: Vec<&str> = names.iter().map(String::as_str).collect();
-        let start = std::time::Instant::now();
-        crate::episode::runner::lock_step(&mut sim, &names, &config, |sim, plan| {
-            let now = sim.time()?;
-            self.times.sumo_step(sim)?;
-            self.after_step(sim, now, plan)
-        })?;
-        self.close_timing(start.elapsed().as_secs_f64());
-        let (dt, steps) = (config.scenario.dt, config.scenario.steps);
-        sim.close()
-            .map_err(crate::episode::runner::step_error(dt, steps))?;
-        Ok(())
+            pending: Vec::new(),
+            end: 0.0,
+            waiting: HashMap::new(),
+            removes_crashed: has_cavs(&config.scenario),
+        };
+        let steps = config.scenario.steps;
+        let planning = Planning::new(regions, Box::new(NoObserver), round, steps);
+        Lockstep::new(traffic, planning)
     }
 
     /// The episode ran `steps` steps (a caller's own loop may stop before the configured
     /// number): the summary says so.
     pub fn ran_steps(&mut self, steps: u32) {
-        self.config.scenario.steps = steps;
+        self.traffic.config.scenario.steps = steps;
     }
 
     /// Ends the episode's timing, its loop having taken `loop_s` seconds.
     pub fn close_timing(&mut self, loop_s: f64) {
-        let times = std::mem::replace(&mut self.times, StepTimes::new(0));
-        self.timing = Some(times.timing(loop_s, self.config.scenario.steps));
+        let steps = self.traffic.config.scenario.steps;
+        self.planning.close_timing(loop_s, steps);
     }
 
-    /// What follows a SUMO step that began at time `now`: departures, collisions and
-    /// arrivals booked, every region's scene read and, when `plan`, one planning round per
-    /// region with its commands sent.
-    pub fn after_step(
+    /// The records with SUMO's trip figures and each vehicle's delay in its region, the books
+    /// of each region and entry, and the summary.
+    pub fn finish(
+        mut self,
+        planner: &str,
+        options: &SumoOptions,
+    ) -> Result<ScenarioResult, String> {
+        let trips = records::read_trips(&options.tripinfo)?;
+        let (trajectories, traces) = self.planning.take_files();
+        let (mut traffic, planning) = (self.traffic, self.planning);
+        let regions = &planning.regions;
+        let vehicles = traffic.vehicle_records(&trips, regions);
+        let hdv_collisions = (traffic.collisions.iter())
+            .filter(|c| !c.controllable())
+            .count();
+        let names: Vec<String> = regions.iter().map(|r| r.name.clone()).collect();
+        let head = Summary::head_of_scenario(&traffic.config, planner, &names);
+        let (vehicles_per_step, cavs_per_step) = planning.per_step();
+        let waiting = traffic.never_inserted_entries();
+        let (regions, entries) = region_books(&head, regions, &vehicles, &waiting);
+        let summary = Summary {
+            plan_stats: planning.plan_stats,
+            ..Summary::of_scenario(head, &vehicles, hdv_collisions, traffic.end)
+        };
+        Ok(ScenarioResult {
+            summary,
+            regions,
+            entries,
+            vehicles,
+            collisions: traffic.collisions,
+            sumo_options: options.args.clone(),
+            sumo_notes: options.notes.clone(),
+            sumo_log: String::new(),
+            timing: planning.timing.expect("timed when the episode ran"),
+            vehicles_per_step,
+            cavs_per_step,
+            trajectories,
+            traces,
+        })
+    }
+}
+
+impl Traffic for ScenarioTraffic {
+    /// Each vehicle SUMO inserted gets its CAV draw and its line; the vehicles SUMO holds back
+    /// are noted.
+    fn book_departures(
         &mut self,
         sim: &mut impl SumoClient,
         now: f64,
-        plan: bool,
+        regions: &[Region],
     ) -> Result<(), SumoError> {
         self.end = now + self.config.scenario.dt;
-        self.book_departures(sim, now)?;
-        self.note_waiting(sim)?;
-        sim.read_vehicles(&mut self.readings)?;
-        self.book_collisions(sim, now)?;
-        for id in sim.arrived()? {
+        self.book_inserted(sim, now, regions)?;
+        self.note_waiting(sim, regions)
+    }
+
+    /// Told apart by their draw.
+    fn kind_of(&self, id: &str, _type_id: &str) -> Option<Kind> {
+        self.index.get(id).map(|&k| self.lines[k].record.kind)
+    }
+
+    /// Removed (once, while present) only in an episode with CAVs.
+    fn removes(&self, id: &str) -> bool {
+        let present = |&k: &usize| self.lines[k].record.outcome == Outcome::Present;
+        self.removes_crashed && self.index.get(id).is_some_and(present)
+    }
+
+    /// Books each collision (a CAV in it makes it controllable); in an episode with CAVs its
+    /// vehicles were removed.
+    fn book_collisions(&mut self, events: Vec<CollisionEvent>, now: f64) {
+        for event in events {
+            let controllable = event.controllable();
+            for (me, other) in event.pairs() {
+                let Some(&k) = self.index.get(me) else {
+                    continue;
+                };
+                let r = &mut self.lines[k].record;
+                if self.removes_crashed && r.outcome == Outcome::Present {
+                    r.outcome = Outcome::Crashed;
+                    r.crash_time_s = Some(now);
+                }
+                if !r.crashed_with.is_empty() {
+                    r.crashed_with.push(' ');
+                }
+                r.crashed_with.push_str(other);
+                r.controllable_crash |= controllable;
+            }
+            self.collisions.push(event);
+        }
+    }
+
+    fn book_arrivals(&mut self, arrived: Vec<String>, now: f64) {
+        for id in arrived {
             if let Some(&k) = self.index.get(&id) {
                 let r = &mut self.lines[k].record;
                 if r.outcome == Outcome::Present {
@@ -187,77 +221,63 @@ impl ScenarioRun {
                 }
             }
         }
-        self.build_scenes(sim, now)?;
-        if plan {
-            self.plan_regions();
-            for r in &mut self.regions {
-                if r.commanded() {
-                    crate::episode::runner::send_commands(
-                        sim,
-                        &r.scene,
-                        &r.commands,
-                        &r.config.scenario,
-                    )?;
-                    r.record_sent();
-                    if let Some(gui) = &mut r.gui {
-                        gui.update(sim, &r.scene.scene, &r.commands)?;
-                    }
-                }
-            }
-        }
-        Ok(())
     }
 
-    /// One planning round of every region, in parallel (each region's planner sees only its
-    /// own scene and keeps its own state, so the rounds are independent and each is
-    /// deterministic), timed together: the step's planning time.
-    fn plan_regions(&mut self) {
-        use rayon::prelude::*;
-        let start = std::time::Instant::now();
-        let crashed = std::mem::take(&mut self.crashed);
-        if let Some(round) = &mut self.round {
-            plan_together(round.as_mut(), &mut self.regions, &crashed);
-        }
-        self.regions.par_iter_mut().for_each(|r| {
-            if let Some(c) = &mut r.controller {
-                r.commands.clear();
-                c.plan(&r.scene.scene, &mut r.commands);
-                if let Some(t) = &mut r.trace {
-                    t.planned(&r.scene.scene, &r.commands, c.as_ref());
-                }
+    /// This step's scene of every region: each vehicle read on its edges, with its own size;
+    /// a CAV entering the part a planner drives is taken over, one leaving it handed back.
+    fn build_scenes(
+        &mut self,
+        sim: &mut impl SumoClient,
+        readings: &VehicleReadings,
+        regions: &mut [Region],
+        now: f64,
+    ) -> Result<(), SumoError> {
+        let mut planned_by: Vec<Option<usize>> = vec![None; self.lines.len()];
+        for (id, raw) in readings.ids.iter().zip(&readings.states) {
+            let Some(&k) = self.index.get(id) else {
+                continue;
+            };
+            if self.lines[k].record.outcome != Outcome::Present {
+                continue;
             }
-        });
-        let controllers = || self.regions.iter().filter_map(|r| r.controller.as_ref());
-        let shield_ms = controllers().map(|c| c.last_shield_ms()).sum();
-        for c in controllers() {
-            self.plan_stats += c.last_stats();
+            let found = regions.iter().enumerate().find_map(|(g, r)| {
+                let local = r.local(raw)?;
+                frame::frame_position(&r.road, &local).map(|p| (g, local, p))
+            });
+            let Some((g, local, position)) = found else {
+                continue;
+            };
+            if self.place(sim, k, (g, &mut regions[g]), &local, position, now)? {
+                planned_by[k] = Some(g);
+            }
         }
-        self.times
-            .add_round(start.elapsed().as_secs_f64() * 1e3, shield_ms);
-        self.occupancy.0 += 1;
-        for r in &self.regions {
-            let vehicles = &r.scene.scene.vehicles;
-            self.occupancy.1 += vehicles.len() as u64;
-            self.occupancy.2 += vehicles.iter().filter(|v| v.kind == Kind::Cav).count() as u64;
-        }
+        self.hand_back(sim, &planned_by)
     }
+}
 
+impl ScenarioTraffic {
     /// Reads the vehicles SUMO holds back now, and where each new one would enter a region.
-    fn note_waiting(&mut self, sim: &impl SumoClient) -> Result<(), SumoError> {
+    fn note_waiting(&mut self, sim: &impl SumoClient, regions: &[Region]) -> Result<(), SumoError> {
         self.pending = sim.pending()?;
         for id in &self.pending {
             if !self.waiting.contains_key(id) {
                 let route = sim.vehicle_route(id)?;
-                let entry = first_region_on(&self.regions, &route);
+                let entry = first_region_on(regions, &route);
                 self.waiting.insert(id.clone(), entry);
             }
         }
         Ok(())
     }
 
-    fn book_departures(&mut self, sim: &mut impl SumoClient, now: f64) -> Result<(), SumoError> {
+    /// Each vehicle SUMO inserted in the step that began at `now`: its draw, its line.
+    fn book_inserted(
+        &mut self,
+        sim: &mut impl SumoClient,
+        now: f64,
+        regions: &[Region],
+    ) -> Result<(), SumoError> {
         let s = &self.config.scenario;
-        let (index, lines, regions) = (&mut self.index, &mut self.lines, &self.regions);
+        let (index, lines) = (&mut self.index, &mut self.lines);
         for id in sim.departed()? {
             let sumo_type = sim.vehicle_type(&id)?;
             let size = sim.vehicle_size(&id)?;
@@ -291,77 +311,6 @@ impl ScenarioRun {
         Ok(())
     }
 
-    /// Books each collision (a CAV in it makes it controllable) and, in an episode with CAVs,
-    /// removes both vehicles; without, SUMO does what its `collision.action` says.
-    fn book_collisions(&mut self, sim: &mut impl SumoClient, now: f64) -> Result<(), SumoError> {
-        let mut crashes = ScenarioCrashes {
-            index: &self.index,
-            lines: &self.lines,
-            removes: self.removes_crashed,
-            crashed: &mut self.crashed,
-        };
-        for event in take_collisions(sim, now, &mut crashes)? {
-            let controllable = event.controllable();
-            for (me, other) in event.pairs() {
-                let Some(&k) = self.index.get(me) else {
-                    continue;
-                };
-                let r = &mut self.lines[k].record;
-                if self.removes_crashed && r.outcome == Outcome::Present {
-                    r.outcome = Outcome::Crashed;
-                    r.crash_time_s = Some(now);
-                }
-                if !r.crashed_with.is_empty() {
-                    r.crashed_with.push(' ');
-                }
-                r.crashed_with.push_str(other);
-                r.controllable_crash |= controllable;
-            }
-            self.collisions.push(event);
-        }
-        Ok(())
-    }
-
-    /// This step's scene of every region: each vehicle read on its edges, with its own size;
-    /// a CAV entering the part a planner drives is taken over, one leaving it handed back.
-    fn build_scenes(&mut self, sim: &mut impl SumoClient, now: f64) -> Result<(), SumoError> {
-        for r in &mut self.regions {
-            r.scene.clear(now);
-            r.log_rows.clear();
-            if let Some(log) = &mut r.log {
-                log.begin_step(now);
-            }
-        }
-        let mut planned_by: Vec<Option<usize>> = vec![None; self.lines.len()];
-        // Taken out for the loop, which places vehicles into `self`, and put back after it.
-        let readings = std::mem::take(&mut self.readings);
-        for (id, raw) in readings.ids.iter().zip(&readings.states) {
-            let Some(&k) = self.index.get(id) else {
-                continue;
-            };
-            if self.lines[k].record.outcome != Outcome::Present {
-                continue;
-            }
-            let found = self.regions.iter().enumerate().find_map(|(g, r)| {
-                let local = r.local(raw)?;
-                frame::frame_position(&r.road, &local).map(|p| (g, local, p))
-            });
-            let Some((g, local, position)) = found else {
-                continue;
-            };
-            match self.place(sim, k, g, &local, position, now) {
-                Ok(true) => planned_by[k] = Some(g),
-                Ok(false) => {}
-                Err(e) => {
-                    self.readings = readings;
-                    return Err(e);
-                }
-            }
-        }
-        self.readings = readings;
-        self.hand_back(sim, &planned_by)
-    }
-
     /// Puts vehicle `k`, read at `position` in region `g`, in that region's scene; whether
     /// the region's planner drives it. The planners have no lane for a CAV on a deceleration
     /// lane (lane 0 outside a merge zone), nor a way off the carriageway: there SUMO drives it,
@@ -372,12 +321,11 @@ impl ScenarioRun {
         &mut self,
         sim: &mut impl SumoClient,
         k: usize,
-        g: usize,
+        (g, region): (usize, &mut Region),
         raw: &RawVehicleState,
         (front, lane): (f64, i32),
         now: f64,
     ) -> Result<bool, SumoError> {
-        let region = &mut self.regions[g];
         let line = &mut self.lines[k];
         if line.entry.is_none() {
             line.entry = Some(enter(&line.record.id, sim, g, region, raw, front, now)?);
@@ -423,21 +371,6 @@ impl ScenarioRun {
         Ok(())
     }
 
-    /// Each region's trajectories and trace, taken out of it (region name, file).
-    fn take_region_files(&mut self) -> (Vec<(String, TrajectoryFile)>, Vec<RegionTrace>) {
-        let trajectories = self
-            .regions
-            .iter_mut()
-            .filter_map(|r| Some((r.name.clone(), r.log.take()?.finish())))
-            .collect();
-        let traces = self
-            .regions
-            .iter_mut()
-            .filter_map(|r| Some((r.name.clone(), r.trace.take()?.text().to_string())))
-            .collect();
-        (trajectories, traces)
-    }
-
     /// Where each vehicle still waiting at the end would enter a region first: the region and
     /// the entry of its road (those whose routes enter none left out).
     fn never_inserted_entries(&self) -> Vec<(usize, usize)> {
@@ -460,7 +393,11 @@ impl ScenarioRun {
 
     /// The records of the vehicles SUMO inserted, with SUMO's trip figures and each one's
     /// passage through its first region, then those of the vehicles never inserted.
-    fn vehicle_records(&mut self, trips: &BTreeMap<String, records::Trip>) -> Vec<ScenarioVehicle> {
+    fn vehicle_records(
+        &mut self,
+        trips: &BTreeMap<String, records::Trip>,
+        regions: &[Region],
+    ) -> Vec<ScenarioVehicle> {
         let mut vehicles: Vec<ScenarioVehicle> = std::mem::take(&mut self.lines)
             .into_iter()
             .map(|l| {
@@ -472,7 +409,7 @@ impl ScenarioRun {
                     v.scheduled_depart_s = v.depart_s.map(|d| to_ms(d - t.depart_delay));
                 }
                 if let Some(e) = l.entry {
-                    let region = &self.regions[e.region];
+                    let region = &regions[e.region];
                     let own = own_desired_speed(l.speed_factor, l.max_speed, &region.road);
                     passage(&mut v, &e, region, own);
                 }
@@ -481,66 +418,6 @@ impl ScenarioRun {
             .collect();
         vehicles.extend(self.never_inserted(trips));
         vehicles
-    }
-
-    /// The records with SUMO's trip figures and each vehicle's delay in its region, the books
-    /// of each region and entry, and the summary.
-    pub fn finish(
-        mut self,
-        planner: &str,
-        options: &SumoOptions,
-    ) -> Result<ScenarioResult, String> {
-        let trips = records::read_trips(&options.tripinfo)?;
-        let (trajectories, traces) = self.take_region_files();
-        let vehicles = self.vehicle_records(&trips);
-        let hdv_collisions = self.collisions.iter().filter(|c| !c.controllable()).count();
-        let names: Vec<String> = self.regions.iter().map(|r| r.name.clone()).collect();
-        let head = Summary::head_of_scenario(&self.config, planner, &names);
-        let (steps, in_scenes, cavs) = self.occupancy;
-        let per_step = |n: u64| n as f64 / steps.max(1) as f64;
-        let waiting = self.never_inserted_entries();
-        let (regions, entries) = region_books(&head, &self.regions, &vehicles, &waiting);
-        let summary = Summary {
-            plan_stats: self.plan_stats,
-            ..Summary::of_scenario(head, &vehicles, hdv_collisions, self.end)
-        };
-        Ok(ScenarioResult {
-            summary,
-            regions,
-            entries,
-            vehicles,
-            collisions: self.collisions,
-            sumo_options: options.args.clone(),
-            sumo_notes: options.notes.clone(),
-            sumo_log: String::new(),
-            timing: self.timing.expect("timed when the episode ran"),
-            vehicles_per_step: per_step(in_scenes),
-            cavs_per_step: per_step(cavs),
-            trajectories,
-            traces,
-        })
-    }
-}
-
-/// A scenario's vehicles in a collision: told apart by their draw, removed (once, while
-/// present) only in an episode with CAVs.
-struct ScenarioCrashes<'a> {
-    index: &'a HashMap<String, usize>,
-    lines: &'a [Line],
-    removes: bool,
-    crashed: &'a mut Vec<Arc<str>>,
-}
-
-impl Crashes for ScenarioCrashes<'_> {
-    fn kind_of(&self, id: &str, _type_id: &str) -> Option<Kind> {
-        self.index.get(id).map(|&k| self.lines[k].record.kind)
-    }
-    fn removes(&self, id: &str) -> bool {
-        let present = |&k: &usize| self.lines[k].record.outcome == Outcome::Present;
-        self.removes && self.index.get(id).is_some_and(present)
-    }
-    fn removed(&mut self, id: &str) {
-        self.crashed.push(Arc::from(id));
     }
 }
 

@@ -38,13 +38,13 @@ pub(super) fn config(alpha: f64, seed: u64) -> Config {
 /// The loop over the paper merge's one region, planned by `planner`.
 pub(super) fn paper_run(config: &Config, planner: &str) -> ScenarioRun {
     let regions = regions(config, vec![Road::paper_default()], planner).unwrap();
-    ScenarioRun::new(config, regions)
+    ScenarioRun::of_regions(config, regions)
 }
 
 /// SUMO playing `script`, the loop's edges registered, as the loop's caller does first.
 pub(super) fn sumo_for(run: &ScenarioRun, script: Vec<Step>) -> FakeSumo {
     let mut sim = FakeSumo::new(DT, script);
-    let names = run.edge_names();
+    let names = run.planning.edge_names();
     let names: Vec<&str> = names.iter().map(String::as_str).collect();
     sim.set_edge_codes(&names).unwrap();
     sim
@@ -444,7 +444,7 @@ fn a_cav_on_a_lane_the_planner_has_none_of_stays_sumos() {
     let mut road = Road::paper_default();
     road.zones[0].end = 250.0;
     let c = config(1.0, 9);
-    let mut run = ScenarioRun::new(&c, regions(&c, vec![road], "idm-mobil").unwrap());
+    let mut run = ScenarioRun::of_regions(&c, regions(&c, vec![road], "idm-mobil").unwrap());
     let script = vec![
         Step::default()
             .depart(FakeVehicle::new("d", "car"))
@@ -534,7 +534,7 @@ fn renamed(mut road: Road, prefix: &str) -> Road {
 fn each_region_reads_its_own_edges_after_the_codes_of_those_before() {
     let c = config(0.0, 8);
     let roads = vec![Road::paper_default(), renamed(Road::paper_default(), "b_")];
-    let mut run = ScenarioRun::new(&c, regions(&c, roads, "idm-mobil").unwrap());
+    let mut run = ScenarioRun::of_regions(&c, regions(&c, roads, "idm-mobil").unwrap());
     let script = vec![Step::default()
         .depart(FakeVehicle::new("one", "car"))
         .depart(FakeVehicle::new("two", "car"))

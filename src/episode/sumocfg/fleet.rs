@@ -1,31 +1,10 @@
-//! Planning every region of a scenario in one round from outside the regions' own planners:
-//! the stepped RL environment on a user's scenario (`train::ppo::env`), whose one decision per
-//! step covers the agents of every region, as on the paper's merge it covers every CAV.
-//!
-//! An episode planned this way can also have a single agent: the first vehicle that departs
-//! after a warm-up, is a CAV by the scenario's draw and drives through a region; every other
-//! vehicle is then an HDV (the paper trains its RL-PPO "in a single CAV environment").
+//! Which vehicles of a user's scenario are CAVs: the scenario's draw (α or `cav_types`), or,
+//! for the stepped RL environment, a single agent: the first vehicle that departs after a
+//! warm-up, is a CAV by the scenario's draw and drives through a region; every other vehicle is
+//! then an HDV (the paper trains its RL-PPO "in a single CAV environment").
 
-use std::sync::Arc;
-
-use super::region::Region;
-use crate::config::Config;
-use crate::controller::Command;
-use crate::model::scene::Scene;
+use crate::episode::region::Region;
 use crate::sumo::{SumoClient, SumoError};
-
-/// One planning round over every region at once.
-pub trait Round: Send {
-    /// Each region's configuration and scene, in region order, and the vehicles removed in
-    /// collisions since the last round; each region's commands go into its list of `out`
-    /// (one per region, empty on entry).
-    fn plan(
-        &mut self,
-        regions: &[(&Config, &Scene)],
-        crashed: &[Arc<str>],
-        out: &mut [Vec<Command>],
-    );
-}
 
 /// Which vehicles of the scenario are CAVs.
 #[derive(Debug, Clone, PartialEq)]
@@ -71,26 +50,6 @@ impl Fleet {
                 Ok(true)
             }
         }
-    }
-}
-
-/// One round of `round` over every region, each region's commands replaced by the round's.
-pub(super) fn plan_together(round: &mut dyn Round, regions: &mut [Region], crashed: &[Arc<str>]) {
-    let mut commands: Vec<Vec<Command>> = regions
-        .iter_mut()
-        .map(|r| {
-            let mut c = std::mem::take(&mut r.commands);
-            c.clear();
-            c
-        })
-        .collect();
-    let views: Vec<(&Config, &Scene)> = regions
-        .iter()
-        .map(|r| (&r.config, &r.scene.scene))
-        .collect();
-    round.plan(&views, crashed, &mut commands);
-    for (r, c) in regions.iter_mut().zip(commands) {
-        r.commands = c;
     }
 }
 

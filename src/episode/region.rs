@@ -1,52 +1,56 @@
-//! One merge region of a scenario: its road frame, its planner, this step's scene and the
-//! commands for it, where the planner takes CAVs over and hands them back, and its
-//! trajectories.
+//! One merge region: its road frame, its planner, this step's scene and the commands for it,
+//! where the planner takes CAVs over and hands them back, its trajectories and trace. The
+//! paper's merge is one region whose planner drives every CAV from its insertion on; a user's
+//! scenario has one per merge the network has (or the configuration selects).
 
 use crate::config::Config;
 use crate::controller::{CavHandling, Command, Controller};
 use crate::episode::gui::GuiColours;
+use crate::episode::recording::Recording;
 use crate::episode::trace::Tracer;
-use crate::episode::trajectories::{Sent, TrajectoryLog, TrajectoryRow};
+use crate::episode::trajectories::TrajectoryRow;
 use crate::episode::Observer;
 use crate::model::road::Road;
 use crate::model::scene::Kind;
-use crate::sumo::frame::{self, SumoScene};
+use crate::sumo::frame::SumoScene;
 use crate::sumo::RawVehicleState;
 
-use super::merge_edges;
-
 /// One merge region: its frame, its planner, this step's scene and commands.
-pub struct Region {
-    /// The region's configuration: the episode's, `v_max` capped at the region's limit.
+pub struct Region<'a> {
+    /// The region's configuration: the episode's, `v_max` capped at the region's limit on a
+    /// user's scenario.
     pub config: Config,
+    /// Its road frame.
     pub road: Road,
-    /// Its own planner; `None` when the episode's [`super::round::Round`] plans every region
-    /// together.
-    pub controller: Option<Box<dyn Controller>>,
-    pub(super) scene: SumoScene,
-    pub(super) commands: Vec<Command>,
+    /// Its own planner (owned, or the caller's); `None` when the episode's
+    /// [`Round`](crate::episode::round::Round) plans every region together.
+    pub controller: Option<Box<dyn Controller + 'a>>,
+    pub(crate) scene: SumoScene,
+    pub(crate) commands: Vec<Command>,
     /// Frame `s` from which the planner drives CAVs: the end of the region's first edge.
-    pub(super) control_start: f64,
+    pub(crate) control_start: f64,
     /// Frame `s` up to which it drives them (their fronts): the start of the region's last
     /// edge, or the region's end where that edge holds a merge zone's end.
-    pub(super) control_end: f64,
+    pub(crate) control_end: f64,
     /// Its edges' codes start here in the codes registered with SUMO.
-    pub(super) code_offset: i32,
+    pub(crate) code_offset: i32,
     /// The edges its on-ramps join, its name in the results.
-    pub(super) name: String,
+    pub(crate) name: String,
     /// Its vehicles' trajectories, in its own road frame, when `output.trajectories` asks.
-    pub(super) log: Option<TrajectoryLog>,
-    /// The trajectory row of each scene vehicle in the current step.
-    pub(super) log_rows: Vec<usize>,
+    pub(crate) recording: Recording,
     /// Its planners' trace (`trace.jsonl`), when `output.trace` asks.
-    pub(super) trace: Option<Tracer>,
+    pub(crate) trace: Option<Tracer>,
     /// Its CAVs' colours in sumo-gui, when `sumo.gui` shows the episode there.
-    pub(super) gui: Option<GuiColours>,
+    pub(crate) gui: Option<GuiColours>,
 }
 
-impl Region {
+impl<'a> Region<'a> {
     /// The region of `road`, planned by `controller` (or the episode's round) under `config`.
-    pub fn new(config: Config, road: Road, mut controller: Option<Box<dyn Controller>>) -> Region {
+    pub fn new(
+        config: Config,
+        road: Road,
+        mut controller: Option<Box<dyn Controller + 'a>>,
+    ) -> Region<'a> {
         let trace = config.output.trace.then(|| Tracer::new(&config));
         let gui = config.sumo.gui.then(GuiColours::default);
         if let (Some(c), Some(t)) = (&mut controller, &trace) {
@@ -60,7 +64,7 @@ impl Region {
             .and_then(|e| e.lanes.iter().flatten().map(|l| l.s0).reduce(f64::min))
             .unwrap_or(0.0);
         let control_end = control_end(&road);
-        let log = TrajectoryLog::new(config.output.trajectories);
+        let recording = Recording::new(config.output.trajectories);
         Region {
             control_end,
             scene: SumoScene::new(&road),
@@ -71,8 +75,7 @@ impl Region {
             commands: Vec::new(),
             control_start,
             code_offset: 0,
-            log,
-            log_rows: Vec::new(),
+            recording,
             trace,
             gui,
         }
@@ -80,7 +83,7 @@ impl Region {
 
     /// Whether a planner commands the region's CAVs (rather than leaving them to SUMO): a
     /// round's always do.
-    pub(super) fn commanded(&self) -> bool {
+    pub(crate) fn commanded(&self) -> bool {
         self.controller
             .as_ref()
             .is_none_or(|c| c.handling() == CavHandling::Commanded)
@@ -88,35 +91,29 @@ impl Region {
 
     /// Records the vehicle just pushed into the scene: its reading and frame state, its own
     /// kind (a CAV SUMO drives is still a CAV here).
-    pub(super) fn record(&mut self, raw: &RawVehicleState, kind: Kind) {
-        let Some(log) = &mut self.log else {
+    pub(crate) fn record(&mut self, raw: &RawVehicleState, kind: Kind) {
+        if !self.recording.is_on() {
             return;
-        };
+        }
         let v = self.scene.scene.vehicles.last().expect("just pushed");
         let identity = (v.id.clone(), kind, v.origin);
         let row = TrajectoryRow::of_reading(&self.road, identity, raw, Some(v));
-        self.log_rows.push(log.push(row));
+        self.recording.push(row, true);
     }
 
     /// The maneuvers just sent, into the trajectory rows of their CAVs.
-    pub(super) fn record_sent(&mut self) {
-        let Some(log) = &mut self.log else {
-            return;
-        };
-        for c in &self.commands {
-            log.set_sent(
-                self.log_rows[c.vehicle],
-                Sent {
-                    speed: frame::commanded_speed(c.maneuver.speed, &self.config.scenario),
-                    lane_change: c.maneuver.lane_change,
-                    source: c.source,
-                },
-            );
-        }
+    pub(crate) fn record_sent(&mut self) {
+        (self.recording).record_sent(&self.commands, &self.config.scenario);
+    }
+
+    /// Starts the step whose state is labelled `time`: an empty scene, no rows yet.
+    pub(crate) fn begin_step(&mut self, time: f64) {
+        self.scene.clear(time);
+        self.recording.begin_step(time);
     }
 
     /// The reading with its edge code counted within this region, if it is on one of its edges.
-    pub(super) fn local(&self, raw: &RawVehicleState) -> Option<RawVehicleState> {
+    pub(crate) fn local(&self, raw: &RawVehicleState) -> Option<RawVehicleState> {
         let code = raw.edge_code - self.code_offset;
         (raw.edge_code >= 0 && (0..self.road.edges.len() as i32).contains(&code)).then_some({
             RawVehicleState {
@@ -125,6 +122,20 @@ impl Region {
             }
         })
     }
+}
+
+/// The edges the region's on-ramps join: the first edge of each ramp's route off the ramp.
+fn merge_edges(road: &Road) -> Vec<String> {
+    road.entries
+        .iter()
+        .skip(1)
+        .filter_map(|e| {
+            e.route
+                .iter()
+                .find(|edge| road.edge(edge).is_some_and(|f| !f.on_ramp))
+                .map(|edge| edge.to_string())
+        })
+        .collect()
 }
 
 /// Where the planner of `road`'s region stops driving CAVs: the start of its last edge, so that
