@@ -314,13 +314,13 @@ impl<'a> Episode<'a> {
                 Origin::Main => self.road.first_through_lane(),
                 Origin::Ramp => 0,
             };
-            sim.add_vehicle(
-                &v.id,
-                &demand::route_name(&self.road, v),
-                v.kind.as_str(),
-                (v.depart_lane as usize + through) as i32,
-                a.speed,
-            )?;
+            sim.add_vehicle(crate::sumo::NewVehicle {
+                id: &v.id,
+                route: &demand::route_name(&self.road, v),
+                type_id: v.kind.as_str(),
+                lane: (v.depart_lane as usize + through) as i32,
+                speed: a.speed,
+            })?;
         }
         Ok(())
     }
