@@ -18,17 +18,8 @@ use serde::Serialize;
 
 use crate::controller::PlanStats;
 use crate::episode::cells;
-
-/// Where an episode's traffic comes from, which decides the parts of its summary.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Traffic {
-    /// The paper's generated demand (λ, α, the HDV profile) on the embedded merge or a
-    /// `--net`: bkpbs inserts every vehicle and keeps the books of its schedule.
-    Demand,
-    /// A user's SUMO scenario (`--sumocfg`): SUMO inserts its routes' vehicles and measures
-    /// their trips.
-    Scenario,
-}
+// Named here as before: the traffic decides the summary's parts.
+pub use crate::episode::traffic::Traffic;
 
 /// The episode's one-row summary (reproducible: no wall-clock figure in it).
 #[derive(Debug, Clone, Default, PartialEq, Serialize)]
