@@ -10,7 +10,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 use bkpbs::model::scene::Limits;
-use bkpbs::sumo::{Collision, RawVehicleState, SumoClient, SumoError, VehicleReadings};
+use bkpbs::sumo::{Collision, NewVehicle, RawVehicleState, SumoClient, SumoError, VehicleReadings};
 
 /// The caller's module, and the codes of the edges whose vehicles are read by index.
 pub struct TraciClient<'py> {
@@ -215,17 +215,10 @@ impl SumoClient for TraciClient<'_> {
     fn set_color(&mut self, id: &str, [r, g, b]: [u8; 3]) -> Result<(), SumoError> {
         self.command("vehicle.setColor", (id, (r, g, b, 255u8)))
     }
-    fn add_vehicle(
-        &mut self,
-        id: &str,
-        route: &str,
-        type_id: &str,
-        lane: i32,
-        speed: f64,
-    ) -> Result<(), SumoError> {
+    fn add_vehicle(&mut self, v: NewVehicle) -> Result<(), SumoError> {
         // As the core's own loop adds one: now, at the lane's start, at this speed.
-        let (lane, speed) = (lane.to_string(), format!("{speed:.6}"));
-        let args = (id, route, type_id, "now", lane, "base", speed);
+        let (lane, speed) = (v.lane.to_string(), format!("{:.6}", v.speed));
+        let args = (v.id, v.route, v.type_id, "now", lane, "base", speed);
         self.command("vehicle.add", args)
     }
     fn set_max_speed(&mut self, id: &str, speed: f64) -> Result<(), SumoError> {

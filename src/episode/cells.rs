@@ -9,8 +9,15 @@
 //! decimals per column. That number is part of the struct's definition: a field marked
 //! `#[serde(serialize_with = "decimals::<4, _>")]` (or [`opt_decimals`]) carries it to
 //! [`Value::Float`]; an unmarked float is written in Rust's shortest form (`{}`).
+//!
+//! A file's columns are those of a template row, worked out once and kept: [`columns_once`],
+//! or per traffic [`TrafficColumns`] where the traffic decides the row's parts.
+
+use std::sync::OnceLock;
 
 use serde::ser::{self, Impossible, Serialize, Serializer};
+
+use crate::episode::traffic::Traffic;
 
 /// One cell's value, as the struct holds it.
 #[derive(Debug, Clone, PartialEq)]
@@ -90,6 +97,42 @@ pub fn cells<T: Serialize>(record: &T) -> Result<Vec<Cell>, RecordError> {
 pub fn columns_of<T: Serialize>(record: &T) -> Vec<&'static str> {
     let cells = cells(record).expect("a flat record");
     cells.into_iter().map(|c| c.column).collect()
+}
+
+/// The columns of `template()`, worked out on the first call and kept in `list`.
+pub fn columns_once<'a, T: Serialize>(
+    list: &'a OnceLock<Vec<&'static str>>,
+    template: impl FnOnce() -> T,
+) -> &'a [&'static str] {
+    list.get_or_init(|| columns_of(&template()))
+}
+
+/// The columns of a record's template row for each [`Traffic`] (whose parts differ), each
+/// list worked out on first use and kept: a `static` behind a `columns(traffic)`.
+pub struct TrafficColumns<T> {
+    template: fn(Traffic) -> T,
+    demand: OnceLock<Vec<&'static str>>,
+    scenario: OnceLock<Vec<&'static str>>,
+}
+
+impl<T: Serialize> TrafficColumns<T> {
+    /// The columns of `template(traffic)`, none worked out yet.
+    pub const fn new(template: fn(Traffic) -> T) -> Self {
+        TrafficColumns {
+            template,
+            demand: OnceLock::new(),
+            scenario: OnceLock::new(),
+        }
+    }
+
+    /// The columns of `traffic`'s template row, in order.
+    pub fn of(&self, traffic: Traffic) -> &[&'static str] {
+        let list = match traffic {
+            Traffic::Demand => &self.demand,
+            Traffic::Scenario => &self.scenario,
+        };
+        columns_once(list, || (self.template)(traffic))
+    }
 }
 
 /// The CSV text of `rows`, under the columns of `template` (a record with every part the

@@ -7,7 +7,7 @@
 //! region's scene from the readings; the planners plan ([`Planning`]) after the source's own
 //! rules (the paper's ramp HDVs' merge requests), and their maneuvers go back to SUMO.
 //!
-//! Two sources implement [`Traffic`]: the paper's generated demand on its merge, one region
+//! Two sources implement [`TrafficSource`]: the paper's generated demand on its merge, one region
 //! (`episode::runner`), and a user's SUMO scenario with a region per merge
 //! (`episode::sumocfg`). What they do differently is theirs: which vehicles are CAVs and when a
 //! planner takes them over, how each is seen in a scene (sizes and limits from the config where
@@ -26,7 +26,7 @@ use crate::sumo::{Simulation, SumoClient, SumoError, VehicleReadings};
 
 /// A source of traffic and its books: what an episode of the paper's demand and one of a
 /// user's scenario do differently, each step of the one loop.
-pub trait Traffic {
+pub trait TrafficSource {
     /// Before SUMO's step that starts at `now`: the vehicles the source inserts itself.
     fn admit(
         &mut self,
@@ -91,7 +91,7 @@ pub struct Lockstep<'a, T> {
     readings: VehicleReadings,
 }
 
-impl<'a, T: Traffic> Lockstep<'a, T> {
+impl<'a, T: TrafficSource> Lockstep<'a, T> {
     /// The episode of `traffic` planned by `planning`.
     pub fn new(traffic: T, planning: Planning<'a>) -> Self {
         Lockstep {
@@ -169,7 +169,7 @@ struct Crashed<'t, 'p, 'a, T> {
     planning: &'p mut Planning<'a>,
 }
 
-impl<T: Traffic> Crashes for Crashed<'_, '_, '_, T> {
+impl<T: TrafficSource> Crashes for Crashed<'_, '_, '_, T> {
     fn kind_of(&self, id: &str, type_id: &str) -> Option<Kind> {
         self.traffic.kind_of(id, type_id)
     }

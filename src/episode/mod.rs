@@ -34,6 +34,7 @@ mod step_times;
 pub mod summary;
 pub mod sumocfg;
 pub mod trace;
+pub mod traffic;
 pub mod trajectories;
 
 pub use error::{sumo_errors, EpisodeError};

@@ -4,7 +4,7 @@
 //! effort, vehicles per step).
 //!
 //! The paper's merge is one region; a user's scenario has one per merge. Each step the traffic
-//! source fills the regions' scenes ([`Traffic::build_scenes`](crate::episode::lockstep::Traffic));
+//! source fills the regions' scenes ([`TrafficSource::build_scenes`](crate::episode::lockstep::TrafficSource));
 //! then every region is planned, in parallel when there are several (each region's planner
 //! sees only its own scene and keeps its own state, so the rounds are independent and each is
 //! deterministic), and the commanded regions' maneuvers go to SUMO.

@@ -7,7 +7,7 @@ use std::sync::OnceLock;
 
 use serde::Serialize;
 
-use crate::episode::cells;
+use crate::episode::cells::{self, TrafficColumns};
 use crate::episode::metrics::{CollisionEvent, Timing, VehicleRecord};
 use crate::episode::summary::Traffic;
 use crate::model::scene::Kind;
@@ -229,13 +229,8 @@ impl VehicleRow {
 
     /// The `vehicles.csv` columns of an episode of `traffic`, in order.
     pub fn columns(traffic: Traffic) -> &'static [&'static str] {
-        static DEMAND: OnceLock<Vec<&'static str>> = OnceLock::new();
-        static SCENARIO: OnceLock<Vec<&'static str>> = OnceLock::new();
-        let cell = match traffic {
-            Traffic::Demand => &DEMAND,
-            Traffic::Scenario => &SCENARIO,
-        };
-        cell.get_or_init(|| cells::columns_of(&VehicleRow::template(traffic)))
+        static COLUMNS: TrafficColumns<VehicleRow> = TrafficColumns::new(VehicleRow::template);
+        COLUMNS.of(traffic)
     }
 
     /// The CSV text of `rows`, vehicles of `traffic`, under that traffic's columns.
@@ -279,7 +274,7 @@ impl CollisionRow {
     /// The `collisions.csv` columns, in order.
     pub fn columns() -> &'static [&'static str] {
         static COLUMNS: OnceLock<Vec<&'static str>> = OnceLock::new();
-        COLUMNS.get_or_init(|| cells::columns_of(&CollisionRow::default()))
+        cells::columns_once(&COLUMNS, CollisionRow::default)
     }
 }
 
@@ -325,7 +320,7 @@ impl TimingRow {
     /// The `timing.csv` columns, in order.
     pub fn columns() -> &'static [&'static str] {
         static COLUMNS: OnceLock<Vec<&'static str>> = OnceLock::new();
-        COLUMNS.get_or_init(|| cells::columns_of(&TimingRow::default()))
+        cells::columns_once(&COLUMNS, TimingRow::default)
     }
 }
 

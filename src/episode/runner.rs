@@ -1,5 +1,5 @@
 //! An episode of the paper's generated demand on its merge: the demand is the source of
-//! traffic ([`Traffic`]) of the one lock-step loop ([`Lockstep`]), its merge one region planned
+//! traffic ([`TrafficSource`]) of the one lock-step loop ([`Lockstep`]), its merge one region planned
 //! by the chosen controller.
 //!
 //! What the demand does its own way: its entry gate inserts the vehicles the demand scheduled,
@@ -17,7 +17,7 @@ use crate::episode::demand::{self, PlannedVehicle};
 use crate::episode::entry::EntryControl;
 use crate::episode::error::EpisodeError;
 use crate::episode::ledger::{Departure, Expected, Ledger, Tracked};
-use crate::episode::lockstep::{Lockstep, Traffic};
+use crate::episode::lockstep::{Lockstep, TrafficSource};
 use crate::episode::merge_rule::RampMergeRule;
 use crate::episode::metrics::{CollisionEvent, Outcome, SummaryInput, Timing, VehicleRecord};
 use crate::episode::observer::{NoObserver, Observer};
@@ -217,7 +217,7 @@ impl<'a> Demand<'a> {
     }
 }
 
-impl Traffic for Demand<'_> {
+impl TrafficSource for Demand<'_> {
     /// Adds the vehicles the entry gate lets in at `now`.
     fn admit(
         &mut self,
@@ -232,13 +232,13 @@ impl Traffic for Demand<'_> {
                 Origin::Main => road.first_through_lane(),
                 Origin::Ramp => 0,
             };
-            sim.add_vehicle(
-                &v.id,
-                &demand::route_name(road, v),
-                v.kind.as_str(),
-                (v.depart_lane as usize + through) as i32,
-                a.speed,
-            )?;
+            sim.add_vehicle(crate::sumo::NewVehicle {
+                id: &v.id,
+                route: &demand::route_name(road, v),
+                type_id: v.kind.as_str(),
+                lane: (v.depart_lane as usize + through) as i32,
+                speed: a.speed,
+            })?;
         }
         Ok(())
     }

@@ -12,23 +12,12 @@
 //! [`Summary::of_scenario`](crate::episode::sumocfg) for a user's scenario); the CSV header,
 //! the campaign's checks and the Python dict follow.
 
-use std::sync::OnceLock;
-
 use serde::Serialize;
 
 use crate::controller::PlanStats;
-use crate::episode::cells;
-
-/// Where an episode's traffic comes from, which decides the parts of its summary.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Traffic {
-    /// The paper's generated demand (λ, α, the HDV profile) on the embedded merge or a
-    /// `--net`: bkpbs inserts every vehicle and keeps the books of its schedule.
-    Demand,
-    /// A user's SUMO scenario (`--sumocfg`): SUMO inserts its routes' vehicles and measures
-    /// their trips.
-    Scenario,
-}
+use crate::episode::cells::{self, TrafficColumns};
+// Named here as before: the traffic decides the summary's parts.
+pub use crate::episode::traffic::Traffic;
 
 /// The episode's one-row summary (reproducible: no wall-clock figure in it).
 #[derive(Debug, Clone, Default, PartialEq, Serialize)]
@@ -216,19 +205,8 @@ impl Summary {
 
     /// The `episode.csv` columns of an episode of `traffic`, in order.
     pub fn columns(traffic: Traffic) -> &'static [&'static str] {
-        static DEMAND: OnceLock<Vec<&'static str>> = OnceLock::new();
-        static SCENARIO: OnceLock<Vec<&'static str>> = OnceLock::new();
-        let cell = match traffic {
-            Traffic::Demand => &DEMAND,
-            Traffic::Scenario => &SCENARIO,
-        };
-        cell.get_or_init(|| {
-            Summary::template(traffic)
-                .cells()
-                .into_iter()
-                .map(|c| c.column)
-                .collect()
-        })
+        static COLUMNS: TrafficColumns<Summary> = TrafficColumns::new(Summary::template);
+        COLUMNS.of(traffic)
     }
 
     /// [`Summary::columns`] as owned strings (a CSV header to compare a file's with).

@@ -3,7 +3,7 @@
 //! `Controller(sumocfg=…)`), so that both keep one set of books and plan alike, or by a scripted
 //! fake in the loops' unit tests.
 
-use super::{Collision, RawVehicleState, Simulation, SumoError, VehicleReadings};
+use super::{Collision, NewVehicle, RawVehicleState, Simulation, SumoError, VehicleReadings};
 use crate::model::scene::Limits;
 
 /// What an episode asks of SUMO between two steps. The caller steps SUMO; every call here reads
@@ -52,16 +52,9 @@ pub trait SumoClient {
     fn change_lane(&mut self, id: &str, lane_index: i32, duration: f64) -> Result<(), SumoError>;
     /// Takes a vehicle out of the simulation now.
     fn remove_vehicle(&mut self, id: &str) -> Result<(), SumoError>;
-    /// Adds a vehicle departing now from the start of `route`, on lane `lane` of its first edge,
-    /// at `speed` (m/s); SUMO inserts it in the coming step if there is room, else retries.
-    fn add_vehicle(
-        &mut self,
-        id: &str,
-        route: &str,
-        type_id: &str,
-        lane: i32,
-        speed: f64,
-    ) -> Result<(), SumoError>;
+    /// Adds `v`, departing now from the start of its route on its lane at its speed; SUMO
+    /// inserts it in the coming step if there is room, else retries.
+    fn add_vehicle(&mut self, v: NewVehicle) -> Result<(), SumoError>;
     /// A vehicle's own top speed (m/s), which SUMO's car-following models take as its desired
     /// speed.
     fn set_max_speed(&mut self, id: &str, speed: f64) -> Result<(), SumoError>;
@@ -133,15 +126,8 @@ impl SumoClient for Simulation {
     fn remove_vehicle(&mut self, id: &str) -> Result<(), SumoError> {
         Simulation::remove_vehicle(self, id)
     }
-    fn add_vehicle(
-        &mut self,
-        id: &str,
-        route: &str,
-        type_id: &str,
-        lane: i32,
-        speed: f64,
-    ) -> Result<(), SumoError> {
-        Simulation::add_vehicle(self, id, route, type_id, lane, speed)
+    fn add_vehicle(&mut self, v: NewVehicle) -> Result<(), SumoError> {
+        Simulation::add_vehicle(self, v)
     }
     fn set_max_speed(&mut self, id: &str, speed: f64) -> Result<(), SumoError> {
         Simulation::set_max_speed(self, id, speed)

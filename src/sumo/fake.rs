@@ -9,7 +9,7 @@
 
 use std::collections::{HashMap, HashSet};
 
-use super::{Collision, RawVehicleState, SumoClient, SumoError, VehicleReadings};
+use super::{Collision, NewVehicle, RawVehicleState, SumoClient, SumoError, VehicleReadings};
 use crate::model::scene::Limits;
 
 /// A vehicle SUMO inserts, with what its type tells the loop about it.
@@ -370,17 +370,10 @@ impl SumoClient for FakeSumo {
         Ok(())
     }
     /// Recorded only: the script says when SUMO inserts it.
-    fn add_vehicle(
-        &mut self,
-        id: &str,
-        route: &str,
-        type_id: &str,
-        lane: i32,
-        speed: f64,
-    ) -> Result<(), SumoError> {
-        let (route, type_id) = (route.to_string(), type_id.to_string());
+    fn add_vehicle(&mut self, v: NewVehicle) -> Result<(), SumoError> {
+        let (route, type_id) = (v.route.into(), v.type_id.into());
         self.sent
-            .push(Sent::Add(id.into(), route, type_id, lane, speed));
+            .push(Sent::Add(v.id.into(), route, type_id, v.lane, v.speed));
         Ok(())
     }
     fn set_max_speed(&mut self, id: &str, speed: f64) -> Result<(), SumoError> {

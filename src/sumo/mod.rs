@@ -22,6 +22,7 @@ mod error;
 #[cfg(test)]
 pub(crate) mod fake;
 mod ffi;
+mod new_vehicle;
 mod quiet;
 mod sumocfg_refusals;
 mod vehicle;
@@ -35,6 +36,7 @@ use std::thread::{self, ThreadId};
 pub use client::SumoClient;
 pub use error::SumoError;
 pub use ffi::RawVehicleState;
+pub use new_vehicle::NewVehicle;
 pub use quiet::StderrCapture;
 
 /// Turns a shim status code into a `Result`, attaching SUMO's message.
@@ -382,20 +384,13 @@ impl Simulation {
         })
     }
 
-    /// Adds a vehicle departing now from the start of `route`, on lane `lane` of its first edge,
-    /// at `speed`; SUMO inserts it in the coming step if there is room, else retries.
-    pub fn add_vehicle(
-        &mut self,
-        id: &str,
-        route: &str,
-        type_id: &str,
-        lane: i32,
-        speed: f64,
-    ) -> Result<(), SumoError> {
-        let (cid, croute, ctype) = (c_string(id)?, c_string(route)?, c_string(type_id)?);
+    /// Adds `v`, departing now from the start of its route on its lane at its speed; SUMO
+    /// inserts it in the coming step if there is room, else retries.
+    pub fn add_vehicle(&mut self, v: NewVehicle) -> Result<(), SumoError> {
+        let (id, route, ty) = (c_string(v.id)?, c_string(v.route)?, c_string(v.type_id)?);
         // SAFETY: valid C strings.
         decode("vehicle.add", unsafe {
-            ffi::bk_vehicle_add(cid.as_ptr(), croute.as_ptr(), ctype.as_ptr(), lane, speed)
+            ffi::bk_vehicle_add(id.as_ptr(), route.as_ptr(), ty.as_ptr(), v.lane, v.speed)
         })
     }
 

@@ -8,7 +8,7 @@
 use std::collections::{BTreeMap, HashMap};
 
 use crate::config::Config;
-use crate::episode::lockstep::{Lockstep, Traffic};
+use crate::episode::lockstep::{Lockstep, TrafficSource};
 use crate::episode::metrics::{CollisionEvent, Outcome};
 use crate::episode::planning::Planning;
 use crate::episode::region::Region;
@@ -162,7 +162,7 @@ impl ScenarioRun {
     }
 }
 
-impl Traffic for ScenarioTraffic {
+impl TrafficSource for ScenarioTraffic {
     /// Each vehicle SUMO inserted gets its CAV draw and its line; the vehicles SUMO holds back
     /// are noted.
     fn book_departures(
