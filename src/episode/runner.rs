@@ -23,6 +23,7 @@ use crate::episode::metrics::{CollisionEvent, Outcome, SummaryInput, Timing, Veh
 use crate::episode::observer::{NoObserver, Observer};
 use crate::episode::planning::Planning;
 use crate::episode::region::Region;
+use crate::episode::round::Round;
 use crate::episode::summary::Summary;
 use crate::episode::trajectories::{TrajectoryFile, TrajectoryRow};
 use crate::model::road::Road;
@@ -62,12 +63,15 @@ pub struct EpisodeResult {
 }
 
 /// Who drives the CAVs: a planner by name, built by [`controller::by_name`] once SUMO has given
-/// the road, or a controller the caller built (staged scenes, probes in tests).
+/// the road, a controller the caller built (staged scenes, probes in tests, training rollouts),
+/// or a round deciding from outside (the stepped RL environment).
 pub enum Driver<'a> {
     /// The planner of this name (one of [`controller::PLANNERS`]).
     Named(&'a str),
     /// This controller, which the caller keeps.
     Given(&'a mut dyn Controller),
+    /// This round, as on a user's scenario; the name is the planner column of the rows.
+    Round(&'a str, Box<dyn Round>),
 }
 
 /// Runs one episode of the planner `planner` with the demand drawn from the config's (λ, α, seed).
@@ -123,14 +127,17 @@ pub fn run_observed(
                     .unwrap_or_else(|| "(embedded)".into()),
                 cause,
             })?;
-        let controller: Box<dyn Controller + '_> = match driver {
-            Driver::Named(name) => controller::by_name(name, config, &road)?,
-            Driver::Given(c) => Box::new(c),
+        let (name, planners) = match driver {
+            Driver::Named(name) => {
+                let c = controller::by_name(name, config, &road)?;
+                (c.name(), Planners::Own(c))
+            }
+            Driver::Given(c) => (c.name(), Planners::Own(Box::new(c))),
+            Driver::Round(name, round) => (name, Planners::Round(round)),
         };
-        let mut episode = demand_episode(config, planned, road, controller, Box::new(observer));
+        let mut episode = demand_episode(config, planned, road, planners, Box::new(observer));
         episode.run(sim, config)?;
-        let result = finish(episode);
-        Ok(result)
+        Ok(finish(episode, name))
     })();
     let sumo_log = capture.map(StderrCapture::finish).unwrap_or_default();
     let mut result = outcome.map_err(|e| e.with_sumo_log(sumo_log.clone()))?;
@@ -139,18 +146,28 @@ pub fn run_observed(
     Ok(result)
 }
 
-/// The episode of `planned` on the merge of `road`, `controller` driving its CAVs and
-/// `observer` watching.
+/// Who plans the merge's CAVs: its own controller, or a round from outside.
+enum Planners<'a> {
+    Own(Box<dyn Controller + 'a>),
+    Round(Box<dyn Round>),
+}
+
+/// The episode of `planned` on the merge of `road`, `planners` driving its CAVs and `observer`
+/// watching.
 fn demand_episode<'a>(
     config: &'a Config,
     planned: &'a [PlannedVehicle],
     road: Road,
-    controller: Box<dyn Controller + 'a>,
+    planners: Planners<'a>,
     observer: Box<dyn Observer + 'a>,
 ) -> Lockstep<'a, Demand<'a>> {
     let demand = Demand::new(config, planned, &road);
-    let region = Region::new(config.clone(), road, Some(controller));
-    let planning = Planning::new(vec![region], observer, None, config.scenario.steps);
+    let (controller, round) = match planners {
+        Planners::Own(c) => (Some(c), None),
+        Planners::Round(r) => (None, Some(r)),
+    };
+    let region = Region::new(config.clone(), road, controller);
+    let planning = Planning::new(vec![region], observer, round, config.scenario.steps);
     Lockstep::new(demand, planning)
 }
 
@@ -376,8 +393,8 @@ fn trajectory_row(
     TrajectoryRow::of_reading(road, identity, raw, state)
 }
 
-/// What the episode of `demand` produced, once SUMO has closed.
-fn finish(episode: Lockstep<'_, Demand<'_>>) -> EpisodeResult {
+/// What the episode of `demand` produced, once SUMO has closed; `planner` names it.
+fn finish(episode: Lockstep<'_, Demand<'_>>, planner: &str) -> EpisodeResult {
     let Lockstep {
         traffic,
         mut planning,
@@ -387,7 +404,6 @@ fn finish(episode: Lockstep<'_, Demand<'_>>) -> EpisodeResult {
     let region = &planning.regions[0];
     // The time of the last state: a vehicle still in the network was last seen then.
     let end = region.scene.scene.time;
-    let planner = region.controller.as_ref().map_or("", |c| c.name());
     let books = traffic.ledger.close(end);
     let summary = Summary::compute(&SummaryInput {
         planner,

@@ -39,7 +39,8 @@ fn run_script(planned: &[PlannedVehicle], script: Vec<Step>) -> (FakeSumo, Episo
     let steps = script.len();
     let mut sim = FakeSumo::new(config.scenario.dt, script);
     sim.set_edge_codes(&frame::edge_names(&road)).unwrap();
-    let mut episode = demand_episode(&config, planned, road, controller, Box::new(NoObserver));
+    let planners = Planners::Own(controller);
+    let mut episode = demand_episode(&config, planned, road, planners, Box::new(NoObserver));
     for k in 0..steps {
         let now = sim.time().unwrap();
         let regions = &episode.planning.regions;
@@ -48,7 +49,7 @@ fn run_script(planned: &[PlannedVehicle], script: Vec<Step>) -> (FakeSumo, Episo
         episode.after_step(&mut sim, now, k + 1 < steps).unwrap();
     }
     episode.planning.close_timing(0.0, steps as u32);
-    let result = finish(episode);
+    let result = finish(episode, "idm-mobil");
     (sim, result)
 }
 

@@ -17,7 +17,7 @@
 
 use std::collections::{HashMap, HashSet};
 use std::sync::mpsc::{self, Receiver, Sender, SyncSender};
-use std::sync::{Arc, Mutex};
+use std::sync::Arc;
 use std::thread::JoinHandle;
 
 mod remote;
@@ -26,11 +26,11 @@ use super::reward::RewardSettings;
 use crate::config::Config;
 use crate::episode::demand::PlannedVehicle;
 use crate::episode::sumocfg::{self, Fleet};
-use crate::episode::{self, Driver, EpisodeError, Observer, Ran};
+use crate::episode::{self, Driver, EpisodeError, NoObserver, Ran};
 use crate::model::scene::{Kind, Scene};
 use crate::planner::primitives::Primitive;
 use crate::policy::actions::{Mask, IDLE};
-use remote::{MergeRemote, Remote};
+use remote::Remote;
 
 /// Which vehicles are agents.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -361,14 +361,9 @@ fn episode_thread(
     events: Sender<Event>,
     actions: Receiver<Vec<usize>>,
 ) {
-    let crashed = Arc::new(Mutex::new(Vec::new()));
-    let mut ctl = MergeRemote {
-        remote: Remote::new(events.clone(), actions),
-        config: config.clone(),
-        crashed: crashed.clone(),
-    };
-    let mut observer = CrashLog(crashed);
-    let result = episode::run_observed(&config, Driver::Given(&mut ctl), &demand, &mut observer);
+    let round = Box::new(Remote::new(events.clone(), actions));
+    let driver = Driver::Round("rl-env", round);
+    let result = episode::run_observed(&config, driver, &demand, &mut NoObserver);
     let _ = events.send(Event::Finished(Box::new(
         result.map(|r| Ran::Demand(Box::new(r))),
     )));
@@ -391,18 +386,4 @@ fn scenario_thread(
     let _ = events.send(Event::Finished(Box::new(
         result.map(|r| Ran::Scenario(Box::new(r))),
     )));
-}
-
-/// Records the vehicles removed in collisions, for the controller to report.
-struct CrashLog(Arc<Mutex<Vec<Arc<str>>>>);
-
-impl Observer for CrashLog {
-    fn observe(&mut self, _scene: &Scene) {}
-
-    fn removed_in_collision(&mut self, id: &str) {
-        self.0
-            .lock()
-            .unwrap_or_else(|e| e.into_inner())
-            .push(Arc::from(id));
-    }
 }

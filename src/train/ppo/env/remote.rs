@@ -2,18 +2,18 @@
 //! every region becomes an agent; their observations go to the caller, the actions come back,
 //! and each region's executor turns them into the commands SUMO executes.
 //!
-//! On the paper's merge the round is one scene ([`MergeRemote`], a controller of the episode
-//! loop); on a user's scenario it is every merge region's scene at once ([`Remote`] as the
-//! scenario loop's [`Round`]), so that one decision covers every agent, wherever it drives.
+//! [`Remote`] is the episode loop's [`Round`]: on the paper's merge its one region's scene, on
+//! a user's scenario every merge region's scene at once, so that one decision covers every
+//! agent, wherever it drives.
 
 use std::sync::mpsc::{Receiver, Sender};
-use std::sync::{Arc, Mutex};
+use std::sync::Arc;
 
 use super::{Agent, Decision, Event};
 use crate::config::Config;
 use crate::controller::rl_ppo::{merge_progress, Executor};
-use crate::controller::{CavHandling, Command, Controller};
-use crate::episode::sumocfg::Round;
+use crate::controller::Command;
+use crate::episode::round::Round;
 use crate::model::scene::Scene;
 use crate::policy::actions::IDLE;
 use crate::policy::observation::{observe, OBS_DIM};
@@ -110,36 +110,5 @@ fn agent(executor: &Executor, scene: &Scene, i: usize) -> Agent {
         forced,
         speed: v.speed,
         merge_progress: merge_progress(scene, i),
-    }
-}
-
-/// The paper merge's controller: one round per step over its one scene.
-pub(super) struct MergeRemote {
-    pub(super) remote: Remote,
-    pub(super) config: Config,
-    /// The vehicles removed in collisions since the last round, from the episode's observer.
-    pub(super) crashed: Arc<Mutex<Vec<Arc<str>>>>,
-}
-
-impl Controller for MergeRemote {
-    fn name(&self) -> &'static str {
-        "rl-env"
-    }
-
-    fn handling(&self) -> CavHandling {
-        CavHandling::Commanded
-    }
-
-    fn plan(&mut self, scene: &Scene, out: &mut Vec<Command>) {
-        let crashed = std::mem::take(&mut *self.crashed.lock().unwrap_or_else(|e| e.into_inner()));
-        let regions = [(&self.config, scene)];
-        self.remote
-            .decide(&regions, crashed, std::slice::from_mut(out));
-    }
-
-    fn lane_change_cancelled(&mut self, id: &str) {
-        if let Some(e) = self.remote.executors.first_mut() {
-            e.lane_changes.cancel(id);
-        }
     }
 }
