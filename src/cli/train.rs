@@ -46,8 +46,12 @@ pub struct CollectArgs {
     #[arg(long, value_name = "NAME")]
     hdv_profile: Option<String>,
     /// SUMO network of the episodes (overrides the config's scenario.net_file).
-    #[arg(long, value_name = "FILE")]
+    #[arg(long, value_name = "FILE", conflicts_with = "sumocfg")]
     net: Option<PathBuf>,
+    /// A SUMO configuration of your own (.sumocfg): its routes are the episodes' demand (no
+    /// --lambdas) and each merge region's scenes give samples.
+    #[arg(long, value_name = "FILE", conflicts_with = "lambdas")]
+    sumocfg: Option<PathBuf>,
 }
 
 /// A checked collection: the base configuration, the episodes' plan and the data file.
@@ -60,7 +64,7 @@ pub struct Collect {
 impl CollectArgs {
     /// Loads the base configuration and fills the plan's unset flags with the library defaults.
     pub fn resolve(self) -> Result<Collect> {
-        let (profile, net) = (self.hdv_profile, self.net);
+        let (profile, net, sumocfg) = (self.hdv_profile, self.net, self.sumocfg);
         let base = load_config(self.config.as_deref(), |c| {
             if let Some(p) = profile {
                 c.hdv.profile = p;
@@ -68,7 +72,12 @@ impl CollectArgs {
             if net.is_some() {
                 c.scenario.net_file = net;
             }
+            if sumocfg.is_some() {
+                c.scenario.sumocfg = sumocfg;
+            }
         })?;
+        // A scenario's routes are its demand: no λ.
+        let own_demand = base.scenario.sumocfg.is_some();
         bkpbs::sumo::frame::scenario_road(&base.scenario)?;
         let d = CollectPlan::default();
         let plan = CollectPlan {
@@ -76,7 +85,10 @@ impl CollectArgs {
             seed_base: self.seed_base.unwrap_or(d.seed_base),
             planners: self.planners.unwrap_or(d.planners),
             alphas: self.alphas.unwrap_or(d.alphas),
-            lambdas: self.lambdas.unwrap_or(d.lambdas),
+            lambdas: match own_demand {
+                true => Vec::new(),
+                false => self.lambdas.unwrap_or(d.lambdas),
+            },
             steps: self.steps.unwrap_or(d.steps),
             main_negative_keep: self.main_negative_keep.unwrap_or(d.main_negative_keep),
         };

@@ -14,6 +14,13 @@ pub trait Observer {
     /// Sees the scene of one step, as the controller is about to plan on it.
     fn observe(&mut self, scene: &Scene);
 
+    /// Sees the scene of merge region `region` (numbered from 0 in the episode's order) in one
+    /// step: on a user's scenario each region's scene in turn, on the paper's merge its one.
+    /// By default the same as [`Observer::observe`].
+    fn observe_region(&mut self, _region: usize, scene: &Scene) {
+        self.observe(scene);
+    }
+
     /// Sees what the controller decided in the step whose scene was just observed, and what it
     /// believed (when tracing; see [`Controller::set_tracing`]).
     fn planned(&mut self, _scene: &Scene, _commands: &[Command], _controller: &dyn Controller) {}
@@ -32,6 +39,9 @@ pub trait Observer {
 impl<O: Observer + ?Sized> Observer for &mut O {
     fn observe(&mut self, scene: &Scene) {
         (**self).observe(scene);
+    }
+    fn observe_region(&mut self, region: usize, scene: &Scene) {
+        (**self).observe_region(region, scene);
     }
     fn planned(&mut self, scene: &Scene, commands: &[Command], controller: &dyn Controller) {
         (**self).planned(scene, commands, controller);

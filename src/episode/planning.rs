@@ -77,6 +77,16 @@ impl<'a> Planning<'a> {
         }
     }
 
+    /// Shows every region's scenes to `observer` from now on, in place of the one given.
+    pub fn observe_with(&mut self, observer: Box<dyn Observer + 'a>) {
+        for r in &mut self.regions {
+            if let Some(c) = &mut r.controller {
+                c.set_tracing(r.trace.is_some() || observer.wants_beliefs());
+            }
+        }
+        self.observer = observer;
+    }
+
     /// The names of every region's edges, in the order of their codes in the readings.
     pub fn edge_names(&self) -> Vec<String> {
         self.regions
@@ -107,11 +117,11 @@ impl<'a> Planning<'a> {
     /// The step's scenes are built: counted, and shown to the observer.
     pub(crate) fn scenes_built(&mut self) {
         self.occupancy.0 += 1;
-        for r in &self.regions {
+        for (k, r) in self.regions.iter().enumerate() {
             let vehicles = &r.scene.scene.vehicles;
             self.occupancy.1 += vehicles.len() as u64;
             self.occupancy.2 += vehicles.iter().filter(|v| v.kind == Kind::Cav).count() as u64;
-            self.observer.observe(&r.scene.scene);
+            self.observer.observe_region(k, &r.scene.scene);
         }
     }
 

@@ -336,8 +336,8 @@ pub struct EpisodeSpec {
     pub planner: String,
     /// CAV penetration α.
     pub alpha: f64,
-    /// Total arrival rate λ (veh/h).
-    pub lambda: f64,
+    /// Total arrival rate λ (veh/h); none on a user's scenario, whose routes are its demand.
+    pub lambda: Option<f64>,
 }
 
 impl CollectPlan {
@@ -350,7 +350,7 @@ impl CollectPlan {
             seed: self.seed_base + e as u64,
             planner: self.planners[e % p].clone(),
             alpha: self.alphas[(e / p) % a],
-            lambda: self.lambdas[(e / (p * a)) % l],
+            lambda: self.lambdas.get((e / (p * a)) % l).copied(),
         }
     }
 }
@@ -366,7 +366,8 @@ pub enum CollectError {
     Planner(#[from] controller::UnknownPlanner),
     /// An episode of the plan failed to run.
     #[error(
-        "episode {episode} ({planner}, α = {alpha}, λ = {lambda}, seed {seed}) failed: {cause}"
+        "episode {episode} ({planner}, α = {alpha}{}, seed {seed}) failed: {cause}",
+        lambda.map(|l| format!(", λ = {l}")).unwrap_or_default()
     )]
     Episode {
         /// Episode number within the plan.
@@ -375,8 +376,8 @@ pub enum CollectError {
         planner: String,
         /// Its CAV penetration α.
         alpha: f64,
-        /// Its arrival rate λ (veh/h).
-        lambda: f64,
+        /// Its arrival rate λ (veh/h), on the paper's demand.
+        lambda: Option<f64>,
         /// Its seed.
         seed: u64,
         /// What went wrong.
@@ -412,7 +413,7 @@ pub fn collect(
     plan: &CollectPlan,
     mut progress: impl FnMut(usize, &CollectStats),
 ) -> Result<Dataset, CollectError> {
-    check_plan(plan)?;
+    check_plan(plan, base.scenario.sumocfg.is_some())?;
     let seeds = super::provenance::seed_range(plan.seed_base, plan.episodes as u64);
     let trained_on = super::provenance::of_episodes(base, seeds, plan.episodes as u64)?;
     let mut samples = Vec::new();
@@ -437,13 +438,24 @@ pub fn collect(
     })
 }
 
-/// A plan that names at least one planner, α and λ, known planners only, and a negative
-/// sampling share in (0, 1].
-fn check_plan(plan: &CollectPlan) -> Result<(), CollectError> {
-    if plan.planners.is_empty() || plan.alphas.is_empty() || plan.lambdas.is_empty() {
+/// A plan that names at least one planner, α and λ (no λ on a user's scenario, `scenario`),
+/// known planners only, and a negative sampling share in (0, 1].
+fn check_plan(plan: &CollectPlan, scenario: bool) -> Result<(), CollectError> {
+    if plan.planners.is_empty() || plan.alphas.is_empty() {
         return Err(CollectError::Plan(
-            "planners, alphas and lambdas need at least one value each".into(),
+            "planners and alphas need at least one value each".into(),
         ));
+    }
+    match (scenario, plan.lambdas.is_empty()) {
+        (false, true) => {
+            return Err(CollectError::Plan("lambdas need at least one value".into()));
+        }
+        (true, false) => {
+            return Err(CollectError::Plan(
+                "lambdas do not apply to a scenario of your own (its routes are its demand)".into(),
+            ));
+        }
+        _ => {}
     }
     if !(plan.main_negative_keep > 0.0 && plan.main_negative_keep <= 1.0) {
         return Err(CollectError::Plan(format!(
@@ -458,12 +470,16 @@ fn check_plan(plan: &CollectPlan) -> Result<(), CollectError> {
 }
 
 /// Episode `e` of the plan, run with the constant-speed predictor (so the data never depends
-/// on a learned model) and recorded.
+/// on a learned model) and recorded: on the paper's demand its one merge, on a user's scenario
+/// (`scenario.sumocfg`, whose routes are the demand: the plan's λ does not apply) each merge
+/// region's scenes apart, the regions' samples in region order.
 fn collect_episode(base: &Config, plan: &CollectPlan, e: usize) -> Result<Recorder, CollectError> {
     let spec = plan.episode(e);
     let mut config = base.clone();
     config.scenario.alpha = spec.alpha;
-    config.scenario.lambda = spec.lambda;
+    if let Some(lambda) = spec.lambda {
+        config.scenario.lambda = lambda;
+    }
     config.scenario.seed = spec.seed;
     config.scenario.steps = plan.steps;
     config.predictor.kind = PredictorKind::Constant;
@@ -476,19 +492,125 @@ fn collect_episode(base: &Config, plan: &CollectPlan, e: usize) -> Result<Record
         cause: Box::new(cause),
     };
     config.validate().map_err(|c| fail(c.into()))?;
-    let demand = crate::episode::demand::generate_for(&config).map_err(fail)?;
-    let mut rec = Recorder::new(
-        e as u32,
-        spec.seed,
-        config.scenario.dt,
-        plan.main_negative_keep,
-    );
-    episode::run_observed(&config, Driver::Named(&spec.planner), &demand, &mut rec)
+    let mut recorders = RegionRecorders {
+        new: |region: usize| {
+            // Each region thins on a stream of its own.
+            let seed = spec.seed.wrapping_add((region as u64) << 32);
+            Recorder::new(e as u32, seed, config.scenario.dt, plan.main_negative_keep)
+        },
+        regions: Vec::new(),
+    };
+    if config.scenario.sumocfg.is_some() {
+        episode::sumocfg::run_observed(&config, &spec.planner, &mut recorders).map_err(fail)?;
+    } else {
+        let demand = crate::episode::demand::generate_for(&config).map_err(fail)?;
+        episode::run_observed(
+            &config,
+            Driver::Named(&spec.planner),
+            &demand,
+            &mut recorders,
+        )
         .map_err(fail)?;
-    Ok(rec)
+    }
+    Ok(recorders.into_one())
+}
+
+/// One [`Recorder`] per merge region, made by `new` as its region is first seen.
+struct RegionRecorders<F> {
+    new: F,
+    regions: Vec<Recorder>,
+}
+
+impl<F: Fn(usize) -> Recorder> Observer for RegionRecorders<F> {
+    fn observe(&mut self, scene: &Scene) {
+        self.observe_region(0, scene);
+    }
+
+    fn observe_region(&mut self, region: usize, scene: &Scene) {
+        while self.regions.len() <= region {
+            let next = (self.new)(self.regions.len());
+            self.regions.push(next);
+        }
+        self.regions[region].observe(scene);
+    }
+}
+
+impl<F: Fn(usize) -> Recorder> RegionRecorders<F> {
+    /// Every region's samples, in region order, and their counts together.
+    fn into_one(self) -> Recorder {
+        let mut regions = self.regions.into_iter();
+        let mut one = regions.next().unwrap_or_else(|| (self.new)(0));
+        for mut r in regions {
+            one.samples.append(&mut r.samples);
+            one.stats += r.stats;
+        }
+        one
+    }
 }
 
 /// The collection metadata of a data file, if it has any.
 pub fn meta_of(data: &Dataset) -> Option<CollectMeta> {
     serde_json::from_str(&data.meta).ok()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::scene::Origin;
+
+    /// A scene holding one HDV called `id`.
+    fn scene_of(id: &str, time: f64) -> Scene {
+        let v = VehicleState::on_lane(id, Kind::Hdv, Origin::Main, 100.0, 1, 30.0);
+        Scene::on_paper_road(time, vec![v])
+    }
+
+    #[test]
+    fn each_region_is_recorded_apart_and_the_regions_samples_come_in_region_order() {
+        let mut recorders = RegionRecorders {
+            new: |region: usize| Recorder::new(7, 100 + region as u64, 0.2, 1.0),
+            regions: Vec::new(),
+        };
+        for k in 0..3 {
+            let t = f64::from(k) * 0.2;
+            recorders.observe_region(0, &scene_of("a", t));
+            recorders.observe_region(1, &scene_of("b", t));
+        }
+        assert_eq!(recorders.regions.len(), 2);
+        for (r, id) in recorders.regions.iter().zip(["a", "b"]) {
+            assert_eq!(r.step, 3, "each region's recorder saw its own three scenes");
+            let ids: Vec<&str> = (r.buffer.iter())
+                .flat_map(|b| b.scene.vehicles.iter().map(|v| &*v.id))
+                .collect();
+            assert!(ids.iter().all(|i| *i == id), "region of {id} saw {ids:?}");
+        }
+        recorders.regions[0].samples.push(Sample {
+            episode: 7,
+            step: 0,
+            subset: Subset::Main,
+            label: false,
+            weight: 1.0,
+            obs: Default::default(),
+        });
+        let mut second = recorders.regions[0].samples[0].clone();
+        second.step = 1;
+        recorders.regions[1].samples.push(second);
+        let one = recorders.into_one();
+        let steps: Vec<u32> = one.samples.iter().map(|s| s.step).collect();
+        assert_eq!(steps, [0, 1]);
+    }
+
+    #[test]
+    fn a_plan_on_a_scenario_of_your_own_has_no_lambda_and_one_on_the_paper_demand_has_one() {
+        let plan = CollectPlan::default();
+        assert!(check_plan(&plan, false).is_ok());
+        let refused = check_plan(&plan, true).unwrap_err().to_string();
+        assert!(refused.contains("lambdas do not apply"), "{refused}");
+        let own = CollectPlan {
+            lambdas: Vec::new(),
+            ..plan
+        };
+        assert!(check_plan(&own, true).is_ok());
+        assert_eq!(own.episode(5).lambda, None);
+        assert!(check_plan(&own, false).is_err());
+    }
 }

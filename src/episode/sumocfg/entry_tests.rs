@@ -48,7 +48,7 @@ fn two_ramps() -> Road {
 }
 
 /// The loop over one region of `road`, SUMO's drivers driving everybody (α 0).
-fn run_on(road: Road) -> ScenarioRun {
+fn run_on(road: Road) -> ScenarioRun<'static> {
     let c = config(0.0, 7);
     ScenarioRun::of_regions(&c, regions(&c, vec![road], "sumo").unwrap())
 }

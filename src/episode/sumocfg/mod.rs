@@ -218,10 +218,25 @@ fn check_cav_types(
 /// An unreadable configuration, a step length other than the planners', a network without a
 /// region to plan, an unknown planner, or SUMO failing.
 pub fn run(config: &Config, planner: &str) -> Result<ScenarioResult, EpisodeError> {
+    run_observed(config, planner, &mut crate::episode::NoObserver)
+}
+
+/// Runs the scenario as [`run`] does, showing each merge region's scene of every step to
+/// `observer` ([`Observer::observe_region`](crate::episode::Observer::observe_region)).
+///
+/// # Errors
+/// As [`run`]'s.
+pub fn run_observed(
+    config: &Config,
+    planner: &str,
+    observer: &mut dyn crate::episode::Observer,
+) -> Result<ScenarioResult, EpisodeError> {
     run_planned(config, planner, |roads| {
-        Ok(run::ScenarioRun::of_regions(
+        let regions = regions(config, roads, planner)?;
+        Ok(run::ScenarioRun::observed(
             config,
-            regions(config, roads, planner)?,
+            regions,
+            Box::new(observer),
         ))
     })
 }
@@ -250,10 +265,10 @@ pub fn run_together(
 
 /// The episode of `config`, its loop made by `make` from the regions' roads; `planner` names
 /// it in the rows.
-fn run_planned(
+fn run_planned<'a>(
     config: &Config,
     planner: &str,
-    make: impl FnOnce(Vec<Road>) -> Result<run::ScenarioRun, EpisodeError>,
+    make: impl FnOnce(Vec<Road>) -> Result<run::ScenarioRun<'a>, EpisodeError>,
 ) -> Result<ScenarioResult, EpisodeError> {
     config.validate()?;
     let (path, cfg) = checked(config)?;

@@ -19,7 +19,7 @@ use super::{sumo_options, SumoOptions};
 
 /// The episode's state between the caller's steps.
 pub struct OwnLoop {
-    run: ScenarioRun,
+    run: ScenarioRun<'static>,
     planner: String,
     config: Config,
     /// The user's SUMO configuration.

@@ -13,7 +13,7 @@ use crate::episode::metrics::{CollisionEvent, Outcome};
 use crate::episode::planning::Planning;
 use crate::episode::region::Region;
 use crate::episode::round::Round;
-use crate::episode::NoObserver;
+use crate::episode::{NoObserver, Observer};
 use crate::model::road::MERGE_LANE;
 use crate::model::scene::{Kind, Limits, Origin, VehicleState};
 use crate::sumo::frame;
@@ -67,19 +67,31 @@ pub struct ScenarioTraffic {
 }
 
 /// An episode on a user's scenario: its traffic in lock-step with its regions' planning.
-pub type ScenarioRun = Lockstep<'static, ScenarioTraffic>;
+pub type ScenarioRun<'a> = Lockstep<'a, ScenarioTraffic>;
 
-impl ScenarioRun {
+impl<'a> ScenarioRun<'a> {
     /// The episode of `config`'s scenario with `regions`, each planned by its own planner.
-    pub fn of_regions(config: &Config, regions: Vec<Region<'static>>) -> Self {
+    pub fn of_regions(config: &Config, regions: Vec<Region<'a>>) -> Self {
         Self::with_round(config, regions, None, Fleet::Drawn)
+    }
+
+    /// The episode with each region planned by its own planner, every region's scene shown to
+    /// `observer` each step.
+    pub fn observed(
+        config: &Config,
+        regions: Vec<Region<'a>>,
+        observer: Box<dyn Observer + 'a>,
+    ) -> Self {
+        let mut run = Self::of_regions(config, regions);
+        run.planning.observe_with(observer);
+        run
     }
 
     /// The episode with `round` planning every region (theirs without planners) and `fleet`
     /// deciding the CAVs.
     pub fn planned_together(
         config: &Config,
-        regions: Vec<Region<'static>>,
+        regions: Vec<Region<'a>>,
         round: Box<dyn Round>,
         fleet: Fleet,
     ) -> Self {
@@ -88,7 +100,7 @@ impl ScenarioRun {
 
     fn with_round(
         config: &Config,
-        regions: Vec<Region<'static>>,
+        regions: Vec<Region<'a>>,
         round: Option<Box<dyn Round>>,
         fleet: Fleet,
     ) -> Self {

@@ -36,7 +36,7 @@ pub(super) fn config(alpha: f64, seed: u64) -> Config {
 }
 
 /// The loop over the paper merge's one region, planned by `planner`.
-pub(super) fn paper_run(config: &Config, planner: &str) -> ScenarioRun {
+pub(super) fn paper_run(config: &Config, planner: &str) -> ScenarioRun<'static> {
     let regions = regions(config, vec![Road::paper_default()], planner).unwrap();
     ScenarioRun::of_regions(config, regions)
 }
