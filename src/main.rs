@@ -90,7 +90,7 @@ fn run(command: Command) -> Result<()> {
         Command::Report(a) => cli::report::run(a),
         Command::Collect(a) => cli::train::collect(a.resolve()?),
         Command::Train(a) => cli::train::train(a.resolve()?),
-        Command::EvalPredictor(a) => cli::train::eval_predictor(a.resolve()),
+        Command::EvalPredictor(a) => cli::train::eval_predictor(a.resolve()?),
         Command::BenchPredictor(a) => cli::train::bench_predictor(a.resolve()?),
         Command::Calibrate(a) => cli::calibrate::run(a.resolve()?),
         Command::TrainRl(a) => {

@@ -1,7 +1,8 @@
 //! `bkpbs collect --sumocfg` on a SUMO scenario nobody here wrote (SUMO's `ramp` game): the
 //! episodes run the scenario's own routes, each merge region's scenes give samples, the data
 //! file says what it was collected on, the same command writes the same bytes, and a λ is
-//! refused (the scenario's routes are its demand).
+//! refused (the scenario's routes are its demand); `eval-predictor --sumocfg` evaluates on fresh
+//! episodes of it.
 
 use bkpbs::train::collect::meta_of;
 use bkpbs::train::dataset::Dataset;
@@ -85,4 +86,27 @@ fn a_lambda_with_a_scenario_of_your_own_is_one_error_line() {
         "{line}"
     );
     assert!(!out.exists());
+}
+
+#[test]
+fn eval_predictor_evaluates_on_fresh_episodes_of_a_scenario_of_your_own() {
+    let d = tempfile::tempdir().unwrap();
+    let cfg = game_copy(d.path()).join("ramp.sumocfg");
+    let o = bkpbs(&[
+        "eval-predictor",
+        "--sumocfg",
+        cfg.to_str().unwrap(),
+        "--episodes",
+        "1",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(
+        err.contains("evaluation data: 1 episodes from seed 90000"),
+        "{err}"
+    );
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(out.contains("ramp b_θ (GCN)"), "{out}");
+    let o = bkpbs(&["eval-predictor", "--sumocfg", "missing.sumocfg"]);
+    assert!(one_error_line(&o).contains("missing.sumocfg"));
 }

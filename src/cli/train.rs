@@ -190,10 +190,15 @@ pub struct EvalPredictorArgs {
     /// Seed of the draw of the 4000 + 4000 samples.
     #[arg(long, default_value_t = 1)]
     draw_seed: u64,
+    /// Fresh evaluation episodes on a SUMO configuration of your own (.sumocfg), its routes
+    /// their demand [default: the paper's merge and demand].
+    #[arg(long, value_name = "FILE", conflicts_with = "data")]
+    sumocfg: Option<PathBuf>,
 }
 
 /// An evaluation: which model on which data.
 pub struct Evaluation {
+    base: Config,
     model: Option<PathBuf>,
     unconditioned: bool,
     data: EvalData,
@@ -201,25 +206,36 @@ pub struct Evaluation {
 }
 
 impl EvalPredictorArgs {
-    /// Cannot fail: clap already refuses the flags that contradict each other.
-    pub fn resolve(self) -> Evaluation {
+    /// The evaluation's configuration (the paper's, or its scenario of your own, checked) and
+    /// data.
+    pub fn resolve(self) -> Result<Evaluation> {
+        let mut base = Config::default();
+        if let Some(cfg) = self.sumocfg {
+            base.scenario.sumocfg = Some(cfg);
+            bkpbs::sumo::frame::scenario_road(&base.scenario)?;
+        }
         let data = match self.data {
             Some(p) => EvalData::File(p),
-            None => EvalData::fresh(self.episodes, self.seed_base),
+            None => {
+                let own_demand = base.scenario.sumocfg.is_some();
+                EvalData::fresh(self.episodes, self.seed_base, own_demand)
+            }
         };
-        Evaluation {
+        Ok(Evaluation {
+            base,
             model: self.model,
             unconditioned: self.unconditioned,
             data,
             draw_seed: self.draw_seed,
-        }
+        })
     }
 }
 
-/// Evaluates the model on the paper's default scenario and prints the tables.
+/// Evaluates the model on the paper's default scenario (or the one given) and prints the
+/// tables.
 pub fn eval_predictor(e: Evaluation) -> Result<()> {
     let report = commands::run_eval(
-        &Config::default(),
+        &e.base,
         e.model.as_deref(),
         e.unconditioned,
         &e.data,

@@ -165,12 +165,19 @@ pub enum EvalData {
 }
 
 impl EvalData {
-    /// Fresh data: `episodes` episodes from `seed_base` (default [`EVAL_SEED_BASE`]).
-    pub fn fresh(episodes: usize, seed_base: Option<u64>) -> EvalData {
+    /// Fresh data: `episodes` episodes from `seed_base` (default [`EVAL_SEED_BASE`]); on a
+    /// scenario of the user's own (`own_demand`) without λ, its routes being its demand.
+    pub fn fresh(episodes: usize, seed_base: Option<u64>, own_demand: bool) -> EvalData {
+        let d = CollectPlan::default();
         EvalData::Collect(CollectPlan {
             episodes,
             seed_base: seed_base.unwrap_or(EVAL_SEED_BASE),
-            ..CollectPlan::default()
+            lambdas: if own_demand {
+                Vec::new()
+            } else {
+                d.lambdas.clone()
+            },
+            ..d
         })
     }
 }
