@@ -54,9 +54,7 @@ fn net_has_the_papers_geometry() {
     // only edge after it, has no lane in the frame lane it would continue.
     let acc = sim.lane_shape("acc_0").unwrap();
     assert!((acc.last().unwrap().0 - zone.end).abs() < 1e-6, "{acc:?}");
-    assert!(!road
-        .lanes_at(zone.end)
-        .contains(&bkpbs::model::road::MERGE_LANE));
+    assert!(!road.lane_exists(bkpbs::model::road::MERGE_LANE, zone.end));
     let out_lanes = sim.edge_lane_count("main_out").unwrap();
     assert_eq!(out_lanes, 2, "main_out carries only the two main lanes");
     sim.close().unwrap();

@@ -11,7 +11,7 @@ use crate::controller::{Command, Source};
 use crate::model::road::Road;
 use crate::model::scene::{Kind, Scene};
 use crate::model::trajectory::Trajectory;
-use crate::planner::lane_end::{held_up_at_lane_end, merge_order, standing_in_lane_1};
+use crate::planner::lane_end::{held_up_at_lane_end, merge_order, standing_in_target_lane};
 use crate::predict::{ConstantSpeed, Predictor};
 
 /// Decentralised M-A* planner.
@@ -62,7 +62,7 @@ impl RoundPlanner for EachAlone {
         let predictions = self.predictions(core, scene);
         let idm = &core.config.idm;
         let lane_end = merge_order(scene, idm.min_gap, idm.decel);
-        let waiting = |r: usize| standing_in_lane_1(scene, r, core.horizon(), core.dt());
+        let waiting = |r: usize| standing_in_target_lane(scene, r, core.horizon(), core.dt());
         let yielded_to: Vec<(usize, Trajectory)> = lane_end
             .iter()
             .map(|&(hi, lo)| (lo, hi))

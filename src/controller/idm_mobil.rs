@@ -6,7 +6,6 @@ use std::sync::Arc;
 
 use super::{idm, mobil, CavHandling, Command, Controller, LaneChange, Maneuver, Source};
 use crate::config::{Config, Idm, Mobil};
-use crate::model::road::MERGE_LANE;
 use crate::model::scene::{Kind, Scene};
 
 /// Slack of time comparisons on the step grid (s).
@@ -40,10 +39,13 @@ impl IdmMobil {
         if me.on_ramp || me.changing_lanes() {
             return None;
         }
-        if me.lane == MERGE_LANE {
+        let road = &scene.road;
+        if road.is_auxiliary(me.lane) {
             // The merge is mandatory: only its safety matters.
-            return mobil::merge_is_safe(&self.mobil, scene, i, me.lane + 1)
-                .then_some(LaneChange::Left);
+            let target = road.toward_main(me.lane);
+            return mobil::merge_is_safe(&self.mobil, scene, i, target)
+                .then(|| LaneChange::between(me.lane, target))
+                .flatten();
         }
         if let Some(t) = self.last_change.get(&me.id) {
             // Times lie on the step grid but are not exact in binary: compare with a margin
@@ -55,7 +57,7 @@ impl IdmMobil {
         let mut best: Option<(f64, LaneChange)> = None;
         for dir in [LaneChange::Left, LaneChange::Right] {
             let target = me.lane + dir.offset();
-            if target == MERGE_LANE {
+            if road.is_auxiliary(target) {
                 continue; // main-road vehicles never enter the acceleration lane
             }
             if let Some(g) = mobil::evaluate(&self.idm, &self.mobil, scene, i, target) {
@@ -83,10 +85,11 @@ impl Controller for IdmMobil {
                 continue;
             }
             let mut a = mobil::idm_in_lane(&self.idm, scene, i, v.lane);
-            if v.lane == MERGE_LANE && !v.on_ramp {
+            if scene.road.is_auxiliary(v.lane) && !v.on_ramp {
                 // Gap seeking: on the acceleration lane also follow the nearest vehicle ahead on
                 // the main road, so the CAV lines up behind a gap instead of racing past it.
-                if let Some(j) = mobil::leader_index(scene, v.lane + 1, v.s, i) {
+                let target = scene.road.toward_main(v.lane);
+                if let Some(j) = mobil::leader_index(scene, target, v.s, i) {
                     let l = &scene.vehicles[j];
                     let gap = l.rear() - v.front();
                     if gap > 0.0 {

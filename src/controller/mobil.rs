@@ -6,7 +6,6 @@
 
 use super::idm::{self, Leader};
 use crate::config::{Idm, Mobil};
-use crate::model::road::MERGE_LANE;
 use crate::model::scene::{Scene, VehicleState};
 
 /// Whether `v` takes up space in `lane`.
@@ -73,8 +72,8 @@ pub fn constraint_ahead(
     let from_vehicle = new_leader
         .or_else(|| leader_index(scene, lane, me.s, skip))
         .map(|j| gap_to(me, &scene.vehicles[j]));
-    let end = scene.road.zone_ahead(me.front()).end;
-    let lane_end = (lane == MERGE_LANE && me.front() < end).then(|| Leader {
+    let end = scene.road.lane_end(lane, me.front());
+    let lane_end = end.filter(|&end| me.front() < end).map(|end| Leader {
         gap: end - me.front() + me.speed * time_headway,
         speed: 0.0,
     });
@@ -121,7 +120,7 @@ pub fn merge_is_safe(mobil: &Mobil, scene: &Scene, i: usize, target: i32) -> boo
 /// exceeds the threshold.
 pub fn evaluate(idm_p: &Idm, mobil: &Mobil, scene: &Scene, i: usize, target: i32) -> Option<f64> {
     let me = &scene.vehicles[i];
-    if !scene.road.lanes_at(me.front()).contains(&target) {
+    if !scene.road.lane_exists(target, me.front()) {
         return None;
     }
     let new_leader = leader_index(scene, target, me.s, i);

@@ -41,6 +41,15 @@ impl LaneChange {
             LaneChange::Right => -1,
         }
     }
+
+    /// The move from lane `from` to the next lane `to`, if they are neighbours.
+    pub fn between(from: i32, to: i32) -> Option<LaneChange> {
+        match to - from {
+            1 => Some(LaneChange::Left),
+            -1 => Some(LaneChange::Right),
+            _ => None,
+        }
+    }
 }
 
 /// What one CAV does during the next step.

@@ -16,7 +16,7 @@ use rand_chacha::ChaCha8Rng;
 
 use super::{CavHandling, Command, Controller, LaneChange, Maneuver, Source};
 use crate::config::Config;
-use crate::model::road::MERGE_LANE;
+
 use crate::model::scene::Scene;
 use crate::planner::lane_changes::LaneChanges;
 use crate::planner::primitives::Primitive;
@@ -83,9 +83,9 @@ impl Record {
 /// has driven; elsewhere `None`. The reward's merge-deadline term reads it.
 pub fn merge_progress(scene: &Scene, i: usize) -> Option<f64> {
     let v = &scene.vehicles[i];
-    let merge = scene.road.zone_ahead(v.front());
+    let merge = scene.road.zone_for(v.lane, v.front());
     let zone = merge.end - merge.start;
-    (v.lane == MERGE_LANE && !v.on_ramp).then(|| (v.front() - merge.start) / zone)
+    (scene.road.is_auxiliary(v.lane) && !v.on_ramp).then(|| (v.front() - merge.start) / zone)
 }
 
 /// Turns a chosen primitive into the command SUMO executes, and keeps the lane changes under

@@ -435,6 +435,7 @@ mod tests {
     fn ramp_weights_split_the_ramp_demand() {
         let mut road = Road::paper_default();
         road.zones.push(crate::model::road::MergeZone {
+            lane: crate::model::road::MERGE_LANE,
             ramp_start: 600.0,
             start: 800.0,
             end: 1000.0,

@@ -17,7 +17,7 @@ use std::collections::VecDeque;
 
 use crate::config::Config;
 use crate::episode::demand::PlannedVehicle;
-use crate::model::road::{Road, MERGE_LANE};
+use crate::model::road::Road;
 use crate::model::scene::{Origin, Scene};
 
 /// A vehicle cleared to enter now.
@@ -67,7 +67,10 @@ impl EntryControl {
     /// Road-frame lane and front position of a vehicle just inserted by queue `queue`.
     fn entry_point(&self, road: &Road, queue: usize) -> (i32, f64) {
         match queue.checked_sub(self.main_lanes) {
-            Some(ramp) => (MERGE_LANE, road.zones[ramp].ramp_start + self.length),
+            Some(ramp) => (
+                road.zones[ramp].lane,
+                road.zones[ramp].ramp_start + self.length,
+            ),
             None => {
                 let first = road.edges[0].lanes[queue + road.first_through_lane()]
                     .as_ref()

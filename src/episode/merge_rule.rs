@@ -25,7 +25,6 @@ use rand_chacha::ChaCha8Rng;
 
 use crate::config::hdv::RampMergeStyle;
 use crate::config::Config;
-use crate::model::road::MERGE_LANE;
 use crate::model::scene::{Kind, Origin, Scene};
 
 /// Random stream of the merge decisions.
@@ -89,12 +88,13 @@ impl RampMergeRule {
         let road = &scene.road;
         let mut out = Vec::new();
         for (i, v) in scene.vehicles.iter().enumerate() {
-            if v.kind != Kind::Hdv || v.origin != Origin::Ramp || v.on_ramp || v.lane != MERGE_LANE
-            {
+            let Some(merge) = road.zone_on(v.lane, v.front()) else {
+                continue;
+            };
+            if v.kind != Kind::Hdv || v.origin != Origin::Ramp || v.on_ramp {
                 continue;
             }
             if !self.decided.contains(&v.id) {
-                let merge = road.zone_ahead(v.front());
                 let xi = (v.front() - merge.start) / (merge.end - merge.start);
                 let p = self.probability(xi);
                 if self.rng.gen::<f64>() < p {
@@ -104,7 +104,7 @@ impl RampMergeRule {
             if !self.decided.contains(&v.id) {
                 continue;
             }
-            if road.forces_merge(v.front(), v.speed) {
+            if road.forces_merge(v.lane, v.front(), v.speed) {
                 out.push(MergeRequest {
                     vehicle: i,
                     forced: true,
@@ -151,20 +151,17 @@ fn standard_normal(rng: &mut ChaCha8Rng) -> f64 {
 /// accepting a short gap behind a standing car drove into it.
 pub fn accepts(scene: &Scene, i: usize, critical_gap: f64, decel: f64) -> bool {
     let v = &scene.vehicles[i];
-    scene
-        .vehicles
-        .iter()
-        .filter(|u| u.lane == MERGE_LANE + 1)
-        .all(|u| {
-            if u.front() <= v.rear() {
-                v.rear() - u.front() >= critical_gap * u.speed.max(0.1)
-            } else if u.rear() >= v.front() {
-                let braking = (v.speed.powi(2) - u.speed.powi(2)).max(0.0) / (2.0 * decel);
-                u.rear() - v.front() >= 0.5 * critical_gap * v.speed.max(0.1) + braking
-            } else {
-                false
-            }
-        })
+    let target = scene.road.toward_main(v.lane);
+    scene.vehicles.iter().filter(|u| u.lane == target).all(|u| {
+        if u.front() <= v.rear() {
+            v.rear() - u.front() >= critical_gap * u.speed.max(0.1)
+        } else if u.rear() >= v.front() {
+            let braking = (v.speed.powi(2) - u.speed.powi(2)).max(0.0) / (2.0 * decel);
+            u.rear() - v.front() >= 0.5 * critical_gap * v.speed.max(0.1) + braking
+        } else {
+            false
+        }
+    })
 }
 
 #[cfg(test)]

@@ -375,7 +375,7 @@ impl TrafficSource for Demand<'_> {
 /// Vehicles standing on the acceleration lane: at the end, the stranded (a jam indicator).
 fn standing_on_acceleration_lane(scene: &crate::model::scene::Scene) -> usize {
     (scene.vehicles.iter())
-        .filter(|v| !v.on_ramp && v.lane == crate::model::road::MERGE_LANE && v.speed < 1.0)
+        .filter(|v| !v.on_ramp && scene.road.is_auxiliary(v.lane) && v.speed < 1.0)
         .count()
 }
 

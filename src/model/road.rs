@@ -3,8 +3,11 @@
 //! the network's layout in `crate::sumo::network`).
 //!
 //! Frame: `s` is the arc length along the main carriageway's reference line (SUMO's x on the
-//! straight paper network); lane 0 is the auxiliary lane on the right (a ramp, its acceleration
-//! lane, or a deceleration lane), lanes 1..=N the main carriageway's lanes from the right. On a
+//! straight paper network); lanes 1..=N are the main carriageway's lanes from the right, and
+//! each auxiliary lane (a ramp, its acceleration lane, or a deceleration lane) has a frame lane
+//! of its own outside them: 0, −1, … on the right, N+1, … on the left, each with the role its
+//! [`MergeZone`] gives it (where it begins and ends, and the lane its traffic must move to). On
+//! the paper's merge the one auxiliary lane is lane 0 ([`MERGE_LANE`]). On a
 //! ramp, `s` is measured backwards from where its acceleration lane begins, along the ramp, so
 //! route distances stay exact even though a ramp is curved. A curved carriageway is
 //! straightened: a vehicle that follows its lane keeps its lateral offset and heading 0.
@@ -13,7 +16,8 @@ use std::sync::Arc;
 
 use super::reference_line::ReferenceLine;
 
-/// Road-frame lane of the ramps, acceleration and deceleration lanes.
+/// Road-frame lane of the paper's ramp and acceleration lane, and of any auxiliary lane right
+/// beside the carriageway's rightmost lane.
 pub const MERGE_LANE: i32 = 0;
 /// The rightmost lane of the main carriageway.
 pub const FIRST_MAIN_LANE: i32 = 1;
@@ -91,10 +95,14 @@ pub struct EdgeFrame {
     pub on_ramp: bool,
 }
 
-/// An on-ramp's stretch of the merge lane: the ramp from `ramp_start` to `start`, then the
-/// acceleration lane to `end`, by which its vehicles must have merged.
+/// An auxiliary lane's role: an on-ramp's stretch of frame lane `lane`, the ramp from
+/// `ramp_start` to `start`, then the acceleration lane to `end`, by which its vehicles must
+/// have moved to the lane next to it towards the carriageway ([`MergeZone::target`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct MergeZone {
+    /// The frame lane it lies on: 0 or below right of the carriageway, above its lanes on the
+    /// left.
+    pub lane: i32,
     /// Frame `s` where the ramp begins (m): `start` less the ramp's length along it.
     pub ramp_start: f64,
     /// Frame `s` where the acceleration lane begins: vehicles may merge from here (m).
@@ -104,6 +112,22 @@ pub struct MergeZone {
     /// Whether the lane runs on at `end` into an off-ramp (a weaving section): main-road
     /// traffic then crosses the zone towards the exit, the other way from the ramp's.
     pub weaving: bool,
+}
+
+impl MergeZone {
+    /// The lane its traffic must move to: the next one towards the carriageway.
+    pub fn target(&self) -> i32 {
+        if self.lane <= MERGE_LANE {
+            self.lane + 1
+        } else {
+            self.lane - 1
+        }
+    }
+
+    /// Whether `s` lies on it, from where its ramp begins to the lane's end.
+    pub fn holds(&self, s: f64) -> bool {
+        (self.ramp_start..self.end).contains(&s)
+    }
 }
 
 /// Where vehicles enter the section: the main carriageway's source (entry 0), then each on-ramp
@@ -186,6 +210,59 @@ impl Road {
             .unwrap_or_else(|| self.zones.last().expect("a road has a merge zone"))
     }
 
+    /// The zone of auxiliary lane `lane` a vehicle on it at `s` deals with: the first on that
+    /// lane whose end lies at or ahead of `s`, or its last; `None` on a lane with no zone.
+    pub fn zone_on(&self, lane: i32, s: f64) -> Option<&MergeZone> {
+        let mut on = self.zones.iter().filter(|z| z.lane == lane);
+        let last = on.clone().next_back();
+        on.find(|z| z.end >= s).or(last)
+    }
+
+    /// The zone whose traffic moves into `lane` that a vehicle there at `s` deals with (the
+    /// first ahead, or the last), `None` if no auxiliary lane merges into it.
+    pub fn zone_into(&self, lane: i32, s: f64) -> Option<&MergeZone> {
+        let mut into = self.zones.iter().filter(|z| z.target() == lane);
+        let last = into.clone().next_back();
+        into.find(|z| z.end >= s).or(last)
+    }
+
+    /// The zone a vehicle on `lane` at `s` deals with: its own lane's if it is auxiliary, else
+    /// the one merging into its lane, else the one ahead on the road.
+    pub fn zone_for(&self, lane: i32, s: f64) -> &MergeZone {
+        (self.zone_on(lane, s))
+            .or_else(|| self.zone_into(lane, s))
+            .unwrap_or_else(|| self.zone_ahead(s))
+    }
+
+    /// Whether `lane` is auxiliary: outside the carriageway's lanes.
+    pub fn is_auxiliary(&self, lane: i32) -> bool {
+        !self.main_lane_range().contains(&lane)
+    }
+
+    /// The lane a vehicle on `lane` must move to before its lane ends: the next one towards the
+    /// carriageway from an auxiliary lane; a main lane itself.
+    pub fn toward_main(&self, lane: i32) -> i32 {
+        if lane < FIRST_MAIN_LANE {
+            lane + 1
+        } else if lane > self.main_lanes {
+            lane - 1
+        } else {
+            lane
+        }
+    }
+
+    /// Whether a lane change from `from` to `to` leaves an auxiliary lane towards the
+    /// carriageway: a merge.
+    pub fn is_merge(&self, from: i32, to: i32) -> bool {
+        self.is_auxiliary(from) && to == self.toward_main(from)
+    }
+
+    /// Where a vehicle on `lane` at `s` must have left it (m): the end of its auxiliary lane's
+    /// zone; `None` on a main lane.
+    pub fn lane_end(&self, lane: i32, s: f64) -> Option<f64> {
+        self.zone_on(lane, s).map(|z| z.end)
+    }
+
     /// Whether `s` lies in a weaving section's zone, where main-road vehicles may cross towards
     /// the exit.
     pub fn weaving_at(&self, s: f64) -> bool {
@@ -205,25 +282,31 @@ impl Road {
         first.saturating_sub(self.main_lanes as usize)
     }
 
-    /// The leftmost frame lane.
+    /// The leftmost frame lane: the carriageway's, or a left auxiliary lane's.
     pub fn top_lane(&self) -> i32 {
-        self.main_lanes
+        (self.zones.iter().map(|z| z.lane)).fold(self.main_lanes, i32::max)
     }
 
-    /// Every frame lane, the merge lane to the main carriageway's leftmost.
+    /// The rightmost frame lane: the lowest auxiliary lane's ([`MERGE_LANE`] on a road
+    /// without any on the right).
+    pub fn bottom_lane(&self) -> i32 {
+        (self.zones.iter().map(|z| z.lane)).fold(MERGE_LANE, i32::min)
+    }
+
+    /// Every frame lane, the rightmost to the leftmost.
     pub fn lanes(&self) -> std::ops::RangeInclusive<i32> {
-        MERGE_LANE..=self.top_lane()
+        self.bottom_lane()..=self.top_lane()
     }
 
     /// The main carriageway's lanes.
     pub fn main_lane_range(&self) -> std::ops::RangeInclusive<i32> {
-        FIRST_MAIN_LANE..=self.top_lane()
+        FIRST_MAIN_LANE..=self.main_lanes
     }
 
     /// The nearest frame lane to `lane` (e.g. a lane computed from a predicted position that
     /// strayed off the road).
     pub fn clamp_lane(&self, lane: i32) -> i32 {
-        lane.clamp(MERGE_LANE, self.top_lane())
+        lane.clamp(self.bottom_lane(), self.top_lane())
     }
 
     /// The frame lane whose centre line is nearest to lateral position `y` (lane `k`'s centre
@@ -232,22 +315,19 @@ impl Road {
         self.clamp_lane((y / self.lane_width).round() as i32)
     }
 
-    /// Whether a vehicle on the merge lane with its front at `front` and going `speed` stands in
-    /// the zone where the merge rule forces it in: the one definition the rule and the planner
-    /// (which may not predict such a merge away) share.
-    pub fn forces_merge(&self, front: f64, speed: f64) -> bool {
-        speed < STANDING_SPEED && front > self.zone_ahead(front).end - FORCED_MERGE_ZONE
+    /// Whether a vehicle on auxiliary lane `lane` with its front at `front` and going `speed`
+    /// stands in the zone where the merge rule forces it in: the one definition the rule and
+    /// the planner (which may not predict such a merge away) share.
+    pub fn forces_merge(&self, lane: i32, front: f64, speed: f64) -> bool {
+        let end = self.lane_end(lane, front);
+        speed < STANDING_SPEED && end.is_some_and(|end| front > end - FORCED_MERGE_ZONE)
     }
 
-    /// The lanes a vehicle at `s` may occupy: the merge lane exists only along a ramp and its
-    /// acceleration lane.
-    pub fn lanes_at(&self, s: f64) -> std::ops::RangeInclusive<i32> {
-        let z = self.zone_ahead(s);
-        if (z.ramp_start..z.end).contains(&s) {
-            self.lanes()
-        } else {
-            self.main_lane_range()
-        }
+    /// Whether a vehicle at `s` may occupy `lane`: a lane of the carriageway, or an auxiliary
+    /// lane along its ramp and acceleration lane.
+    pub fn lane_exists(&self, lane: i32, s: f64) -> bool {
+        self.main_lane_range().contains(&lane)
+            || (self.zones.iter()).any(|z| z.lane == lane && z.holds(s))
     }
 
     /// The road's heading at `s` in SUMO's plane (rad, 0 = east, counter-clockwise).
@@ -318,6 +398,7 @@ impl Road {
             lane_width: 4.5,
             main_lanes: 2,
             zones: vec![MergeZone {
+                lane: MERGE_LANE,
                 ramp_start,
                 start: 150.0,
                 end: 330.0,
@@ -342,8 +423,9 @@ mod tests {
     #[test]
     fn merge_lane_ends_at_merge_end() {
         let r = Road::paper_default();
-        assert!(r.lanes_at(200.0).contains(&0));
-        assert!(!r.lanes_at(340.0).contains(&0));
+        assert!(r.lane_exists(0, 200.0));
+        assert!(!r.lane_exists(0, 340.0));
+        assert!(r.lane_exists(2, 340.0));
         assert_eq!(r.lanes(), 0..=2);
         assert_eq!(r.lane_at(5.0), 1);
         assert_eq!(r.lane_at(50.0), 2);
@@ -353,6 +435,7 @@ mod tests {
     fn each_vehicle_deals_with_the_zone_ahead() {
         let mut r = Road::paper_default();
         r.zones.push(MergeZone {
+            lane: MERGE_LANE,
             ramp_start: 800.0,
             start: 1000.0,
             end: 1200.0,
@@ -361,9 +444,9 @@ mod tests {
         assert_eq!(r.zone_ahead(100.0).end, 330.0);
         assert_eq!(r.zone_ahead(500.0).end, 1200.0);
         assert_eq!(r.zone_ahead(5000.0).end, 1200.0);
-        assert!(!r.lanes_at(500.0).contains(&0));
-        assert!(r.lanes_at(900.0).contains(&0));
-        assert!(r.lanes_at(200.0).contains(&0));
+        assert!(!r.lane_exists(0, 500.0));
+        assert!(r.lane_exists(0, 900.0));
+        assert!(r.lane_exists(0, 200.0));
     }
 
     /// Each ramp's edges, and a junction lane between them, belong to that ramp's entry; the
@@ -372,6 +455,7 @@ mod tests {
     fn each_edge_belongs_to_the_entry_its_vehicles_come_by() {
         let mut r = Road::paper_default();
         r.zones.push(MergeZone {
+            lane: MERGE_LANE,
             ramp_start: 280.0,
             start: 330.0,
             end: 430.0,
@@ -390,5 +474,40 @@ mod tests {
         // main_in, acc, main_out, ramp, ramp2, the junction lane on ramp2.
         assert_eq!(entries, [0, 0, 0, 1, 2, 2]);
         assert_eq!(r.entry_of_edge(99), 0);
+    }
+
+    /// Lane roles: a two-lane ramp on the right (lane −1 ends first, then lane 0) and a ramp on
+    /// the left (lane 3 beside the carriageway's lanes 1 and 2): each lane's end, the lane its
+    /// traffic moves to, where it exists.
+    #[test]
+    fn auxiliary_lanes_on_either_side_keep_their_own_roles() {
+        let mut r = Road::paper_default();
+        let zone = |lane, ramp_start, start, end| MergeZone {
+            lane,
+            ramp_start,
+            start,
+            end,
+            weaving: false,
+        };
+        r.zones.push(zone(-1, -16.79, 150.0, 250.0));
+        r.zones.push(zone(3, 500.0, 600.0, 700.0));
+        assert_eq!(r.lanes(), -1..=3);
+        assert_eq!((r.bottom_lane(), r.top_lane()), (-1, 3));
+        assert_eq!(r.main_lane_range(), 1..=2);
+        assert_eq!(r.lane_end(-1, 100.0), Some(250.0));
+        assert_eq!(r.lane_end(0, 100.0), Some(330.0));
+        assert_eq!(r.lane_end(1, 100.0), None);
+        assert_eq!(r.lane_end(3, 650.0), Some(700.0));
+        assert_eq!((r.toward_main(-1), r.toward_main(0)), (0, 1));
+        assert_eq!((r.toward_main(3), r.toward_main(2)), (2, 2));
+        assert!(r.is_merge(-1, 0) && r.is_merge(3, 2) && !r.is_merge(1, 2) && !r.is_merge(0, -1));
+        assert_eq!(r.zone_into(0, 100.0).map(|z| z.lane), Some(-1));
+        assert_eq!(r.zone_into(2, 100.0).map(|z| z.lane), Some(3));
+        assert_eq!(r.zone_for(2, 100.0).lane, 3);
+        assert_eq!(r.zone_for(-1, 100.0).end, 250.0);
+        assert!(r.lane_exists(-1, 200.0) && !r.lane_exists(-1, 260.0));
+        assert!(r.lane_exists(3, 650.0) && !r.lane_exists(3, 450.0));
+        assert!(r.forces_merge(-1, 245.0, 0.0) && !r.forces_merge(0, 245.0, 0.0));
+        assert_eq!((r.clamp_lane(-5), r.clamp_lane(9)), (-1, 3));
     }
 }

@@ -18,7 +18,6 @@ use std::sync::Arc;
 
 use crate::model::kinematics::BicycleState;
 use crate::model::math::Point;
-use crate::model::road::{FIRST_MAIN_LANE, MERGE_LANE};
 use crate::model::scene::{Origin, Scene};
 use crate::model::trajectory::Trajectory;
 use crate::planner::guard::{Guard, StartGuard};
@@ -82,8 +81,14 @@ impl LaneChanges {
         // A merge under way is still a merge: the body overlaps the merge lane until it ends,
         // so the search must allow that (it once rejected every continuation, and the CAV
         // braked hard while SUMO kept moving it sideways).
-        let merging = ongoing.is_some_and(|o| o.target_lane == FIRST_MAIN_LANE)
-            && (v.lane == MERGE_LANE || v.lateral < 0.0);
+        let road = &scene.road;
+        let merging = ongoing.is_some_and(|o| {
+            // Towards a lane an auxiliary lane merges into, still on the auxiliary lane or on
+            // its side of a lane's centre.
+            let from = road.zone_into(o.target_lane, v.s).map(|z| z.lane);
+            let short = |from: i32| f64::from(o.target_lane - from) * v.lateral < 0.0;
+            from.is_some_and(|from| v.lane == from || short(from))
+        });
         let cos = v.heading.cos().max(0.5);
         Request {
             start: BicycleState {
@@ -93,7 +98,7 @@ impl LaneChanges {
             },
             lane,
             ongoing,
-            must_merge: v.origin == Origin::Ramp && (lane == MERGE_LANE || merging),
+            must_merge: v.origin == Origin::Ramp && (road.is_auxiliary(lane) || merging),
             length: v.length,
             width: v.width,
             max_speed: v.max_speed,

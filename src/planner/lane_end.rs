@@ -18,7 +18,6 @@
 //! cooperation slows for it; the first CAV that can stop behind it yields. Once it yields, lane
 //! 1 beside the ramp CAV clears as those ahead drive on, and the merge goes in.
 
-use crate::model::road::{FIRST_MAIN_LANE, MERGE_LANE};
 use crate::model::scene::{Kind, Origin, Scene, VehicleState};
 use crate::model::trajectory::Trajectory;
 
@@ -41,11 +40,11 @@ pub fn merge_order(scene: &Scene, yield_gap: f64, decel: f64) -> Vec<(usize, usi
 }
 
 /// Ramp CAV `r` as the CAVs that yield to it must see it when they plan alone (bk-mastar,
-/// where no plan of it is shared): standing in lane 1 where it waits, for `horizon` steps of
-/// `dt`, so that they stop behind it with room for its merge.
-pub fn standing_in_lane_1(scene: &Scene, r: usize, horizon: usize, dt: f64) -> Trajectory {
+/// where no plan of it is shared): standing in the lane it merges into where it waits, for
+/// `horizon` steps of `dt`, so that they stop behind it with room for its merge.
+pub fn standing_in_target_lane(scene: &Scene, r: usize, horizon: usize, dt: f64) -> Trajectory {
     let v = &scene.vehicles[r];
-    let y = f64::from(FIRST_MAIN_LANE) * scene.road.lane_width;
+    let y = f64::from(scene.road.toward_main(v.lane)) * scene.road.lane_width;
     Trajectory {
         length: v.length,
         width: v.width,
@@ -55,10 +54,11 @@ pub fn standing_in_lane_1(scene: &Scene, r: usize, horizon: usize, dt: f64) -> T
 
 /// Whether `v` is a ramp CAV on the acceleration lane, slow, near its end, not yet moving over.
 pub fn held_up_at_lane_end(scene: &Scene, v: &VehicleState) -> bool {
-    let end = scene.road.zone_ahead(v.front()).end;
+    let Some(end) = scene.road.lane_end(v.lane, v.front()) else {
+        return false;
+    };
     v.kind == Kind::Cav
         && v.origin == Origin::Ramp
-        && v.lane == MERGE_LANE
         && !v.on_ramp
         && v.other_lane().is_none()
         && v.speed < HELD_UP_SPEED
@@ -81,13 +81,14 @@ fn order_behind(scene: &Scene, r: usize, yield_gap: f64, decel: f64) -> Vec<(usi
 /// standing for the last 280 s, lane 1 closed behind them).
 fn alongside_ahead(scene: &Scene, r: usize) -> Vec<(usize, usize)> {
     let merger = &scene.vehicles[r];
+    let target = scene.road.toward_main(merger.lane);
     scene
         .vehicles
         .iter()
         .enumerate()
         .filter(|(_, v)| {
             v.kind == Kind::Cav
-                && v.lane == FIRST_MAIN_LANE
+                && v.lane == target
                 && v.front() >= merger.front()
                 && v.rear() < merger.front()
         })
@@ -99,11 +100,12 @@ fn alongside_ahead(scene: &Scene, r: usize) -> Vec<(usize, usize)> {
 /// passes first, the first that can stop yields and ends the walk, as does an HDV.
 fn walk_back(scene: &Scene, r: usize, yield_gap: f64, decel: f64) -> Vec<(usize, usize)> {
     let merger = &scene.vehicles[r];
+    let target = scene.road.toward_main(merger.lane);
     let mut behind: Vec<(usize, &VehicleState)> = scene
         .vehicles
         .iter()
         .enumerate()
-        .filter(|(_, v)| v.lane == FIRST_MAIN_LANE && v.front() < merger.front())
+        .filter(|(_, v)| v.lane == target && v.front() < merger.front())
         .collect();
     behind.sort_by(|a, b| b.1.s.total_cmp(&a.1.s));
     let mut edges = Vec::new();

@@ -3,7 +3,6 @@
 //! rules forbid is masked out of the policy's distribution, so the policy never picks it.
 
 use crate::config::{Config, LowSpeedLaneChanges};
-use crate::model::road::MERGE_LANE;
 use crate::model::scene::Scene;
 use crate::planner::primitives::Primitive;
 
@@ -64,13 +63,14 @@ impl Rules {
             let slow = v.speed < self.min_lane_change_speed;
             let slide_ok = match self.low_speed {
                 LowSpeedLaneChanges::Off => false,
-                LowSpeedLaneChanges::Merge => v.lane == MERGE_LANE,
+                LowSpeedLaneChanges::Merge => road.is_auxiliary(v.lane),
                 LowSpeedLaneChanges::All => true,
             };
+            let zone = road.zone_on(v.lane, v.front());
             !v.on_ramp
-                && target != MERGE_LANE
-                && road.lanes_at(v.s).contains(&target)
-                && !(v.lane == MERGE_LANE && v.front() < road.zone_ahead(v.front()).start)
+                && (!road.is_auxiliary(target) || road.is_merge(v.lane, target))
+                && road.lane_exists(target, v.s)
+                && !zone.is_some_and(|z| v.front() < z.start)
                 && (!slow || slide_ok)
         })
     }

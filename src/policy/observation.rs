@@ -5,7 +5,6 @@
 //! not by running statistics, so an observation means the same in training and at test time,
 //! in Rust and in Python.
 
-use crate::model::road::MERGE_LANE;
 use crate::model::scene::{Kind, Scene};
 
 /// Vehicles observed around the ego.
@@ -54,9 +53,9 @@ pub fn observe(scene: &Scene, i: usize, changing: bool, v_max: f64, out: &mut [f
     out.fill(0.0);
     let road = &scene.road;
     let me = &scene.vehicles[i];
-    let merge = road.zone_ahead(me.front());
+    let merge = road.zone_for(me.lane, me.front());
     let zone = (merge.end - merge.start).max(1.0);
-    let on_merge_lane = me.lane == MERGE_LANE;
+    let on_merge_lane = road.is_auxiliary(me.lane);
     let ego = [
         me.speed / v_max,
         f64::from(me.lane) / f64::from(road.top_lane()),

@@ -6,7 +6,6 @@
 use super::longitudinal::Longitudinal;
 use super::Predictor;
 use crate::config::Config;
-use crate::model::road::MERGE_LANE;
 use crate::model::scene::{Kind, Origin, Scene};
 use crate::model::trajectory::Trajectory;
 
@@ -47,12 +46,12 @@ impl ConstantSpeed {
     pub fn median_merge_step(
         &self,
         scene: &Scene,
-        front: f64,
+        (lane, front): (i32, f64),
         speed: f64,
         horizon: usize,
     ) -> Option<usize> {
         let road = &scene.road;
-        let merge = road.zone_ahead(front);
+        let merge = road.zone_for(lane, front);
         let zone = merge.end - merge.start;
         let mut undecided = 1.0;
         for k in 0..=horizon {
@@ -82,15 +81,17 @@ impl Predictor for ConstantSpeed {
         let w = scene.road.lane_width;
         let y0 = v.lane as f64 * w + v.lateral;
         let forward = v.speed;
-        let merge_at =
-            (v.kind == Kind::Hdv && v.origin == Origin::Ramp && v.lane == MERGE_LANE && !v.on_ramp)
-                .then(|| self.median_merge_step(scene, v.front(), forward, horizon))
-                .flatten();
+        let road = &scene.road;
+        let merging = v.kind == Kind::Hdv && v.origin == Origin::Ramp && !v.on_ramp;
+        let merge_at = (merging && road.is_auxiliary(v.lane))
+            .then(|| self.median_merge_step(scene, (v.lane, v.front()), forward, horizon))
+            .flatten();
+        let inward = f64::from(road.toward_main(v.lane) - v.lane);
         let lc = self.lane_change_steps as f64;
         let poses = self
             .longitudinal
             .poses(scene, i, horizon, self.dt, |k| match merge_at {
-                Some(m) if k > m => y0 + w * ((k - m) as f64 / lc).min(1.0),
+                Some(m) if k > m => y0 + inward * w * ((k - m) as f64 / lc).min(1.0),
                 _ => y0,
             });
         Trajectory {
@@ -142,7 +143,7 @@ mod tests {
             )],
         };
         let p = ConstantSpeed::new(&Config::default());
-        assert_eq!(p.median_merge_step(&scene, 222.0, 20.0, 15), Some(1));
+        assert_eq!(p.median_merge_step(&scene, (0, 222.0), 20.0, 15), Some(1));
         let t = p.predict(&scene, 0, &[], 15);
         assert_eq!(t.poses[1].y, 0.0);
         assert!((t.poses[2].y - 0.9).abs() < 1e-9);

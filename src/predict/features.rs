@@ -180,8 +180,8 @@ pub enum Subset {
 }
 
 impl Subset {
-    /// The subset of a sample on `lane`: the merge lane is [`Subset::Ramp`], every other lane
-    /// [`Subset::Main`].
+    /// The subset of a sample on a lane of class `lane` ([`lane_class`]): an auxiliary lane
+    /// is [`Subset::Ramp`], every other lane [`Subset::Main`].
     pub fn of_lane(lane: i32) -> Subset {
         if lane == MERGE_LANE {
             Subset::Ramp
@@ -250,24 +250,26 @@ pub fn lane_change_start(now: &VehicleState, next: &VehicleState, lane_width: f6
     }
 }
 
-/// The lane an HDV on `lane` moves to when it changes lanes: the acceleration lane merges left,
-/// the rightmost main lane can only go left (main-road vehicles may not enter the acceleration
-/// lane), the leftmost (lane `top`) goes right; a middle lane of a wider road is taken to go
-/// left, the direction of overtaking.
-pub fn lane_change_direction(lane: i32, top: i32) -> i32 {
-    if lane >= top {
+/// The direction an HDV on `lane` moves when it changes lanes: an auxiliary lane's traffic
+/// towards the carriageway, the rightmost main lane can only go left (main-road vehicles may
+/// not enter the acceleration lane), the leftmost goes right; a middle lane of a wider road is
+/// taken to go left, the direction of overtaking.
+pub fn lane_change_direction(road: &Road, lane: i32) -> i32 {
+    if road.is_auxiliary(lane) {
+        road.toward_main(lane) - lane
+    } else if lane >= road.main_lanes {
         -1
     } else {
         1
     }
 }
 
-/// The ego lane as the model knows it, relative to the road: 0 the merge lane, 2 the leftmost
-/// main lane, 1 any other main lane (the rightmost of the paper's two).
-pub fn lane_class(lane: i32, top: i32) -> u8 {
-    if lane <= MERGE_LANE {
+/// The ego lane as the model knows it, relative to the road: 0 an auxiliary lane, 2 the
+/// leftmost main lane, 1 any other main lane (the rightmost of the paper's two).
+pub fn lane_class(road: &Road, lane: i32) -> u8 {
+    if road.is_auxiliary(lane) {
         0
-    } else if lane >= top {
+    } else if lane >= road.main_lanes {
         2
     } else {
         1
@@ -277,11 +279,11 @@ pub fn lane_class(lane: i32, top: i32) -> u8 {
 /// The HDV part of the observation.
 pub fn ego_of(v: &VehicleState, road: &Road) -> Ego {
     Ego {
-        lane: lane_class(v.lane, road.top_lane()),
+        lane: lane_class(road, v.lane),
         lateral: v.lateral as f32,
         speed: v.speed as f32,
         accel: v.accel as f32,
-        to_merge_end: (road.zone_ahead(v.front()).end - v.front()) as f32,
+        to_merge_end: (road.zone_for(v.lane, v.front()).end - v.front()) as f32,
         from_ramp: v.origin == Origin::Ramp,
     }
 }
@@ -612,12 +614,17 @@ mod tests {
         mid.lateral = 0.9;
         assert!(!is_decision_point(&mid));
         assert!(!is_decision_point(&veh(Kind::Cav, 100.0, 1, 30.0)));
-        assert_eq!(lane_change_direction(0, 2), 1);
-        assert_eq!(lane_change_direction(1, 2), 1);
-        assert_eq!(lane_change_direction(2, 2), -1);
-        assert_eq!(lane_change_direction(2, 3), 1);
-        assert_eq!(lane_class(2, 3), 1);
-        assert_eq!(lane_class(3, 3), 2);
+        let paper = Road::paper_default();
+        assert_eq!(lane_change_direction(&paper, 0), 1);
+        assert_eq!(lane_change_direction(&paper, 1), 1);
+        assert_eq!(lane_change_direction(&paper, 2), -1);
+        let three = Road {
+            main_lanes: 3,
+            ..Road::paper_default()
+        };
+        assert_eq!(lane_change_direction(&three, 2), 1);
+        assert_eq!((lane_class(&three, 0), lane_class(&three, 1)), (0, 1));
+        assert_eq!((lane_class(&three, 2), lane_class(&three, 3)), (1, 2));
     }
 
     #[test]

@@ -28,7 +28,7 @@ use super::longitudinal::Longitudinal;
 use super::model_file::{LaneChangeModel, ModelError};
 use super::Predictor;
 use crate::config::{Config, PredictorKind};
-use crate::model::road::{Road, MERGE_LANE};
+use crate::model::road::Road;
 use crate::model::scene::{Kind, Origin, Scene, VehicleState};
 use crate::model::trajectory::Trajectory;
 
@@ -136,7 +136,7 @@ impl Learned {
     ) -> Rollout {
         let road = &scene.road;
         let v = &scene.vehicles[i];
-        let direction = lane_change_direction(v.lane, road.top_lane());
+        let direction = lane_change_direction(road, v.lane);
         let mut out = Rollout {
             probabilities: Vec::new(),
             start: None,
@@ -387,9 +387,10 @@ impl Predictor for Learned {
 /// possible, and a main-road vehicle on lane 0 is on a deceleration lane, leaving, and does not
 /// come back.
 fn lane_change_zone_end(road: &Road, v: &VehicleState, dk: f64) -> Option<f64> {
-    let zone = road.zone_ahead(v.front() + dk);
-    let leaving = v.lane == MERGE_LANE && v.origin == Origin::Main;
-    if v.lane == MERGE_LANE && v.front() + dk < zone.start || leaving {
+    let zone = road.zone_for(v.lane, v.front() + dk);
+    let auxiliary = road.is_auxiliary(v.lane);
+    let leaving = auxiliary && v.origin == Origin::Main;
+    if auxiliary && v.front() + dk < zone.start || leaving {
         None
     } else {
         Some(zone.end)

@@ -3,7 +3,6 @@
 //! road is drawn in its own frame, stretched across (a 14 m wide road over a 470 m section would
 //! be a line otherwise).
 
-use crate::model::road::MERGE_LANE;
 use crate::model::scene::{Kind, Scene};
 
 const GRASS: [u8; 3] = [96, 128, 84];
@@ -25,11 +24,12 @@ pub fn section_rgb(scene: &Scene, highlight: &[&str], width: usize, height: usiz
     let s0 = road.ramp_start();
     let sx = width as f64 / (road.section_end - s0);
     let w = road.lane_width;
-    let lanes = f64::from(road.top_lane() + 1);
-    // Lane 0's right edge at 80 % of the height, the top lane's left edge at 20 %.
+    let lanes = f64::from(road.top_lane() - road.bottom_lane() + 1);
+    let bottom = f64::from(road.bottom_lane()) * w;
+    // The bottom lane's right edge at 80 % of the height, the top lane's left edge at 20 %.
     let sy = 0.6 * height as f64 / (lanes * w);
     let x = |s: f64| (s - s0) * sx;
-    let y = |lateral: f64| 0.8 * height as f64 - (lateral + 0.5 * w) * sy;
+    let y = |lateral: f64| 0.8 * height as f64 - (lateral - bottom + 0.5 * w) * sy;
     let band = |img: &mut Canvas, lane: i32, from: f64, to: f64| {
         let (top, bottom) = (
             y(f64::from(lane) * w + 0.5 * w),
@@ -43,7 +43,7 @@ pub fn section_rgb(scene: &Scene, highlight: &[&str], width: usize, height: usiz
         band(&mut img, lane, 0.0, road.section_end);
     }
     for z in &road.zones {
-        band(&mut img, MERGE_LANE, z.ramp_start, z.end);
+        band(&mut img, z.lane, z.ramp_start, z.end);
     }
     for v in &scene.vehicles {
         let colour = if highlight.contains(&&*v.id) {

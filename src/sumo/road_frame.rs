@@ -322,6 +322,7 @@ fn ramp_frames(
         next = id;
     }
     Ok(MergeZone {
+        lane: MERGE_LANE,
         ramp_start: s_end,
         start: joined.0,
         end: joined.1,

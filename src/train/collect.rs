@@ -24,8 +24,8 @@ use crate::controller;
 use crate::episode::{self, Driver, EpisodeError, Observer};
 use crate::model::scene::{Kind, Scene, VehicleState};
 use crate::predict::features::{
-    cav_node, ego_of, is_decision_point, lane_change_direction, lane_change_start, neighbours,
-    select_cavs, Agent, CavNode, Observation, Subset, CAV_NODES, PREVIEW,
+    cav_node, ego_of, is_decision_point, lane_change_direction, lane_change_start, lane_class,
+    neighbours, select_cavs, Agent, CavNode, Observation, Subset, CAV_NODES, PREVIEW,
 };
 
 /// Random stream of the collector's thinning of main-road negatives.
@@ -160,7 +160,7 @@ impl Recorder {
             let Some(label) = label_of(v, next, w, &mut self.stats) else {
                 continue;
             };
-            let subset = Subset::of_lane(v.lane);
+            let subset = Subset::of_lane(lane_class(&now.road, v.lane).into());
             let Some(weight) = thinning_weight(
                 &mut self.rng,
                 self.main_negative_keep,
@@ -197,7 +197,7 @@ fn label_of(v: &VehicleState, next: &Buffered, w: f64, stats: &mut CollectStats)
         return None;
     };
     let dir = lane_change_start(v, &next.scene.vehicles[j], w);
-    if dir != 0 && dir as i32 != lane_change_direction(v.lane, next.scene.road.top_lane()) {
+    if dir != 0 && dir as i32 != lane_change_direction(&next.scene.road, v.lane) {
         stats.unexpected_direction += 1;
     }
     Some(dir != 0)

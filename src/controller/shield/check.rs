@@ -40,7 +40,7 @@ use super::cut_in::CutIn;
 use crate::config::hdv::RampMergeStyle;
 use crate::config::Config;
 use crate::controller::Maneuver;
-use crate::model::road::{Road, FIRST_MAIN_LANE, FORCED_MERGE_ZONE, MERGE_LANE};
+use crate::model::road::{Road, FORCED_MERGE_ZONE};
 use crate::model::scene::{Kind, Origin, Scene, VehicleState};
 
 /// The shield's worst-case braking model: how hard every vehicle may brake (and an HDV
@@ -112,10 +112,14 @@ impl WorstCase {
     }
 }
 
-/// Lane bit of a lane set (lanes outside 0..64 are no lane of this road).
+/// The lane whose bit is a lane set's lowest: auxiliary lanes on the right down to it have one.
+const LOWEST_LANE_BIT: i32 = -16;
+
+/// Lane bit of a lane set (lanes outside −16..48 are no lane of this road).
 pub fn bit(lane: i32) -> u64 {
-    if (0..64).contains(&lane) {
-        1 << lane
+    let index = lane - LOWEST_LANE_BIT;
+    if (0..64).contains(&index) {
+        1 << index
     } else {
         0
     }
@@ -125,12 +129,7 @@ pub fn bit(lane: i32) -> u64 {
 /// ([`VehicleState::other_lane`]: moving to it or from it, either way it occupies both), and the
 /// ramp's lane while its rear is still on the ramp (`tail_on_ramp`).
 fn lanes_now(road: &Road, v: &VehicleState) -> u64 {
-    let tail = if tail_on_ramp(road, v) {
-        bit(MERGE_LANE)
-    } else {
-        0
-    };
-    lanes_beside(v) | tail
+    lanes_beside(v) | tail_on_ramp(road, v).map_or(0, bit)
 }
 
 /// The lanes `v` occupies side by side: its own and the other one of a change under way. (A
@@ -148,19 +147,19 @@ fn lanes_beside(v: &VehicleState) -> u64 {
 /// front 1.25 m into it, changed into lane 1 at 143.4–144.2 s; a CAV stopped 2 m behind it on
 /// the ramp then saw its lane free and accelerated, and at 145.2 s hit the rear, 3.6 m back
 /// on the ramp.) The zone's start is taken for where the vehicle's ramp joins; a ramp vehicle
-/// passing a later ramp's junction in lane 1 counts too, for the moment it takes.
-fn tail_on_ramp(road: &Road, v: &VehicleState) -> bool {
-    v.origin == Origin::Ramp
-        && v.lane == FIRST_MAIN_LANE
-        && v.rear() < road.zone_ahead(v.front()).start
+/// passing a later ramp's junction in lane 1 counts too, for the moment it takes. The lane
+/// its tail is on: the auxiliary lane merging into its own.
+fn tail_on_ramp(road: &Road, v: &VehicleState) -> Option<i32> {
+    let zone = road.zone_into(v.lane, v.front())?;
+    (v.origin == Origin::Ramp && v.rear() < zone.start).then_some(zone.lane)
 }
 
 /// A ramp HDV on the acceleration lane: it may start its merge at any moment (SUMO's lane-change
 /// model decides when). A CAV changing into lane 1 beside it must let it (a CAV in lane 2 and a
 /// ramp HDV 16 m ahead of it once moved into lane 1 in the same step: each saw the lane free);
 /// a CAV already driving in lane 1 is not asked to, see [`may_merge`].
-fn on_acceleration_lane(v: &VehicleState) -> bool {
-    v.kind == Kind::Hdv && v.origin == Origin::Ramp && v.lane == MERGE_LANE && !v.on_ramp
+fn on_acceleration_lane(road: &Road, v: &VehicleState) -> bool {
+    v.kind == Kind::Hdv && v.origin == Origin::Ramp && road.is_auxiliary(v.lane) && !v.on_ramp
 }
 
 /// A ramp HDV whose merge will happen whatever the CAVs do: on the acceleration lane within
@@ -171,12 +170,16 @@ fn on_acceleration_lane(v: &VehicleState) -> bool {
 /// assumed to merge at any moment: that assumption cost a fifth of the throughput and no
 /// collision it prevented was seen.
 pub fn may_merge(scene: &Scene, v: &VehicleState, horizon: f64, b: &WorstCase) -> bool {
-    let zone = scene.road.zone_ahead(v.front()).end - FORCED_MERGE_ZONE;
+    let Some(end) = scene.road.lane_end(v.lane, v.front()) else {
+        return false;
+    };
+    let zone = end - FORCED_MERGE_ZONE;
     let can_stand_in_zone = || {
         farthest_stand(v.speed, horizon, b.hdv_accel, b.hdv_decel)
             .is_some_and(|reach| v.front() + reach >= zone)
     };
-    on_acceleration_lane(v) && (v.front() + v.speed * horizon >= zone || can_stand_in_zone())
+    on_acceleration_lane(&scene.road, v)
+        && (v.front() + v.speed * horizon >= zone || can_stand_in_zone())
 }
 
 /// How far ahead a vehicle at `speed` can be standing within `horizon` seconds, accelerating
@@ -193,7 +196,7 @@ pub(super) fn farthest_stand(speed: f64, horizon: f64, accel: f64, decel: f64) -
 /// Lanes another vehicle may occupy within `horizon` seconds under the worst cases.
 fn lanes_of_other(scene: &Scene, v: &VehicleState, horizon: f64, b: &WorstCase) -> u64 {
     let merge = if may_merge(scene, v, horizon, b) {
-        bit(FIRST_MAIN_LANE)
+        bit(scene.road.toward_main(v.lane))
     } else {
         0
     };
@@ -259,17 +262,17 @@ fn cav_motion(v: &VehicleState, m: &Maneuver, b: &WorstCase) -> Motion {
 /// How far `v` can drive before its lane ends: to the end of the acceleration lane for a vehicle
 /// on it, else without limit.
 fn reach(scene: &Scene, v: &VehicleState) -> f64 {
-    if v.lane == MERGE_LANE {
-        (scene.road.zone_ahead(v.front()).end - v.front()).max(0.0)
-    } else {
-        f64::INFINITY
-    }
+    let end = scene.road.lane_end(v.lane, v.front());
+    end.map_or(f64::INFINITY, |end| (end - v.front()).max(0.0))
 }
 
 /// The end of the acceleration lane, as a standing vehicle in front of a CAV that occupies that
 /// lane alone: the CAV must be able to stop before it.
 fn clear_of_lane_end(scene: &Scene, v: &VehicleState, m: &Maneuver, b: &WorstCase) -> bool {
-    if lanes_of_cav(v, m) != bit(MERGE_LANE) {
+    let Some(end) = scene.road.lane_end(v.lane, v.front()) else {
+        return true;
+    };
+    if lanes_of_cav(v, m) != bit(v.lane) {
         return true;
     }
     let wall = Motion {
@@ -278,13 +281,7 @@ fn clear_of_lane_end(scene: &Scene, v: &VehicleState, m: &Maneuver, b: &WorstCas
         decel: b.cav_decel,
         reach: 0.0,
     };
-    stays_clear(
-        cav_motion(v, m, b),
-        wall,
-        scene.road.zone_ahead(v.front()).end - v.front(),
-        b.margin,
-        b,
-    )
+    stays_clear(cav_motion(v, m, b), wall, end - v.front(), b.margin, b)
 }
 
 /// CAV `i`'s maneuver `m` under check, with `entering[j]` the lanes scene vehicle `j` enters
@@ -339,17 +336,17 @@ pub fn clear_of_leaders(c: &Candidate) -> bool {
     let lanes = lanes_of_cav(me, m);
     let horizon = b.dt + m.speed / b.cav_decel;
     let motion = cav_motion(me, m, b);
-    let target = c.target();
-    let into_lane_1 = target == Some(FIRST_MAIN_LANE);
+    let (road, target) = (&scene.road, c.target());
     let lanes_of = |j: usize, o: &VehicleState| {
+        let merges_into = |t: i32| on_acceleration_lane(road, o) && road.toward_main(o.lane) == t;
         let merging = match target {
-            Some(t) if into_lane_1 && on_acceleration_lane(o) => bit(t),
-            Some(t) if may_enter_from_beyond(&scene.road, me, t, o) => bit(t),
+            Some(t) if merges_into(t) => bit(t),
+            Some(t) if may_enter_from_beyond(road, me, t, o) => bit(t),
             _ => 0,
         };
         let lanes = lanes_of_other(scene, o, horizon, b) | c.entered(j) | merging;
-        if cannot_cut_in(me, o, b) {
-            lanes & !bit(FIRST_MAIN_LANE)
+        if cannot_cut_in(road, me, o, b) {
+            lanes & !bit(road.toward_main(o.lane))
         } else {
             lanes
         }
@@ -359,7 +356,8 @@ pub fn clear_of_leaders(c: &Candidate) -> bool {
             // In a lane of the CAV's, braking as hard as it can; cutting in, as SUMO expects.
             let decel = if lanes_of(j, o) & lanes != 0 {
                 b.emergency_decel(o.kind)
-            } else if may_cut_in(me, m.speed, lanes, o, b) || may_take_gap(me, m.speed, lanes, o, b)
+            } else if may_cut_in(road, (me, m.speed), lanes, o, b)
+                || may_take_gap(road, (me, m.speed), lanes, o, b)
             {
                 b.cut_in.brake_decel
             } else {
@@ -371,7 +369,7 @@ pub fn clear_of_leaders(c: &Candidate) -> bool {
                 decel,
                 reach: reach(scene, o),
             };
-            let yields = yields_to(me, target, o);
+            let yields = yields_to(road, me, target, o);
             let margin = b.margin + if yields { b.yield_gap } else { 0.0 };
             stays_clear(motion, worst, o.rear() - me.front(), margin, b)
         })
@@ -389,9 +387,15 @@ pub fn clear_of_leaders(c: &Candidate) -> bool {
 /// out of the standing lane-1 queue 49.9 m in front of a CAV at 26.3 m/s in lane 2, which needs
 /// 55 m to stop at 6 m/s², and was hit at 79.0 s; the shield, assuming HDVs keep their lane, had
 /// let the CAV close in at 27 m/s. It now slows such a CAV, to 10 m/s past a standing car.
-fn may_cut_in(me: &VehicleState, speed: f64, lanes: u64, o: &VehicleState, b: &WorstCase) -> bool {
-    let beside = |d: i32| o.lane + d >= FIRST_MAIN_LANE && lanes & bit(o.lane + d) != 0;
-    if o.kind != Kind::Hdv || o.on_ramp || o.lane < FIRST_MAIN_LANE || o.changing_lanes() {
+fn may_cut_in(
+    road: &Road,
+    (me, speed): (&VehicleState, f64),
+    lanes: u64,
+    o: &VehicleState,
+    b: &WorstCase,
+) -> bool {
+    let beside = |d: i32| !road.is_auxiliary(o.lane + d) && lanes & bit(o.lane + d) != 0;
+    if o.kind != Kind::Hdv || o.on_ramp || road.is_auxiliary(o.lane) || o.changing_lanes() {
         return false;
     }
     let changer_speed = o.speed + b.hdv_accel * b.dt;
@@ -424,13 +428,16 @@ fn gap_after_step(
 /// 0.48 s, which no braking could then stop.) Under SUMO's own merging the safety check keeps
 /// such gaps shut, and [`may_merge`] covers the merges it forces.
 fn may_take_gap(
-    me: &VehicleState,
-    speed: f64,
+    road: &Road,
+    (me, speed): (&VehicleState, f64),
     lanes: u64,
     o: &VehicleState,
     b: &WorstCase,
 ) -> bool {
-    if !b.gap_accepting_mergers || !on_acceleration_lane(o) || lanes & bit(FIRST_MAIN_LANE) == 0 {
+    if !b.gap_accepting_mergers || !on_acceleration_lane(road, o) {
+        return false;
+    }
+    if lanes & bit(road.toward_main(o.lane)) == 0 {
         return false;
     }
     let fastest = o.speed + b.hdv_accel * b.dt;
@@ -444,9 +451,10 @@ fn may_take_gap(
 /// for the last 120 s of a 300 s run: `paper` drivers, α 0.4, λ 3000). A CAV changing into lane
 /// 1 (`target`) behind it owes it the same: ramp CAVs queued behind a standing ramp HDV that
 /// took the room beside it one after another kept it standing for 17 s.
-fn yields_to(me: &VehicleState, target: Option<i32>, o: &VehicleState) -> bool {
-    let in_lane_1 = me.lane == FIRST_MAIN_LANE || target == Some(FIRST_MAIN_LANE);
-    in_lane_1 && on_acceleration_lane(o) && o.other_lane().is_none()
+fn yields_to(road: &Road, me: &VehicleState, target: Option<i32>, o: &VehicleState) -> bool {
+    let into = road.toward_main(o.lane);
+    let in_lane_1 = me.lane == into || target == Some(into);
+    in_lane_1 && on_acceleration_lane(road, o) && o.other_lane().is_none()
 }
 
 /// Whether ramp HDV `o`, on the acceleration lane and not yet moving over, cannot merge in
@@ -455,8 +463,9 @@ fn yields_to(me: &VehicleState, target: Option<i32>, o: &VehicleState) -> bool {
 /// may drive on past it. Held to the worst case instead, a CAV that came to a stand 4.6 m
 /// behind a ramp HDV standing at the lane end could never move again, and neither could the
 /// HDV (`paper` drivers, α 0.4, λ 3000).
-fn cannot_cut_in(me: &VehicleState, o: &VehicleState, b: &WorstCase) -> bool {
-    me.lane == FIRST_MAIN_LANE && yields_to(me, None, o) && o.rear() - me.front() < b.yield_gap
+fn cannot_cut_in(road: &Road, me: &VehicleState, o: &VehicleState, b: &WorstCase) -> bool {
+    let beside = me.lane == road.toward_main(o.lane);
+    beside && yields_to(road, me, None, o) && o.rear() - me.front() < b.yield_gap
 }
 
 /// Whether HDV `o` drives on the main-road lane beyond `target`, seen from CAV `me`'s lane, on a
@@ -477,11 +486,11 @@ pub(super) fn may_enter_from_beyond(
     o: &VehicleState,
 ) -> bool {
     let beyond = 2 * target - me.lane;
-    let weaving = me.lane == MERGE_LANE && road.weaving_at(o.front());
+    let weaving = road.is_auxiliary(me.lane) && road.weaving_at(o.front());
     o.kind == Kind::Hdv
         && !o.on_ramp
-        && (me.lane >= FIRST_MAIN_LANE || weaving)
-        && beyond >= FIRST_MAIN_LANE
+        && (!road.is_auxiliary(me.lane) || weaving)
+        && !road.is_auxiliary(beyond)
         && o.lane == beyond
 }
 

@@ -31,6 +31,7 @@ fn two_ramps() -> Road {
         edge("ramp2", 0..1, 360.0, true),
     ]);
     road.zones.push(MergeZone {
+        lane: 0,
         ramp_start: 360.0,
         start: 460.0,
         end: 640.0,

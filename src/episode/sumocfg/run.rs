@@ -14,7 +14,6 @@ use crate::episode::planning::Planning;
 use crate::episode::region::Region;
 use crate::episode::round::Round;
 use crate::episode::{NoObserver, Observer};
-use crate::model::road::MERGE_LANE;
 use crate::model::scene::{Kind, Limits, Origin, VehicleState};
 use crate::sumo::frame;
 use crate::sumo::{RawVehicleState, SumoClient, SumoError, VehicleReadings};
@@ -353,7 +352,7 @@ impl ScenarioTraffic {
             && !(first && entry.leaves_early)
             && front >= region.control_start
             && front < region.control_end
-            && region.road.lanes_at(front).contains(&lane);
+            && region.road.lane_exists(lane, front);
         let commanded = region.commanded();
         if planned && commanded && line.commanded != Some(g) {
             control::take_over(sim, &line.record.id)?;
@@ -449,7 +448,7 @@ fn scene_vehicle(
     // which the planners never merge and the shield never expects to move over (A10KW,
     // bk-mastar, α 0.6, seed 102: such an HDV, standing at the lane end, moved into lane 1
     // as a CAV from lane 2 did, 25 m behind it at 27.6 m/s; a controllable crash).
-    let merging = lane == MERGE_LANE && region.road.lanes_at(front).contains(&MERGE_LANE);
+    let merging = region.road.is_auxiliary(lane) && region.road.lane_exists(lane, front);
     // No faster than its type, nor than the lane it drives on allows (a CAV above that, as
     // it entered a slower lane, may hold its speed: it does not brake ahead of one).
     let top = line.max_speed.min(frame::speed_limit(

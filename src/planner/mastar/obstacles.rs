@@ -70,29 +70,51 @@ impl Mastar {
         let (y_lo, y_hi) = (st.pos.y - half_across, st.pos.y + half_across);
         let (s_lo, s_hi) = (st.pos.x - half_along, st.pos.x + half_along);
         const EPS: f64 = 0.05;
-        if y_lo < -0.5 * w - EPS || y_hi > (f64::from(self.road.top_lane()) + 0.5) * w + EPS {
+        let (bottom, top) = (self.road.bottom_lane(), self.road.top_lane());
+        let edge = |lane: i32, side: f64| (f64::from(lane) + 0.5 * side) * w;
+        if y_lo < edge(bottom, -1.0) - EPS || y_hi > edge(top, 1.0) + EPS {
             return false;
         }
-        let in_merge_lane = y_lo < 0.5 * w - EPS;
-        if in_merge_lane {
-            // Only ramp vehicles use it, and only until its zone ends.
-            let zone = self.road.zone_ahead(s_lo);
-            if !req.must_merge || s_hi > zone.end {
-                return false;
-            }
-            // Crossing between it and the main road only beside the acceleration lane.
-            let crossing = y_hi > 0.5 * w + EPS;
-            if crossing && s_lo < zone.start {
-                return false;
-            }
-            // Fully in the lane, the CAV must still be able to stop before its end, or the plan
-            // could leave it in a state from which the crash is certain.
-            let stop = st.speed * st.speed / (2.0 * self.library.emergency_decel);
-            if !crossing && stop > zone.end - s_hi + 1e-9 {
-                return false;
-            }
+        let stop = st.speed * st.speed / (2.0 * self.library.emergency_decel);
+        let auxiliary = (bottom..=top).filter(|&l| self.road.is_auxiliary(l));
+        auxiliary.into_iter().all(|lane| {
+            // The lane's line towards the carriageway and its outer one; the body overlaps the
+            // lane, and crosses its line towards the carriageway, or not.
+            let right = lane < self.road.toward_main(lane);
+            let (overlaps, crossing) = if right {
+                let (near, far) = (edge(lane, 1.0), edge(lane, -1.0));
+                (y_lo < near - EPS && y_hi > far + EPS, y_hi > near + EPS)
+            } else {
+                let (near, far) = (edge(lane, -1.0), edge(lane, 1.0));
+                (y_hi > near + EPS && y_lo < far - EPS, y_lo < near - EPS)
+            };
+            !overlaps || self.fits_auxiliary_lane(lane, (s_lo, s_hi), crossing, stop, req)
+        })
+    }
+
+    /// Whether a body spanning `s_lo..s_hi` on auxiliary lane `lane`, `crossing` its line
+    /// towards the carriageway or not, needing `stop` metres to stop, may be there: only a ramp
+    /// vehicle, only until the lane's zone ends, crossing only beside the acceleration lane.
+    fn fits_auxiliary_lane(
+        &self,
+        lane: i32,
+        (s_lo, s_hi): (f64, f64),
+        crossing: bool,
+        stop: f64,
+        req: &Request,
+    ) -> bool {
+        let Some(zone) = self.road.zone_on(lane, s_lo) else {
+            return false;
+        };
+        if !req.must_merge || s_hi > zone.end {
+            return false;
         }
-        true
+        if crossing && s_lo < zone.start {
+            return false;
+        }
+        // Fully in the lane, the CAV must still be able to stop before its end, or the plan
+        // could leave it in a state from which the crash is certain.
+        crossing || stop <= zone.end - s_hi + 1e-9
     }
 
     /// Whether the CAV at `st` at `step` is clear of every obstacle (see [`SafetyRule`](crate::planner::safety::SafetyRule)).

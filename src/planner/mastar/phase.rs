@@ -8,7 +8,6 @@
 use crate::config::{LowSpeedLaneChanges, PlannerSettings};
 use crate::model::kinematics::{free_flow_time, BicycleState};
 use crate::model::math::Point;
-use crate::model::road::MERGE_LANE;
 use crate::model::trajectory::Trajectory;
 use crate::planner::mastar::first_moves::Move;
 use crate::planner::mastar::obstacles::Obstacles;
@@ -226,7 +225,7 @@ impl<'p> PhaseSearch<'p> {
         let to_goal = if self.req.must_merge {
             let road = &self.planner.road;
             let rear = n.state.pos.x - 0.5 * self.req.length;
-            let approach = (road.zone_ahead(rear).start - rear).max(0.0);
+            let approach = (road.zone_for(n.lane, rear).start - rear).max(0.0);
             approach / (self.planner.v_max * self.dt) + self.library.lane_change_steps as f64
         } else {
             self.lacking_steps(n)
@@ -325,11 +324,12 @@ impl<'p> PhaseSearch<'p> {
         let slow = n.state.speed < settings.min_lane_change_speed;
         let slide_allowed = match settings.low_speed_lane_changes {
             LowSpeedLaneChanges::Off => false,
-            LowSpeedLaneChanges::Merge => n.lane == MERGE_LANE,
+            LowSpeedLaneChanges::Merge => self.planner.road.is_auxiliary(n.lane),
             LowSpeedLaneChanges::All => true,
         };
-        let before_zone = front < self.planner.road.zone_ahead(front).start;
-        !(n.lane == MERGE_LANE && before_zone) && (!slow || slide_allowed)
+        let zone = self.planner.road.zone_on(n.lane, front);
+        let before_zone = zone.is_some_and(|z| front < z.start);
+        !before_zone && (!slow || slide_allowed)
     }
 
     /// Whether the request's guard lets primitive `p`, rolled out as `seg` from the root, start.

@@ -45,7 +45,6 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 
-use crate::model::road::MERGE_LANE;
 use crate::model::scene::{Kind, Origin, Scene};
 use crate::model::trajectory::Trajectory;
 use crate::planner::mastar::{Mastar, NoPlan, Plan};
@@ -179,11 +178,12 @@ impl Problem<'_> {
     /// argue such a merge away: its unconditioned prediction stands (no optimism about HDVs).
     fn merge_is_certain(&self, a: usize) -> bool {
         let v = &self.scene.vehicles[a];
-        let forced = self.scene.road.forces_merge(v.front(), v.speed);
+        let road = &self.scene.road;
+        let forced = road.forces_merge(v.lane, v.front(), v.speed);
         v.kind == Kind::Hdv
             && v.origin == Origin::Ramp
-            && v.lane == MERGE_LANE
-            && (v.other_lane() == Some(MERGE_LANE + 1) || forced)
+            && road.is_auxiliary(v.lane)
+            && (v.other_lane().is_some_and(|to| road.is_merge(v.lane, to)) || forced)
     }
 
     /// The tracks of `ts` over this problem's horizon.

@@ -9,7 +9,6 @@ use std::sync::Arc;
 
 use super::model::{FollowSample, HORIZON_STEPS, STEPS_1S};
 use crate::episode::Observer;
-use crate::model::road::MERGE_LANE;
 use crate::model::scene::{Kind, Scene};
 
 /// Beyond this distance (m) a vehicle ahead does not count as a leader.
@@ -40,7 +39,7 @@ impl Observer for FollowRecorder {
         let seen = scene
             .vehicles
             .iter()
-            .filter(|v| v.lane != MERGE_LANE && !v.on_ramp)
+            .filter(|v| !scene.road.is_auxiliary(v.lane) && !v.on_ramp)
             .map(|v| Seen {
                 id: v.id.clone(),
                 hdv: v.kind == Kind::Hdv,
