@@ -1,4 +1,5 @@
-//! `bkpbs calibrate`: the planner's HDV model against the HDVs SUMO drives under a profile.
+//! `bkpbs calibrate`: the planner's HDV model against the HDVs SUMO drives under a profile,
+//! or on a scenario of the user's own (`--sumocfg`).
 
 use std::path::PathBuf;
 
@@ -10,13 +11,14 @@ use bkpbs::config::Config;
 use bkpbs::report::calibration;
 use bkpbs::train::longitudinal::{self, CalibrateSpec};
 
-use super::scenario::load_config;
+use super::scenario::{check_own_scenario, load_config};
 
 #[derive(Args)]
 pub struct CalibrateArgs {
-    /// HDV driver profile to calibrate against (see `bkpbs config --print --hdv-profile`).
-    #[arg(long, default_value = "sumo-safe")]
-    profile: String,
+    /// HDV driver profile to calibrate against (see `bkpbs config --print --hdv-profile`)
+    /// [default: sumo-safe].
+    #[arg(long)]
+    profile: Option<String>,
     /// Episodes the IDM is fitted on.
     #[arg(long, default_value_t = 20, allow_negative_numbers = true)]
     episodes: u64,
@@ -39,7 +41,14 @@ pub struct CalibrateArgs {
     /// Profiles of the matrix, comma-separated [default: every built-in profile].
     #[arg(long, requires = "matrix", value_name = "NAMES")]
     profiles: Option<String>,
+    /// A SUMO configuration of your own (.sumocfg): its routes are the episodes' demand and its
+    /// vehicle types the drivers (no profile), each merge region's HDVs sampled apart.
+    #[arg(long, value_name = "FILE", conflicts_with_all = ["profile", "matrix"])]
+    sumocfg: Option<PathBuf>,
 }
+
+/// The profile calibrate runs when none is given.
+const DEFAULT_PROFILE: &str = "sumo-safe";
 
 /// A checked calibration run.
 pub struct Calibrate {
@@ -52,8 +61,14 @@ pub struct Calibrate {
 
 impl CalibrateArgs {
     pub fn resolve(self) -> Result<Calibrate> {
-        let profile = self.profile;
-        let config = load_config(self.config.as_deref(), |c| c.hdv.profile = profile)?;
+        let (profile, sumocfg) = (self.profile.clone(), self.sumocfg.clone());
+        let config = load_config(self.config.as_deref(), |c| {
+            c.hdv.profile = profile.unwrap_or_else(|| DEFAULT_PROFILE.into());
+            if sumocfg.is_some() {
+                c.scenario.sumocfg = sumocfg;
+            }
+        })?;
+        self.check_scenario(&config)?;
         let matrix: Option<Vec<String>> = match (self.matrix, &self.profiles) {
             (false, _) => None,
             (true, None) => Some(BUILT_IN.iter().map(|p| p.to_string()).collect()),
@@ -80,6 +95,26 @@ impl CalibrateArgs {
             out: self.out,
             matrix,
         })
+    }
+
+    /// A scenario of the user's own (`--sumocfg` or the config's `[scenario] sumocfg`) that can
+    /// be read and has a region to plan, without the flags of the paper's drivers.
+    fn check_scenario(&self, config: &Config) -> Result<()> {
+        let Some(cfg) = &config.scenario.sumocfg else {
+            return Ok(());
+        };
+        for (flag, given) in [
+            ("--profile", self.profile.is_some()),
+            ("--matrix", self.matrix),
+        ] {
+            if given {
+                anyhow::bail!(
+                    "{flag}: a scenario of your own ({}) brings its own drivers; leave {flag} out",
+                    cfg.display()
+                );
+            }
+        }
+        check_own_scenario(config)
     }
 }
 

@@ -22,6 +22,19 @@ pub fn load_config(file: Option<&Path>, flags: impl FnOnce(&mut Config)) -> Resu
     Ok(config)
 }
 
+/// Checks the scenario of the user's own that `config` runs, if any, before any episode: its
+/// configuration and every file it names can be read, and its network has a region to plan.
+///
+/// # Errors
+/// A file that cannot be read or a network without a region, naming the file.
+pub fn check_own_scenario(config: &Config) -> Result<()> {
+    if config.scenario.sumocfg.is_some() {
+        bkpbs::sumo::frame::scenario_roads(&config.scenario)?;
+        bkpbs::sumo::scenario_record::scenario_record(&config.scenario)?;
+    }
+    Ok(())
+}
+
 /// Scenario flags shared by the subcommands that run SUMO; each overrides the config file.
 #[derive(Args)]
 pub struct ScenarioArgs {

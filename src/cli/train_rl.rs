@@ -13,7 +13,7 @@ use bkpbs::train::ppo::rollout::RolloutStats;
 use bkpbs::train::ppo::trainer::{self, Checkpoint, RunFiles, TrainSettings};
 use bkpbs::train::ppo::workers::{Pool, PoolError};
 
-use super::scenario::load_config;
+use super::scenario::{check_own_scenario, load_config};
 
 #[derive(Args)]
 pub struct TrainRlArgs {
@@ -47,6 +47,11 @@ pub struct TrainRlArgs {
     /// TOML file with scenario settings (α, λ and seed are set per episode).
     #[arg(long)]
     config: Option<PathBuf>,
+    /// A SUMO configuration of your own (.sumocfg; overrides the config's scenario.sumocfg):
+    /// train on its routes and vehicle types, every merge region's CAVs acting (α and the
+    /// seed set per episode; λ does not apply).
+    #[arg(long, value_name = "FILE")]
+    sumocfg: Option<PathBuf>,
 }
 
 /// The most SUMO episodes per PPO update.
@@ -65,7 +70,14 @@ pub struct TrainRl {
 
 impl TrainRlArgs {
     pub fn resolve(self) -> Result<TrainRl> {
-        let config = load_config(self.config.as_deref(), |_| {})?;
+        let sumocfg = self.sumocfg;
+        let config = load_config(self.config.as_deref(), |c| {
+            if sumocfg.is_some() {
+                c.scenario.sumocfg = sumocfg;
+            }
+        })?;
+        // Read before any worker starts: a bad scenario is one line, not a failed rollout.
+        check_own_scenario(&config)?;
         if self.steps == 0 || self.episodes_per_update == 0 {
             anyhow::bail!("--steps and --episodes-per-update must be positive");
         }

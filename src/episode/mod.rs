@@ -38,6 +38,6 @@ pub mod traffic;
 pub mod trajectories;
 
 pub use error::{sumo_errors, EpisodeError};
-pub use observer::{NoObserver, Observer};
+pub use observer::{NoObserver, Observer, PerRegion};
 pub use ran::Ran;
 pub use runner::{run, run_observed, run_with_demand, Driver, EpisodeResult};

@@ -54,9 +54,85 @@ impl<O: Observer + ?Sized> Observer for &mut O {
     }
 }
 
+/// One observer per merge region, each made by `new` from its region's number as the region is
+/// first seen: for a recorder that reads the scenes it is shown as those of one road, which on
+/// a user's scenario of several regions must see each region's apart. The paper's merge is
+/// region 0, so there it is the one observer `new(0)`. It sees scenes only.
+pub struct PerRegion<O, F> {
+    new: F,
+    regions: Vec<O>,
+}
+
+impl<O, F: Fn(usize) -> O> PerRegion<O, F> {
+    /// No region seen yet; `new(k)` makes region `k`'s observer.
+    pub fn new(new: F) -> Self {
+        PerRegion {
+            new,
+            regions: Vec::new(),
+        }
+    }
+
+    /// The regions' observers so far, in region order.
+    pub fn regions(&self) -> &[O] {
+        &self.regions
+    }
+
+    /// The regions' observers in region order; region 0's (made now if no scene came) at least.
+    pub fn into_regions(mut self) -> Vec<O> {
+        if self.regions.is_empty() {
+            self.regions.push((self.new)(0));
+        }
+        self.regions
+    }
+}
+
+impl<O: Observer, F: Fn(usize) -> O> Observer for PerRegion<O, F> {
+    fn observe(&mut self, scene: &Scene) {
+        self.observe_region(0, scene);
+    }
+
+    fn observe_region(&mut self, region: usize, scene: &Scene) {
+        while self.regions.len() <= region {
+            let next = (self.new)(self.regions.len());
+            self.regions.push(next);
+        }
+        self.regions[region].observe(scene);
+    }
+}
+
 /// An observer that looks away.
 pub struct NoObserver;
 
 impl Observer for NoObserver {
     fn observe(&mut self, _scene: &Scene) {}
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Region `.0`'s observer, counting the scenes it saw.
+    struct Count(usize, usize);
+
+    impl Observer for Count {
+        fn observe(&mut self, _scene: &Scene) {
+            self.1 += 1;
+        }
+    }
+
+    #[test]
+    fn each_region_has_its_own_observer_made_as_the_region_is_first_seen() {
+        let none = PerRegion::new(|k| Count(k, 0)).into_regions();
+        assert_eq!(
+            none.iter().map(|c| (c.0, c.1)).collect::<Vec<_>>(),
+            [(0, 0)]
+        );
+        let mut p = PerRegion::new(|k| Count(k, 0));
+        let scene = Scene::on_paper_road(0.0, Vec::new());
+        p.observe_region(2, &scene);
+        p.observe(&scene);
+        p.observe_region(2, &scene);
+        let seen: Vec<(usize, usize)> = p.regions().iter().map(|c| (c.0, c.1)).collect();
+        assert_eq!(seen, [(0, 1), (1, 0), (2, 2)]);
+    }
 }

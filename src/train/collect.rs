@@ -21,7 +21,7 @@ use serde::{Deserialize, Serialize};
 use super::dataset::{Dataset, Sample};
 use crate::config::{Config, PredictorKind};
 use crate::controller;
-use crate::episode::{self, Driver, EpisodeError, Observer};
+use crate::episode::{self, Driver, EpisodeError, Observer, PerRegion};
 use crate::model::scene::{Kind, Scene, VehicleState};
 use crate::predict::features::{
     cav_node, ego_of, is_decision_point, lane_change_direction, lane_change_start, lane_class,
@@ -492,14 +492,11 @@ fn collect_episode(base: &Config, plan: &CollectPlan, e: usize) -> Result<Record
         cause: Box::new(cause),
     };
     config.validate().map_err(|c| fail(c.into()))?;
-    let mut recorders = RegionRecorders {
-        new: |region: usize| {
-            // Each region thins on a stream of its own.
-            let seed = spec.seed.wrapping_add((region as u64) << 32);
-            Recorder::new(e as u32, seed, config.scenario.dt, plan.main_negative_keep)
-        },
-        regions: Vec::new(),
-    };
+    let mut recorders = PerRegion::new(|region: usize| {
+        // Each region thins on a stream of its own.
+        let seed = spec.seed.wrapping_add((region as u64) << 32);
+        Recorder::new(e as u32, seed, config.scenario.dt, plan.main_negative_keep)
+    });
     if config.scenario.sumocfg.is_some() {
         episode::sumocfg::run_observed(&config, &spec.planner, &mut recorders).map_err(fail)?;
     } else {
@@ -512,40 +509,18 @@ fn collect_episode(base: &Config, plan: &CollectPlan, e: usize) -> Result<Record
         )
         .map_err(fail)?;
     }
-    Ok(recorders.into_one())
+    Ok(into_one(recorders.into_regions()))
 }
 
-/// One [`Recorder`] per merge region, made by `new` as its region is first seen.
-struct RegionRecorders<F> {
-    new: F,
-    regions: Vec<Recorder>,
-}
-
-impl<F: Fn(usize) -> Recorder> Observer for RegionRecorders<F> {
-    fn observe(&mut self, scene: &Scene) {
-        self.observe_region(0, scene);
+/// Every region's samples, in region order, and their counts together.
+fn into_one(regions: Vec<Recorder>) -> Recorder {
+    let mut regions = regions.into_iter();
+    let mut one = regions.next().expect("region 0's recorder at least");
+    for mut r in regions {
+        one.samples.append(&mut r.samples);
+        one.stats += r.stats;
     }
-
-    fn observe_region(&mut self, region: usize, scene: &Scene) {
-        while self.regions.len() <= region {
-            let next = (self.new)(self.regions.len());
-            self.regions.push(next);
-        }
-        self.regions[region].observe(scene);
-    }
-}
-
-impl<F: Fn(usize) -> Recorder> RegionRecorders<F> {
-    /// Every region's samples, in region order, and their counts together.
-    fn into_one(self) -> Recorder {
-        let mut regions = self.regions.into_iter();
-        let mut one = regions.next().unwrap_or_else(|| (self.new)(0));
-        for mut r in regions {
-            one.samples.append(&mut r.samples);
-            one.stats += r.stats;
-        }
-        one
-    }
+    one
 }
 
 /// The collection metadata of a data file, if it has any.
@@ -566,24 +541,23 @@ mod tests {
 
     #[test]
     fn each_region_is_recorded_apart_and_the_regions_samples_come_in_region_order() {
-        let mut recorders = RegionRecorders {
-            new: |region: usize| Recorder::new(7, 100 + region as u64, 0.2, 1.0),
-            regions: Vec::new(),
-        };
+        let mut recorders =
+            PerRegion::new(|region: usize| Recorder::new(7, 100 + region as u64, 0.2, 1.0));
         for k in 0..3 {
             let t = f64::from(k) * 0.2;
             recorders.observe_region(0, &scene_of("a", t));
             recorders.observe_region(1, &scene_of("b", t));
         }
-        assert_eq!(recorders.regions.len(), 2);
-        for (r, id) in recorders.regions.iter().zip(["a", "b"]) {
+        let mut regions = recorders.into_regions();
+        assert_eq!(regions.len(), 2);
+        for (r, id) in regions.iter().zip(["a", "b"]) {
             assert_eq!(r.step, 3, "each region's recorder saw its own three scenes");
             let ids: Vec<&str> = (r.buffer.iter())
                 .flat_map(|b| b.scene.vehicles.iter().map(|v| &*v.id))
                 .collect();
             assert!(ids.iter().all(|i| *i == id), "region of {id} saw {ids:?}");
         }
-        recorders.regions[0].samples.push(Sample {
+        regions[0].samples.push(Sample {
             episode: 7,
             step: 0,
             subset: Subset::Main,
@@ -591,10 +565,10 @@ mod tests {
             weight: 1.0,
             obs: Default::default(),
         });
-        let mut second = recorders.regions[0].samples[0].clone();
+        let mut second = regions[0].samples[0].clone();
         second.step = 1;
-        recorders.regions[1].samples.push(second);
-        let one = recorders.into_one();
+        regions[1].samples.push(second);
+        let one = into_one(regions);
         let steps: Vec<u32> = one.samples.iter().map(|s| s.step).collect();
         assert_eq!(steps, [0, 1]);
     }

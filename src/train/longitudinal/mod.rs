@@ -1,9 +1,10 @@
 //! Longitudinal calibration (`bkpbs calibrate`): how well the planner's HDV model predicts the
-//! HDVs SUMO drives under a driver profile. Follow samples come from SUMO episodes
-//! ([`samples`]), an IDM is fitted to them by nonlinear least squares ([`fit`]), and on held-out
-//! episodes its open-loop predictions ([`model`]) are compared with constant speed, the
-//! planner's present assumption; per-vehicle fits say how well heterogeneous drivers' drawn
-//! parameters are recovered.
+//! HDVs SUMO drives under a driver profile, or on a user's scenario (`scenario.sumocfg`: its
+//! routes the demand, its vehicle types the drivers). Follow samples come from SUMO episodes
+//! ([`samples`], each merge region's apart), an IDM is fitted to them by nonlinear least
+//! squares ([`fit`]), and on held-out episodes its open-loop predictions ([`model`]) are
+//! compared with constant speed, the planner's present assumption; on the paper's demand,
+//! per-vehicle fits say how well heterogeneous drivers' drawn parameters are recovered.
 
 pub mod fit;
 pub mod model;
@@ -13,9 +14,10 @@ use std::collections::{BTreeMap, HashMap};
 
 use serde::{Deserialize, Serialize};
 
-use crate::config::Config;
-use crate::episode::{self, Driver, EpisodeError};
+use crate::config::{Config, TrainingScenario};
+use crate::episode::{self, Driver, EpisodeError, PerRegion};
 use crate::sumo::files::driver_type_draws;
+use crate::sumo::scenario_record::scenario_record;
 use fit::fit_idm;
 use model::{predict_constant_speed, predict_idm, rmse, FollowSample, IdmParams};
 use samples::FollowRecorder;
@@ -28,9 +30,13 @@ pub const VERSION: u32 = 1;
 pub const MAX_FIT_SAMPLES: usize = 4000;
 /// Fewest samples of one vehicle for a per-vehicle fit.
 pub const MIN_VEHICLE_SAMPLES: usize = 10;
+/// Why a calibration on a user's scenario recovers no drawn parameters.
+pub const RECOVERY_NOT_APPLICABLE: &str = "not applicable on a scenario of your own: its \
+    vehicle types are its drivers, and per-vehicle recovery compares fits with a driver \
+    profile's drawn parameters";
 
-/// What to calibrate on: the profile's episodes `seed_base ..` for fitting, the next
-/// `held_out` seeds for evaluation.
+/// What to calibrate on: the episodes (the profile's, or the user's scenario's) of seeds
+/// `seed_base ..` for fitting, the next `held_out` seeds for evaluation.
 #[derive(Debug, Clone)]
 pub struct CalibrateSpec {
     /// Episodes to fit on (seeds `seed_base ..`).
@@ -80,8 +86,12 @@ pub struct Calibration {
     pub format: String,
     /// Always [`VERSION`].
     pub version: u32,
-    /// The HDV driver profile calibrated on (`[hdv] profile`).
-    pub profile: String,
+    /// The HDV driver profile calibrated on (`[hdv] profile`); none on a user's scenario.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub profile: Option<String>,
+    /// The user's scenario calibrated on, if any.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub scenario: Option<CalibratedScenario>,
     /// Episodes fitted on.
     pub episodes: u64,
     /// Held-out episodes evaluated on.
@@ -100,6 +110,34 @@ pub struct Calibration {
     pub idm_fitted: Errors,
     /// Heterogeneous profiles: recovery of the drawn parameters by per-vehicle fits.
     pub recovery: Vec<Recovery>,
+    /// Why there is no recovery at all, on a user's scenario ([`RECOVERY_NOT_APPLICABLE`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub recovery_not_applicable: Option<String>,
+}
+
+/// A user's scenario as a calibration records it.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CalibratedScenario {
+    /// The SUMO configuration as given (`--sumocfg`, `[scenario] sumocfg`).
+    pub sumocfg: String,
+    /// Its world: the configuration's file name and the SHA-256 of it and every file it names.
+    pub files: TrainingScenario,
+}
+
+impl CalibratedScenario {
+    /// The scenario `config` runs, if it runs one of the user's.
+    ///
+    /// # Errors
+    /// A file of the scenario that cannot be read, naming it.
+    pub fn of(config: &Config) -> Result<Option<CalibratedScenario>, EpisodeError> {
+        let Some(cfg) = &config.scenario.sumocfg else {
+            return Ok(None);
+        };
+        Ok(Some(CalibratedScenario {
+            sumocfg: cfg.display().to_string(),
+            files: scenario_record(&config.scenario)?,
+        }))
+    }
 }
 
 impl Calibration {
@@ -115,8 +153,8 @@ impl Calibration {
         let mut out =
             line("constant-speed", &self.constant_speed) + &line("idm-fitted", &self.idm_fitted);
         out += &format!(
-            "idm fitted on {} samples of {} episodes (profile {}): v0 = {:.3} × desired, T = {:.3} s, s0 = {:.3} m, a = {:.3} m/s², b = {:.3} m/s²; evaluated on {} samples of {} held-out episodes\n",
-            self.fit_samples, self.episodes, self.profile, p.v0_factor, p.time_headway, p.min_gap, p.accel, p.decel, self.held_out_samples, self.held_out
+            "idm fitted on {} samples of {} episodes ({}): v0 = {:.3} × desired, T = {:.3} s, s0 = {:.3} m, a = {:.3} m/s², b = {:.3} m/s²; evaluated on {} samples of {} held-out episodes\n",
+            self.fit_samples, self.episodes, self.world(), p.v0_factor, p.time_headway, p.min_gap, p.accel, p.decel, self.held_out_samples, self.held_out
         );
         for r in &self.recovery {
             out += &format!(
@@ -126,26 +164,44 @@ impl Calibration {
                 r.vehicles
             );
         }
+        if let Some(why) = &self.recovery_not_applicable {
+            out += &format!("per-vehicle recovery: {why}\n");
+        }
         out
+    }
+
+    /// What was calibrated on, for the report: `profile NAME` or `scenario PATH`.
+    fn world(&self) -> String {
+        match (&self.scenario, &self.profile) {
+            (Some(s), _) => format!("scenario {}", s.sumocfg),
+            (None, Some(p)) => format!("profile {p}"),
+            (None, None) => "no profile".into(),
+        }
     }
 }
 
-/// One episode's samples and each vehicle's SUMO type.
+/// Vehicle id → its SUMO type.
+type VehicleTypes = HashMap<String, String>;
+
+/// One episode's samples (each merge region's apart, in region order) and, on the paper's
+/// demand, each vehicle's SUMO type (a user's scenario's drivers have no profile's draws).
 fn episode_samples(
     config: &Config,
     seed: u64,
-) -> Result<(Vec<FollowSample>, HashMap<String, String>), EpisodeError> {
+) -> Result<(Vec<FollowSample>, Option<VehicleTypes>), EpisodeError> {
     let mut c = config.clone();
     c.scenario.seed = seed;
-    let planned = episode::demand::generate_for(&c)?;
-    let mut recorder = FollowRecorder::default();
-    let result = episode::run_observed(&c, Driver::Named("sumo"), &planned, &mut recorder)?;
-    let types = result
-        .vehicles
-        .iter()
-        .map(|v| (v.id.clone(), v.sumo_type.clone()))
-        .collect();
-    Ok((recorder.samples(), types))
+    let mut recorders = PerRegion::new(|_| FollowRecorder::default());
+    let types = if c.scenario.sumocfg.is_some() {
+        episode::sumocfg::run_observed(&c, "sumo", &mut recorders)?;
+        None
+    } else {
+        let planned = episode::demand::generate_for(&c)?;
+        let result = episode::run_observed(&c, Driver::Named("sumo"), &planned, &mut recorders)?;
+        let types = result.vehicles.iter();
+        Some(types.map(|v| (v.id.clone(), v.sumo_type.clone())).collect())
+    };
+    Ok((samples::of_regions(&recorders.into_regions()), types))
 }
 
 /// A sample of a vehicle with drawn parameters, and those draws.
@@ -168,7 +224,7 @@ fn driver_index(sumo_type: &str) -> Option<usize> {
         .ok()
 }
 
-/// Runs the profile's episodes and gathers their samples.
+/// Runs the episodes (the profile's, or the user's scenario's) and gathers their samples.
 fn gather(
     config: &Config,
     spec: &CalibrateSpec,
@@ -179,38 +235,54 @@ fn gather(
         held_out: Vec::new(),
         drawn: Vec::new(),
     };
+    let world = match &config.scenario.sumocfg {
+        Some(cfg) => cfg.display().to_string(),
+        None => config.hdv.profile.clone(),
+    };
     for k in 0..spec.episodes + spec.held_out {
         let seed = spec.seed_base + k;
         let (samples, types) = episode_samples(config, seed)?;
-        progress(&format!(
-            "{} seed {seed}: {} samples",
-            config.hdv.profile,
-            samples.len()
-        ));
+        progress(&format!("{world} seed {seed}: {} samples", samples.len()));
         if k >= spec.episodes {
             data.held_out.extend(samples);
             continue;
         }
-        let mut c = config.clone();
-        c.scenario.seed = seed;
-        let draws = driver_type_draws(&c);
-        for s in &samples {
+        if let Some(types) = types {
+            data.drawn
+                .extend(with_draws(config, seed, &samples, &types));
+        }
+        data.fit.extend(samples);
+    }
+    Ok(data)
+}
+
+/// The samples of episode `seed` on the paper's demand, each with its vehicle's drawn
+/// parameters if its driver type (`types`: vehicle → SUMO type) has any; vehicles named
+/// `seed/id`, apart from other episodes'.
+fn with_draws(
+    config: &Config,
+    seed: u64,
+    samples: &[FollowSample],
+    types: &VehicleTypes,
+) -> Vec<DrawnSample> {
+    let mut c = config.clone();
+    c.scenario.seed = seed;
+    let draws = driver_type_draws(&c);
+    samples
+        .iter()
+        .map(|s| {
             let drawn = types
                 .get(&s.vehicle)
                 .and_then(|t| driver_index(t))
                 .and_then(|i| draws.get(i).cloned());
             let vehicle = format!("{seed}/{}", s.vehicle);
-            data.drawn.push((
-                FollowSample {
-                    vehicle,
-                    ..s.clone()
-                },
-                drawn,
-            ));
-        }
-        data.fit.extend(samples);
-    }
-    Ok(data)
+            let sample = FollowSample {
+                vehicle,
+                ..s.clone()
+            };
+            (sample, drawn)
+        })
+        .collect()
 }
 
 /// The global IDM fit of a profile's samples (at most [`MAX_FIT_SAMPLES`], evenly thinned),
@@ -231,19 +303,27 @@ fn fit_global(config: &Config, samples: &[FollowSample]) -> (IdmParams, usize) {
     )
 }
 
-/// Runs the episodes, fits and evaluates; `progress` hears about each episode.
+/// Runs the episodes, fits and evaluates; `progress` hears about each episode. On a user's
+/// scenario (`scenario.sumocfg`) the calibration records it and no profile, and says why it
+/// recovers no drawn parameters.
+///
+/// # Errors
+/// A file of the scenario that cannot be read, or an episode that fails.
 pub fn calibrate(
     config: &Config,
     spec: &CalibrateSpec,
     mut progress: impl FnMut(&str),
 ) -> Result<Calibration, EpisodeError> {
+    let scenario = CalibratedScenario::of(config)?;
     let data = gather(config, spec, &mut progress)?;
     let dt = config.scenario.dt;
     let (global, fit_samples) = fit_global(config, &data.fit);
+    let own = scenario.is_some();
     Ok(Calibration {
         format: FORMAT.into(),
         version: VERSION,
-        profile: config.hdv.profile.clone(),
+        profile: (!own).then(|| config.hdv.profile.clone()),
+        scenario,
         episodes: spec.episodes,
         held_out: spec.held_out,
         seed_base: spec.seed_base,
@@ -253,6 +333,7 @@ pub fn calibrate(
         constant_speed: rmse(&data.held_out, |s| predict_constant_speed(s, dt)).into(),
         idm_fitted: rmse(&data.held_out, |s| predict_idm(&global, s, dt)).into(),
         recovery: recover(&data.drawn, global, dt),
+        recovery_not_applicable: own.then(|| RECOVERY_NOT_APPLICABLE.into()),
     })
 }
 

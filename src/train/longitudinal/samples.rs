@@ -3,6 +3,9 @@
 //! [`FollowSample`] when the next 3 s are clean: it keeps its lane and its leader (no cut-in,
 //! nobody leaves), or drives a free road (nobody within [`FREE_ROAD_M`] ahead) throughout.
 //! The acceleration lane is left out: its vehicles brake for the lane's end, not a leader.
+//! A recorder reads the scenes it sees as one road's: on a user's scenario of several merge
+//! regions each region has its own ([`PerRegion`](crate::episode::PerRegion)), and
+//! [`of_regions`] puts their samples together.
 
 use std::collections::HashMap;
 use std::sync::Arc;
@@ -52,6 +55,11 @@ impl Observer for FollowRecorder {
             .collect();
         self.steps.push(seen);
     }
+}
+
+/// The samples of each merge region's recorder, in region order.
+pub fn of_regions(regions: &[FollowRecorder]) -> Vec<FollowSample> {
+    regions.iter().flat_map(FollowRecorder::samples).collect()
 }
 
 /// The nearest vehicle ahead of `f` on its lane within [`FREE_ROAD_M`], if any.
@@ -117,5 +125,51 @@ impl FollowRecorder {
             speed_1s: own[STEPS_1S].1,
             speed_3s: own[HORIZON_STEPS].1,
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::episode::PerRegion;
+    use crate::model::scene::{Origin, VehicleState};
+
+    /// Step `k` of a region where HDV `id` follows `id-lead` 30 m ahead, both at 25 m/s.
+    fn following(id: &str, k: usize) -> Scene {
+        let s = 100.0 + 25.0 * 0.2 * k as f64;
+        let v = |name: &str, at| VehicleState::on_lane(name, Kind::Hdv, Origin::Main, at, 1, 25.0);
+        let lead = format!("{id}-lead");
+        Scene::on_paper_road(0.2 * k as f64, vec![v(id, s), v(&lead, s + 30.0)])
+    }
+
+    /// The vehicles of `samples`, in order.
+    fn vehicles(samples: &[FollowSample]) -> Vec<&str> {
+        samples.iter().map(|s| s.vehicle.as_str()).collect()
+    }
+
+    /// Two regions' scenes arrive interleaved, step by step, as the episode loop shows them:
+    /// one recorder per region samples each as if it had run alone, region 0's samples first;
+    /// one recorder for both would read them as one road's steps and find nobody's next 3 s.
+    #[test]
+    fn each_region_is_sampled_apart_and_its_samples_come_in_region_order() {
+        let mut per_region = PerRegion::new(|_| FollowRecorder::default());
+        let mut shared = FollowRecorder::default();
+        let mut alone = [FollowRecorder::default(), FollowRecorder::default()];
+        for k in 0..HORIZON_STEPS + 1 + STRIDE {
+            for (r, id) in ["a", "b"].into_iter().enumerate() {
+                let scene = following(id, k);
+                per_region.observe_region(r, &scene);
+                shared.observe_region(r, &scene);
+                alone[r].observe(&scene);
+            }
+        }
+        let got = of_regions(&per_region.into_regions());
+        let want: Vec<FollowSample> = alone.iter().flat_map(FollowRecorder::samples).collect();
+        assert_eq!(
+            vehicles(&want),
+            ["a", "a-lead", "a", "a-lead", "b", "b-lead", "b", "b-lead"]
+        );
+        assert_eq!(format!("{got:?}"), format!("{want:?}"));
+        assert!(shared.samples().is_empty());
     }
 }

@@ -5,19 +5,26 @@
 //! the episode ends, at its last decision, whose value bootstraps what follows: the road goes on
 //! past the section, so arriving is not an end of the task (else the policy would learn that
 //! lingering collects more reward).
+//!
+//! On a user's scenario (`scenario.sumocfg`) each merge region's CAVs are driven by a controller
+//! of the region's own, as the `rl-ppo` planner drives them there, and each region's CAVs give
+//! their segments apart (a CAV driving through two regions gives one in each).
 
-use std::collections::HashMap;
-use std::sync::Arc;
+use std::collections::HashSet;
+use std::sync::{Arc, Mutex, PoisonError};
 
 use serde::{Deserialize, Serialize};
 
-use super::env::{agent_demand, Agents};
+use super::env::{agent_demand, agent_fleet, Agents};
 use super::reward::RewardSettings;
 use super::{Segment, Step};
 use crate::config::Config;
 use crate::controller::rl_ppo::{Choice, Decision, RlPpo};
+use crate::controller::{Command, Controller};
 use crate::episode::metrics::Outcome;
-use crate::episode::{self, Driver, EpisodeError, NoObserver};
+use crate::episode::round::Round;
+use crate::episode::{self, sumocfg, Driver, EpisodeError, NoObserver};
+use crate::model::scene::Scene;
 use crate::planner::primitives::Primitive;
 use crate::policy::network::ActorCritic;
 
@@ -92,19 +99,15 @@ pub fn run(
 ) -> Result<Rollout, EpisodeError> {
     config.validate()?;
     let keep_segments = matches!(choice, Choice::Sample(_));
-    let mut ctl = RlPpo::new(config, net, choice, true);
-    let demand = agent_demand(config, agents)?;
-    let result = episode::run_observed(config, Driver::Given(&mut ctl), &demand, &mut NoObserver)?;
-    let outcomes: HashMap<&str, Outcome> = result
-        .vehicles
-        .iter()
-        .map(|v| (v.id.as_str(), v.outcome))
-        .collect();
+    let ran = match config.scenario.sumocfg.is_some() {
+        true => scenario_episode(config, net, choice, agents)?,
+        false => paper_episode(config, net, choice, agents)?,
+    };
     let mut out = Rollout::default();
     out.stats.episodes = 1;
-    out.stats.wall_s = result.timing.wall_s;
-    for (id, decisions) in ctl.take_record().vehicles {
-        let crashed = outcomes.get(&*id) == Some(&Outcome::Crashed);
+    out.stats.wall_s = ran.wall_s;
+    for (id, decisions) in ran.decisions {
+        let crashed = ran.crashed.contains(&*id);
         let seg = segment(&decisions, crashed, reward);
         out.stats.agents += 1;
         out.stats.steps += decisions.len() as u64;
@@ -116,6 +119,111 @@ pub fn run(
         }
     }
     Ok(out)
+}
+
+/// What the CAVs of one episode decided, and which of them crashed.
+struct Decided {
+    /// (vehicle, its decisions), as the controllers recorded them.
+    decisions: Vec<(Arc<str>, Vec<Decision>)>,
+    /// The vehicles removed in a collision.
+    crashed: HashSet<String>,
+    /// The episode's wall time (s).
+    wall_s: f64,
+}
+
+/// The vehicles of `outcomes` (id, outcome) that crashed.
+fn crashed<'a>(outcomes: impl Iterator<Item = (&'a String, Outcome)>) -> HashSet<String> {
+    outcomes
+        .filter(|(_, o)| *o == Outcome::Crashed)
+        .map(|(id, _)| id.clone())
+        .collect()
+}
+
+/// The episode on the paper's demand, one controller driving its CAVs.
+fn paper_episode(
+    config: &Config,
+    net: Arc<ActorCritic>,
+    choice: Choice,
+    agents: Agents,
+) -> Result<Decided, EpisodeError> {
+    let mut ctl = RlPpo::new(config, net, choice, true);
+    let demand = agent_demand(config, agents)?;
+    let result = episode::run_observed(config, Driver::Given(&mut ctl), &demand, &mut NoObserver)?;
+    Ok(Decided {
+        decisions: ctl.take_record().vehicles,
+        crashed: crashed(result.vehicles.iter().map(|v| (&v.id, v.outcome))),
+        wall_s: result.timing.wall_s,
+    })
+}
+
+/// The episode on the user's scenario of `config`, each region's CAVs driven by a controller
+/// of its own; the regions' decisions in region order.
+fn scenario_episode(
+    config: &Config,
+    net: Arc<ActorCritic>,
+    choice: Choice,
+    agents: Agents,
+) -> Result<Decided, EpisodeError> {
+    let controllers = Arc::new(Mutex::new(Vec::new()));
+    let round = RegionControllers {
+        controllers: Arc::clone(&controllers),
+        net,
+        choice,
+    };
+    let result = sumocfg::run_together(config, "rl-ppo", Box::new(round), agent_fleet(agents))?;
+    let mut controllers = controllers.lock().unwrap_or_else(PoisonError::into_inner);
+    Ok(Decided {
+        decisions: (controllers.iter_mut())
+            .flat_map(|c| c.take_record().vehicles)
+            .collect(),
+        crashed: crashed(result.vehicles.iter().map(|v| (&v.id, v.outcome))),
+        wall_s: result.timing.wall_s,
+    })
+}
+
+/// Plans every merge region of a scenario with a recording [`RlPpo`] of its own, made with the
+/// region's configuration at the first round; the caller shares them, to read their records
+/// once the episode is over.
+struct RegionControllers {
+    controllers: Arc<Mutex<Vec<RlPpo>>>,
+    net: Arc<ActorCritic>,
+    choice: Choice,
+}
+
+impl Round for RegionControllers {
+    fn plan(
+        &mut self,
+        regions: &[(&Config, &Scene)],
+        _crashed: &[Arc<str>],
+        out: &mut [Vec<Command>],
+    ) {
+        let mut controllers = self
+            .controllers
+            .lock()
+            .unwrap_or_else(PoisonError::into_inner);
+        for (k, (config, _)) in regions.iter().enumerate().skip(controllers.len()) {
+            let choice = region_choice(&self.choice, k);
+            controllers.push(RlPpo::new(config, Arc::clone(&self.net), choice, true));
+        }
+        for ((c, (_, scene)), out) in controllers.iter_mut().zip(regions).zip(out) {
+            c.plan(scene, out);
+        }
+    }
+}
+
+/// Region `k`'s way of choosing: `choice` itself for region 0, a random stream of its own
+/// (`choice`'s stream + `k`) for each further region.
+fn region_choice(choice: &Choice, k: usize) -> Choice {
+    let own = |rng: &rand_chacha::ChaCha8Rng| {
+        let mut r = rng.clone();
+        r.set_stream(rng.get_stream().wrapping_add(k as u64));
+        r
+    };
+    match choice {
+        Choice::Sample(rng) => Choice::Sample(own(rng)),
+        Choice::Random(rng) => Choice::Random(own(rng)),
+        other => other.clone(),
+    }
 }
 
 /// The segment of one CAV's `decisions`: each step's reward read off the next decision's state;

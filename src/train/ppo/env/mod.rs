@@ -369,6 +369,15 @@ fn episode_thread(
     )));
 }
 
+/// The CAVs of an episode on a user's scenario: the scenario's draw, or one among HDVs (the
+/// first of the draw departing after the warm-up with a route through a region).
+pub fn agent_fleet(agents: Agents) -> Fleet {
+    match agents {
+        Agents::Single => Fleet::single(WARMUP_S),
+        Agents::AllCavs => Fleet::Drawn,
+    }
+}
+
 /// The episode on the user's scenario of `config`, every region's CAVs (or one among HDVs)
 /// the agents of one round per step.
 fn scenario_thread(
@@ -377,12 +386,8 @@ fn scenario_thread(
     events: Sender<Event>,
     actions: Receiver<Vec<usize>>,
 ) {
-    let fleet = match agents {
-        Agents::Single => Fleet::single(WARMUP_S),
-        Agents::AllCavs => Fleet::Drawn,
-    };
     let round = Box::new(Remote::new(events.clone(), actions));
-    let result = sumocfg::run_together(&config, "rl-env", round, fleet);
+    let result = sumocfg::run_together(&config, "rl-env", round, agent_fleet(agents));
     let _ = events.send(Event::Finished(Box::new(
         result.map(|r| Ran::Scenario(Box::new(r))),
     )));
