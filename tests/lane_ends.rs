@@ -29,63 +29,6 @@ fn has_line(out: &str, words: &[&str]) {
     );
 }
 
-/// A two-lane on-ramp joining a two-lane motorway, its lanes ending in turn: the right one at
-/// the end of `acc` (200 m), the other at the end of `acc2` (200 m on).
-#[test]
-fn a_two_lane_ramp_whose_lanes_end_in_turn() {
-    let dir = tempfile::tempdir().unwrap();
-    let nodes = [
-        ("a", 0.0, 0.0),
-        ("b", 500.0, 0.0),
-        ("c", 700.0, 0.0),
-        ("d", 900.0, 0.0),
-        ("e", 1300.0, 0.0),
-        ("r", 300.0, -50.0),
-    ];
-    let edges = [
-        ("up", "a", "b", 2, ""),
-        ("acc", "b", "c", 4, ""),
-        ("acc2", "c", "d", 3, ""),
-        ("down", "d", "e", 2, ""),
-        ("on", "r", "b", 2, ""),
-    ];
-    let mut cons: Vec<Con> = through("up", 2, "acc", 4);
-    cons.extend([("on", 0, "acc", 0), ("on", 1, "acc", 1)]);
-    cons.extend(through("acc", 4, "acc2", 3));
-    cons.extend(through("acc2", 3, "down", 2));
-    let out = network(&build(dir.path(), &nodes, &edges, &cons));
-    has_line(&out, &["two-lane on-ramp", "'on'", "not planned yet"]);
-    assert!(!out.contains("more than the carriageway"), "{out}");
-}
-
-/// A two-lane on-ramp whose lanes the carriageway keeps for 800 m, then drops both.
-#[test]
-fn a_two_lane_gain_dropped_800_m_later() {
-    let dir = tempfile::tempdir().unwrap();
-    let nodes = [
-        ("a", 0.0, 0.0),
-        ("b", 500.0, 0.0),
-        ("c", 1300.0, 0.0),
-        ("d", 1700.0, 0.0),
-        ("r", 300.0, -50.0),
-    ];
-    let edges = [
-        ("up", "a", "b", 2, ""),
-        ("gain", "b", "c", 4, ""),
-        ("down", "c", "d", 2, ""),
-        ("on", "r", "b", 2, ""),
-    ];
-    let mut cons: Vec<Con> = through("up", 2, "gain", 4);
-    cons.extend([("on", 0, "gain", 0), ("on", 1, "gain", 1)]);
-    cons.extend(through("gain", 4, "down", 2));
-    let out = network(&build(dir.path(), &nodes, &edges, &cons));
-    has_line(
-        &out,
-        &["lane gain dropped later", "'on'", "not planned yet"],
-    );
-    assert!(!out.contains("more than the carriageway"), "{out}");
-}
-
 /// A three-lane motorway losing its right lane.
 #[test]
 fn a_main_road_lane_drop() {

@@ -64,7 +64,7 @@ pub fn generate_for(config: &Config) -> Result<Vec<PlannedVehicle>, EpisodeError
 /// # Errors
 /// [`ConfigError::Invalid`] naming `demand.ramp_weights`.
 pub fn check_entries(config: &Config, road: &Road) -> Result<(), ConfigError> {
-    let (given, ramps) = (config.demand.ramp_weights.len(), road.zones.len());
+    let (given, ramps) = (config.demand.ramp_weights.len(), road.ramp_zones().count());
     if given == 0 || given == ramps {
         return Ok(());
     }

@@ -44,7 +44,7 @@ impl EntryControl {
     /// Queues `planned` (sorted by depart time) by entry on `road`.
     pub fn new(config: &Config, road: &Road, planned: &[PlannedVehicle]) -> Self {
         let main_lanes = road.main_lanes as usize;
-        let mut queues = vec![VecDeque::new(); main_lanes + road.zones.len()];
+        let mut queues = vec![VecDeque::new(); main_lanes + road.ramp_zones().count()];
         for p in planned {
             queues[Self::queue_of(main_lanes, p)].push_back(p.clone());
         }
@@ -67,10 +67,10 @@ impl EntryControl {
     /// Road-frame lane and front position of a vehicle just inserted by queue `queue`.
     fn entry_point(&self, road: &Road, queue: usize) -> (i32, f64) {
         match queue.checked_sub(self.main_lanes) {
-            Some(ramp) => (
-                road.zones[ramp].lane,
-                road.zones[ramp].ramp_start + self.length,
-            ),
+            Some(ramp) => {
+                let zone = road.ramp_zones().nth(ramp).expect("a queue per on-ramp");
+                (zone.lane, zone.ramp_start + self.length)
+            }
             None => {
                 let first = road.edges[0].lanes[queue + road.first_through_lane()]
                     .as_ref()

@@ -164,7 +164,8 @@ pub struct Road {
     pub lane_width: f64,
     /// Lanes of the main carriageway (frame lanes 1..=N).
     pub main_lanes: i32,
-    /// The on-ramps' merge zones, in order along the road.
+    /// The auxiliary lanes' merge zones: each on-ramp's lane beside the carriageway, in order
+    /// along the road, then the further lanes of ramps of several lanes.
     pub zones: Vec<MergeZone>,
     /// End of the section: vehicles that stay on the main carriageway arrive here.
     pub section_end: f64,
@@ -232,6 +233,12 @@ impl Road {
         (self.zone_on(lane, s))
             .or_else(|| self.zone_into(lane, s))
             .unwrap_or_else(|| self.zone_ahead(s))
+    }
+
+    /// The on-ramps' zones, one per ramp (its lane beside the carriageway), in order along
+    /// the road.
+    pub fn ramp_zones(&self) -> impl Iterator<Item = &MergeZone> {
+        (self.zones.iter()).filter(|z| !self.is_auxiliary(z.target()))
     }
 
     /// Whether `lane` is auxiliary: outside the carriageway's lanes.

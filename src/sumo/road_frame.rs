@@ -46,11 +46,13 @@ pub fn road(net: &Net, layout: &Layout) -> Result<Road, String> {
         .expect("a main edge") as i32;
     let first = net.edge(&layout.main[0].id);
     let lane_width = first.lanes.last().expect("lanes checked").width;
-    let (mut edges, main) = main_edges(net, layout, main_lanes)?;
+    let outer_lanes = (layout.on_ramps.iter()).map(|r| r.outer.len()).max();
+    let bottom = MERGE_LANE - outer_lanes.unwrap_or(0) as i32;
+    let (mut edges, main) = main_edges(net, layout, main_lanes, bottom)?;
     let mut internal = main_junctions(net, layout, &main);
     let mut ramps: Vec<&OnRamp> = layout.on_ramps.iter().collect();
     ramps.sort_by(|a, b| a.merge_start.total_cmp(&b.merge_start));
-    let mut zones = Vec::new();
+    let (mut zones, mut outer) = (Vec::new(), Vec::new());
     for ramp in &ramps {
         let end_lane = &net.edge(&ramp.ends_on).lanes[ramp.end_lane as usize];
         let joined = (
@@ -67,8 +69,10 @@ pub fn road(net: &Net, layout: &Layout) -> Result<Road, String> {
             ));
         }
         let zone = ramp_frames(net, ramp, joined, &main.offsets, &mut edges, &mut internal)?;
+        outer.extend(outer_zones(net, ramp, &zone, &main)?);
         zones.push(zone);
     }
+    zones.extend(outer);
     edges.extend(internal.into_edges());
     let entries = entries(net, layout, &ramps);
     let last = layout.main.last().expect("a main carriageway");
@@ -93,6 +97,7 @@ fn main_edges<'n>(
     net: &'n Net,
     layout: &'n Layout,
     main_lanes: i32,
+    bottom: i32,
 ) -> Result<(Vec<EdgeFrame>, MainFrames<'n>), String> {
     let mut edges = Vec::new();
     let mut main = MainFrames {
@@ -100,7 +105,7 @@ fn main_edges<'n>(
         spans: BTreeMap::new(),
     };
     for m in &layout.main {
-        let offset = lane_offset(m, main_lanes)?;
+        let offset = lane_offset(m, main_lanes, bottom)?;
         let edge = net.edge(&m.id);
         let left = edge.lanes.last().expect("lanes checked");
         let span = LaneFrame {
@@ -221,17 +226,63 @@ fn exits(net: &Net, layout: &Layout) -> Vec<Exit> {
         .collect()
 }
 
-/// Frame lane of the edge's lane 0: the carriageway's lanes are aligned on the left.
-fn lane_offset(m: &MainEdge, main_lanes: i32) -> Result<i32, String> {
+/// Frame lane of the edge's lane 0: the carriageway's lanes are aligned on the left, and the
+/// region's auxiliary lanes reach down to frame lane `bottom`.
+fn lane_offset(m: &MainEdge, main_lanes: i32, bottom: i32) -> Result<i32, String> {
     let offset = main_lanes + FIRST_MAIN_LANE - m.lanes as i32;
-    if offset < MERGE_LANE {
+    if offset < bottom {
+        let auxiliary = match FIRST_MAIN_LANE - bottom {
+            1 => "one auxiliary lane".to_string(),
+            n => format!("{n} auxiliary lanes"),
+        };
         return Err(format!(
-            "edge '{}' has {} lanes, more than the carriageway's {main_lanes} and one \
-             auxiliary lane",
+            "edge '{}' has {} lanes, more than the carriageway's {main_lanes} and the \
+             {auxiliary} its on-ramps feed",
             m.id, m.lanes
         ));
     }
     Ok(offset)
+}
+
+/// The zones of the further lanes of `ramp`, a ramp of several lanes, whose lane beside the
+/// carriageway has `zone`: frame lanes −1, −2, … outwards, each from where the ramp joins to
+/// where it ends, which must be no later than where the lane inside it ends (the lanes end in
+/// turn from the outside in, or together).
+fn outer_zones(
+    net: &Net,
+    ramp: &OnRamp,
+    zone: &MergeZone,
+    main: &MainFrames<'_>,
+) -> Result<Vec<MergeZone>, String> {
+    let mut inside = *zone;
+    let mut out = Vec::new();
+    for (k, o) in ramp.outer.iter().enumerate() {
+        let lane = MERGE_LANE - 1 - k as i32;
+        if main.offsets[ramp.joins.as_str()] + o.lane as i32 != lane {
+            return Err(format!(
+                "on-ramp '{}' feeds lane {} of '{}', not the lane beside its others: its lanes \
+                 must join side by side",
+                ramp.edges[0], o.lane, ramp.joins
+            ));
+        }
+        let length = net.edge(&o.ends_on).lanes[o.end_lane as usize].length;
+        let end = main.spans[o.ends_on.as_str()].s_at(length);
+        if end > inside.end + 1e-6 {
+            return Err(format!(
+                "lane {} of on-ramp '{}' ends after the lane inside it ({end:.2} m, past \
+                 {:.2} m): a ramp's lanes must end in turn from the outside in",
+                o.lane, ramp.edges[0], inside.end
+            ));
+        }
+        inside = MergeZone {
+            lane,
+            end,
+            weaving: false,
+            ..inside
+        };
+        out.push(inside);
+    }
+    Ok(out)
 }
 
 /// The knots of lane `l` of an edge whose leftmost lane, the reference, is `left` and starts
@@ -293,32 +344,9 @@ fn ramp_frames(
     }
     let mut s_end = joined.0;
     let mut next = ramp.joins.as_str();
+    let lanes = 1 + ramp.outer.len();
     for id in ramp.edges.iter().rev() {
-        let e = net.edge(id);
-        if e.lanes.len() != 1 {
-            return Err(format!(
-                "ramp edge '{id}' has {} lanes; ramps of one lane only",
-                e.lanes.len()
-            ));
-        }
-        let via = net
-            .outgoing(id)
-            .find(|c| c.to == next)
-            .and_then(|c| c.via.as_ref())
-            .and_then(|v| net.internal.get(v));
-        if let Some(via) = via {
-            s_end -= via.length;
-            let frame = LaneFrame::straight(MERGE_LANE, s_end).limited(via.speed);
-            internal.put(via, frame, true);
-        }
-        s_end -= e.lanes[0].length;
-        edges.push(EdgeFrame {
-            name: Arc::from(id.as_str()),
-            lanes: vec![Some(
-                LaneFrame::straight(MERGE_LANE, s_end).limited(e.lanes[0].speed),
-            )],
-            on_ramp: true,
-        });
+        s_end = ramp_edge_frames(net, (id, next), s_end, lanes, edges, internal)?;
         next = id;
     }
     Ok(MergeZone {
@@ -328,6 +356,53 @@ fn ramp_frames(
         end: joined.1,
         weaving: ramp.weaves_into.is_some(),
     })
+}
+
+/// The frames of ramp edge `id` (of at most `lanes` lanes) and of its junction lanes into
+/// `next`, which begins at `s_end`; returns where the edge begins. Its lanes count from the
+/// left: the leftmost continues into frame lane 0, the others lie outside it.
+fn ramp_edge_frames(
+    net: &Net,
+    (id, next): (&str, &str),
+    mut s_end: f64,
+    lanes: usize,
+    edges: &mut Vec<EdgeFrame>,
+    internal: &mut InternalEdges,
+) -> Result<f64, String> {
+    let e = net.edge(id);
+    if e.lanes.len() > lanes {
+        return Err(format!(
+            "ramp edge '{id}' has {} lanes, more than the {lanes} it feeds the carriageway with",
+            e.lanes.len()
+        ));
+    }
+    let frame_lane = |index: u32| MERGE_LANE + index as i32 + 1 - e.lanes.len() as i32;
+    let left = e.lanes.len() as u32 - 1;
+    // Each lane's first link into the next edge, through its junction lane.
+    let links: Vec<_> = (0..=left)
+        .filter_map(|from| {
+            let c = net
+                .outgoing(id)
+                .find(|c| c.to == next && c.from_lane == from)?;
+            Some((from, net.internal.get(c.via.as_ref()?)?))
+        })
+        .collect();
+    if let Some((_, via)) = links.iter().find(|(from, _)| *from == left) {
+        s_end -= via.length;
+    }
+    for (from, via) in &links {
+        let frame = LaneFrame::straight(frame_lane(*from), s_end).limited(via.speed);
+        internal.put(via, frame, true);
+    }
+    s_end -= e.lanes[left as usize].length;
+    edges.push(EdgeFrame {
+        name: Arc::from(id),
+        lanes: (e.lanes.iter())
+            .map(|l| Some(LaneFrame::straight(frame_lane(l.index), s_end).limited(l.speed)))
+            .collect(),
+        on_ramp: true,
+    });
+    Ok(s_end)
 }
 
 /// Junction lanes of the frame, gathered into SUMO's internal edges (lane `:j_0_2` is lane 2

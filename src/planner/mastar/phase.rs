@@ -293,7 +293,15 @@ impl<'p> PhaseSearch<'p> {
                         continue;
                     }
                     let lane = n.lane + p.lane_offset();
-                    if !self.planner.road.lanes().contains(&lane) || !self.can_start(p, n) {
+                    let road = &self.planner.road;
+                    if !road.lanes().contains(&lane) || !self.can_start(p, n) {
+                        continue;
+                    }
+                    // From an auxiliary lane only towards the carriageway.
+                    if p.is_lane_change()
+                        && road.is_auxiliary(n.lane)
+                        && !road.is_merge(n.lane, lane)
+                    {
                         continue;
                     }
                     let seg = if n.step == 0 {

@@ -28,6 +28,12 @@ impl Layout {
             if let Some(exit) = &r.weaves_into {
                 on += &format!("; weaving: its lane runs on into off-ramp '{exit}'");
             }
+            for o in &r.outer {
+                on += &format!(
+                    "; outer lane {}: ends at s {:.2} m on '{}'",
+                    o.lane, o.merge_end, o.ends_on
+                );
+            }
             out += &format!(
                 "on-ramp {}: {} → {} lane {}: from s {:.2} m, ends at s {:.2} m{on}\n",
                 k + 1,

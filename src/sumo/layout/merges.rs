@@ -46,6 +46,20 @@ pub struct Merge {
     pub end_lane: u32,
     /// In a weaving section, the off-ramp edge the lane runs on into; `None` where it ends.
     pub weaves_into: Option<String>,
+    /// The further lanes of a ramp of several, from the one beside `lane` outwards.
+    pub outer: Vec<OuterLane>,
+}
+
+/// A further lane of an on-ramp of several, outside the one next to the carriageway: the lane
+/// of the joined edge it feeds, and the carriageway edge and lane where it ends.
+#[derive(Debug, Clone, PartialEq)]
+pub struct OuterLane {
+    /// The lane of the joined edge it feeds.
+    pub lane: u32,
+    /// The carriageway edge on which it ends.
+    pub ends_on: String,
+    /// Its lane index there.
+    pub end_lane: u32,
 }
 
 /// An edge where a ramp joins but no merge is planned, and why.
@@ -74,9 +88,9 @@ pub fn find(net: &Net) -> (Vec<Merge>, Vec<NotAMerge>) {
         let lowest_main = main_lanes.first().copied().unwrap_or(0);
         let lanes = |id: &str| net.edge(id).lanes.iter().filter(|l| l.for_cars).count();
         for ramp in preds.into_iter().filter(|p| *p != main) {
-            if lanes(ramp) > lanes(main) || lanes_feeding(net, ramp, &e.id) > 1 {
-                // The carriageway itself (the road on the left is a left-side on-ramp), or a
-                // ramp of several lanes: `lane_ends` names both, none is planned yet.
+            if lanes(ramp) > lanes(main) {
+                // The carriageway itself (the road on the left is a left-side on-ramp):
+                // `lane_ends` names it, not planned yet.
                 continue;
             }
             let fed = lanes_fed(net, ramp, &e.id);
@@ -84,13 +98,47 @@ pub fn find(net: &Net) -> (Vec<Merge>, Vec<NotAMerge>) {
                 continue; // joins beside or left of the carriageway: a junction, not a ramp
             }
             let lane = *fed.last().expect("a predecessor feeds a lane");
-            match classify(ramp, &e.id, lane, follow_lane(net, &e.id, lane)) {
+            let merge = classify(ramp, &e.id, lane, follow_lane(net, &e.id, lane)).and_then(|m| {
+                match lanes_feeding(net, ramp, &e.id) {
+                    1 => Ok(m),
+                    _ => with_outer_lanes(net, m, &fed),
+                }
+            });
+            match merge {
                 Ok(m) => merges.push(m),
                 Err(n) => not.push(n),
             }
         }
     }
     (merges, not)
+}
+
+/// `merge` with the further lanes of its ramp, `fed` (the joined edge's lanes the ramp feeds,
+/// rightmost first, the last the merge's own): each must end on the carriageway, as a lane of
+/// a two-lane on-ramp or a lane gain dropped later does; one that never ends or turns off is
+/// not planned.
+fn with_outer_lanes(net: &Net, mut merge: Merge, fed: &[u32]) -> Result<Merge, NotAMerge> {
+    for &lane in fed.iter().rev().skip(1) {
+        match follow_lane(net, &merge.joins, lane) {
+            LaneEnd::Ends(ends_on, end_lane) => merge.outer.push(OuterLane {
+                lane,
+                ends_on,
+                end_lane,
+            }),
+            _ => {
+                return Err(NotAMerge {
+                    ramp: merge.ramp,
+                    why: format!(
+                        "a ramp of {} lanes whose lane {lane} on '{}' does not end on the \
+                         carriageway (it is kept or turns off): not planned",
+                        fed.len(),
+                        merge.joins
+                    ),
+                })
+            }
+        }
+    }
+    Ok(merge)
 }
 
 /// How many lanes of `from` lead into `to`.
@@ -122,6 +170,7 @@ fn classify(ramp: &str, joins: &str, lane: u32, end: LaneEnd) -> Result<Merge, N
         ends_on,
         end_lane,
         weaves_into,
+        outer: Vec::new(),
     };
     let not = |why: String| NotAMerge {
         ramp: ramp.to_string(),

@@ -70,6 +70,22 @@ pub struct OnRamp {
     /// In a weaving section, the off-ramp edge the lane runs on into at `merge_end` (one of the
     /// region's off-ramps); `None` where the lane ends there.
     pub weaves_into: Option<String>,
+    /// The further lanes of a ramp of several, from the one beside `lane` outwards.
+    pub outer: Vec<OuterEnd>,
+}
+
+/// A further lane of an on-ramp of several (a two-lane on-ramp, a lane gain dropped later):
+/// the lane of `joins` it feeds and where it ends.
+#[derive(Debug, Clone, PartialEq)]
+pub struct OuterEnd {
+    /// Lane index on the ramp's `joins`.
+    pub lane: u32,
+    /// The main edge on which it ends.
+    pub ends_on: String,
+    /// Its lane index there.
+    pub end_lane: u32,
+    /// Where it ends along the carriageway (m): its traffic must have moved over by then.
+    pub merge_end: f64,
 }
 
 /// An off-ramp: the main edge it leaves and its edges.
@@ -211,7 +227,13 @@ fn changes(
     let mut out: Vec<(ForcedChange, Status)> = found
         .into_iter()
         .map(|mut c| {
-            let planned = matches!(c.kind, Kind::AccelerationLane | Kind::Weaving);
+            let planned = matches!(
+                c.kind,
+                Kind::AccelerationLane
+                    | Kind::Weaving
+                    | Kind::TwoLaneOnRamp
+                    | Kind::GainDroppedLater
+            );
             let ramp = c.ramp.as_deref().filter(|_| planned).unwrap_or_default();
             let status = if let Some(k) = regions.iter().position(|l| has(l, ramp)) {
                 Status::Region(k)
@@ -349,6 +371,14 @@ fn on_ramp(net: &Net, merge: &Merge, on_main: &BTreeSet<&str>, line: &ReferenceL
     let at = |p: Option<&Point>| p.map_or(0.0, |p| line.to_frame(*p).0);
     let start = &net.edge(&merge.joins).lanes[merge.lane as usize];
     let end = &net.edge(&merge.ends_on).lanes[merge.end_lane as usize];
+    let outer = (merge.outer.iter())
+        .map(|o| OuterEnd {
+            lane: o.lane,
+            ends_on: o.ends_on.clone(),
+            end_lane: o.end_lane,
+            merge_end: at(net.edge(&o.ends_on).lanes[o.end_lane as usize].shape.last()),
+        })
+        .collect();
     OnRamp {
         edges,
         joins: merge.joins.clone(),
@@ -358,6 +388,7 @@ fn on_ramp(net: &Net, merge: &Merge, on_main: &BTreeSet<&str>, line: &ReferenceL
         merge_start: at(start.shape.first()),
         merge_end: at(end.shape.last()),
         weaves_into: merge.weaves_into.clone(),
+        outer,
     }
 }
 
