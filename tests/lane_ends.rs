@@ -29,27 +29,6 @@ fn has_line(out: &str, words: &[&str]) {
     );
 }
 
-/// A three-lane motorway losing its right lane.
-#[test]
-fn a_main_road_lane_drop() {
-    let dir = tempfile::tempdir().unwrap();
-    let nodes = [
-        ("a", 0.0, 0.0),
-        ("b", 400.0, 0.0),
-        ("c", 700.0, 0.0),
-        ("d", 1100.0, 0.0),
-    ];
-    let edges = [
-        ("up", "a", "b", 3, ""),
-        ("mid", "b", "c", 3, ""),
-        ("down", "c", "d", 2, ""),
-    ];
-    let mut cons: Vec<Con> = through("up", 3, "mid", 3);
-    cons.extend(through("mid", 3, "down", 2));
-    let out = network(&build(dir.path(), &nodes, &edges, &cons));
-    has_line(&out, &["lane drop 3 → 2 lanes on 'mid'", "not planned yet"]);
-}
-
 /// A one-lane ramp joining a two-lane motorway at the nose, without an acceleration lane: its
 /// lane and the right main lane both lead into the right lane of `down` (OpenStreetMap imports
 /// often look so).

@@ -440,6 +440,7 @@ mod tests {
             start: 800.0,
             end: 1000.0,
             weaving: false,
+            ramp: true,
         });
         road.entries[1].name = "ramp1".into();
         road.entries.push(crate::model::road::Entry::new(

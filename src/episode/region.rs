@@ -10,7 +10,7 @@ use crate::episode::recording::Recording;
 use crate::episode::trace::Tracer;
 use crate::episode::trajectories::TrajectoryRow;
 use crate::episode::Observer;
-use crate::model::road::Road;
+use crate::model::road::{EdgeFrame, Road};
 use crate::model::scene::Kind;
 use crate::sumo::frame::SumoScene;
 use crate::sumo::RawVehicleState;
@@ -126,16 +126,27 @@ impl<'a> Region<'a> {
 
 /// The edges the region's on-ramps join: the first edge of each ramp's route off the ramp.
 fn merge_edges(road: &Road) -> Vec<String> {
-    road.entries
-        .iter()
-        .skip(1)
-        .filter_map(|e| {
-            e.route
+    let joins = road.entries.iter().skip(1).filter_map(|e| {
+        e.route
+            .iter()
+            .find(|edge| road.edge(edge).is_some_and(|f| !f.on_ramp))
+            .map(|edge| edge.to_string())
+    });
+    let drops = road.zones.iter().filter(|z| !z.ramp).filter_map(|z| {
+        // The last carriageway edge holding the dropped lane: where it ends.
+        let mut main = road
+            .edges
+            .iter()
+            .filter(|e| !e.on_ramp && !e.name.starts_with(':'));
+        let holds = |e: &&EdgeFrame| {
+            e.lanes
                 .iter()
-                .find(|edge| road.edge(edge).is_some_and(|f| !f.on_ramp))
-                .map(|edge| edge.to_string())
-        })
-        .collect()
+                .flatten()
+                .any(|l| l.lane == z.lane && l.s0 < z.end)
+        };
+        main.rfind(holds).map(|e| e.name.to_string())
+    });
+    joins.chain(drops).collect()
 }
 
 /// Where the planner of `road`'s region stops driving CAVs: the start of its last edge, so that

@@ -112,6 +112,9 @@ pub struct MergeZone {
     /// Whether the lane runs on at `end` into an off-ramp (a weaving section): main-road
     /// traffic then crosses the zone towards the exit, the other way from the ramp's.
     pub weaving: bool,
+    /// Whether an on-ramp feeds it; `false` for a lane of the carriageway that ends (a lane
+    /// drop), whose `ramp_start` is `start`, where the lane begins in the region.
+    pub ramp: bool,
 }
 
 impl MergeZone {
@@ -238,7 +241,7 @@ impl Road {
     /// The on-ramps' zones, one per ramp (its lane beside the carriageway), in order along
     /// the road.
     pub fn ramp_zones(&self) -> impl Iterator<Item = &MergeZone> {
-        (self.zones.iter()).filter(|z| !self.is_auxiliary(z.target()))
+        (self.zones.iter()).filter(|z| z.ramp && !self.is_auxiliary(z.target()))
     }
 
     /// Whether `lane` is auxiliary: outside the carriageway's lanes.
@@ -410,6 +413,7 @@ impl Road {
                 start: 150.0,
                 end: 330.0,
                 weaving: false,
+                ramp: true,
             }],
             section_end: 460.0,
             end_edge: (Arc::from("main_out"), 130.0),
@@ -447,6 +451,7 @@ mod tests {
             start: 1000.0,
             end: 1200.0,
             weaving: false,
+            ramp: true,
         });
         assert_eq!(r.zone_ahead(100.0).end, 330.0);
         assert_eq!(r.zone_ahead(500.0).end, 1200.0);
@@ -467,6 +472,7 @@ mod tests {
             start: 330.0,
             end: 430.0,
             weaving: false,
+            ramp: true,
         });
         r.entries
             .push(Entry::new("ramp2", &["ramp2", "main_out"], 40.0));
@@ -495,6 +501,7 @@ mod tests {
             start,
             end,
             weaving: false,
+            ramp: true,
         };
         r.zones.push(zone(-1, -16.79, 150.0, 250.0));
         r.zones.push(zone(3, 500.0, 600.0, 700.0));

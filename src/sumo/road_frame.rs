@@ -22,7 +22,7 @@ use std::sync::Arc;
 use crate::model::road::{
     EdgeFrame, Entry, Exit, LaneFrame, MergeZone, Road, FIRST_MAIN_LANE, MERGE_LANE,
 };
-use crate::sumo::layout::{Layout, MainEdge, OnRamp};
+use crate::sumo::layout::{LaneDrop, Layout, MainEdge, OnRamp};
 use crate::sumo::network::{Lane, Net};
 
 /// The shortest acceleration lane a merge is planned on (m): room for one car.
@@ -73,6 +73,9 @@ pub fn road(net: &Net, layout: &Layout) -> Result<Road, String> {
         zones.push(zone);
     }
     zones.extend(outer);
+    for d in &layout.lane_drops {
+        zones.push(drop_zone(net, layout, d, &main)?);
+    }
     edges.extend(internal.into_edges());
     let entries = entries(net, layout, &ramps);
     let last = layout.main.last().expect("a main carriageway");
@@ -244,6 +247,40 @@ fn lane_offset(m: &MainEdge, main_lanes: i32, bottom: i32) -> Result<i32, String
     Ok(offset)
 }
 
+/// The zone of lane drop `d`: the carriageway's lane 0 from where it begins in the region (the
+/// first of the edges before the drop with as many lanes) to its end.
+fn drop_zone(
+    net: &Net,
+    layout: &Layout,
+    d: &LaneDrop,
+    main: &MainFrames<'_>,
+) -> Result<MergeZone, String> {
+    let at = (layout.main.iter()).position(|m| m.id == d.ends_on);
+    let at = at.expect("a lane drop lies on the region's carriageway");
+    let lanes = layout.main[at].lanes;
+    let first = (0..=at)
+        .rev()
+        .take_while(|&k| layout.main[k].lanes == lanes)
+        .last()
+        .unwrap_or(at);
+    if main.offsets[d.ends_on.as_str()] != MERGE_LANE {
+        return Err(format!(
+            "the lane dropped on '{}' is not the one lane the carriageway has more there",
+            d.ends_on
+        ));
+    }
+    let start = main.spans[layout.main[first].id.as_str()].s0;
+    let length = net.edge(&d.ends_on).lanes[0].length;
+    Ok(MergeZone {
+        lane: MERGE_LANE,
+        ramp_start: start,
+        start,
+        end: main.spans[d.ends_on.as_str()].s_at(length),
+        weaving: false,
+        ramp: false,
+    })
+}
+
 /// The zones of the further lanes of `ramp`, a ramp of several lanes, whose lane beside the
 /// carriageway has `zone`: frame lanes −1, −2, … outwards, each from where the ramp joins to
 /// where it ends, which must be no later than where the lane inside it ends (the lanes end in
@@ -355,6 +392,7 @@ fn ramp_frames(
         start: joined.0,
         end: joined.1,
         weaving: ramp.weaves_into.is_some(),
+        ramp: true,
     })
 }
 

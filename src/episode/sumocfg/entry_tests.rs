@@ -36,6 +36,7 @@ fn two_ramps() -> Road {
         start: 460.0,
         end: 640.0,
         weaving: false,
+        ramp: true,
     });
     road.section_end = 770.0;
     road.end_edge = (Arc::from("out2"), 130.0);

@@ -101,20 +101,24 @@ impl ScenarioResult {
         let ramp = crate::model::scene::Origin::Ramp.as_str();
         (self.regions.iter())
             .filter(|row| !row.ramp_traffic)
-            .map(|row| {
+            .filter_map(|row| {
                 let ramps: Vec<&str> = (self.entries.iter())
                     .filter(|e| e.key.region == row.key.region && e.origin == ramp)
                     .map(|e| e.entry.as_str())
                     .collect();
+                // A region of lane drops alone has no on-ramp to receive anyone.
+                if ramps.is_empty() {
+                    return None;
+                }
                 let plural = if ramps.len() == 1 { "" } else { "s" };
-                format!(
+                Some(format!(
                     "warning: region {} received no vehicle from its on-ramp{plural} ({}) in this \
                      episode ({} never inserted were bound for it): its rows measure traffic \
                      past a merge nobody used",
                     row.key.region,
                     ramps.join(", "),
                     row.never_inserted_ramp
-                )
+                ))
             })
             .collect()
     }

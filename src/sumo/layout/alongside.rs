@@ -1,7 +1,8 @@
 //! On-ramps that run alongside another merge's auxiliary lane: along the carriageway, the
 //! ramp's edges lie beside an acceleration lane or weaving lane that is not its own (two
 //! on-ramps close together; a cloverleaf's outer on-ramp beside its weaving lane). The road
-//! frame gives every ramp and auxiliary lane frame lane 0, so a vehicle on such a ramp would
+//! frame gives each on-ramp's lane beside the carriageway frame lane 0, so a vehicle on such a
+//! ramp would
 //! be planned against the other merge's zone, and stopped where that lane ends: such a region
 //! is left to SUMO's drivers until the frame knows one auxiliary lane from another.
 

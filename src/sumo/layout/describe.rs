@@ -44,6 +44,12 @@ impl Layout {
                 r.merge_end
             );
         }
+        for d in &self.lane_drops {
+            out += &format!(
+                "lane drop: lane 0 of {} ends at s {:.2} m\n",
+                d.ends_on, d.merge_end
+            );
+        }
         for (k, r) in self.off_ramps.iter().enumerate() {
             out += &format!(
                 "off-ramp {}: {} → {}\n",

@@ -73,6 +73,8 @@ pub struct ForcedChange {
     pub kind: Kind,
     /// The on-ramp's last edge whose traffic must change lanes; `None` for a lane drop.
     pub ramp: Option<String>,
+    /// For a lane drop, the edge on which the lane ends.
+    pub drop: Option<String>,
     /// Where, in words after the kind's name (`'on' → 'acc': …`, `3 → 2 lanes on 'mid'`).
     pub what: String,
 }
@@ -186,6 +188,30 @@ fn origin(net: &Net, edge: &str, lane: u32) -> (Origin, f64) {
     }
 }
 
+/// The edges, in file order, where the carriageway's rightmost lane ends while two lanes or
+/// more go on, on a road of [`NOSE_MERGE_MIN_SPEED`] or more that nothing joins there: the
+/// lane drops the planners plan (its traffic moves one lane left before the end).
+pub fn right_lane_drops(net: &Net) -> Vec<String> {
+    let ends = lane_ends(net);
+    let ending = |edge: &str| ends.iter().filter(|(e, _)| *e == edge).count();
+    let mut out: Vec<String> = Vec::new();
+    for &(edge, lane) in &ends {
+        let e = net.edge(edge);
+        let cars = e.lanes.iter().filter(|l| l.for_cars).count();
+        let limit = e.lanes.iter().map(|l| l.speed).fold(0.0, f64::max);
+        let plannable = lane == 0
+            && cars >= 3
+            && ending(edge) == 1
+            && limit >= NOSE_MERGE_MIN_SPEED
+            && net.predecessors(edge).len() == 1
+            && origin(net, edge, lane).0 == Origin::Carriageway;
+        if plannable && !out.iter().any(|o| o == edge) {
+            out.push(edge.to_string());
+        }
+    }
+    out
+}
+
 /// The lane drops among `ends` (lanes of the carriageway), one per edge.
 fn lane_drops(net: &Net, ends: &[End]) -> Vec<ForcedChange> {
     let mut by_edge: BTreeMap<&str, Vec<u32>> = BTreeMap::new();
@@ -226,6 +252,7 @@ fn lane_drop(net: &Net, edge: &str, lanes: &[u32]) -> ForcedChange {
     ForcedChange {
         kind: Kind::LaneDrop,
         ramp: None,
+        drop: Some(edge.to_string()),
         what,
     }
 }
@@ -264,6 +291,7 @@ fn ramp_lanes(net: &Net, ramp: &str, joins: &str, ends: &[End]) -> ForcedChange 
     ForcedChange {
         kind,
         ramp: Some(ramp.to_string()),
+        drop: None,
         what: format!("'{ramp}'{width} → '{joins}': ends {}", on.join(", ")),
     }
 }
@@ -295,6 +323,7 @@ fn nose_merges(net: &Net) -> Vec<ForcedChange> {
                 out.push(ForcedChange {
                     kind: Kind::NoseMerge,
                     ramp: Some(ramp.to_string()),
+                    drop: None,
                     what: format!(
                         "'{ramp}' → '{}': its lane and a main-road lane lead into lane {}",
                         e.id, fed[0]

@@ -88,6 +88,16 @@ pub struct OuterEnd {
     pub merge_end: f64,
 }
 
+/// A lane drop: the carriageway's rightmost lane ends on edge `ends_on`, at `merge_end` along
+/// it (m); its traffic must have moved one lane left by then.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LaneDrop {
+    /// The main edge on which the lane (its lane 0) ends.
+    pub ends_on: String,
+    /// Where the lane ends along the carriageway (m).
+    pub merge_end: f64,
+}
+
 /// An off-ramp: the main edge it leaves and its edges.
 #[derive(Debug, Clone, PartialEq)]
 pub struct OffRamp {
@@ -104,6 +114,8 @@ pub struct Layout {
     pub main: Vec<MainEdge>,
     /// The on-ramps.
     pub on_ramps: Vec<OnRamp>,
+    /// The carriageway's right lanes that end (lane drops), in order along it.
+    pub lane_drops: Vec<LaneDrop>,
     /// The off-ramps.
     pub off_ramps: Vec<OffRamp>,
     /// The curvilinear frame's reference line: s along it, d from it (positive left).
@@ -152,19 +164,31 @@ impl Discovery {
     /// The merge regions of `net`.
     pub fn of(net: &Net) -> Discovery {
         let (merges, mut not_merges) = merges::find(net);
-        let mut by_road: BTreeMap<Vec<String>, Vec<Merge>> = BTreeMap::new();
+        let mut by_road: BTreeMap<Vec<String>, (Vec<Merge>, Vec<String>)> = BTreeMap::new();
         let mut order: Vec<Vec<String>> = Vec::new();
-        for m in merges {
-            let road = merges::carriageway(net, &m.joins);
-            if !by_road.contains_key(&road) {
+        let mut road_of = |edge: &str| {
+            let road = merges::carriageway(net, edge);
+            if !order.contains(&road) {
                 order.push(road.clone());
             }
-            by_road.entry(road).or_default().push(m);
+            road
+        };
+        let mut grouped = Vec::new();
+        for m in merges {
+            grouped.push((road_of(&m.joins), Some(m), None));
+        }
+        for d in lane_ends::right_lane_drops(net) {
+            grouped.push((road_of(&d), None, Some(d)));
+        }
+        for (road, m, d) in grouped {
+            let (merges, drops) = by_road.entry(road).or_default();
+            merges.extend(m);
+            drops.extend(d);
         }
         let (mut regions, mut left_to_sumo) = (Vec::new(), Vec::new());
         for road in &order {
-            let merges = &by_road[road];
-            match Layout::of_region(net, road, merges) {
+            let (merges, drops) = &by_road[road];
+            match Layout::of_region(net, road, merges, drops) {
                 Some(layout) => match alongside::why(net, &layout) {
                     Some((ramp, why)) => left_to_sumo.push(LeftToSumo { layout, ramp, why }),
                     None => regions.push(layout),
@@ -214,6 +238,7 @@ fn changes(
             found.push(ForcedChange {
                 kind: Kind::Weaving,
                 ramp: Some(alongside::ramp_name(r).to_string()),
+                drop: None,
                 what: format!(
                     "'{}' → '{}': its lane runs on into off-ramp '{exit}' on '{}'",
                     alongside::ramp_name(r),
@@ -224,6 +249,7 @@ fn changes(
         }
     }
     let has = |l: &Layout, ramp: &str| l.on_ramps.iter().any(|r| alongside::ramp_name(r) == ramp);
+    let drops = |l: &Layout, edge: &str| l.lane_drops.iter().any(|d| d.ends_on == edge);
     let mut out: Vec<(ForcedChange, Status)> = found
         .into_iter()
         .map(|mut c| {
@@ -235,7 +261,10 @@ fn changes(
                     | Kind::GainDroppedLater
             );
             let ramp = c.ramp.as_deref().filter(|_| planned).unwrap_or_default();
-            let status = if let Some(k) = regions.iter().position(|l| has(l, ramp)) {
+            let drop = c.drop.as_deref().unwrap_or_default();
+            let status = if let Some(k) = regions.iter().position(|l| drops(l, drop)) {
+                Status::Region(k)
+            } else if let Some(k) = regions.iter().position(|l| has(l, ramp)) {
                 Status::Region(k)
             } else if let Some(k) = left.iter().position(|l| has(&l.layout, ramp)) {
                 if left[k].ramp == ramp {
@@ -254,15 +283,14 @@ fn changes(
 }
 
 impl Layout {
-    /// The region of carriageway `road` around `merges` (all on it, in its order).
-    fn of_region(net: &Net, road: &[String], merges: &[Merge]) -> Option<Layout> {
+    /// The region of carriageway `road` around `merges` and the lane drops on edges `drops`
+    /// (all on it, in its order).
+    fn of_region(net: &Net, road: &[String], merges: &[Merge], drops: &[String]) -> Option<Layout> {
         let at = |id: &str| road.iter().position(|e| e == id).expect("on the road");
-        let first = merges.iter().map(|m| at(&m.joins)).min().expect("a merge");
-        let last = merges
-            .iter()
-            .map(|m| at(&m.ends_on))
-            .max()
-            .expect("a merge");
+        let firsts = merges.iter().map(|m| at(&m.joins));
+        let first = firsts.chain(drops.iter().map(|d| at(d))).min()?;
+        let lasts = merges.iter().map(|m| at(&m.ends_on));
+        let last = lasts.chain(drops.iter().map(|d| at(d))).max()?;
         let length = |id: &String| net.edge(id).lanes.last().map_or(0.0, |l| l.length);
         let mut begin = first;
         let mut upstream = 0.0;
@@ -285,10 +313,20 @@ impl Layout {
             .map(|m| on_ramp(net, m, &on_main, &line))
             .collect();
         let next = road.get(end + 1).map(String::as_str);
+        let lane_drops = (drops.iter())
+            .map(|d| LaneDrop {
+                ends_on: d.clone(),
+                merge_end: net.edge(d).lanes[0]
+                    .shape
+                    .last()
+                    .map_or(0.0, |p| line.to_frame(*p).0),
+            })
+            .collect();
         Some(Layout {
             off_ramps: off_ramps(net, ids, next, &on_main),
             main,
             on_ramps,
+            lane_drops,
             line,
         })
     }
@@ -301,9 +339,11 @@ impl Layout {
         main.chain(on.chain(off).map(String::as_str))
     }
 
-    /// The edges its on-ramps join: the region's names in `[scenario] regions`.
+    /// The edges its on-ramps join and its lanes drop on: the region's names in `[scenario]
+    /// regions`.
     pub fn merge_edges(&self) -> impl Iterator<Item = &str> {
-        self.on_ramps.iter().map(|r| r.joins.as_str())
+        let drops = self.lane_drops.iter().map(|d| d.ends_on.as_str());
+        self.on_ramps.iter().map(|r| r.joins.as_str()).chain(drops)
     }
 
     /// Length of the main carriageway along the reference line (m).

@@ -1,8 +1,10 @@
-//! On-ramps of two lanes, on networks built here from plain XML by netconvert: a ramp whose
-//! lanes end in turn, and one that joins as two lanes the carriageway keeps for 800 m and then
-//! drops. `bkpbs network` plans each (its outer lane a frame lane of its own, outside the one
-//! beside the carriageway); under bk-pbs, bk-mastar and idm-mobil no ramp lane is closed: each
-//! ramp flow inserts and delivers as many vehicles as under SUMO alone (within 3 %), and under
+//! Auxiliary lanes of other roles than the one acceleration lane, on networks built here from
+//! plain XML by netconvert: on-ramps of two lanes (a ramp whose lanes end in turn, one that
+//! joins as two lanes the carriageway keeps for 800 m and then drops) and a main-road lane drop
+//! (3 to 2 lanes). `bkpbs network` plans each (a ramp's outer lane a frame lane of its own,
+//! outside the one beside the carriageway; the dropped lane an auxiliary lane whose traffic is
+//! the main road's); under bk-pbs, bk-mastar and idm-mobil no lane is closed: each flow inserts
+//! and delivers as many vehicles as under SUMO alone (within 3 %), and under
 //! bk-pbs and bk-mastar its mean delay lies within 3 s of SUMO alone's, without a controllable
 //! collision.
 
@@ -60,6 +62,25 @@ fn two_lane_gain(dir: &Path) -> PathBuf {
     let mut cons: Vec<Con> = through("up", 2, "gain", 4);
     cons.extend([("on", 0, "gain", 0), ("on", 1, "gain", 1)]);
     cons.extend(through("gain", 4, "down", 2));
+    build(dir, &nodes, &edges, &cons)
+}
+
+/// A three-lane motorway losing its right lane at the end of `mid` (600 m): the region's
+/// control begins where `up` (100 m) ends, so CAVs inserted on the right lane are planned on it.
+fn lane_drop(dir: &Path) -> PathBuf {
+    let nodes = [
+        ("a", 0.0, 0.0),
+        ("b", 100.0, 0.0),
+        ("c", 700.0, 0.0),
+        ("d", 1100.0, 0.0),
+    ];
+    let edges = [
+        ("up", "a", "b", 3, ""),
+        ("mid", "b", "c", 3, ""),
+        ("down", "c", "d", 2, ""),
+    ];
+    let mut cons: Vec<Con> = through("up", 3, "mid", 3);
+    cons.extend(through("mid", 3, "down", 2));
     build(dir, &nodes, &edges, &cons)
 }
 
@@ -219,4 +240,27 @@ fn a_two_lane_gain_dropped_later_is_planned_and_never_closed() {
     );
     let cfg = scenario(dir.path(), &net, &flows("on gain down", "up gain down"));
     flows_as_under_sumo_alone(&cfg, "7");
+}
+
+#[test]
+fn a_main_road_lane_drop_is_planned_and_never_closed() {
+    let dir = tempfile::tempdir().unwrap();
+    let net = lane_drop(dir.path());
+    let said = network(&net);
+    has_line(
+        &said,
+        &["lane drop 3 → 2 lanes on 'mid'", "planned in region 1"],
+    );
+    has_line(&said, &["lane drop: lane 0 of mid ends at s"]);
+    let route = "up mid down";
+    let cfg = scenario(
+        dir.path(),
+        &net,
+        &[
+            ("right", route, "0", 900),
+            ("middle", route, "1", 900),
+            ("left", route, "2", 900),
+        ],
+    );
+    flows_as_under_sumo_alone(&cfg, "5");
 }
