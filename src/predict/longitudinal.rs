@@ -7,9 +7,10 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 
 use super::model_file::ModelError;
-use crate::config::Config;
+use crate::config::{Config, TrainingScenario};
 use crate::model::scene::{Kind, Scene};
 use crate::model::trajectory::Pose;
+use crate::sumo::scenario_record::scenario_record;
 
 /// IDM acceleration exponent δ (fixed, as SUMO's and the paper's).
 pub const DELTA: f64 = 4.0;
@@ -78,13 +79,33 @@ pub enum Longitudinal {
     Idm(IdmParams),
 }
 
-/// What a predictor needs of `calibration.json` (written by `bkpbs calibrate`).
+/// What a predictor needs of `calibration.json` (written by `bkpbs calibrate`): the profile
+/// it was made under, or the user's scenario it was made on, and the fitted IDM.
 #[derive(Deserialize)]
 struct CalibrationView {
     format: String,
     version: u32,
-    profile: String,
+    #[serde(default)]
+    profile: Option<String>,
+    #[serde(default)]
+    scenario: Option<ScenarioView>,
     idm: IdmParams,
+}
+
+/// The scenario a calibration was made on (`bkpbs calibrate --sumocfg`).
+#[derive(Deserialize)]
+struct ScenarioView {
+    sumocfg: String,
+    files: TrainingScenario,
+}
+
+/// What a calibration must have been made on for a run: the HDV profile SUMO runs under, and
+/// the user's scenario the run is on, if any.
+pub struct CalibrationFor<'a> {
+    /// `hdv.profile`.
+    pub profile: &'a str,
+    /// The run's scenario of the user's, with its files' digests.
+    pub scenario: Option<&'a TrainingScenario>,
 }
 
 /// Format tag of `calibration.json` (its `format` field).
@@ -106,7 +127,20 @@ impl Longitudinal {
         let Some(path) = path else {
             return Ok(Longitudinal::ConstantSpeed);
         };
-        let expected = (!p.calibration_for_any_profile).then_some(profile.as_str());
+        let own = match &config.scenario.sumocfg {
+            Some(_) => Some(
+                scenario_record(&config.scenario).map_err(|e| ModelError::Shape {
+                    path: path.clone(),
+                    what: format!("the run's scenario cannot be read: {e}"),
+                })?,
+            ),
+            None => None,
+        };
+        let expected = CalibrationFor {
+            profile,
+            scenario: own.as_ref(),
+        };
+        let expected = (!p.calibration_for_any_profile).then_some(expected);
         load(&path, expected).map(Longitudinal::Idm)
     }
 
@@ -168,8 +202,9 @@ impl Longitudinal {
 }
 
 /// The fitted IDM of a calibration file, checked: the format, its version, and that it was
-/// made for `profile` (unless `None`: any profile).
-pub fn load(path: &Path, profile: Option<&str>) -> Result<IdmParams, ModelError> {
+/// made for the run `expected` describes (unless `None`: any profile or scenario): under its
+/// profile, or, for a calibration on a user's scenario, on the same scenario (the same files).
+pub fn load(path: &Path, expected: Option<CalibrationFor>) -> Result<IdmParams, ModelError> {
     let p = || PathBuf::from(path);
     let text = crate::io::bounded::read_text(path, crate::io::bounded::FileKind::Model)
         .map_err(|cause| ModelError::Read { path: p(), cause })?;
@@ -190,14 +225,10 @@ pub fn load(path: &Path, profile: Option<&str>) -> Result<IdmParams, ModelError>
             expected: CALIBRATION_VERSION,
         });
     }
-    if let Some(profile) = profile.filter(|p| *p != c.profile) {
+    if let Some(why) = expected.and_then(|e| mismatch(&c, &e)) {
         return Err(ModelError::Shape {
             path: p(),
-            what: format!(
-                "it calibrates HDV profile '{}', but SUMO runs '{profile}' (hdv.profile; \
-                 predictor.calibration_for_any_profile allows it)",
-                c.profile
-            ),
+            what: format!("{why} (predictor.calibration_for_any_profile allows it)"),
         });
     }
     let ok = c
@@ -212,6 +243,29 @@ pub fn load(path: &Path, profile: Option<&str>) -> Result<IdmParams, ModelError>
         });
     }
     Ok(c.idm)
+}
+
+/// Why calibration `c` does not fit the run `e`, if it does not.
+fn mismatch(c: &CalibrationView, e: &CalibrationFor) -> Option<String> {
+    match (&c.scenario, &c.profile) {
+        (Some(s), _) => match e.scenario {
+            Some(run) if run.same_as(&s.files) => None,
+            Some(_) => Some(format!(
+                "it calibrates the scenario '{}', but this run is on another (its files differ)",
+                s.sumocfg
+            )),
+            None => Some(format!(
+                "it calibrates the scenario '{}', but this run is on the paper's demand",
+                s.sumocfg
+            )),
+        },
+        (None, Some(profile)) if profile != e.profile => Some(format!(
+            "it calibrates HDV profile '{profile}', but SUMO runs '{}' (hdv.profile)",
+            e.profile
+        )),
+        (None, Some(_)) => None,
+        (None, None) => Some("it names neither an HDV profile nor a scenario".into()),
+    }
 }
 
 #[cfg(test)]
@@ -264,12 +318,53 @@ mod tests {
             std::fs::write(&path, text.to_string()).unwrap();
         };
         write(CALIBRATION_FORMAT, "paper");
-        assert_eq!(load(&path, Some("paper")).unwrap(), IDM);
-        let e = load(&path, Some("sumo-safe")).unwrap_err().to_string();
+        let under = |profile| {
+            Some(CalibrationFor {
+                profile,
+                scenario: None,
+            })
+        };
+        assert_eq!(load(&path, under("paper")).unwrap(), IDM);
+        let e = load(&path, under("sumo-safe")).unwrap_err().to_string();
         assert!(e.contains("'paper'") && e.contains("'sumo-safe'"), "{e}");
         assert_eq!(load(&path, None).unwrap(), IDM, "any profile");
         write("something-else", "paper");
-        assert!(load(&path, Some("paper")).is_err());
-        assert!(load(&d.path().join("missing.json"), Some("paper")).is_err());
+        assert!(load(&path, under("paper")).is_err());
+        assert!(load(&d.path().join("missing.json"), under("paper")).is_err());
+    }
+
+    /// A calibration made on a user's scenario is used on that scenario (the same files) and
+    /// refused, in one line naming it, on another or on the paper's demand.
+    #[test]
+    fn a_scenario_calibration_is_for_its_own_scenario() {
+        let d = tempfile::tempdir().unwrap();
+        let path = d.path().join("calibration.json");
+        let world = |sha: &str| TrainingScenario::Sumocfg {
+            file: "ramp.sumocfg".into(),
+            sha256: [("ramp.sumocfg".to_string(), sha.to_string())].into(),
+        };
+        let text = serde_json::json!({
+            "format": CALIBRATION_FORMAT, "version": 1, "idm": IDM,
+            "scenario": {"sumocfg": "game/ramp.sumocfg", "files": world("ab")},
+        });
+        std::fs::write(&path, text.to_string()).unwrap();
+        let on = |w: Option<&TrainingScenario>| {
+            load(
+                &path,
+                Some(CalibrationFor {
+                    profile: "sumo-safe",
+                    scenario: w,
+                }),
+            )
+        };
+        assert_eq!(on(Some(&world("ab"))).unwrap(), IDM);
+        let other = on(Some(&world("cd"))).unwrap_err().to_string();
+        assert!(
+            other.contains("'game/ramp.sumocfg'") && other.contains("another"),
+            "{other}"
+        );
+        let paper = on(None).unwrap_err().to_string();
+        assert!(paper.contains("paper's demand"), "{paper}");
+        assert_eq!(load(&path, None).unwrap(), IDM, "any scenario");
     }
 }
