@@ -10,24 +10,11 @@ mod common;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
-use common::netconvert::{build, through};
-use common::{bkpbs, csv_rows, scenario_run, stderr};
+use common::flows::{within_3_percent, Flow, FlowCount};
+use common::netconvert::{build, network, through};
+use common::{bkpbs, has_line, scenario_run, stderr};
 
 type Con = (&'static str, u32, &'static str, u32);
-
-/// What `bkpbs network` prints on `net`, whether it succeeded or not.
-fn network(net: &Path) -> String {
-    let o = bkpbs(&["network", net.to_str().unwrap()]);
-    format!("{}{}", String::from_utf8_lossy(&o.stdout), stderr(&o))
-}
-
-/// Asserts `out` holds a line containing every one of `words`.
-fn has_line(out: &str, words: &[&str]) {
-    assert!(
-        out.lines().any(|l| words.iter().all(|w| l.contains(w))),
-        "no line with {words:?} in:\n{out}"
-    );
-}
 
 /// A one-lane ramp joining a two-lane motorway at the nose, without an acceleration lane: its
 /// lane and the right main lane both lead into the right lane of `down` (OpenStreetMap imports
@@ -190,37 +177,13 @@ fn a_cloverleaf_is_named_and_left_to_sumo() {
     has_line(&out, &["left to SUMO's drivers", "region at acc, weave"]);
 }
 
-/// A scenario on `net` with `flows` (id, route edges, vehicles per hour) for 160 s.
+/// A scenario on `net` with `flows` (id, route edges, vehicles per hour) for 160 s, each
+/// vehicle departing on its best lane.
 fn scenario(dir: &Path, net: &Path, flows: &[(&str, &str, u32)]) -> PathBuf {
-    let mut routes = String::from("<routes>\n<vType id=\"car\" length=\"5\" maxSpeed=\"30\"/>\n");
-    for (id, edges, rate) in flows {
-        routes += &format!("<route id=\"r_{id}\" edges=\"{edges}\"/>\n");
-        routes += &format!(
-            "<flow id=\"{id}\" type=\"car\" route=\"r_{id}\" begin=\"0\" end=\"160\" \
-             vehsPerHour=\"{rate}\" departSpeed=\"max\" departLane=\"best\"/>\n"
-        );
-    }
-    std::fs::write(dir.join("s.rou.xml"), routes + "</routes>\n").unwrap();
-    let cfg = format!(
-        r#"<configuration>
-    <input><net-file value="{}"/><route-files value="s.rou.xml"/></input>
-    <time><begin value="0"/><end value="160"/><step-length value="0.2"/></time>
-</configuration>
-"#,
-        net.file_name().unwrap().to_str().unwrap()
-    );
-    let path = dir.join("s.sumocfg");
-    std::fs::write(&path, cfg).unwrap();
-    path
-}
-
-/// Per flow: vehicles inserted, arrived, and their mean delay (SUMO's timeLoss plus the wait
-/// to enter, s).
-#[derive(Debug, Default, Clone, Copy, PartialEq)]
-struct FlowCount {
-    inserted: usize,
-    arrived: usize,
-    delay: f64,
+    let flows: Vec<Flow> = (flows.iter())
+        .map(|&(id, edges, rate)| (id, edges, "best", rate))
+        .collect();
+    common::flows::scenario(dir, net, &flows, (160, 160))
 }
 
 /// Runs `planner` at `alpha` on `cfg` (seed 5) and counts each flow of `vehicles.csv`.
@@ -229,19 +192,7 @@ fn per_flow(cfg: &Path, planner: &str, alpha: &str, out: &Path) -> BTreeMap<Stri
     assert!(o.status.success(), "{planner}: {}", stderr(&o));
     let said = String::from_utf8_lossy(&o.stdout);
     has_line(&said, &["region at", "left to SUMO's drivers: on-ramp"]);
-    let mut flows: BTreeMap<String, FlowCount> = BTreeMap::new();
-    for v in csv_rows(&std::fs::read(out.join("vehicles.csv")).unwrap()) {
-        let flow = v["id"].split('.').next().unwrap().to_string();
-        let f = flows.entry(flow).or_default();
-        let num = |k: &str| v[k].parse::<f64>().unwrap_or(0.0);
-        f.inserted += 1;
-        f.arrived += usize::from(v["outcome"] == "arrived");
-        f.delay += num("time_loss_s") + num("depart_delay_s");
-    }
-    for f in flows.values_mut() {
-        f.delay /= f.inserted.max(1) as f64;
-    }
-    flows
+    common::flows::per_flow(out)
 }
 
 /// bk-pbs at α = 0.6 against SUMO alone on the same seed: each of `ramps` inserts and delivers
@@ -265,7 +216,7 @@ fn ramps_as_sumo_alone(cfg: &Path, ramps: &[&str]) {
     }
     for ramp in ramps {
         let (b, a) = (bk[*ramp], alone[*ramp]);
-        let near = |x: usize, y: usize| (x as f64 - y as f64).abs() <= 0.03 * y as f64;
+        let near = within_3_percent;
         assert!(a.inserted > 5, "{ramp}: {a:?}");
         assert!(
             near(b.inserted, a.inserted),

@@ -13,8 +13,9 @@ mod common;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
-use common::netconvert::{build, through};
-use common::{bkpbs, csv_rows, scenario_run, stderr};
+use common::flows::{within_3_percent, Flow, FlowCount};
+use common::netconvert::{build, network, through};
+use common::{csv_rows, has_line, scenario_run, stderr};
 
 type Con = (&'static str, u32, &'static str, u32);
 
@@ -84,52 +85,10 @@ fn lane_drop(dir: &Path) -> PathBuf {
     build(dir, &nodes, &edges, &cons)
 }
 
-/// What `bkpbs network` prints on `net`, whether it succeeded or not.
-fn network(net: &Path) -> String {
-    let o = bkpbs(&["network", net.to_str().unwrap()]);
-    format!("{}{}", String::from_utf8_lossy(&o.stdout), stderr(&o))
-}
-
-/// Asserts `out` holds a line containing every one of `words`.
-fn has_line(out: &str, words: &[&str]) {
-    assert!(
-        out.lines().any(|l| words.iter().all(|w| l.contains(w))),
-        "no line with {words:?} in:\n{out}"
-    );
-}
-
-/// A scenario on `net` whose flows `(id, route edges, depart lane, vehicles per hour)` run for
-/// 300 s, the simulation for 420 s: every vehicle has time to arrive.
-fn scenario(dir: &Path, net: &Path, flows: &[(&str, &str, &str, u32)]) -> PathBuf {
-    let mut routes = String::from("<routes>\n<vType id=\"car\" length=\"5\" maxSpeed=\"30\"/>\n");
-    for (id, edges, lane, rate) in flows {
-        routes += &format!("<route id=\"r_{id}\" edges=\"{edges}\"/>\n");
-        routes += &format!(
-            "<flow id=\"{id}\" type=\"car\" route=\"r_{id}\" begin=\"0\" end=\"300\" \
-             vehsPerHour=\"{rate}\" departSpeed=\"max\" departLane=\"{lane}\"/>\n"
-        );
-    }
-    std::fs::write(dir.join("s.rou.xml"), routes + "</routes>\n").unwrap();
-    let cfg = format!(
-        r#"<configuration>
-    <input><net-file value="{}"/><route-files value="s.rou.xml"/></input>
-    <time><begin value="0"/><end value="420"/><step-length value="0.2"/></time>
-</configuration>
-"#,
-        net.file_name().unwrap().to_str().unwrap()
-    );
-    let path = dir.join("s.sumocfg");
-    std::fs::write(&path, cfg).unwrap();
-    path
-}
-
-/// Per flow: vehicles inserted, arrived, and their mean delay (SUMO's timeLoss plus the wait
-/// to enter, s).
-#[derive(Debug, Default, Clone, Copy, PartialEq)]
-struct FlowCount {
-    inserted: usize,
-    arrived: usize,
-    delay: f64,
+/// A scenario on `net` whose `flows` run for 300 s, the simulation for 420 s: every vehicle has
+/// time to arrive.
+fn scenario(dir: &Path, net: &Path, flows: &[Flow]) -> PathBuf {
+    common::flows::scenario(dir, net, flows, (300, 420))
 }
 
 /// One run of `planner` at `alpha` on `cfg` (seed `seed`): each flow's counts, and the region's
@@ -146,23 +105,11 @@ fn per_flow(
         .join(format!("{planner}-{alpha}-{seed}"));
     let o = scenario_run(cfg, planner, &["--alpha", alpha, "--seed", seed], &out);
     assert!(o.status.success(), "{planner}: {}", stderr(&o));
-    let mut flows: BTreeMap<String, FlowCount> = BTreeMap::new();
-    for v in csv_rows(&std::fs::read(out.join("vehicles.csv")).unwrap()) {
-        let flow = v["id"].split('.').next().unwrap().to_string();
-        let f = flows.entry(flow).or_default();
-        let num = |k: &str| v[k].parse::<f64>().unwrap_or(0.0);
-        f.inserted += 1;
-        f.arrived += usize::from(v["outcome"] == "arrived");
-        f.delay += num("time_loss_s") + num("depart_delay_s");
-    }
-    for f in flows.values_mut() {
-        f.delay /= f.inserted.max(1) as f64;
-    }
     let regions = csv_rows(&std::fs::read(out.join("regions.csv")).unwrap());
     let controllable = (regions.iter())
         .map(|r| r["controllable_crashed"].parse::<u64>().unwrap())
         .sum();
-    (flows, controllable)
+    (common::flows::per_flow(&out), controllable)
 }
 
 /// Each planner at α = 0.6 against SUMO alone on the same seed: every flow inserts and
@@ -178,7 +125,7 @@ fn flows_as_under_sumo_alone(cfg: &Path, seed: &str) {
         for (flow, a) in &alone {
             let b = flows[flow];
             eprintln!("{planner} {flow}: {b:?}, SUMO alone {a:?}");
-            let near = |x: usize, y: usize| (x as f64 - y as f64).abs() <= 0.03 * y as f64;
+            let near = within_3_percent;
             assert!(a.inserted > 20, "{flow}: {a:?}");
             assert!(
                 near(b.inserted, a.inserted),
@@ -200,10 +147,7 @@ fn flows_as_under_sumo_alone(cfg: &Path, seed: &str) {
 }
 
 /// Ramp flows on either lane of the ramp, and the main road's.
-fn flows(
-    ramp_route: &'static str,
-    main_route: &'static str,
-) -> [(&'static str, &'static str, &'static str, u32); 3] {
+fn flows(ramp_route: &'static str, main_route: &'static str) -> [Flow<'static>; 3] {
     [
         ("main", main_route, "best", 2200),
         ("rampR", ramp_route, "0", 500),

@@ -2,6 +2,7 @@
 //! part of it, hence the `dead_code` allowance.
 #![allow(dead_code)]
 
+pub mod flows;
 pub mod netconvert;
 
 use std::collections::BTreeMap;
@@ -384,4 +385,12 @@ pub fn csv_rows(bytes: &[u8]) -> Vec<BTreeMap<String, String>> {
                 .collect()
         })
         .collect()
+}
+
+/// Asserts `out` holds a line containing every one of `words`.
+pub fn has_line(out: &str, words: &[&str]) {
+    assert!(
+        out.lines().any(|l| words.iter().all(|w| l.contains(w))),
+        "no line with {words:?} in:\n{out}"
+    );
 }

@@ -83,3 +83,13 @@ pub fn merge(dir: &Path, acc_length: f64) -> PathBuf {
     cons.push(("on", 0, "acc", 0));
     build(dir, &nodes, &edges, &cons)
 }
+
+/// What `bkpbs network` prints on `net`, whether it succeeded or not.
+pub fn network(net: &Path) -> String {
+    let o = super::bkpbs(&["network", net.to_str().unwrap()]);
+    format!(
+        "{}{}",
+        String::from_utf8_lossy(&o.stdout),
+        super::stderr(&o)
+    )
+}
