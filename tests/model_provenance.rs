@@ -196,3 +196,32 @@ fn ramp_episode_with_model(
     assert!(o.status.success(), "{}", stderr(&o));
     scenario_warnings(&o)
 }
+
+/// An episode whose predictor follows an HDV calibration lists that file in `models.toml`
+/// (bk-mastar with the constant predictor: the calibration is its one learned file).
+#[test]
+fn the_calibration_an_episode_follows_is_listed() {
+    let dir = tempfile::tempdir().unwrap();
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let calibration = root.join("models/profiles/paper/calibration.json");
+    let cfg = dir.path().join("c.toml");
+    let text = format!(
+        "[hdv]\nprofile = \"paper\"\n[predictor]\nkind = \"constant\"\ncalibration = {:?}\n",
+        calibration.to_str().unwrap()
+    );
+    std::fs::write(&cfg, text).unwrap();
+    let out = dir.path().join("out");
+    let o = paper_episode("bk-mastar", Some(&cfg), &out);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let record = std::fs::read_to_string(out.join("models.toml")).unwrap();
+    let value: toml::Value = toml::from_str(&record).unwrap();
+    let models = value["model"].as_array().unwrap();
+    assert_eq!(models.len(), 1, "{record}");
+    assert_eq!(models[0]["setting"].as_str(), Some("predictor.calibration"));
+    assert_eq!(
+        models[0]["source"].as_str(),
+        calibration.to_str(),
+        "{record}"
+    );
+    assert_eq!(models[0]["sha256"].as_str().unwrap().len(), 64, "{record}");
+}

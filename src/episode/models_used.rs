@@ -1,4 +1,5 @@
-//! The learned files an episode uses — b_θ's model files, the RL-PPO policy — with what each
+//! The learned files an episode uses — b_θ's model files, the HDV calibration its predictors
+//! follow, the RL-PPO policy — with what each
 //! was trained on: `bkpbs episode` warns once, after its run, where a file was trained on
 //! another scenario than the one it runs (a campaign once at its start), and `bkpbs episode` lists them in `models.toml` beside its
 //! CSV files (which keep their columns: committed results stay as they are).
@@ -12,6 +13,7 @@ use sha2::{Digest, Sha256};
 use crate::config::{Config, PredictorKind, TrainedOn, TrainingScenario};
 use crate::controller::{BuildError, PlannerKind};
 use crate::policy::model_file::{load_file, EMBEDDED_POLICY, EMBEDDED_POLICY_SOURCE};
+use crate::predict::longitudinal::calibration_path;
 use crate::predict::model_file::{LaneChangeModel, EMBEDDED_CONDITIONED, EMBEDDED_UNCONDITIONED};
 
 /// The file `bkpbs episode` lists the models in, in its output directory.
@@ -33,8 +35,9 @@ pub struct UsedModel {
 }
 
 /// The learned files the planner `planner` uses under `config`: b_θ's two models for
-/// `bk-pbs` (the unconditioned one for `bk-mastar`) with the learned predictor, the policy for
-/// `rl-ppo`, none otherwise.
+/// `bk-pbs` (the unconditioned one for `bk-mastar`) with the learned predictor, then the HDV
+/// calibration of either predictor if one is configured, the policy for `rl-ppo`, none
+/// otherwise.
 ///
 /// # Errors
 /// An unknown planner, or a file that cannot be used (as building the planner would say).
@@ -42,12 +45,16 @@ pub fn models_used(config: &Config, planner: &str) -> Result<Vec<UsedModel>, Bui
     let kind: PlannerKind = planner.parse()?;
     let learned = config.predictor.kind == PredictorKind::Learned;
     Ok(match kind {
-        PlannerKind::BkPbs | PlannerKind::BkMastar if learned => {
-            let (c, u) = crate::predict::learned::configured_models(config)?;
-            let mut used = vec![of_model("predictor.unconditioned_model", &u)];
-            if kind == PlannerKind::BkPbs {
-                used.insert(0, of_model("predictor.conditioned_model", &c));
+        PlannerKind::BkPbs | PlannerKind::BkMastar => {
+            let mut used = Vec::new();
+            if learned {
+                let (c, u) = crate::predict::learned::configured_models(config)?;
+                if kind == PlannerKind::BkPbs {
+                    used.push(of_model("predictor.conditioned_model", &c));
+                }
+                used.push(of_model("predictor.unconditioned_model", &u));
             }
+            used.extend(of_calibration(config));
             used
         }
         PlannerKind::RlPpo => vec![of_policy(config)?],
@@ -68,6 +75,18 @@ fn of_model(setting: &str, model: &LaneChangeModel) -> UsedModel {
         sha256: digest(embedded, &model.source),
         trained_on: model.file.trained_on.clone(),
     }
+}
+
+/// The record of the HDV calibration `config` names, if any (`bkpbs calibrate`'s file says
+/// itself what it was made on: a profile or a scenario's files).
+fn of_calibration(config: &Config) -> Option<UsedModel> {
+    let source = calibration_path(config)?.display().to_string();
+    Some(UsedModel {
+        setting: "predictor.calibration".into(),
+        sha256: digest(None, &source),
+        source,
+        trained_on: None,
+    })
 }
 
 /// The record of the configured (or embedded) policy.

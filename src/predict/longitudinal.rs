@@ -119,12 +119,7 @@ impl Longitudinal {
     pub fn from_config(config: &Config) -> Result<Longitudinal, ModelError> {
         let p = &config.predictor;
         let profile = &config.hdv.profile;
-        let path = p.calibration.clone().or_else(|| {
-            p.calibrations
-                .as_ref()
-                .map(|dir| dir.join(profile).join("calibration.json"))
-        });
-        let Some(path) = path else {
+        let Some(path) = calibration_path(config) else {
             return Ok(Longitudinal::ConstantSpeed);
         };
         let own = match &config.scenario.sumocfg {
@@ -199,6 +194,15 @@ impl Longitudinal {
         }
         out
     }
+}
+
+/// The calibration file `config` names: `predictor.calibration`, or the profile's in
+/// `predictor.calibrations`; `None` for none (constant speed along the lane).
+pub fn calibration_path(config: &Config) -> Option<PathBuf> {
+    let p = &config.predictor;
+    p.calibration.clone().or_else(|| {
+        (p.calibrations.as_ref()).map(|dir| dir.join(&config.hdv.profile).join("calibration.json"))
+    })
 }
 
 /// The fitted IDM of a calibration file, checked: the format, its version, and that it was
