@@ -384,6 +384,20 @@ impl Road {
             .map_or(1, |((k, _), _)| k)
     }
 
+    /// The entry (an index of `entries`) of a vehicle driving `route`: that of the first of its
+    /// edges in the frame's list (with or without frame lanes); `None` if none is.
+    pub fn entry_of_route(&self, route: &[String]) -> Option<usize> {
+        let code = |edge: &String| self.edges.iter().position(|e| *e.name == **edge);
+        route.iter().find_map(code).map(|c| self.entry_of_edge(c))
+    }
+
+    /// Whether an on-ramp has edges outside the frame (beside another auxiliary lane): its
+    /// vehicles are first read in the frame where it joins, on an edge that does not say
+    /// they came by the ramp.
+    pub fn has_ramp_edges_outside(&self) -> bool {
+        (self.edges.iter()).any(|e| e.on_ramp && e.lanes.iter().all(Option::is_none))
+    }
+
     /// The default road (the shipped network), for unit tests and planning without SUMO.
     pub fn paper_default() -> Road {
         let ramp_start = 150.0 - 166.79;

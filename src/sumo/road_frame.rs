@@ -52,27 +52,7 @@ pub fn road(net: &Net, layout: &Layout) -> Result<Road, String> {
     let mut internal = main_junctions(net, layout, &main);
     let mut ramps: Vec<&OnRamp> = layout.on_ramps.iter().collect();
     ramps.sort_by(|a, b| a.merge_start.total_cmp(&b.merge_start));
-    let (mut zones, mut outer) = (Vec::new(), Vec::new());
-    for ramp in &ramps {
-        let end_lane = &net.edge(&ramp.ends_on).lanes[ramp.end_lane as usize];
-        let joined = (
-            main.spans[ramp.joins.as_str()].s0,
-            main.spans[ramp.ends_on.as_str()].s_at(end_lane.length),
-        );
-        if joined.1 - joined.0 < MIN_ACCELERATION_LANE {
-            return Err(format!(
-                "the acceleration lane of on-ramp '{}' on '{}' is {:.2} m long, shorter than one \
-                 vehicle ({MIN_ACCELERATION_LANE} m): no merge to plan",
-                ramp.edges[0],
-                ramp.joins,
-                joined.1 - joined.0
-            ));
-        }
-        let zone = ramp_frames(net, ramp, joined, &main.offsets, &mut edges, &mut internal)?;
-        outer.extend(outer_zones(net, ramp, &zone, &main)?);
-        zones.push(zone);
-    }
-    zones.extend(outer);
+    let mut zones = ramp_zones(net, &ramps, &main, &mut edges, &mut internal)?;
     for d in &layout.lane_drops {
         zones.push(drop_zone(net, layout, d, &main)?);
     }
@@ -92,6 +72,45 @@ pub fn road(net: &Net, layout: &Layout) -> Result<Road, String> {
         exits: exits(net, layout),
         line: (!layout.line.is_straight_east()).then(|| Arc::new(layout.line.clone())),
     })
+}
+
+/// The frames of `ramps` (in order along the road) and their zones: each ramp's lane beside
+/// the carriageway in that order, then the further lanes of ramps of several.
+fn ramp_zones(
+    net: &Net,
+    ramps: &[&OnRamp],
+    main: &MainFrames<'_>,
+    edges: &mut Vec<EdgeFrame>,
+    internal: &mut InternalEdges,
+) -> Result<Vec<MergeZone>, String> {
+    let (mut zones, mut outer) = (Vec::new(), Vec::new());
+    for ramp in ramps {
+        let end_lane = &net.edge(&ramp.ends_on).lanes[ramp.end_lane as usize];
+        let joined = (
+            main.spans[ramp.joins.as_str()].s0,
+            main.spans[ramp.ends_on.as_str()].s_at(end_lane.length),
+        );
+        if joined.1 - joined.0 < MIN_ACCELERATION_LANE {
+            return Err(format!(
+                "the acceleration lane of on-ramp '{}' on '{}' is {:.2} m long, shorter than one \
+                 vehicle ({MIN_ACCELERATION_LANE} m): no merge to plan",
+                ramp.edges[0],
+                ramp.joins,
+                joined.1 - joined.0
+            ));
+        }
+        // The ramp is in the frame only past every auxiliary lane that ends before it joins.
+        let free_from = (zones.iter().chain(&outer))
+            .map(|z: &MergeZone| z.end)
+            .filter(|end| *end <= joined.0 + 1e-6)
+            .fold(f64::NEG_INFINITY, f64::max);
+        let placed = (joined, free_from);
+        let zone = ramp_frames(net, ramp, placed, &main.offsets, edges, internal)?;
+        outer.extend(outer_zones(net, ramp, &zone, main)?);
+        zones.push(zone);
+    }
+    zones.extend(outer);
+    Ok(zones)
 }
 
 /// The frames of the main carriageway's edges: every lane of an edge at the `s` of the same
@@ -360,11 +379,14 @@ fn shape_length(l: &Lane) -> f64 {
 
 /// The frames of an on-ramp's edges and junction lanes, counted back from where its
 /// acceleration lane begins, and its merge zone (`joined`: where the acceleration lane begins
-/// and ends).
+/// and ends). The stretch of the ramp before `free_from` (where the last auxiliary lane of the
+/// carriageway before it ends) lies beside that lane, not on it: its junction lanes are left
+/// out of the frame and its edges have no frame lanes (a vehicle there is not yet in the
+/// region's scene), and its zone begins where the ramp is in the frame.
 fn ramp_frames(
     net: &Net,
     ramp: &OnRamp,
-    joined: (f64, f64),
+    (joined, free_from): ((f64, f64), f64),
     offsets: &BTreeMap<&str, i32>,
     edges: &mut Vec<EdgeFrame>,
     internal: &mut InternalEdges,
@@ -379,16 +401,20 @@ fn ramp_frames(
             net.edge(&ramp.joins).lanes.len()
         ));
     }
-    let mut s_end = joined.0;
+    let mut piece = RampPiece {
+        s_end: joined.0,
+        lanes: 1 + ramp.outer.len(),
+        free_from,
+    };
+    let mut ramp_start = joined.0;
     let mut next = ramp.joins.as_str();
-    let lanes = 1 + ramp.outer.len();
     for id in ramp.edges.iter().rev() {
-        s_end = ramp_edge_frames(net, (id, next), s_end, lanes, edges, internal)?;
+        ramp_start = ramp_start.min(piece.frames(net, (id, next), edges, internal)?);
         next = id;
     }
     Ok(MergeZone {
         lane: MERGE_LANE,
-        ramp_start: s_end,
+        ramp_start,
         start: joined.0,
         end: joined.1,
         weaving: ramp.weaves_into.is_some(),
@@ -396,51 +422,70 @@ fn ramp_frames(
     })
 }
 
-/// The frames of ramp edge `id` (of at most `lanes` lanes) and of its junction lanes into
-/// `next`, which begins at `s_end`; returns where the edge begins. Its lanes count from the
-/// left: the leftmost continues into frame lane 0, the others lie outside it.
-fn ramp_edge_frames(
-    net: &Net,
-    (id, next): (&str, &str),
-    mut s_end: f64,
+/// Where the next ramp edge to place, walking upstream, ends (its junction lanes into the
+/// edge after it included), how many lanes a ramp edge may have, and the `s` before which the
+/// ramp lies beside another auxiliary lane, outside the frame.
+struct RampPiece {
+    s_end: f64,
     lanes: usize,
-    edges: &mut Vec<EdgeFrame>,
-    internal: &mut InternalEdges,
-) -> Result<f64, String> {
-    let e = net.edge(id);
-    if e.lanes.len() > lanes {
-        return Err(format!(
-            "ramp edge '{id}' has {} lanes, more than the {lanes} it feeds the carriageway with",
-            e.lanes.len()
-        ));
+    free_from: f64,
+}
+
+impl RampPiece {
+    /// The frames of ramp edge `id` and of its junction lanes into `next`, which begins at
+    /// `s_end`, which moves to where the edge begins; returns the lowest `s` put in the frame
+    /// (the edge's old `s_end` if nothing was). Its lanes count from the left: the leftmost
+    /// continues into frame lane 0, the others lie outside it.
+    fn frames(
+        &mut self,
+        net: &Net,
+        (id, next): (&str, &str),
+        edges: &mut Vec<EdgeFrame>,
+        internal: &mut InternalEdges,
+    ) -> Result<f64, String> {
+        let e = net.edge(id);
+        if e.lanes.len() > self.lanes {
+            return Err(format!(
+                "ramp edge '{id}' has {} lanes, more than the {} it feeds the carriageway with",
+                e.lanes.len(),
+                self.lanes
+            ));
+        }
+        let frame_lane = |index: u32| MERGE_LANE + index as i32 + 1 - e.lanes.len() as i32;
+        let in_frame = |s: f64| s >= self.free_from - 1e-6;
+        let left = e.lanes.len() as u32 - 1;
+        let mut lowest = self.s_end;
+        // Each lane's first link into the next edge, through its junction lane.
+        let links: Vec<_> = (0..=left)
+            .filter_map(|from| {
+                let c = net
+                    .outgoing(id)
+                    .find(|c| c.to == next && c.from_lane == from)?;
+                Some((from, net.internal.get(c.via.as_ref()?)?))
+            })
+            .collect();
+        if let Some((_, via)) = links.iter().find(|(from, _)| *from == left) {
+            self.s_end -= via.length;
+        }
+        if in_frame(self.s_end) {
+            lowest = self.s_end;
+            for (from, via) in &links {
+                let frame = LaneFrame::straight(frame_lane(*from), self.s_end).limited(via.speed);
+                internal.put(via, frame, true);
+            }
+        }
+        self.s_end -= e.lanes[left as usize].length;
+        let s0 = self.s_end;
+        let lane = |l: &Lane| LaneFrame::straight(frame_lane(l.index), s0).limited(l.speed);
+        edges.push(EdgeFrame {
+            name: Arc::from(id),
+            lanes: (e.lanes.iter())
+                .map(|l| in_frame(s0).then(|| lane(l)))
+                .collect(),
+            on_ramp: true,
+        });
+        Ok(if in_frame(s0) { s0 } else { lowest })
     }
-    let frame_lane = |index: u32| MERGE_LANE + index as i32 + 1 - e.lanes.len() as i32;
-    let left = e.lanes.len() as u32 - 1;
-    // Each lane's first link into the next edge, through its junction lane.
-    let links: Vec<_> = (0..=left)
-        .filter_map(|from| {
-            let c = net
-                .outgoing(id)
-                .find(|c| c.to == next && c.from_lane == from)?;
-            Some((from, net.internal.get(c.via.as_ref()?)?))
-        })
-        .collect();
-    if let Some((_, via)) = links.iter().find(|(from, _)| *from == left) {
-        s_end -= via.length;
-    }
-    for (from, via) in &links {
-        let frame = LaneFrame::straight(frame_lane(*from), s_end).limited(via.speed);
-        internal.put(via, frame, true);
-    }
-    s_end -= e.lanes[left as usize].length;
-    edges.push(EdgeFrame {
-        name: Arc::from(id),
-        lanes: (e.lanes.iter())
-            .map(|l| Some(LaneFrame::straight(frame_lane(l.index), s_end).limited(l.speed)))
-            .collect(),
-        on_ramp: true,
-    });
-    Ok(s_end)
 }
 
 /// Junction lanes of the frame, gathered into SUMO's internal edges (lane `:j_0_2` is lane 2

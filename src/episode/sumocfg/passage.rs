@@ -42,6 +42,26 @@ pub(super) fn first_region_on(regions: &[Region], route: &[String]) -> Option<(u
     })
 }
 
+/// The entry of region `region` that vehicle `id`, read first in its frame on edge
+/// `edge_code`, came in by: that edge's; where an on-ramp's edges lie outside the frame
+/// (beside another auxiliary lane), its route's, so that a ramp vehicle first read where its
+/// ramp joins is still the ramp's.
+fn entry_of(
+    sim: &impl SumoClient,
+    id: &str,
+    region: &Region,
+    edge_code: i32,
+) -> Result<usize, SumoError> {
+    let road = &region.road;
+    let by_edge = usize::try_from(edge_code).map_or(0, |c| road.entry_of_edge(c));
+    if by_edge != 0 || !road.has_ramp_edges_outside() {
+        return Ok(by_edge);
+    }
+    Ok(road
+        .entry_of_route(&sim.vehicle_route(id)?)
+        .unwrap_or(by_edge))
+}
+
 /// A vehicle's first reading in region `region`: when, where, how fast, by which entry, and
 /// whether its route leaves the region early.
 pub(super) fn enter(
@@ -54,7 +74,7 @@ pub(super) fn enter(
     now: f64,
 ) -> Result<Entry, SumoError> {
     let (end, pos) = (&region.road.end_edge.0, region.road.end_edge.1);
-    let entry = usize::try_from(raw.edge_code).map_or(0, |c| region.road.entry_of_edge(c));
+    let entry = entry_of(sim, id, region, raw.edge_code)?;
     Ok(Entry {
         region: g,
         entry,

@@ -10,8 +10,9 @@
 //! internal lanes between its edges. The road frame of a region is built in `road_frame.rs`.
 //!
 //! Besides the regions, every forced lane change of the network is named by its kind
-//! (`lane_ends.rs`), with where it is planned or why not; a region with an on-ramp alongside
-//! another merge's auxiliary lane is left to SUMO's drivers (`alongside.rs`).
+//! (`lane_ends.rs`), with where it is planned or why not; an on-ramp alongside another merge's
+//! auxiliary lane is named so (`alongside.rs`), and a region where one's acceleration lane
+//! begins beside another's is left to SUMO's drivers.
 
 mod alongside;
 mod describe;
@@ -164,27 +165,7 @@ impl Discovery {
     /// The merge regions of `net`.
     pub fn of(net: &Net) -> Discovery {
         let (merges, mut not_merges) = merges::find(net);
-        let mut by_road: BTreeMap<Vec<String>, (Vec<Merge>, Vec<String>)> = BTreeMap::new();
-        let mut order: Vec<Vec<String>> = Vec::new();
-        let mut road_of = |edge: &str| {
-            let road = merges::carriageway(net, edge);
-            if !order.contains(&road) {
-                order.push(road.clone());
-            }
-            road
-        };
-        let mut grouped = Vec::new();
-        for m in merges {
-            grouped.push((road_of(&m.joins), Some(m), None));
-        }
-        for d in lane_ends::right_lane_drops(net) {
-            grouped.push((road_of(&d), None, Some(d)));
-        }
-        for (road, m, d) in grouped {
-            let (merges, drops) = by_road.entry(road).or_default();
-            merges.extend(m);
-            drops.extend(d);
-        }
+        let (order, by_road) = by_carriageway(net, merges);
         let (mut regions, mut left_to_sumo) = (Vec::new(), Vec::new());
         for road in &order {
             let (merges, drops) = &by_road[road];
@@ -199,7 +180,11 @@ impl Discovery {
                 })),
             }
         }
-        let changes = changes(lane_ends::find(net), &regions, &left_to_sumo);
+        let beside = (regions.iter())
+            .chain(left_to_sumo.iter().map(|l| &l.layout))
+            .flat_map(|l| alongside::beside(net, l))
+            .collect::<Vec<_>>();
+        let changes = changes(lane_ends::find(net), &regions, &left_to_sumo, &beside);
         let used: BTreeSet<&str> = regions.iter().flat_map(Layout::edge_ids).collect();
         let sumos: BTreeSet<&str> = left_to_sumo
             .iter()
@@ -224,13 +209,45 @@ impl Discovery {
     }
 }
 
+/// Per carriageway (its edges), its merges and the edges its right lanes drop on.
+type OnCarriageway = BTreeMap<Vec<String>, (Vec<Merge>, Vec<String>)>;
+
+/// The merges and right-lane drops of `net`, grouped by the carriageway they lie on: the
+/// carriageways in the order their first merge or drop was found, and each one's merges and
+/// the edges its lanes drop on.
+fn by_carriageway(net: &Net, merges: Vec<Merge>) -> (Vec<Vec<String>>, OnCarriageway) {
+    let mut by_road = OnCarriageway::new();
+    let mut order: Vec<Vec<String>> = Vec::new();
+    let mut road_of = |edge: &str| {
+        let road = merges::carriageway(net, edge);
+        if !order.contains(&road) {
+            order.push(road.clone());
+        }
+        road
+    };
+    let mut grouped = Vec::new();
+    for m in merges {
+        grouped.push((road_of(&m.joins), Some(m), None));
+    }
+    for d in lane_ends::right_lane_drops(net) {
+        grouped.push((road_of(&d), None, Some(d)));
+    }
+    for (road, m, d) in grouped {
+        let (merges, drops) = by_road.entry(road).or_default();
+        merges.extend(m);
+        drops.extend(d);
+    }
+    (order, by_road)
+}
+
 /// The forced lane changes `found`, with the weaving sections of the regions, each with where
-/// it is planned; an on-ramp of a region left to SUMO for running alongside another's
-/// auxiliary lane is named so.
+/// it is planned; an on-ramp running alongside another's auxiliary lane (`beside`: its name and
+/// what it runs beside) is named so.
 fn changes(
     mut found: Vec<ForcedChange>,
     regions: &[Layout],
     left: &[LeftToSumo],
+    beside: &[(String, String)],
 ) -> Vec<(ForcedChange, Status)> {
     let layouts = regions.iter().chain(left.iter().map(|l| &l.layout));
     for r in layouts.flat_map(|l| &l.on_ramps) {
@@ -262,15 +279,15 @@ fn changes(
             );
             let ramp = c.ramp.as_deref().filter(|_| planned).unwrap_or_default();
             let drop = c.drop.as_deref().unwrap_or_default();
+            if let Some((_, what)) = beside.iter().find(|(r, _)| r == ramp) {
+                c.kind = Kind::Alongside;
+                c.what = what.clone();
+            }
             let status = if let Some(k) = regions.iter().position(|l| drops(l, drop)) {
                 Status::Region(k)
             } else if let Some(k) = regions.iter().position(|l| has(l, ramp)) {
                 Status::Region(k)
             } else if let Some(k) = left.iter().position(|l| has(&l.layout, ramp)) {
-                if left[k].ramp == ramp {
-                    c.kind = Kind::Alongside;
-                    c.what = left[k].why.clone();
-                }
                 Status::LeftToSumo(k)
             } else {
                 Status::NotPlanned
