@@ -33,38 +33,6 @@ fn a_nose_merge() {
     has_line(&out, &["nose merge", "'on'", "'down'", "not planned yet"]);
 }
 
-/// A one-lane ramp joining on the left, its acceleration lane the leftmost.
-#[test]
-fn a_left_side_ramp() {
-    let dir = tempfile::tempdir().unwrap();
-    let nodes = [
-        ("a", 0.0, 0.0),
-        ("b", 500.0, 0.0),
-        ("c", 700.0, 0.0),
-        ("d", 1100.0, 0.0),
-        ("r", 300.0, 50.0),
-    ];
-    let edges = [
-        ("up", "a", "b", 2, ""),
-        ("acc", "b", "c", 3, ""),
-        ("down", "c", "d", 2, ""),
-        ("on", "r", "b", 1, ""),
-    ];
-    let cons: Vec<Con> = vec![
-        ("up", 0, "acc", 0),
-        ("up", 1, "acc", 1),
-        ("on", 0, "acc", 2),
-        ("acc", 0, "down", 0),
-        ("acc", 1, "down", 1),
-    ];
-    let out = network(&build(dir.path(), &nodes, &edges, &cons));
-    has_line(&out, &["left-side on-ramp", "'on'", "not planned yet"]);
-    assert!(
-        !out.contains("ramp 'up'"),
-        "the main road called a ramp:\n{out}"
-    );
-}
-
 /// Two on-ramps whose acceleration lanes overlap: `on2` joins `both` while the lane `on1`
 /// feeds still runs there for 45 m. The region is left to SUMO's drivers with why.
 #[test]

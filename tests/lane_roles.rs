@@ -1,7 +1,8 @@
 //! Auxiliary lanes of other roles than the one acceleration lane, on networks built here from
 //! plain XML by netconvert: on-ramps of two lanes (a ramp whose lanes end in turn, one that
 //! joins as two lanes the carriageway keeps for 800 m and then drops), a main-road lane drop
-//! (3 to 2 lanes), and on-ramps whose edges run alongside another merge's auxiliary lane (two
+//! (3 to 2 lanes), an on-ramp joining on the left (its lane the frame lane above the
+//! carriageway's), and on-ramps whose edges run alongside another merge's auxiliary lane (two
 //! on-ramps 150 m apart; a cloverleaf's outer on-ramp beside its weaving lane). `bkpbs network`
 //! plans each (a ramp's outer lane a frame lane of its own, outside the one beside the
 //! carriageway; the dropped lane an auxiliary lane whose traffic is the main road's; a ramp's
@@ -86,6 +87,32 @@ fn lane_drop(dir: &Path) -> PathBuf {
     ];
     let mut cons: Vec<Con> = through("up", 3, "mid", 3);
     cons.extend(through("mid", 3, "down", 2));
+    build(dir, &nodes, &edges, &cons)
+}
+
+/// A one-lane on-ramp `on` joining a two-lane motorway on the left, its acceleration lane
+/// (200 m on `acc`) the leftmost.
+fn left_side_ramp(dir: &Path) -> PathBuf {
+    let nodes = [
+        ("a", 0.0, 0.0),
+        ("b", 500.0, 0.0),
+        ("c", 700.0, 0.0),
+        ("d", 1100.0, 0.0),
+        ("r", 300.0, 50.0),
+    ];
+    let edges = [
+        ("up", "a", "b", 2, ""),
+        ("acc", "b", "c", 3, ""),
+        ("down", "c", "d", 2, ""),
+        ("on", "r", "b", 1, ""),
+    ];
+    let cons: Vec<Con> = vec![
+        ("up", 0, "acc", 0),
+        ("up", 1, "acc", 1),
+        ("on", 0, "acc", 2),
+        ("acc", 0, "down", 0),
+        ("acc", 1, "down", 1),
+    ];
     build(dir, &nodes, &edges, &cons)
 }
 
@@ -380,4 +407,26 @@ fn a_cloverleaf_is_planned_and_never_closed() {
         ("idm-mobil", Held::Counts),
     ];
     flows_as_under_sumo_alone(&cfg, "5", &held);
+}
+
+#[test]
+fn a_left_side_ramp_is_planned_and_never_closed() {
+    let dir = tempfile::tempdir().unwrap();
+    let net = left_side_ramp(dir.path());
+    let said = network(&net);
+    has_line(&said, &["left-side on-ramp", "'on'", "planned in region 1"]);
+    has_line(&said, &["on-ramp 1: on → acc lane 2"]);
+    assert!(
+        !said.contains("ramp 'up'"),
+        "the main road called a ramp:\n{said}"
+    );
+    let cfg = scenario(
+        dir.path(),
+        &net,
+        &[
+            ("main", "up acc down", "best", 2200),
+            ("ramp", "on acc down", "best", 500),
+        ],
+    );
+    flows_as_under_sumo_alone(&cfg, "5", &AS_A_RULE);
 }

@@ -30,6 +30,8 @@ const MIN_ACCELERATION_LANE: f64 = 5.0;
 
 /// Where each main edge lies: its frame-lane offset and the span of its reference lane.
 struct MainFrames<'n> {
+    /// The carriageway's lanes (frame lanes 1 to it).
+    main_lanes: i32,
     offsets: BTreeMap<&'n str, i32>,
     spans: BTreeMap<&'n str, LaneFrame>,
 }
@@ -48,7 +50,9 @@ pub fn road(net: &Net, layout: &Layout) -> Result<Road, String> {
     let lane_width = first.lanes.last().expect("lanes checked").width;
     let outer_lanes = (layout.on_ramps.iter()).map(|r| r.outer.len()).max();
     let bottom = MERGE_LANE - outer_lanes.unwrap_or(0) as i32;
-    let (mut edges, main) = main_edges(net, layout, main_lanes, bottom)?;
+    let left_ramps = (layout.on_ramps.iter()).any(|r| on_the_left(layout, r));
+    let top = main_lanes + i32::from(left_ramps);
+    let (mut edges, main) = main_edges(net, layout, main_lanes, (bottom, top))?;
     let mut internal = main_junctions(net, layout, &main);
     let mut ramps: Vec<&OnRamp> = layout.on_ramps.iter().collect();
     ramps.sort_by(|a, b| a.merge_start.total_cmp(&b.merge_start));
@@ -59,7 +63,7 @@ pub fn road(net: &Net, layout: &Layout) -> Result<Road, String> {
     edges.extend(internal.into_edges());
     let entries = entries(net, layout, &ramps);
     let last = layout.main.last().expect("a main carriageway");
-    let end_lane = net.edge(&last.id).lanes.last().expect("lanes checked");
+    let end_lane = &net.edge(&last.id).lanes[last.reference as usize];
     let section_end = main.spans[last.id.as_str()].s_at(end_lane.length);
     Ok(Road {
         edges,
@@ -99,13 +103,16 @@ fn ramp_zones(
                 joined.1 - joined.0
             ));
         }
-        // The ramp is in the frame only past every auxiliary lane that ends before it joins.
+        // The ramp is in the frame only past every auxiliary lane on its side that ends
+        // before it joins.
+        let left = main.offsets[ramp.joins.as_str()] + ramp.lane as i32 > MERGE_LANE;
         let free_from = (zones.iter().chain(&outer))
-            .map(|z: &MergeZone| z.end)
+            .filter(|z: &&MergeZone| (z.lane > MERGE_LANE) == left)
+            .map(|z| z.end)
             .filter(|end| *end <= joined.0 + 1e-6)
             .fold(f64::NEG_INFINITY, f64::max);
         let placed = (joined, free_from);
-        let zone = ramp_frames(net, ramp, placed, &main.offsets, edges, internal)?;
+        let zone = ramp_frames(net, ramp, placed, main, edges, internal)?;
         outer.extend(outer_zones(net, ramp, &zone, main)?);
         zones.push(zone);
     }
@@ -119,17 +126,18 @@ fn main_edges<'n>(
     net: &'n Net,
     layout: &'n Layout,
     main_lanes: i32,
-    bottom: i32,
+    (bottom, top): (i32, i32),
 ) -> Result<(Vec<EdgeFrame>, MainFrames<'n>), String> {
     let mut edges = Vec::new();
     let mut main = MainFrames {
+        main_lanes,
         offsets: BTreeMap::new(),
         spans: BTreeMap::new(),
     };
     for m in &layout.main {
-        let offset = lane_offset(m, main_lanes, bottom)?;
+        let offset = lane_offset(m, main_lanes, (bottom, top))?;
         let edge = net.edge(&m.id);
-        let left = edge.lanes.last().expect("lanes checked");
+        let left = &edge.lanes[m.reference as usize];
         let span = LaneFrame {
             lane: 0,
             s0: m.s_start,
@@ -166,7 +174,7 @@ fn main_junctions(net: &Net, layout: &Layout, main: &MainFrames<'_>) -> Internal
     let mut internal = InternalEdges::default();
     for pair in layout.main.windows(2) {
         let (from, to) = (pair[0].id.as_str(), pair[1].id.as_str());
-        let left = net.edge(from).lanes.last().expect("lanes checked");
+        let left = &net.edge(from).lanes[pair[0].reference as usize];
         let s_a = main.spans[from].s_at(left.length);
         let s_b = main.spans[to].s0;
         for c in net.outgoing(from).filter(|c| c.to == to) {
@@ -248,12 +256,13 @@ fn exits(net: &Net, layout: &Layout) -> Vec<Exit> {
         .collect()
 }
 
-/// Frame lane of the edge's lane 0: the carriageway's lanes are aligned on the left, and the
-/// region's auxiliary lanes reach down to frame lane `bottom`.
-fn lane_offset(m: &MainEdge, main_lanes: i32, bottom: i32) -> Result<i32, String> {
-    let offset = main_lanes + FIRST_MAIN_LANE - m.lanes as i32;
-    if offset < bottom {
-        let auxiliary = match FIRST_MAIN_LANE - bottom {
+/// Frame lane of the edge's lane 0: its leftmost through lane (`reference`) is the
+/// carriageway's top lane, and the region's auxiliary lanes reach down to frame lane `bottom`
+/// and up to `top`.
+fn lane_offset(m: &MainEdge, main_lanes: i32, (bottom, top): (i32, i32)) -> Result<i32, String> {
+    let offset = main_lanes - m.reference as i32;
+    if offset < bottom || offset + m.lanes as i32 - 1 > top {
+        let auxiliary = match FIRST_MAIN_LANE - bottom + top - main_lanes {
             1 => "one auxiliary lane".to_string(),
             n => format!("{n} auxiliary lanes"),
         };
@@ -264,6 +273,12 @@ fn lane_offset(m: &MainEdge, main_lanes: i32, bottom: i32) -> Result<i32, String
         ));
     }
     Ok(offset)
+}
+
+/// Whether on-ramp `r` joins on the left: the lane it feeds lies left of the joined edge's
+/// leftmost through lane.
+fn on_the_left(layout: &Layout, r: &OnRamp) -> bool {
+    (layout.main.iter()).any(|m| m.id == r.joins && r.lane > m.reference)
 }
 
 /// The zone of lane drop `d`: the carriageway's lane 0 from where it begins in the region (the
@@ -387,15 +402,16 @@ fn ramp_frames(
     net: &Net,
     ramp: &OnRamp,
     (joined, free_from): ((f64, f64), f64),
-    offsets: &BTreeMap<&str, i32>,
+    main: &MainFrames<'_>,
     edges: &mut Vec<EdgeFrame>,
     internal: &mut InternalEdges,
 ) -> Result<MergeZone, String> {
     let name = &ramp.edges[0];
-    if offsets[ramp.joins.as_str()] + ramp.lane as i32 != MERGE_LANE {
+    let lane = main.offsets[ramp.joins.as_str()] + ramp.lane as i32;
+    if lane != MERGE_LANE && lane != main.main_lanes + 1 {
         return Err(format!(
             "on-ramp '{name}' feeds lane {} of '{}', which has {} lanes: a ramp must join as \
-             the one lane the carriageway gains on the right",
+             the one lane the carriageway gains on the right or on the left",
             ramp.lane,
             ramp.joins,
             net.edge(&ramp.joins).lanes.len()
@@ -404,6 +420,7 @@ fn ramp_frames(
     let mut piece = RampPiece {
         s_end: joined.0,
         lanes: 1 + ramp.outer.len(),
+        lane,
         free_from,
     };
     let mut ramp_start = joined.0;
@@ -413,7 +430,7 @@ fn ramp_frames(
         next = id;
     }
     Ok(MergeZone {
-        lane: MERGE_LANE,
+        lane,
         ramp_start,
         start: joined.0,
         end: joined.1,
@@ -428,6 +445,9 @@ fn ramp_frames(
 struct RampPiece {
     s_end: f64,
     lanes: usize,
+    /// The frame lane the ramp's lane beside the carriageway continues into: 0 on the right,
+    /// the one above the carriageway's on the left.
+    lane: i32,
     free_from: f64,
 }
 
@@ -451,7 +471,13 @@ impl RampPiece {
                 self.lanes
             ));
         }
-        let frame_lane = |index: u32| MERGE_LANE + index as i32 + 1 - e.lanes.len() as i32;
+        let n = e.lanes.len() as i32;
+        // On the right the ramp's leftmost lane continues into `lane`, on the left its
+        // rightmost.
+        let frame_lane = |index: u32| match self.lane {
+            MERGE_LANE => self.lane + index as i32 + 1 - n,
+            _ => self.lane + index as i32,
+        };
         let in_frame = |s: f64| s >= self.free_from - 1e-6;
         let left = e.lanes.len() as u32 - 1;
         let mut lowest = self.s_end;

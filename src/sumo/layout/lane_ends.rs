@@ -16,7 +16,7 @@
 
 use std::collections::{BTreeMap, BTreeSet};
 
-use super::merges::{feeder, lanes_fed};
+use super::merges::{lanes_fed, main_feeder};
 use crate::sumo::network::Net;
 
 /// How far an on-ramp's lanes run on before the first of them ends for the carriageway to
@@ -134,22 +134,6 @@ fn lane_ends(net: &Net) -> Vec<(&str, u32)> {
         out.extend(ends.map(|l| (e.id.as_str(), l.index)));
     }
     out
-}
-
-/// The road that feeds `edge` as its carriageway: its one predecessor, the one with the most
-/// lanes, or (where two are as wide) the one feeding its leftmost lane.
-fn main_feeder<'n>(net: &'n Net, edge: &str) -> Option<&'n str> {
-    let preds = net.predecessors(edge);
-    let lanes = |id: &str| net.edge(id).lanes.iter().filter(|l| l.for_cars).count();
-    let most = preds.iter().map(|p| lanes(p)).max()?;
-    match preds
-        .iter()
-        .filter(|p| lanes(p) == most)
-        .collect::<Vec<_>>()[..]
-    {
-        [one] => Some(one),
-        _ => feeder(net, edge),
-    }
 }
 
 /// Where lane `lane` of `edge` began, followed upstream along the carriageway's lanes, and

@@ -89,8 +89,13 @@ pub fn find(net: &Net) -> (Vec<Merge>, Vec<NotAMerge>) {
         let lanes = |id: &str| net.edge(id).lanes.iter().filter(|l| l.for_cars).count();
         for ramp in preds.into_iter().filter(|p| *p != main) {
             if lanes(ramp) > lanes(main) {
-                // The carriageway itself (the road on the left is a left-side on-ramp):
-                // `lane_ends` names it, not planned yet.
+                // `ramp` is the carriageway, and `main`, feeding the lanes left of it, a
+                // left-side on-ramp.
+                match left_merge(net, (main, ramp), &e.id) {
+                    Some(Ok(m)) => merges.push(m),
+                    Some(Err(n)) => not.push(n),
+                    None => {}
+                }
                 continue;
             }
             let fed = lanes_fed(net, ramp, &e.id);
@@ -111,6 +116,33 @@ pub fn find(net: &Net) -> (Vec<Merge>, Vec<NotAMerge>) {
         }
     }
     (merges, not)
+}
+
+/// The merge of on-ramp `ramp` joining carriageway `main` on the left at `joins`: its lane (the
+/// one beside the carriageway's) and where it ends; `None` where it feeds no lane left of the
+/// carriageway's (a junction), and a ramp of several lanes is not planned.
+fn left_merge(
+    net: &Net,
+    (ramp, main): (&str, &str),
+    joins: &str,
+) -> Option<Result<Merge, NotAMerge>> {
+    let fed = lanes_fed(net, ramp, joins);
+    let top_main = *lanes_fed(net, main, joins).last()?;
+    if fed.iter().any(|l| *l <= top_main) {
+        return None;
+    }
+    if lanes_feeding(net, ramp, joins) > 1 {
+        return Some(Err(NotAMerge {
+            ramp: ramp.to_string(),
+            why: format!(
+                "joins '{joins}' on the left with {} lanes: a left-side on-ramp of several \
+                 lanes is not planned",
+                fed.len()
+            ),
+        }));
+    }
+    let lane = fed[0];
+    Some(classify(ramp, joins, lane, follow_lane(net, joins, lane)))
 }
 
 /// `merge` with the further lanes of its ramp, `fed` (the joined edge's lanes the ramp feeds,
@@ -308,11 +340,29 @@ fn widest<'n>(net: &'n Net, ids: impl Iterator<Item = &'n str>) -> Option<&'n st
     (best.len() == 1).then(|| best[0])
 }
 
-/// The carriageway through `edge`: followed by its leftmost lane upstream to a source and
-/// downstream to a sink (or to where it forks into equal roads, or loops).
+/// The road that feeds `edge` as its carriageway: its one predecessor, the one with the most
+/// lanes, or (where two are as wide) the one feeding its leftmost lane. (A narrower road
+/// feeding the leftmost lane is a left-side on-ramp.)
+pub fn main_feeder<'n>(net: &'n Net, edge: &str) -> Option<&'n str> {
+    let preds = net.predecessors(edge);
+    let lanes = |id: &str| net.edge(id).lanes.iter().filter(|l| l.for_cars).count();
+    let most = preds.iter().map(|p| lanes(p)).max()?;
+    match preds
+        .iter()
+        .filter(|p| lanes(p) == most)
+        .collect::<Vec<_>>()[..]
+    {
+        [one] => Some(one),
+        _ => feeder(net, edge),
+    }
+}
+
+/// The carriageway through `edge`: followed upstream by its main feeder ([`main_feeder`]) to a
+/// source and downstream by its leftmost lane to a sink (or to where it forks into equal
+/// roads, or loops).
 pub fn carriageway(net: &Net, edge: &str) -> Vec<String> {
     let mut up = vec![edge.to_string()];
-    while let Some(p) = feeder(net, up.last().expect("non-empty")) {
+    while let Some(p) = main_feeder(net, up.last().expect("non-empty")) {
         if up.iter().any(|e| e == p) {
             break;
         }

@@ -46,6 +46,9 @@ pub struct MainEdge {
     pub length: f64,
     /// Number of lanes.
     pub lanes: u32,
+    /// The index of its leftmost through lane, the frame's reference (its leftmost lane, but
+    /// where a left-side on-ramp's lane lies left of it).
+    pub reference: u32,
 }
 
 /// An on-ramp: its edges, and the main-road lane it feeds.
@@ -276,6 +279,7 @@ fn changes(
                     | Kind::Weaving
                     | Kind::TwoLaneOnRamp
                     | Kind::GainDroppedLater
+                    | Kind::LeftSideOnRamp
             );
             let ramp = c.ramp.as_deref().filter(|_| planned).unwrap_or_default();
             let drop = c.drop.as_deref().unwrap_or_default();
@@ -322,8 +326,9 @@ impl Layout {
             downstream += length(&road[end]);
         }
         let ids = &road[begin..=end];
-        let line = reference_line(net, ids)?;
-        let main = positions(net, ids, &line);
+        let through = leftmost_through(net, ids);
+        let line = reference_line(net, ids, &through)?;
+        let main = positions(net, ids, &through, &line);
         let on_main: BTreeSet<&str> = road.iter().map(String::as_str).collect();
         let on_ramps = merges
             .iter()
@@ -369,19 +374,36 @@ impl Layout {
     }
 }
 
-/// The reference line of a region: the centre line of each main edge's leftmost lane (a
-/// through lane: ramps join on the right) and of the internal lane joining it to the next
-/// edge's, in order; `None` if their shapes hold fewer than two distinct points.
-fn reference_line(net: &Net, ids: &[String]) -> Option<ReferenceLine> {
+/// Per main edge of `ids`, the index of its leftmost through lane: the lane the carriageway's
+/// leftmost lane runs on, followed upstream from the last edge's leftmost lane. It is the
+/// edge's leftmost lane but where a left-side on-ramp's lane lies left of it.
+fn leftmost_through(net: &Net, ids: &[String]) -> Vec<u32> {
+    let top = |id: &String| net.edge(id).lanes.len() as u32 - 1;
+    let mut out: Vec<u32> = ids.iter().map(top).collect();
+    for k in (0..ids.len().saturating_sub(1)).rev() {
+        let (next, into) = (&ids[k + 1], out[k + 1]);
+        let from = (net.outgoing(&ids[k]))
+            .filter(|c| &c.to == next && c.to_lane == into)
+            .map(|c| c.from_lane)
+            .max();
+        out[k] = from.unwrap_or(out[k]);
+    }
+    out
+}
+
+/// The reference line of a region: the centre line of each main edge's leftmost through lane
+/// (`through`, by edge) and of the internal lane joining it to the next edge's, in order;
+/// `None` if their shapes hold fewer than two distinct points.
+fn reference_line(net: &Net, ids: &[String], through: &[u32]) -> Option<ReferenceLine> {
     let mut points: Vec<Point> = Vec::new();
     for (k, id) in ids.iter().enumerate() {
-        let left = net.edge(id).lanes.last().expect("an edge has lanes");
+        let left = &net.edge(id).lanes[through[k] as usize];
         points.extend(&left.shape);
         let Some(next) = ids.get(k + 1) else { break };
         let via = net
             .outgoing(id)
-            .filter(|c| &c.to == next)
-            .max_by_key(|c| c.from_lane)
+            .filter(|c| &c.to == next && c.from_lane == through[k])
+            .max_by_key(|c| c.to_lane)
             .and_then(|c| c.via.as_ref())
             .and_then(|v| net.internal.get(v));
         if let Some(lane) = via {
@@ -391,12 +413,14 @@ fn reference_line(net: &Net, ids: &[String]) -> Option<ReferenceLine> {
     ReferenceLine::new(points)
 }
 
-/// Where each main edge starts along the reference line.
-fn positions(net: &Net, ids: &[String], line: &ReferenceLine) -> Vec<MainEdge> {
+/// Where each main edge starts along the reference line (measured on its leftmost through
+/// lane, `through`).
+fn positions(net: &Net, ids: &[String], through: &[u32], line: &ReferenceLine) -> Vec<MainEdge> {
     ids.iter()
-        .map(|id| {
+        .zip(through)
+        .map(|(id, &reference)| {
             let e = net.edge(id);
-            let left = e.lanes.last().expect("an edge has lanes");
+            let left = &e.lanes[reference as usize];
             let s_start = left.shape.first().map_or(0.0, |p| line.to_frame(*p).0);
             let s_end = left.shape.last().map_or(0.0, |p| line.to_frame(*p).0);
             MainEdge {
@@ -404,6 +428,7 @@ fn positions(net: &Net, ids: &[String], line: &ReferenceLine) -> Vec<MainEdge> {
                 s_start,
                 length: s_end - s_start,
                 lanes: e.lanes.len() as u32,
+                reference,
             }
         })
         .collect()
