@@ -56,7 +56,7 @@ pub fn road(net: &Net, layout: &Layout) -> Result<Road, String> {
     let mut internal = main_junctions(net, layout, &main);
     let mut ramps: Vec<&OnRamp> = layout.on_ramps.iter().collect();
     ramps.sort_by(|a, b| a.merge_start.total_cmp(&b.merge_start));
-    let mut zones = ramp_zones(net, &ramps, &main, &mut edges, &mut internal)?;
+    let mut zones = ramp_zones(net, layout, &ramps, &main, (&mut edges, &mut internal))?;
     for d in &layout.lane_drops {
         zones.push(drop_zone(net, layout, d, &main)?);
     }
@@ -82,10 +82,10 @@ pub fn road(net: &Net, layout: &Layout) -> Result<Road, String> {
 /// the carriageway in that order, then the further lanes of ramps of several.
 fn ramp_zones(
     net: &Net,
+    layout: &Layout,
     ramps: &[&OnRamp],
     main: &MainFrames<'_>,
-    edges: &mut Vec<EdgeFrame>,
-    internal: &mut InternalEdges,
+    (edges, internal): (&mut Vec<EdgeFrame>, &mut InternalEdges),
 ) -> Result<Vec<MergeZone>, String> {
     let (mut zones, mut outer) = (Vec::new(), Vec::new());
     for ramp in ramps {
@@ -105,7 +105,7 @@ fn ramp_zones(
         }
         // The ramp is in the frame only past every auxiliary lane on its side that ends
         // before it joins.
-        let left = main.offsets[ramp.joins.as_str()] + ramp.lane as i32 > MERGE_LANE;
+        let left = on_the_left(layout, ramp);
         let free_from = (zones.iter().chain(&outer))
             .filter(|z: &&MergeZone| (z.lane > MERGE_LANE) == left)
             .map(|z| z.end)
