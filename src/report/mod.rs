@@ -20,6 +20,8 @@ pub mod paired;
 pub mod paired_tables;
 pub mod plot;
 pub mod raster;
+pub mod scenario_common;
+pub mod scenario_entries;
 pub mod scenario_inserted;
 pub mod scenarios;
 pub mod signif;

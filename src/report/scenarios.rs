@@ -10,6 +10,8 @@
 //! - `paired_regions.csv`: per scenario, region, α, reference and other planner, the mean of
 //!   the per-seed differences reference − other of the region's mean system delay, its 95 %
 //!   t-interval and the two-sided paired t-test's p-value.
+//! - `paired_entries.csv`: the same per entry of each region (its main road and each on-ramp),
+//!   with each planner's vehicles and arrivals beside ([`super::scenario_entries`]).
 //! - `paired_collisions.csv`: per scenario, α, reference and other planner, the episodes with
 //!   a controllable crash of each, and Fisher's exact test of the 2×2 table.
 //! - `inserted.csv`: per scenario, α and planner, the vehicles SUMO inserted and those it never
@@ -25,14 +27,13 @@
 use std::collections::BTreeMap;
 use std::path::Path;
 
-use statrs::distribution::{ContinuousCDF, StudentsT};
-
+use super::scenario_common::{column, fmt_opt, paired_t, records};
+use super::scenario_entries::paired_entries;
 use super::scenario_inserted::inserted_tables;
 use super::signif::fisher_exact;
-use super::stats::{t_975, Estimate};
+use super::stats::Estimate;
 use super::{Report, ReportError, REPORT_DIR};
 use crate::campaign::results::Results;
-use crate::campaign::table::Table;
 use crate::episode::summary::{Summary, Traffic};
 
 /// A reference planner that ran in none of the campaign's episodes.
@@ -58,13 +59,6 @@ struct RegionSample {
 
 /// (scenario, region, α as text) → planner → samples, in seed order.
 type ByRegion = BTreeMap<(String, String, String), BTreeMap<String, Vec<RegionSample>>>;
-
-fn column(header: &[String], name: &str) -> usize {
-    header
-        .iter()
-        .position(|c| c == name)
-        .expect("a column of the record")
-}
 
 fn by_region(rows: &[csv::StringRecord], h: &[String]) -> ByRegion {
     let get = |r: &csv::StringRecord, name: &str| r.get(column(h, name)).unwrap_or("").to_string();
@@ -101,44 +95,6 @@ fn planners_of(episodes: &[csv::StringRecord]) -> Vec<String> {
     out
 }
 
-fn fmt_opt(x: Option<f64>, decimals: usize) -> String {
-    x.map_or(String::new(), |x| format!("{x:.decimals$}"))
-}
-
-/// A paired comparison of per-seed differences.
-#[derive(Debug, Clone, Copy)]
-struct PairedT {
-    n: usize,
-    mean: f64,
-    half: Option<f64>,
-    p: Option<f64>,
-}
-
-/// The paired t-test of `d` (two-sided): the mean, its 95 % half-width, p; none below 2 pairs.
-fn paired_t(d: &[f64]) -> Option<PairedT> {
-    let e = Estimate::of(d)?;
-    let n = d.len();
-    let p = e.ci95.and_then(|half| {
-        let se = half / t_975(n - 1);
-        if se == 0.0 {
-            return Some(if e.mean == 0.0 { 1.0 } else { 0.0 });
-        }
-        let t = StudentsT::new(0.0, 1.0, (n - 1) as f64).ok()?;
-        Some(2.0 * t.sf((e.mean / se).abs()))
-    });
-    Some(PairedT {
-        n,
-        mean: e.mean,
-        half: e.ci95,
-        p,
-    })
-}
-
-/// The rows of `table`, as read.
-fn records(table: &Table) -> Vec<csv::StringRecord> {
-    table.rows.iter().map(|r| r.fields.clone()).collect()
-}
-
 /// Writes the report of the campaign over scenarios whose collected files are `res` (by arm,
 /// [`super::arms::by_arm`]) into `<out>/report/`, comparing every planner with the `versus` planners (default: `bk-pbs` when
 /// it ran).
@@ -165,10 +121,13 @@ pub fn report(res: &Results, out: &Path, versus: &[String]) -> Result<Report, Re
     let regions = by_region(&regions, &res.regions.header);
     let (paired, paired_md) = paired_csv(&regions, &versus);
     let (inserted, inserted_md) = inserted_tables(&episodes, &planners);
-    let markdown = inserted_md + &unused_merges_md(&regions) + &paired_md;
+    let (by_entry, by_entry_md) =
+        paired_entries(&records(&res.entries), &res.entries.header, &versus);
+    let markdown = inserted_md + &unused_merges_md(&regions) + &paired_md + &by_entry_md;
     let files = [
         ("regions.csv", summary_csv(&regions)),
         ("paired_regions.csv", paired),
+        ("paired_entries.csv", by_entry),
         ("paired_collisions.csv", collisions_csv(&episodes, &versus)),
         ("inserted.csv", inserted),
     ];
@@ -274,10 +233,7 @@ fn paired_csv(regions: &ByRegion, versus: &[String]) -> (String, String) {
                 let Some(t) = paired_t(&differences(r, o)) else {
                     continue;
                 };
-                let (lo, hi) = match t.half {
-                    Some(h) => (Some(t.mean - h), Some(t.mean + h)),
-                    None => (None, None),
-                };
+                let (lo, hi) = t.interval();
                 csv += &format!(
                     "{scenario},{region},{alpha},{reference},{planner},{},{:.4},{},{},{}\n",
                     t.n,
@@ -290,10 +246,7 @@ fn paired_csv(regions: &ByRegion, versus: &[String]) -> (String, String) {
                     "| {scenario} | {region} | {alpha} | {reference} − {planner} | {} | {:+.2} | {} | {} |\n",
                     t.n,
                     t.mean,
-                    match (lo, hi) {
-                        (Some(lo), Some(hi)) => format!("[{lo:+.2}, {hi:+.2}]"),
-                        _ => "-".into(),
-                    },
+                    t.interval_md(),
                     fmt_opt(t.p, 3)
                 );
             }
