@@ -6,6 +6,8 @@
 #                       main road.
 #   three-lane.net.xml  netconvert's defaults: internal junction lanes, default junction shapes.
 #   corridor.net.xml    netconvert's defaults: internal junction lanes, default junction shapes.
+#   layouts/NAME/NAME.net.xml
+#                       the merge layouts (README.md), netconvert's defaults, as the tests build them.
 # netconvert writes the time of the run into the header comment of each file; a net that comes out
 # the same apart from that line keeps its existing file, so rebuilding unchanged sources changes
 # nothing.
@@ -41,3 +43,7 @@ build merge \
     --no-internal-links true
 build three-lane
 build corridor
+for dir in layouts/*/; do
+    name=$(basename "$dir")
+    (cd "$dir" && build "$name" --no-warnings)
+done

@@ -34,10 +34,18 @@ pub fn build(
     ] {
         std::fs::write(dir.join(name), text).unwrap();
     }
+    netconvert(dir, "n");
+    dir.join("n.net.xml")
+}
+
+/// Builds `NAME.net.xml` in `dir` from its plain XML (`NAME.nod.xml`, `NAME.edg.xml`,
+/// `NAME.con.xml`) with netconvert's defaults, as `sumo_net/build_net.sh` builds a layout.
+fn netconvert(dir: &Path, name: &str) {
+    let file = |kind: &str| format!("{name}.{kind}.xml");
     let status = std::process::Command::new("netconvert")
         .current_dir(dir)
-        .args(["-n", "n.nod.xml", "-e", "n.edg.xml", "-x", "n.con.xml"])
-        .args(["-o", "n.net.xml", "--no-warnings"])
+        .args(["-n", &file("nod"), "-e", &file("edg"), "-x", &file("con")])
+        .args(["-o", &file("net"), "--no-warnings"])
         .output()
         .expect("netconvert runs");
     assert!(
@@ -45,7 +53,24 @@ pub fn build(
         "{}",
         String::from_utf8_lossy(&status.stderr)
     );
-    dir.join("n.net.xml")
+}
+
+/// The merge layout `name` of `sumo_net/layouts/` (a SUMO user's scenario: its plain XML, its
+/// flows, its configuration) copied into `dir`, its net built there by netconvert: the paths
+/// of the net and of the configuration.
+pub fn layout(dir: &Path, name: &str) -> (PathBuf, PathBuf) {
+    let from = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("sumo_net/layouts")
+        .join(name);
+    for kind in ["nod.xml", "edg.xml", "con.xml", "rou.xml", "sumocfg"] {
+        let file = format!("{name}.{kind}");
+        std::fs::copy(from.join(&file), dir.join(&file)).unwrap();
+    }
+    netconvert(dir, name);
+    (
+        dir.join(format!("{name}.net.xml")),
+        dir.join(format!("{name}.sumocfg")),
+    )
 }
 
 /// The main lanes of `from` continuing on `to`, aligned on the left.
@@ -64,7 +89,13 @@ pub fn through(
 /// A two-lane motorway (`up`, `acc`, `down`) with an acceleration lane of `acc_length` metres
 /// on `acc` that ends, fed by the one-lane ramp `on`.
 pub fn merge(dir: &Path, acc_length: f64) -> PathBuf {
-    let (b, c) = (500.0, 500.0 + acc_length);
+    merge_of(dir, 2, 500.0, acc_length)
+}
+
+/// A motorway of `lanes` main lanes (`up`, `up_length` metres, `acc`, `down`) with an
+/// acceleration lane of `acc_length` metres on `acc` that ends, fed by the one-lane ramp `on`.
+pub fn merge_of(dir: &Path, lanes: u32, up_length: f64, acc_length: f64) -> PathBuf {
+    let (b, c) = (up_length, up_length + acc_length);
     let nodes = [
         ("a", 0.0, 0.0),
         ("b", b, 0.0),
@@ -73,13 +104,17 @@ pub fn merge(dir: &Path, acc_length: f64) -> PathBuf {
         ("r", b - 150.0, -40.0),
     ];
     let edges = [
-        ("up", "a", "b", 2, ""),
-        ("acc", "b", "c", 3, ""),
-        ("down", "c", "d", 2, ""),
+        ("up", "a", "b", lanes, ""),
+        ("acc", "b", "c", lanes + 1, ""),
+        ("down", "c", "d", lanes, ""),
         ("on", "r", "b", 1, ""),
     ];
-    let mut cons = through("up", 2, "acc", 3);
-    cons.extend(through("acc", 3, "down", 2).into_iter().filter(|c| c.1 > 0));
+    let mut cons = through("up", lanes, "acc", lanes + 1);
+    cons.extend(
+        through("acc", lanes + 1, "down", lanes)
+            .into_iter()
+            .filter(|c| c.1 > 0),
+    );
     cons.push(("on", 0, "acc", 0));
     build(dir, &nodes, &edges, &cons)
 }
