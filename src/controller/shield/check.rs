@@ -23,9 +23,10 @@
 //! lane-change model would let it, and then brake as hard as SUMO expects of it (`may_cut_in`,
 //! [`super::cut_in`]); under a gap-acceptance profile a ramp HDV may move over in front of a
 //! lane-1 CAV anywhere on the acceleration lane (`may_take_gap`); an HDV two lanes over may
-//! change into the lane a CAV changes into, in the same step: a middle lane of three or more, or,
-//! in a weaving section, lane 1 between the ramp's lane and lane 2 (`may_enter_from_beyond`). A
-//! CAV's maneuver is safe
+//! change into the lane a CAV changes into, in the same second: a middle lane of three or more,
+//! lane 1 of a weaving section from lane 2, and lane 1 from lane 2 beside a ramp CAV on an
+//! acceleration lane when the HDV is level with it or can come level within the change
+//! ([`super::far_side`]). A CAV's maneuver is safe
 //! when, executed for one step and followed by braking at `planner.emergency_decel`, the CAV never
 //! comes closer than the margin to any vehicle ahead of it (by centre) in any lane it occupies,
 //! and, if it starts a lane change, the follower in the target lane stays clear of it braking at
@@ -37,6 +38,7 @@
 //! strongest braking and the planned speed, else the strongest braking.
 
 use super::cut_in::CutIn;
+use super::far_side::FarSide;
 use crate::config::hdv::RampMergeStyle;
 use crate::config::Config;
 use crate::controller::Maneuver;
@@ -68,6 +70,9 @@ pub struct WorstCase {
     /// Whether ramp HDVs merge by gap acceptance, without SUMO's safety check (profiles such as
     /// `paper`): then one may move over anywhere on the acceleration lane (see `may_take_gap`).
     pub gap_accepting_mergers: bool,
+    /// Which HDV two lanes over may change into a CAV's target lane with it (see
+    /// [`super::far_side`]).
+    pub far_side: FarSide,
 }
 
 impl WorstCase {
@@ -101,6 +106,13 @@ impl WorstCase {
                 profile.ramp_merge,
                 RampMergeStyle::GapAcceptance { .. }
             ),
+            far_side: FarSide {
+                duration: config.scenario.lane_change_duration,
+                margin: config.planner.margin_long,
+                cav_decel: config.planner.emergency_decel,
+                hdv_decel: config.idm.max_decel,
+                hdv_accel: config.idm.accel,
+            },
         }
     }
 
@@ -341,7 +353,7 @@ pub fn clear_of_leaders(c: &Candidate) -> bool {
         let merges_into = |t: i32| on_acceleration_lane(road, o) && road.toward_main(o.lane) == t;
         let merging = match target {
             Some(t) if merges_into(t) => bit(t),
-            Some(t) if may_enter_from_beyond(road, me, t, o) => bit(t),
+            Some(t) if b.far_side.may_enter(road, (me, m.speed), t, o) => bit(t),
             _ => 0,
         };
         let lanes = lanes_of_other(scene, o, horizon, b) | c.entered(j) | merging;
@@ -468,32 +480,6 @@ fn cannot_cut_in(road: &Road, me: &VehicleState, o: &VehicleState, b: &WorstCase
     beside && yields_to(road, me, None, o) && o.rear() - me.front() < b.yield_gap
 }
 
-/// Whether HDV `o` drives on the main-road lane beyond `target`, seen from CAV `me`'s lane, on a
-/// road of three or more main lanes: it may change into `target`, a middle lane, in the same
-/// second as the CAV (SUMO's LC2013 keeps right and overtakes on the left), and both would be
-/// in it at once. (A CAV in lane 3 changing right beside an HDV in lane 1 that was moving back
-/// left hit it on the corridor.) On an acceleration lane the lane beyond a ramp CAV's target is
-/// a main lane whose drivers have no reason to move right there, and assuming they may cost
-/// nothing it prevented, so a ramp CAV is not asked to; in a weaving section they have one,
-/// the exit beyond the ramp's lane. (A ramp CAV changing into lane 1 of the weaving test net and
-/// an HDV standing in lane 2 near the zone's end, waiting to cross to the off-ramp, moved into
-/// lane 1 in the same step, the HDV 4 m ahead: bk-mastar, λ 2500, `demand.exit_share` 0.4,
-/// seed 4.)
-pub(super) fn may_enter_from_beyond(
-    road: &Road,
-    me: &VehicleState,
-    target: i32,
-    o: &VehicleState,
-) -> bool {
-    let beyond = 2 * target - me.lane;
-    let weaving = road.is_auxiliary(me.lane) && road.weaving_at(o.front());
-    o.kind == Kind::Hdv
-        && !o.on_ramp
-        && (!road.is_auxiliary(me.lane) || weaving)
-        && !road.is_auxiliary(beyond)
-        && o.lane == beyond
-}
-
 /// Whether a lane change the maneuver starts leaves the nearest vehicle behind the CAV in the
 /// target lane able to stay clear braking at `follower_decel` (true when it starts none).
 pub fn clear_of_new_follower(c: &Candidate) -> bool {
@@ -504,7 +490,9 @@ pub fn clear_of_new_follower(c: &Candidate) -> bool {
     let follower = c
         .others()
         .filter(|&(j, o)| {
-            let beyond = may_enter_from_beyond(&c.scene.road, me, target, o);
+            let beyond = b
+                .far_side
+                .may_enter(&c.scene.road, (me, c.m.speed), target, o);
             let lanes = lanes_now(&c.scene.road, o) | c.entered(j);
             o.s <= me.s && (lanes & bit(target) != 0 || beyond)
         })

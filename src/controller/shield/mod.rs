@@ -9,6 +9,7 @@
 
 pub mod check;
 pub mod cut_in;
+pub mod far_side;
 
 pub use check::WorstCase;
 

@@ -1,7 +1,4 @@
-use super::check::{
-    clear_of_leaders, clear_of_new_follower, farthest_stand, may_enter_from_beyond, may_merge,
-    Candidate,
-};
+use super::check::{clear_of_leaders, clear_of_new_follower, farthest_stand, may_merge, Candidate};
 use super::*;
 use crate::model::road::{Road, FORCED_MERGE_ZONE};
 use crate::model::scene::{Kind, Origin, VehicleState};
@@ -24,7 +21,8 @@ fn go(speed: f64, lane_change: Option<LaneChange>) -> Maneuver {
 
 /// Three main lanes: a CAV in lane 3 may not change into the middle lane beside an HDV in
 /// lane 1, which may move into it in the same second; with the HDV far ahead it may. On two
-/// lanes nothing lies beyond: the rule never fires there.
+/// lanes only the acceleration lane lies beyond lane 1: an HDV there counts only when level
+/// with the CAV or able to come level within the change, not 40 m behind at its speed.
 #[test]
 fn a_middle_lane_is_not_entered_beside_an_hdv_on_its_other_side() {
     let b = worst_case();
@@ -44,11 +42,11 @@ fn a_middle_lane_is_not_entered_beside_an_hdv_on_its_other_side() {
     assert!(!is_safe(&scene(2712.0, 34.0), 0, &right, &b, &[]));
     assert!(is_safe(&scene(2712.0, 23.4), 0, &right, &b, &[]));
     let me = cav(100.0, 2, 30.0);
-    assert!(!may_enter_from_beyond(
+    assert!(!b.far_side.may_enter(
         &Road::paper_default(),
-        &me,
+        (&me, 30.0),
         1,
-        &hdv("h", 100.0, 0, 30.0)
+        &hdv("h", 60.0, 0, 30.0)
     ));
 }
 
@@ -56,7 +54,9 @@ fn a_middle_lane_is_not_entered_beside_an_hdv_on_its_other_side() {
 /// ramp CAV may not change into lane 1 beside one, as one once did, 4 m behind an HDV standing
 /// in lane 2 near the zone's end that moved into lane 1 in the same step (bk-mastar on the
 /// weaving test net, λ 2500, exit share 0.4, seed 4: a controllable crash). Ahead of it, the
-/// CAV may. On an acceleration lane the rule does not fire.
+/// CAV may. On an acceleration lane the HDV counts only when it is level with the CAV or can
+/// come level within the change: this one, alongside, does; 14 m ahead, standing, it does
+/// not, where in a weaving section it would.
 #[test]
 fn a_ramp_cav_does_not_weave_into_lane_1_beside_a_crossing_hdv() {
     let b = worst_case();
@@ -74,7 +74,47 @@ fn a_ramp_cav_does_not_weave_into_lane_1_beside_a_crossing_hdv() {
     assert!(!is_safe(&scene(true, 304.0), 0, &left, &b, &[]));
     assert!(is_safe(&scene(true, 304.0), 0, &go(12.6, None), &b, &[]));
     assert!(is_safe(&scene(true, 290.0), 0, &left, &b, &[]));
-    assert!(is_safe(&scene(false, 304.0), 0, &left, &b, &[]));
+    assert!(!is_safe(&scene(false, 304.0), 0, &left, &b, &[]));
+    assert!(!is_safe(&scene(true, 319.0), 0, &left, &b, &[]));
+    assert!(is_safe(&scene(false, 319.0), 0, &left, &b, &[]));
+}
+
+/// A ramp CAV on the acceleration lane starting a change into lane 1 while a 16.5 m truck is
+/// alongside in lane 2: the truck, seeing lane 1 free, may move right into it in the same
+/// second (SUMO decides its change before the CAV's when its front is ahead), and the CAV,
+/// alongside, cannot brake out of its way (an audited bk-pbs episode on a two-carriageway
+/// scenario with trucks: the CAV, sent left from a round's best node, braked at 6 m/s² and hit
+/// the truck 18 m into the merge edge). The change is refused, keeping the lane is not; a car
+/// alongside counts the same. A truck that cannot come level within the change does not
+/// count: 60 m ahead or behind, or 9 m behind at the CAV's speed; 8 m/s faster, from 9 m
+/// behind it can.
+#[test]
+fn a_ramp_cav_does_not_change_into_lane_1_beside_a_truck_in_lane_2() {
+    let b = worst_case();
+    let left = go(20.0, Some(LaneChange::Left));
+    let scene = |length: f64, s: f64, speed: f64| {
+        let ramp_cav = VehicleState::on_lane("cav", Kind::Cav, Origin::Ramp, 200.0, 0, 20.0);
+        let mut other = hdv("truck", s, 2, speed);
+        other.length = length;
+        Scene::on_paper_road(0.0, vec![ramp_cav, other])
+    };
+    for s in [192.0, 198.0, 204.0, 210.0] {
+        assert!(!is_safe(&scene(16.5, s, 20.0), 0, &left, &b, &[]), "{s}");
+        assert!(is_safe(&scene(16.5, s, 20.0), 0, &go(20.0, None), &b, &[]));
+    }
+    assert!(!is_safe(&scene(5.0, 201.0, 20.0), 0, &left, &b, &[]));
+    for (s, speed) in [(260.0, 20.0), (140.0, 20.0), (180.0, 20.0)] {
+        assert!(is_safe(&scene(16.5, s, speed), 0, &left, &b, &[]), "{s}");
+    }
+    assert!(!is_safe(&scene(16.5, 180.0, 28.0), 0, &left, &b, &[]));
+    let me = VehicleState::on_lane("cav", Kind::Cav, Origin::Ramp, 200.0, 0, 20.0);
+    let truck = |s: f64| {
+        let mut t = hdv("truck", s, 2, 20.0);
+        t.length = 16.5;
+        t
+    };
+    assert!(b.far_side.comes_level((&me, 20.0), &truck(198.0)));
+    assert!(!b.far_side.comes_level((&me, 20.0), &truck(180.0)));
 }
 
 #[test]
@@ -533,4 +573,23 @@ fn a_gap_accepting_merger_may_move_over_anywhere_on_the_acceleration_lane() {
     // Alongside the HDV nothing is accepted: a CAV overlapping it may pass.
     let alongside = scene(55.6, 301.0, 13.82, 303.40, 1.85);
     assert!(is_safe(&alongside, 0, &go(13.82, None), &paper, &[]));
+}
+
+/// The mirror image: a main-road CAV in lane 2 starting a change into lane 1 while a ramp
+/// truck of 16.5 m is level with it on the acceleration lane, its centre 0.13 m behind the
+/// CAV's: the truck may merge in the same step (three-lane carriageway of
+/// `tests/shield_far_side.rs`, seed 27: both did at 149.2 s, and collided). Refused; with the
+/// truck 40 m behind at the same speed, allowed.
+#[test]
+fn a_cav_does_not_change_into_lane_1_beside_a_merging_ramp_truck() {
+    let b = worst_case();
+    let right = go(25.4, Some(LaneChange::Right));
+    let scene = |truck_s: f64| {
+        let mut truck = VehicleState::on_lane("truck", Kind::Hdv, Origin::Ramp, truck_s, 0, 25.4);
+        truck.length = 16.5;
+        Scene::on_paper_road(0.0, vec![cav(278.89, 2, 25.4), truck])
+    };
+    assert!(!is_safe(&scene(278.76), 0, &right, &b, &[]));
+    assert!(is_safe(&scene(278.76), 0, &go(25.4, None), &b, &[]));
+    assert!(is_safe(&scene(238.76), 0, &right, &b, &[]));
 }
