@@ -296,9 +296,17 @@ fn clear_of_lane_end(scene: &Scene, v: &VehicleState, m: &Maneuver, b: &WorstCas
     stays_clear(cav_motion(v, m, b), wall, end - v.front(), b.margin, b)
 }
 
-/// CAV `i`'s maneuver `m` under check, with `entering[j]` the lanes scene vehicle `j` enters
-/// by a lane change sent this same step: the question both checks ([`clear_of_leaders`],
-/// [`clear_of_new_follower`]) answer.
+/// What the shield let through this step, before the command under check, for one scene vehicle.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Sent {
+    /// The lanes it enters by a lane change sent this step (a bit set, [`bit`]).
+    pub entering: u64,
+    /// The speed sent for the end of this step, when it is a CAV whose command went first.
+    pub speed: Option<f64>,
+}
+
+/// CAV `i`'s maneuver `m` under check, with `sent[j]` what scene vehicle `j` was sent this same
+/// step: the question both checks ([`clear_of_leaders`], [`clear_of_new_follower`]) answer.
 #[derive(Debug, Clone, Copy)]
 pub struct Candidate<'a> {
     /// The scene the maneuver is checked in.
@@ -309,8 +317,8 @@ pub struct Candidate<'a> {
     pub m: &'a Maneuver,
     /// The worst cases checked against.
     pub b: &'a WorstCase,
-    /// Per scene vehicle, the lanes it enters by a lane change sent this step (bit sets, [`bit`]).
-    pub entering: &'a [u64],
+    /// Per scene vehicle, what the shield let through for it this step so far.
+    pub sent: &'a [Sent],
 }
 
 impl<'a> Candidate<'a> {
@@ -326,7 +334,12 @@ impl<'a> Candidate<'a> {
 
     /// The lanes scene vehicle `j` enters by a lane change sent this step.
     fn entered(&self, j: usize) -> u64 {
-        self.entering.get(j).copied().unwrap_or(0)
+        self.sent.get(j).map_or(0, |s| s.entering)
+    }
+
+    /// The speed scene vehicle `j` was sent for the end of this step, if any.
+    fn sent_speed(&self, j: usize) -> Option<f64> {
+        self.sent.get(j).and_then(|s| s.speed)
     }
 
     /// Every other vehicle of the scene, with its index.
@@ -496,12 +509,12 @@ pub fn clear_of_new_follower(c: &Candidate) -> bool {
             let lanes = lanes_now(&c.scene.road, o) | c.entered(j);
             o.s <= me.s && (lanes & bit(target) != 0 || beyond)
         })
-        .map(|(_, o)| o)
-        .max_by(|a, c| a.s.total_cmp(&c.s));
-    follower.is_none_or(|f| {
+        .max_by(|(_, a), (_, c)| a.s.total_cmp(&c.s));
+    follower.is_none_or(|(j, f)| {
+        // A CAV whose command went first this step drives it before it can brake.
         let back = Motion {
             speed: f.speed,
-            first: None,
+            first: c.sent_speed(j),
             decel: b.follower_decel,
             reach: f64::INFINITY,
         };
@@ -515,17 +528,17 @@ pub fn clear_of_new_follower(c: &Candidate) -> bool {
     })
 }
 
-/// Whether CAV `i` may execute `m` under the shield's worst cases, `entering[j]` being the lanes
-/// scene vehicle `j` enters by a lane change sent this same step (CAVs the shield already let
-/// start one: two CAVs may not change into the same lane at once, as bk-mastar's, planned
-/// apart, once did).
-pub fn is_safe(scene: &Scene, i: usize, m: &Maneuver, b: &WorstCase, entering: &[u64]) -> bool {
+/// Whether CAV `i` may execute `m` under the shield's worst cases, `sent[j]` being what scene
+/// vehicle `j` was sent this same step (two CAVs may not change into the same lane at once, as
+/// bk-mastar's, planned apart, once did; a CAV sent faster this step cannot brake for a change
+/// into its lane before the step's end).
+pub fn is_safe(scene: &Scene, i: usize, m: &Maneuver, b: &WorstCase, sent: &[Sent]) -> bool {
     let c = Candidate {
         scene,
         i,
         m,
         b,
-        entering,
+        sent,
     };
     clear_of_leaders(&c) && clear_of_new_follower(&c)
 }
@@ -539,9 +552,9 @@ pub fn replacement(
     i: usize,
     m: &Maneuver,
     b: &WorstCase,
-    entering: &[u64],
+    sent: &[Sent],
 ) -> Option<Maneuver> {
-    if is_safe(scene, i, m, b, entering) {
+    if is_safe(scene, i, m, b, sent) {
         return None;
     }
     let keep = |speed| Maneuver {
@@ -554,7 +567,7 @@ pub fn replacement(
             i,
             m: &keep(speed),
             b,
-            entering,
+            sent,
         })
     };
     let v = &scene.vehicles[i];

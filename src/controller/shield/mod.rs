@@ -13,7 +13,7 @@ pub mod far_side;
 
 pub use check::WorstCase;
 
-use self::check::{bit, is_safe, replacement};
+use self::check::{bit, is_safe, replacement, Sent};
 use super::{CavBelief, CavHandling, Command, Controller, LaneChange, Maneuver, PlanStats, Source};
 use crate::config::Config;
 use crate::model::scene::Scene;
@@ -81,10 +81,10 @@ impl Controller for Shielded {
         self.inner.plan(scene, out);
         let started = std::time::Instant::now();
         self.overrides = 0;
-        // Lanes entered by the lane changes let through so far this step, per scene vehicle.
-        let mut entering = vec![0u64; scene.vehicles.len()];
+        // What was let through so far this step, per scene vehicle.
+        let mut sent = vec![Sent::default(); scene.vehicles.len()];
         for c in &mut out[start..] {
-            if let Some(m) = replacement(scene, c.vehicle, &c.maneuver, &self.bounds, &entering) {
+            if let Some(m) = replacement(scene, c.vehicle, &c.maneuver, &self.bounds, &sent) {
                 if c.maneuver.lane_change.is_some() && m.lane_change.is_none() {
                     self.inner
                         .lane_change_cancelled(&scene.vehicles[c.vehicle].id);
@@ -93,8 +93,10 @@ impl Controller for Shielded {
                 c.source = Source::Shield;
                 self.overrides += 1;
             }
+            let v = &mut sent[c.vehicle];
+            v.speed = Some(c.maneuver.speed);
             if let Some(lc) = c.maneuver.lane_change {
-                entering[c.vehicle] |= bit(scene.vehicles[c.vehicle].lane + lc.offset());
+                v.entering |= bit(scene.vehicles[c.vehicle].lane + lc.offset());
             }
         }
         self.last_ms = started.elapsed().as_secs_f64() * 1e3;

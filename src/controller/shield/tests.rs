@@ -1,4 +1,6 @@
-use super::check::{clear_of_leaders, clear_of_new_follower, farthest_stand, may_merge, Candidate};
+use super::check::{
+    clear_of_leaders, clear_of_new_follower, farthest_stand, may_merge, Candidate, Sent,
+};
 use super::*;
 use crate::model::road::{Road, FORCED_MERGE_ZONE};
 use crate::model::scene::{Kind, Origin, VehicleState};
@@ -168,7 +170,7 @@ fn a_lane_change_start_into_a_gap_too_small_for_the_follower_is_cancelled() {
         i: 0,
         m: &planned,
         b: &b,
-        entering: &[],
+        sent: &[],
     };
     assert!(clear_of_leaders(&c));
     assert!(!clear_of_new_follower(&c));
@@ -231,11 +233,49 @@ fn two_cavs_may_not_change_into_the_same_lane_at_once() {
     );
     assert!(is_safe(&scene, 0, &main_in, &b, &[]));
     assert!(is_safe(&scene, 1, &ramp_in, &b, &[]));
-    let mut entering = vec![0u64; 2];
-    entering[1] = bit(1);
-    assert!(!is_safe(&scene, 0, &main_in, &b, &entering));
-    entering = vec![bit(1), 0];
-    assert!(!is_safe(&scene, 1, &ramp_in, &b, &entering));
+    let entering = |lanes| Sent {
+        entering: lanes,
+        speed: None,
+    };
+    let sent = [entering(0), entering(bit(1))];
+    assert!(!is_safe(&scene, 0, &main_in, &b, &sent));
+    let sent = [entering(bit(1)), entering(0)];
+    assert!(!is_safe(&scene, 1, &ramp_in, &b, &sent));
+}
+
+#[test]
+fn a_change_in_front_of_a_cav_sent_faster_this_step_waits() {
+    // A ramp CAV standing at the lane end changes into lane 1 with a lane-1 CAV 2.5 m behind it
+    // at 4.8 m/s (rl-ppo behind the shield, α 0.5, λ 3000, seed 4): safe were that CAV to brake
+    // now, but its command, sent first this step, was to speed up to 5.2 m/s; the two collided
+    // 0.8 s later.
+    let b = worst_case();
+    let ramp = VehicleState::on_lane("r", Kind::Cav, Origin::Ramp, 327.0, 0, 0.0);
+    let scene = Scene::on_paper_road(0.0, vec![cav(319.49, 1, 4.8), ramp]);
+    let ramp_in = go(0.0, Some(LaneChange::Left));
+    assert!(is_safe(&scene, 1, &ramp_in, &b, &[]));
+    let faster = Sent {
+        entering: 0,
+        speed: Some(5.2),
+    };
+    assert!(!is_safe(
+        &scene,
+        1,
+        &ramp_in,
+        &b,
+        &[faster, Sent::default()]
+    ));
+    let braking = Sent {
+        entering: 0,
+        speed: Some(4.8 - 6.0 * 0.2),
+    };
+    assert!(is_safe(
+        &scene,
+        1,
+        &ramp_in,
+        &b,
+        &[braking, Sent::default()]
+    ));
 }
 
 #[test]
