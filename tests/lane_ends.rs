@@ -85,16 +85,32 @@ fn game_network(name: &str) -> String {
     String::from_utf8_lossy(&o.stdout).into_owned()
 }
 
-/// SUMO's `highway` game: the merge its routes use (3 lanes and a 2-lane ramp into 4, the
-/// leftmost then dropped) was neither planned nor listed; it is a lane drop, not planned yet.
+/// SUMO's `highway` game: the merge its routes use (3 lanes and a 2-lane ramp joining into 4,
+/// the leftmost then dropped) was neither planned nor listed; it is a left-lane drop, planned:
+/// an episode under bk-pbs has CAVs in its region and no controllable collision.
 #[test]
-fn the_highway_game_s_routed_merge_is_listed_as_a_lane_drop() {
+fn the_highway_game_s_routed_merge_is_a_planned_lane_drop() {
     let said = game_network("highway");
-    assert!(
-        said.contains("lane drop 4 → 3 lanes on '189604289' (its leftmost lane ends), where")
-            && said.contains("not planned yet, SUMO's drivers drive it"),
-        "{said}"
+    has_line(
+        &said,
+        &[
+            "lane drop 4 → 3 lanes on '189604289' (its leftmost lane ends)",
+            "planned in region 3",
+        ],
     );
+    let cfg = common::sumo_game_dir().join("highway.sumocfg");
+    let dir = tempfile::tempdir().unwrap();
+    let flags = ["--alpha", "0.5", "--seed", "1", "--steps", "1500"];
+    let o = common::scenario_run(&cfg, "bk-pbs", &flags, dir.path());
+    assert!(o.status.success(), "{}", common::stderr(&o));
+    let rows = common::csv_rows(&std::fs::read(dir.path().join("regions.csv")).unwrap());
+    let drop = rows
+        .iter()
+        .find(|r| r["region"] == "189604289")
+        .expect("its row");
+    let n = |k: &str| drop[k].parse::<u64>().unwrap();
+    assert!(n("cavs") > 20, "{drop:?}");
+    assert_eq!(n("controllable_crashed"), 0, "{drop:?}");
 }
 
 /// A merge in a region whose road frame cannot be built (SUMO's `DRT` game) does not read

@@ -2,7 +2,7 @@
 //! `sumo_net/layouts/` (each a SUMO scenario: plain XML the test builds with netconvert, flows
 //! of 300 s, a configuration): on-ramps of two lanes (a ramp whose lanes end in turn, one that
 //! joins as two lanes the carriageway keeps for 800 m and then drops), a main-road lane drop
-//! (3 to 2 lanes), an on-ramp joining on the left (its lane the frame lane above the
+//! (3 to 2 lanes, on the right and on the left), an on-ramp joining on the left (its lane the frame lane above the
 //! carriageway's), and on-ramps whose edges run alongside another merge's auxiliary lane (two
 //! on-ramps 150 m apart; a cloverleaf's outer on-ramp beside its weaving lane). `bkpbs network`
 //! plans each (a ramp's outer lane a frame lane of its own, outside the one beside the
@@ -210,5 +210,21 @@ fn a_left_side_ramp_is_planned_and_never_closed() {
         !said.contains("ramp 'up'"),
         "the main road called a ramp:\n{said}"
     );
+    flows_as_under_sumo_alone(&cfg, "5", &AS_A_RULE);
+}
+
+#[test]
+fn a_left_lane_drop_is_planned_and_never_closed() {
+    let dir = tempfile::tempdir().unwrap();
+    let (net, cfg) = layout(dir.path(), "left-lane-drop");
+    let said = network(&net);
+    has_line(
+        &said,
+        &[
+            "lane drop 3 → 2 lanes on 'mid' (its leftmost lane ends)",
+            "planned in region 1",
+        ],
+    );
+    has_line(&said, &["lane drop: lane 2 of mid ends at s"]);
     flows_as_under_sumo_alone(&cfg, "5", &AS_A_RULE);
 }

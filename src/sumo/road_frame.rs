@@ -51,7 +51,8 @@ pub fn road(net: &Net, layout: &Layout) -> Result<Road, String> {
     let outer_lanes = (layout.on_ramps.iter()).map(|r| r.outer.len()).max();
     let bottom = MERGE_LANE - outer_lanes.unwrap_or(0) as i32;
     let left_ramps = (layout.on_ramps.iter()).any(|r| on_the_left(layout, r));
-    let top = main_lanes + i32::from(left_ramps);
+    let left_drops = (layout.lane_drops.iter()).any(|d| d.lane > 0);
+    let top = main_lanes + i32::from(left_ramps || left_drops);
     let (mut edges, main) = main_edges(net, layout, main_lanes, (bottom, top))?;
     let mut internal = main_junctions(net, layout, &main);
     let mut ramps: Vec<&OnRamp> = layout.on_ramps.iter().collect();
@@ -281,8 +282,9 @@ fn on_the_left(layout: &Layout, r: &OnRamp) -> bool {
     (layout.main.iter()).any(|m| m.id == r.joins && r.lane > m.reference)
 }
 
-/// The zone of lane drop `d`: the carriageway's lane 0 from where it begins in the region (the
-/// first of the edges before the drop with as many lanes) to its end.
+/// The zone of lane drop `d`: the carriageway's outer lane (frame lane 0 on the right, the
+/// one above the carriageway's on the left) from where it begins in the region (the first of
+/// the edges before the drop that hold it) to its end.
 fn drop_zone(
     net: &Net,
     layout: &Layout,
@@ -291,22 +293,29 @@ fn drop_zone(
 ) -> Result<MergeZone, String> {
     let at = (layout.main.iter()).position(|m| m.id == d.ends_on);
     let at = at.expect("a lane drop lies on the region's carriageway");
-    let lanes = layout.main[at].lanes;
-    let first = (0..=at)
-        .rev()
-        .take_while(|&k| layout.main[k].lanes == lanes)
-        .last()
-        .unwrap_or(at);
-    if main.offsets[d.ends_on.as_str()] != MERGE_LANE {
+    let lane = main.offsets[d.ends_on.as_str()] + d.lane as i32;
+    if lane != MERGE_LANE && lane != main.main_lanes + 1 {
         return Err(format!(
             "the lane dropped on '{}' is not the one lane the carriageway has more there",
             d.ends_on
         ));
     }
+    let holds = |k: usize| {
+        let (m, offset) = (&layout.main[k], main.offsets[layout.main[k].id.as_str()]);
+        match lane {
+            MERGE_LANE => m.lanes == layout.main[at].lanes,
+            _ => offset <= lane && lane < offset + m.lanes as i32,
+        }
+    };
+    let first = (0..=at)
+        .rev()
+        .take_while(|&k| holds(k))
+        .last()
+        .unwrap_or(at);
     let start = main.spans[layout.main[first].id.as_str()].s0;
-    let length = net.edge(&d.ends_on).lanes[0].length;
+    let length = net.edge(&d.ends_on).lanes[d.lane as usize].length;
     Ok(MergeZone {
-        lane: MERGE_LANE,
+        lane,
         ramp_start: start,
         start,
         end: main.spans[d.ends_on.as_str()].s_at(length),

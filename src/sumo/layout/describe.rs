@@ -46,8 +46,8 @@ impl Layout {
         }
         for d in &self.lane_drops {
             out += &format!(
-                "lane drop: lane 0 of {} ends at s {:.2} m\n",
-                d.ends_on, d.merge_end
+                "lane drop: lane {} of {} ends at s {:.2} m\n",
+                d.lane, d.ends_on, d.merge_end
             );
         }
         for (k, r) in self.off_ramps.iter().enumerate() {

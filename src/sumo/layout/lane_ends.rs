@@ -172,25 +172,27 @@ fn origin(net: &Net, edge: &str, lane: u32) -> (Origin, f64) {
     }
 }
 
-/// The edges, in file order, where the carriageway's rightmost lane ends while two lanes or
-/// more go on, on a road of [`NOSE_MERGE_MIN_SPEED`] or more that nothing joins there: the
-/// lane drops the planners plan (its traffic moves one lane left before the end).
-pub fn right_lane_drops(net: &Net) -> Vec<String> {
+/// The lane drops the planners plan, in file order, each as its edge and the lane that ends:
+/// the carriageway's rightmost lane (lane 0) ending on a road that nothing joins there, or its
+/// leftmost lane ending, while two lanes or more go on, on a road of [`NOSE_MERGE_MIN_SPEED`]
+/// or more (its traffic moves one lane over before the end).
+pub fn planned_lane_drops(net: &Net) -> Vec<(String, u32)> {
     let ends = lane_ends(net);
     let ending = |edge: &str| ends.iter().filter(|(e, _)| *e == edge).count();
-    let mut out: Vec<String> = Vec::new();
+    let mut out: Vec<(String, u32)> = Vec::new();
     for &(edge, lane) in &ends {
         let e = net.edge(edge);
         let cars = e.lanes.iter().filter(|l| l.for_cars).count();
         let limit = e.lanes.iter().map(|l| l.speed).fold(0.0, f64::max);
-        let plannable = lane == 0
+        let right = lane == 0 && net.predecessors(edge).len() == 1;
+        let left = lane as usize + 1 == e.lanes.len();
+        let plannable = (right || left)
             && cars >= 3
             && ending(edge) == 1
             && limit >= NOSE_MERGE_MIN_SPEED
-            && net.predecessors(edge).len() == 1
             && origin(net, edge, lane).0 == Origin::Carriageway;
-        if plannable && !out.iter().any(|o| o == edge) {
-            out.push(edge.to_string());
+        if plannable && !out.iter().any(|(o, _)| o == edge) {
+            out.push((edge.to_string(), lane));
         }
     }
     out

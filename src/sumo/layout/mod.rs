@@ -92,12 +92,14 @@ pub struct OuterEnd {
     pub merge_end: f64,
 }
 
-/// A lane drop: the carriageway's rightmost lane ends on edge `ends_on`, at `merge_end` along
-/// it (m); its traffic must have moved one lane left by then.
+/// A lane drop: the carriageway's rightmost or leftmost lane ends on edge `ends_on`, at
+/// `merge_end` along it (m); its traffic must have moved one lane over by then.
 #[derive(Debug, Clone, PartialEq)]
 pub struct LaneDrop {
-    /// The main edge on which the lane (its lane 0) ends.
+    /// The main edge on which the lane ends.
     pub ends_on: String,
+    /// Its index there: 0, or the edge's leftmost.
+    pub lane: u32,
     /// Where the lane ends along the carriageway (m).
     pub merge_end: f64,
 }
@@ -118,7 +120,7 @@ pub struct Layout {
     pub main: Vec<MainEdge>,
     /// The on-ramps.
     pub on_ramps: Vec<OnRamp>,
-    /// The carriageway's right lanes that end (lane drops), in order along it.
+    /// The carriageway's outer lanes that end (lane drops), in order along it.
     pub lane_drops: Vec<LaneDrop>,
     /// The off-ramps.
     pub off_ramps: Vec<OffRamp>,
@@ -213,9 +215,9 @@ impl Discovery {
 }
 
 /// Per carriageway (its edges), its merges and the edges its right lanes drop on.
-type OnCarriageway = BTreeMap<Vec<String>, (Vec<Merge>, Vec<String>)>;
+type OnCarriageway = BTreeMap<Vec<String>, (Vec<Merge>, Vec<(String, u32)>)>;
 
-/// The merges and right-lane drops of `net`, grouped by the carriageway they lie on: the
+/// The merges and planned lane drops of `net`, grouped by the carriageway they lie on: the
 /// carriageways in the order their first merge or drop was found, and each one's merges and
 /// the edges its lanes drop on.
 fn by_carriageway(net: &Net, merges: Vec<Merge>) -> (Vec<Vec<String>>, OnCarriageway) {
@@ -232,8 +234,8 @@ fn by_carriageway(net: &Net, merges: Vec<Merge>) -> (Vec<Vec<String>>, OnCarriag
     for m in merges {
         grouped.push((road_of(&m.joins), Some(m), None));
     }
-    for d in lane_ends::right_lane_drops(net) {
-        grouped.push((road_of(&d), None, Some(d)));
+    for d in lane_ends::planned_lane_drops(net) {
+        grouped.push((road_of(&d.0), None, Some(d)));
     }
     for (road, m, d) in grouped {
         let (merges, drops) = by_road.entry(road).or_default();
@@ -304,14 +306,19 @@ fn changes(
 }
 
 impl Layout {
-    /// The region of carriageway `road` around `merges` and the lane drops on edges `drops`
+    /// The region of carriageway `road` around `merges` and the lane drops `drops` (edge, lane)
     /// (all on it, in its order).
-    fn of_region(net: &Net, road: &[String], merges: &[Merge], drops: &[String]) -> Option<Layout> {
+    fn of_region(
+        net: &Net,
+        road: &[String],
+        merges: &[Merge],
+        drops: &[(String, u32)],
+    ) -> Option<Layout> {
         let at = |id: &str| road.iter().position(|e| e == id).expect("on the road");
         let firsts = merges.iter().map(|m| at(&m.joins));
-        let first = firsts.chain(drops.iter().map(|d| at(d))).min()?;
+        let first = firsts.chain(drops.iter().map(|d| at(&d.0))).min()?;
         let lasts = merges.iter().map(|m| at(&m.ends_on));
-        let last = lasts.chain(drops.iter().map(|d| at(d))).max()?;
+        let last = lasts.chain(drops.iter().map(|d| at(&d.0))).max()?;
         let length = |id: &String| net.edge(id).lanes.last().map_or(0.0, |l| l.length);
         let mut begin = first;
         let mut upstream = 0.0;
@@ -336,9 +343,10 @@ impl Layout {
             .collect();
         let next = road.get(end + 1).map(String::as_str);
         let lane_drops = (drops.iter())
-            .map(|d| LaneDrop {
-                ends_on: d.clone(),
-                merge_end: net.edge(d).lanes[0]
+            .map(|(edge, lane)| LaneDrop {
+                ends_on: edge.clone(),
+                lane: *lane,
+                merge_end: net.edge(edge).lanes[*lane as usize]
                     .shape
                     .last()
                     .map_or(0.0, |p| line.to_frame(*p).0),
