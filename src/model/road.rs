@@ -261,6 +261,14 @@ impl Road {
         }
     }
 
+    /// How many lane changes a vehicle on `lane` still owes the carriageway: 0 on a main lane,
+    /// 2 on the outer lane of a two-lane ramp.
+    pub fn lanes_to_main(&self, lane: i32) -> u32 {
+        let main = self.main_lane_range();
+        let nearest = lane.clamp(*main.start(), *main.end());
+        nearest.abs_diff(lane)
+    }
+
     /// Whether a lane change from `from` to `to` leaves an auxiliary lane towards the
     /// carriageway: a merge.
     pub fn is_merge(&self, from: i32, to: i32) -> bool {

@@ -42,11 +42,13 @@ impl Node {
     }
 }
 
-/// Extra cost (steps) of a ramp CAV's plan that reaches the horizon still on the acceleration
-/// lane. Such a plan still owes at least the lane change onto the main road (5 steps: 1 s at the
-/// default 0.2 s steps), which the free-flow time of the distance it lacks does not count; without
-/// it, a plan still on the ramp at the horizon could cost less than one that merges a few steps
-/// later.
+/// Extra cost (steps) of a ramp CAV's plan that reaches the horizon still on an auxiliary lane,
+/// per lane change it still owes the main road (5 steps: 1 s at the default 0.2 s steps), which
+/// the free-flow time of the distance it lacks does not count; without it, a plan still on the
+/// ramp at the horizon could cost less than one that merges a few steps later. Charged per lane
+/// owed, a plan that moves from a two-lane ramp's outer lane to its inner one is worth its
+/// lane change: charged once, such a CAV (bk-mastar on the two-lane gain layout) drove 800 m
+/// on the outer lane and changed lanes twice from a stand at its end.
 const UNMERGED_PENALTY: f64 = 5.0;
 
 /// Phase 1's primitives: everything but the emergency brake.
@@ -236,8 +238,9 @@ impl<'p> PhaseSearch<'p> {
     /// Cost charged when a plan reaches the horizon short of its goal.
     fn terminal_cost(&self, n: &Node) -> f64 {
         let lacking = self.lacking_steps(n);
-        if self.req.must_merge && !self.on_main(n) {
-            lacking + UNMERGED_PENALTY
+        if self.req.must_merge {
+            let owed = self.planner.road.lanes_to_main(n.lane);
+            lacking + UNMERGED_PENALTY * owed as f64
         } else {
             lacking
         }

@@ -386,3 +386,28 @@ fn a_cav_is_planned_within_its_own_accelerations() {
         .unwrap();
     assert!((rate(&truck) - 1.3).abs() < 1e-9, "{}", rate(&truck));
 }
+
+/// A ramp CAV on the outer lane of a two-lane ramp (frame lane −1 beside the acceleration lane,
+/// both ending at 330 m), the main road's lane 1 a solid platoon beside it: it cannot merge
+/// within the horizon, but it moves to the inner lane, one lane change fewer still owed. With
+/// a plan left unmerged charged once whatever it still owes, it stayed, and a bk-mastar CAV on
+/// the two-lane gain layout drove 800 m on the outer lane and changed twice from a stand.
+#[test]
+fn an_outer_ramp_lane_cav_moves_inward_when_it_cannot_merge_yet() {
+    let mut road = Road::paper_default();
+    let mut outer = road.zones[0].clone();
+    outer.lane = -1;
+    road.zones.push(outer);
+    let m = Mastar::from_config(&crate::config::Config::default(), road);
+    let platoon: Vec<Trajectory> = (0..40)
+        .map(|k| other(100.0 + 7.0 * k as f64, 1, 25.0))
+        .collect();
+    let obs: Vec<&Trajectory> = platoon.iter().collect();
+    let plan = m.plan(&request(&m, 160.0, -1, 25.0, true, &obs)).unwrap();
+    assert!(collision_free(&plan, &obs));
+    let end = plan.trajectory.poses.last().unwrap();
+    assert!(end.y.abs() < 1e-9, "ends on the inner lane: {end:?}");
+    assert_eq!(m.road.lanes_to_main(-1), 2);
+    assert_eq!(m.road.lanes_to_main(0), 1);
+    assert_eq!(m.road.lanes_to_main(2), 0);
+}
