@@ -395,7 +395,7 @@ fn a_cav_is_planned_within_its_own_accelerations() {
 #[test]
 fn an_outer_ramp_lane_cav_moves_inward_when_it_cannot_merge_yet() {
     let mut road = Road::paper_default();
-    let mut outer = road.zones[0].clone();
+    let mut outer = road.zones[0];
     outer.lane = -1;
     road.zones.push(outer);
     let m = Mastar::from_config(&crate::config::Config::default(), road);
