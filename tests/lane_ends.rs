@@ -12,7 +12,7 @@ type Con = (&'static str, u32, &'static str, u32);
 
 /// A one-lane ramp joining a two-lane motorway at the nose, without an acceleration lane: its
 /// lane and the right main lane both lead into the right lane of `down` (OpenStreetMap imports
-/// often look so).
+/// often look so, at a priority junction). Planned; `tests/lane_roles.rs` runs one.
 #[test]
 fn a_nose_merge() {
     let dir = tempfile::tempdir().unwrap();
@@ -30,7 +30,8 @@ fn a_nose_merge() {
     let mut cons: Vec<Con> = through("up", 2, "down", 2);
     cons.push(("on", 0, "down", 0));
     let out = network(&build(dir.path(), &nodes, &edges, &cons));
-    has_line(&out, &["nose merge", "'on'", "'down'", "not planned yet"]);
+    has_line(&out, &["nose merge 'on' → 'down'", "planned in region 1"]);
+    has_line(&out, &["on-ramp 1: on → down lane 0: joins at the nose"]);
 }
 
 /// Two on-ramps whose acceleration lanes overlap: `on2` joins `both` while the lane `on1`

@@ -4,7 +4,8 @@
 //! joins as two lanes the carriageway keeps for 800 m and then drops), a main-road lane drop
 //! (3 to 2 lanes, on the right and on the left), an on-ramp joining on the left (its lane the frame lane above the
 //! carriageway's), and on-ramps whose edges run alongside another merge's auxiliary lane (two
-//! on-ramps 150 m apart; a cloverleaf's outer on-ramp beside its weaving lane). `bkpbs network`
+//! on-ramps 150 m apart; a cloverleaf's outer on-ramp beside its weaving lane), and a ramp
+//! joining at the nose without an acceleration lane. `bkpbs network`
 //! plans each (a ramp's outer lane a frame lane of its own, outside the one beside the
 //! carriageway; the dropped lane an auxiliary lane whose traffic is the main road's; a ramp's
 //! stretch beside another's lane outside the frame, so it is not planned as if on that lane,
@@ -227,4 +228,21 @@ fn a_left_lane_drop_is_planned_and_never_closed() {
     );
     has_line(&said, &["lane drop: lane 2 of mid ends at s"]);
     flows_as_under_sumo_alone(&cfg, "5", &AS_A_RULE);
+}
+
+/// A one-lane ramp joining a two-lane motorway at the nose, without an acceleration lane, at a
+/// zipper junction (the `nose-merge` layout; at a netconvert priority junction SUMO's own
+/// drivers wait at the nose for 180 s, the guide's SUMO facts). Its lane is frame lane 0 up
+/// to where its junction lane begins, that junction lane lies on lane 1, and a ramp CAV sent
+/// left on the ramp's last 60 m is committed to merging (`episode::nose`). IDM+MOBIL is held to
+/// the counts: its ramp delays run 2.9 and 3.8 s above SUMO alone's on seeds 5 and 6.
+#[test]
+fn a_nose_merge_is_planned_and_never_closed() {
+    let dir = tempfile::tempdir().unwrap();
+    let (net, cfg) = layout(dir.path(), "nose-merge");
+    let said = network(&net);
+    has_line(&said, &["nose merge 'on' → 'down'", "planned in region 1"]);
+    has_line(&said, &["on-ramp 1: on → down lane 0: joins at the nose"]);
+    flows_as_under_sumo_alone(&cfg, "5", &AS_A_RULE[..2]);
+    flows_as_under_sumo_alone(&cfg, "5", &[("idm-mobil", Held::Counts)]);
 }

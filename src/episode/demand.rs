@@ -441,6 +441,7 @@ mod tests {
             end: 1000.0,
             weaving: false,
             ramp: true,
+            nose: false,
         });
         road.entries[1].name = "ramp1".into();
         road.entries.push(crate::model::road::Entry::new(

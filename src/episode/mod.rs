@@ -21,6 +21,7 @@ pub mod lockstep;
 pub mod merge_rule;
 pub mod metrics;
 pub mod models_used;
+pub mod nose;
 pub mod observer;
 pub mod output;
 pub mod planning;

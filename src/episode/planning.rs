@@ -117,6 +117,10 @@ impl<'a> Planning<'a> {
     /// The step's scenes are built: counted, and shown to the observer.
     pub(crate) fn scenes_built(&mut self) {
         self.occupancy.0 += 1;
+        for r in &mut self.regions {
+            r.nose
+                .apply(&mut r.scene.scene, r.config.scenario.lane_change_duration);
+        }
         for (k, r) in self.regions.iter().enumerate() {
             let vehicles = &r.scene.scene.vehicles;
             self.occupancy.1 += vehicles.len() as u64;
@@ -139,6 +143,7 @@ impl<'a> Planning<'a> {
             if r.commanded() {
                 let sc = &r.config.scenario;
                 send_commands(sim, &r.scene, &r.commands, sc)?;
+                r.nose.note(&r.scene, &r.commands);
                 r.record_sent();
                 if let Some(gui) = &mut r.gui {
                     gui.update(sim, &r.scene.scene, &r.commands)?;

@@ -6,6 +6,7 @@
 use crate::config::Config;
 use crate::controller::{CavHandling, Command, Controller};
 use crate::episode::gui::GuiColours;
+use crate::episode::nose::NoseCommitments;
 use crate::episode::recording::Recording;
 use crate::episode::trace::Tracer;
 use crate::episode::trajectories::TrajectoryRow;
@@ -42,6 +43,8 @@ pub struct Region<'a> {
     pub(crate) trace: Option<Tracer>,
     /// Its CAVs' colours in sumo-gui, when `sumo.gui` shows the episode there.
     pub(crate) gui: Option<GuiColours>,
+    /// Its CAVs committed to merging at a nose (`episode::nose`), carried from step to step.
+    pub(crate) nose: NoseCommitments,
 }
 
 impl<'a> Region<'a> {
@@ -56,13 +59,7 @@ impl<'a> Region<'a> {
         if let (Some(c), Some(t)) = (&mut controller, &trace) {
             c.set_tracing(t.wants_beliefs());
         }
-        // The main edges come first in the frame: the second one starts where the first ends.
-        let control_start = road
-            .edges
-            .get(1)
-            .filter(|e| !e.on_ramp)
-            .and_then(|e| e.lanes.iter().flatten().map(|l| l.s0).reduce(f64::min))
-            .unwrap_or(0.0);
+        let control_start = control_start(&road);
         let control_end = control_end(&road);
         let recording = Recording::new(config.output.trajectories);
         Region {
@@ -78,6 +75,7 @@ impl<'a> Region<'a> {
             recording,
             trace,
             gui,
+            nose: NoseCommitments::default(),
         }
     }
 
@@ -155,6 +153,26 @@ fn merge_edges(road: &Road) -> Vec<String> {
 /// the road ahead were empty, into a truck that had just left the region (SUMO's `ramp` game,
 /// bk-mastar, seed 2: a controllable crash 12 m past the end, 0.6 s after the hand-back).
 /// Where that edge holds the end of a merge zone, the region's end.
+/// Frame `s` from which the planner drives CAVs: the end of the region's first edge (the main
+/// edges come first in the frame: the second one starts where the first ends), or earlier,
+/// where a ramp joins at the nose: a nose zone's length before the zone (clamped at the
+/// region's start), so that main-road CAVs are planned with the ramp's. Where the first edge
+/// ends at the nose, as it does where a user's network joins a ramp at a node, control began
+/// only past it.
+fn control_start(road: &Road) -> f64 {
+    let second = road
+        .edges
+        .get(1)
+        .filter(|e| !e.on_ramp)
+        .and_then(|e| e.lanes.iter().flatten().map(|l| l.s0).reduce(f64::min))
+        .unwrap_or(0.0);
+    let noses = road.zones.iter().filter(|z| z.nose);
+    let before_noses = noses
+        .map(|z| z.start - (z.end - z.start))
+        .fold(second, f64::min);
+    before_noses.max(0.0)
+}
+
 fn control_end(road: &Road) -> f64 {
     let region_end = road.section_end;
     let last_start = road

@@ -115,6 +115,11 @@ pub struct MergeZone {
     /// Whether an on-ramp feeds it; `false` for a lane of the carriageway that ends (a lane
     /// drop), whose `ramp_start` is `start`, where the lane begins in the region.
     pub ramp: bool,
+    /// Whether the ramp joins at the nose: no lane lies beside it, its lane ends at `end` where
+    /// it and the target lane lead into one, and its vehicles move over by driving on (a lane
+    /// change there is a commitment to drive into the target lane at `end`, see
+    /// `episode::nose`).
+    pub nose: bool,
 }
 
 impl MergeZone {
@@ -436,6 +441,7 @@ impl Road {
                 end: 330.0,
                 weaving: false,
                 ramp: true,
+                nose: false,
             }],
             section_end: 460.0,
             end_edge: (Arc::from("main_out"), 130.0),
@@ -474,6 +480,7 @@ mod tests {
             end: 1200.0,
             weaving: false,
             ramp: true,
+            nose: false,
         });
         assert_eq!(r.zone_ahead(100.0).end, 330.0);
         assert_eq!(r.zone_ahead(500.0).end, 1200.0);
@@ -495,6 +502,7 @@ mod tests {
             end: 430.0,
             weaving: false,
             ramp: true,
+            nose: false,
         });
         r.entries
             .push(Entry::new("ramp2", &["ramp2", "main_out"], 40.0));
@@ -524,6 +532,7 @@ mod tests {
             end,
             weaving: false,
             ramp: true,
+            nose: false,
         };
         r.zones.push(zone(-1, -16.79, 150.0, 250.0));
         r.zones.push(zone(3, 500.0, 600.0, 700.0));

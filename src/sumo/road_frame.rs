@@ -28,6 +28,12 @@ use crate::sumo::network::{Lane, Net};
 /// The shortest acceleration lane a merge is planned on (m): room for one car.
 const MIN_ACCELERATION_LANE: f64 = 5.0;
 
+/// How far before the nose a ramp joining there without an acceleration lane lets its vehicles
+/// commit to merging (m): about two seconds at a motorway's speed, room for one lane change of
+/// the planners' (`scenario.lane_change_duration`, 1 s) to start and end before the nose. Past
+/// that point a committed vehicle counts as changing lanes until the nose (`episode::nose`).
+pub const NOSE_ZONE: f64 = 60.0;
+
 /// Where each main edge lies: its frame-lane offset and the span of its reference lane.
 struct MainFrames<'n> {
     /// The carriageway's lanes (frame lanes 1 to it).
@@ -91,11 +97,15 @@ fn ramp_zones(
     let (mut zones, mut outer) = (Vec::new(), Vec::new());
     for ramp in ramps {
         let end_lane = &net.edge(&ramp.ends_on).lanes[ramp.end_lane as usize];
-        let joined = (
-            main.spans[ramp.joins.as_str()].s0,
-            main.spans[ramp.ends_on.as_str()].s_at(end_lane.length),
-        );
-        if joined.1 - joined.0 < MIN_ACCELERATION_LANE {
+        let nose = main.spans[ramp.joins.as_str()].s0;
+        let joined = match ramp.nose {
+            true => (nose, nose),
+            false => (
+                nose,
+                main.spans[ramp.ends_on.as_str()].s_at(end_lane.length),
+            ),
+        };
+        if !ramp.nose && joined.1 - joined.0 < MIN_ACCELERATION_LANE {
             return Err(format!(
                 "the acceleration lane of on-ramp '{}' on '{}' is {:.2} m long, shorter than one \
                  vehicle ({MIN_ACCELERATION_LANE} m): no merge to plan",
@@ -321,6 +331,7 @@ fn drop_zone(
         end: main.spans[d.ends_on.as_str()].s_at(length),
         weaving: false,
         ramp: false,
+        nose: false,
     })
 }
 
@@ -416,7 +427,10 @@ fn ramp_frames(
     internal: &mut InternalEdges,
 ) -> Result<MergeZone, String> {
     let name = &ramp.edges[0];
-    let lane = main.offsets[ramp.joins.as_str()] + ramp.lane as i32;
+    let lane = match ramp.nose {
+        true => MERGE_LANE,
+        false => main.offsets[ramp.joins.as_str()] + ramp.lane as i32,
+    };
     if lane != MERGE_LANE && lane != main.main_lanes + 1 {
         return Err(format!(
             "on-ramp '{name}' feeds lane {} of '{}', which has {} lanes: a ramp must join as \
@@ -431,20 +445,33 @@ fn ramp_frames(
         lanes: 1 + ramp.outer.len(),
         lane,
         free_from,
+        nose_into: ramp.nose.then(|| ramp.joins.clone()),
     };
     let mut ramp_start = joined.0;
     let mut next = ramp.joins.as_str();
+    let mut ramp_end = joined.1;
     for id in ramp.edges.iter().rev() {
         ramp_start = ramp_start.min(piece.frames(net, (id, next), edges, internal)?);
+        if ramp.nose && next == ramp.joins {
+            ramp_end = piece.s_end + net.edge(id).lanes.last().map_or(0.0, |l| l.length);
+        }
         next = id;
     }
+    // At the nose the ramp's lane ends where its junction lane begins (that lane converges
+    // with the carriageway's and lies on the target lane); its last stretch before is where
+    // its vehicles may commit to merging.
+    let (start, end) = match ramp.nose {
+        true => ((ramp_end - NOSE_ZONE).max(ramp_start), ramp_end),
+        false => joined,
+    };
     Ok(MergeZone {
         lane,
         ramp_start,
-        start: joined.0,
-        end: joined.1,
+        start,
+        end,
         weaving: ramp.weaves_into.is_some(),
         ramp: true,
+        nose: ramp.nose,
     })
 }
 
@@ -458,6 +485,9 @@ struct RampPiece {
     /// the one above the carriageway's on the left.
     lane: i32,
     free_from: f64,
+    /// The edge a ramp joining at the nose joins: its junction lanes into that edge, where its
+    /// lane converges with the carriageway's, lie on the lane it merges into.
+    nose_into: Option<String>,
 }
 
 impl RampPiece {
@@ -504,8 +534,10 @@ impl RampPiece {
         }
         if in_frame(self.s_end) {
             lowest = self.s_end;
+            let into_nose = self.nose_into.as_deref() == Some(next);
             for (from, via) in &links {
-                let frame = LaneFrame::straight(frame_lane(*from), self.s_end).limited(via.speed);
+                let lane = frame_lane(*from) + i32::from(into_nose);
+                let frame = LaneFrame::straight(lane, self.s_end).limited(via.speed);
                 internal.put(via, frame, true);
             }
         }
@@ -668,5 +700,26 @@ mod tests {
             .collect();
         assert!(scales.iter().all(|s| (s - 1.0).abs() < 0.05), "{scales:?}");
         assert!(scales.iter().any(|s| (s - 1.0).abs() > 1e-4));
+    }
+
+    /// A ramp joining at the nose (the `nose-merge` layout, a zipper junction): its lane ends
+    /// where its junction lane begins, that lane lies on lane 1, and its zone is the 60 m before.
+    #[test]
+    fn a_nose_ramp_ends_where_its_junction_lane_begins_on_lane_1() {
+        let r = shipped("layouts/nose-merge/nose-merge");
+        let z = r.zones[0];
+        assert!(z.nose && z.ramp && z.lane == MERGE_LANE);
+        let lane_of = |edge: &str| r.edge(edge).unwrap().lanes[0].clone().unwrap();
+        // `:b_0` is the ramp's junction lane into `down` (the net's connection `via`).
+        let junction = lane_of(":b_0");
+        assert_eq!((lane_of("on").lane, junction.lane), (MERGE_LANE, 1));
+        assert!(
+            (z.end - junction.s0).abs() < 1e-9,
+            "{} vs {}",
+            z.end,
+            junction.s0
+        );
+        assert!(z.end < lane_of("down").s0);
+        assert!((z.end - z.start - NOSE_ZONE).abs() < 1e-9);
     }
 }

@@ -37,6 +37,7 @@ fn two_ramps() -> Road {
         end: 640.0,
         weaving: false,
         ramp: true,
+        nose: false,
     });
     road.section_end = 770.0;
     road.end_edge = (Arc::from("out2"), 130.0);

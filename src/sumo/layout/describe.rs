@@ -4,7 +4,7 @@
 
 use std::collections::BTreeMap;
 
-use super::{Discovery, Layout, Status};
+use super::{Discovery, Layout, OnRamp, Status};
 
 impl Layout {
     /// The region, one line per element.
@@ -20,29 +20,7 @@ impl Layout {
             );
         }
         for (k, r) in self.on_ramps.iter().enumerate() {
-            let mut on = if r.ends_on == r.joins {
-                String::new()
-            } else {
-                format!(" on '{}'", r.ends_on)
-            };
-            if let Some(exit) = &r.weaves_into {
-                on += &format!("; weaving: its lane runs on into off-ramp '{exit}'");
-            }
-            for o in &r.outer {
-                on += &format!(
-                    "; outer lane {}: ends at s {:.2} m on '{}'",
-                    o.lane, o.merge_end, o.ends_on
-                );
-            }
-            out += &format!(
-                "on-ramp {}: {} → {} lane {}: from s {:.2} m, ends at s {:.2} m{on}\n",
-                k + 1,
-                r.edges.join(" → "),
-                r.joins,
-                r.lane,
-                r.merge_start,
-                r.merge_end
-            );
+            out += &on_ramp_line(k, r);
         }
         for d in &self.lane_drops {
             out += &format!(
@@ -60,6 +38,42 @@ impl Layout {
         }
         out
     }
+}
+
+/// The line of on-ramp `k` (from 0) of a region.
+fn on_ramp_line(k: usize, r: &OnRamp) -> String {
+    let route = r.edges.join(" → ");
+    if r.nose {
+        return format!(
+            "on-ramp {}: {route} → {} lane {}: joins at the nose, s {:.2} m\n",
+            k + 1,
+            r.joins,
+            r.lane,
+            r.merge_start
+        );
+    }
+    let mut on = if r.ends_on == r.joins {
+        String::new()
+    } else {
+        format!(" on '{}'", r.ends_on)
+    };
+    if let Some(exit) = &r.weaves_into {
+        on += &format!("; weaving: its lane runs on into off-ramp '{exit}'");
+    }
+    for o in &r.outer {
+        on += &format!(
+            "; outer lane {}: ends at s {:.2} m on '{}'",
+            o.lane, o.merge_end, o.ends_on
+        );
+    }
+    format!(
+        "on-ramp {}: {route} → {} lane {}: from s {:.2} m, ends at s {:.2} m{on}\n",
+        k + 1,
+        r.joins,
+        r.lane,
+        r.merge_start,
+        r.merge_end
+    )
 }
 
 impl Discovery {

@@ -16,7 +16,7 @@
 
 use std::collections::{BTreeMap, BTreeSet};
 
-use super::merges::{lanes_fed, main_feeder};
+use super::merges::{joins_at_nose, lanes_fed, main_feeder, NOSE_MERGE_MIN_SPEED};
 use crate::sumo::network::Net;
 
 /// How far an on-ramp's lanes run on before the first of them ends for the carriageway to
@@ -282,37 +282,19 @@ fn ramp_lanes(net: &Net, ramp: &str, joins: &str, ends: &[End]) -> ForcedChange 
     }
 }
 
-/// The lowest speed limit (m/s, 60 km/h) of a road on which a ramp joining at the nose is a
-/// merge: on slower roads (city streets) a side street joining is a junction, where SUMO's
-/// right of way decides (SUMO's `DRT` game listed ten such "nose merges" without it).
-const NOSE_MERGE_MIN_SPEED: f64 = 60.0 / 3.6;
-
-/// Every ramp joining at the nose: an edge of a road of at least [`NOSE_MERGE_MIN_SPEED`] fed
-/// by two roads where every lane the narrower one (only ever leading there) feeds is a lane the
-/// carriageway feeds too, on its right.
+/// Every ramp joining at the nose ([`joins_at_nose`]).
 fn nose_merges(net: &Net) -> Vec<ForcedChange> {
     let mut out = Vec::new();
     for e in &net.edges {
-        let limit = e.lanes.iter().map(|l| l.speed).fold(0.0, f64::max);
-        if limit < NOSE_MERGE_MIN_SPEED {
-            continue;
-        }
-        let preds = net.predecessors(&e.id);
-        let Some(main) = main_feeder(net, &e.id).filter(|_| preds.len() == 2) else {
-            continue;
-        };
-        let main_fed = lanes_fed(net, main, &e.id);
-        for ramp in preds.into_iter().filter(|p| *p != main) {
-            let fed = lanes_fed(net, ramp, &e.id);
-            let shared = !fed.is_empty() && fed.iter().all(|l| main_fed.contains(l));
-            if shared && net.successors(ramp) == [e.id.as_str()] {
+        for ramp in net.predecessors(&e.id) {
+            if let Some(lane) = joins_at_nose(net, ramp, &e.id) {
                 out.push(ForcedChange {
                     kind: Kind::NoseMerge,
                     ramp: Some(ramp.to_string()),
                     drop: None,
                     what: format!(
-                        "'{ramp}' → '{}': its lane and a main-road lane lead into lane {}",
-                        e.id, fed[0]
+                        "'{ramp}' → '{}': its lane and a main-road lane lead into lane {lane}",
+                        e.id
                     ),
                 });
             }

@@ -48,6 +48,9 @@ pub struct Merge {
     pub weaves_into: Option<String>,
     /// The further lanes of a ramp of several, from the one beside `lane` outwards.
     pub outer: Vec<OuterLane>,
+    /// Whether the ramp joins at the nose: its lane and the carriageway's lane `lane` lead into
+    /// lane `lane` of `joins`, with no acceleration lane (`ends_on` is `joins`).
+    pub nose: bool,
 }
 
 /// A further lane of an on-ramp of several, outside the one next to the carriageway: the lane
@@ -99,6 +102,13 @@ pub fn find(net: &Net) -> (Vec<Merge>, Vec<NotAMerge>) {
                 continue;
             }
             let fed = lanes_fed(net, ramp, &e.id);
+            if let Some(lane) = joins_at_nose(net, ramp, &e.id) {
+                match nose_merge(net, ramp, &e.id, lane) {
+                    Ok(m) => merges.push(m),
+                    Err(n) => not.push(n),
+                }
+                continue;
+            }
             if fed.iter().any(|l| *l >= lowest_main) {
                 continue; // joins beside or left of the carriageway: a junction, not a ramp
             }
@@ -173,6 +183,54 @@ fn with_outer_lanes(net: &Net, mut merge: Merge, fed: &[u32]) -> Result<Merge, N
     Ok(merge)
 }
 
+/// The lowest speed limit (m/s, 60 km/h) of a road on which a ramp joining at the nose is a
+/// merge: on slower roads (city streets) a side street joining is a junction, where SUMO's
+/// right of way decides (SUMO's `DRT` game listed ten such "nose merges" without it).
+pub(super) const NOSE_MERGE_MIN_SPEED: f64 = 60.0 / 3.6;
+
+/// Whether `ramp` joins `edge` at the nose, and into which of its lanes (the lowest it feeds):
+/// `edge`, on a road of at least [`NOSE_MERGE_MIN_SPEED`], is fed by two roads, and every lane
+/// the one that is not the carriageway (leading only there) feeds is a lane the carriageway
+/// feeds too.
+pub(super) fn joins_at_nose(net: &Net, ramp: &str, edge: &str) -> Option<u32> {
+    let e = net.edge(edge);
+    let limit = e.lanes.iter().map(|l| l.speed).fold(0.0, f64::max);
+    let preds = net.predecessors(edge);
+    if limit < NOSE_MERGE_MIN_SPEED || preds.len() != 2 || !preds.contains(&ramp) {
+        return None;
+    }
+    let main = main_feeder(net, edge).filter(|m| *m != ramp)?;
+    let main_fed = lanes_fed(net, main, edge);
+    let fed = lanes_fed(net, ramp, edge);
+    let shared = !fed.is_empty() && fed.iter().all(|l| main_fed.contains(l));
+    (shared && net.successors(ramp) == [edge]).then(|| fed[0])
+}
+
+/// The merge of `ramp` joining `joins` at the nose into lane `lane`, or why it is not planned:
+/// a one-lane ramp into the carriageway's rightmost lane is.
+fn nose_merge(net: &Net, ramp: &str, joins: &str, lane: u32) -> Result<Merge, NotAMerge> {
+    let why = if lanes_feeding(net, ramp, joins) > 1 {
+        "a ramp of several lanes joining at the nose is not planned"
+    } else if lane > 0 {
+        "a ramp joining at the nose on the left is not planned"
+    } else {
+        return Ok(Merge {
+            ramp: ramp.to_string(),
+            joins: joins.to_string(),
+            lane,
+            ends_on: joins.to_string(),
+            end_lane: lane,
+            weaves_into: None,
+            outer: Vec::new(),
+            nose: true,
+        });
+    };
+    Err(NotAMerge {
+        ramp: ramp.to_string(),
+        why: format!("joins '{joins}' at the nose: {why}"),
+    })
+}
+
 /// How many lanes of `from` lead into `to`.
 fn lanes_feeding(net: &Net, from: &str, to: &str) -> usize {
     let set: BTreeSet<u32> = net
@@ -203,6 +261,7 @@ fn classify(ramp: &str, joins: &str, lane: u32, end: LaneEnd) -> Result<Merge, N
         end_lane,
         weaves_into,
         outer: Vec::new(),
+        nose: false,
     };
     let not = |why: String| NotAMerge {
         ramp: ramp.to_string(),

@@ -76,6 +76,10 @@ pub struct OnRamp {
     pub weaves_into: Option<String>,
     /// The further lanes of a ramp of several, from the one beside `lane` outwards.
     pub outer: Vec<OuterEnd>,
+    /// Whether it joins at the nose, without an acceleration lane: its lane and the
+    /// carriageway's lane `lane` lead into one where `joins` begins (`merge_start` is
+    /// `merge_end`), and its traffic merges by driving on.
+    pub nose: bool,
 }
 
 /// A further lane of an on-ramp of several (a two-lane on-ramp, a lane gain dropped later):
@@ -282,6 +286,7 @@ fn changes(
                     | Kind::TwoLaneOnRamp
                     | Kind::GainDroppedLater
                     | Kind::LeftSideOnRamp
+                    | Kind::NoseMerge
             );
             let ramp = c.ramp.as_deref().filter(|_| planned).unwrap_or_default();
             let drop = c.drop.as_deref().unwrap_or_default();
@@ -476,9 +481,13 @@ fn on_ramp(net: &Net, merge: &Merge, on_main: &BTreeSet<&str>, line: &ReferenceL
         ends_on: merge.ends_on.clone(),
         end_lane: merge.end_lane,
         merge_start: at(start.shape.first()),
-        merge_end: at(end.shape.last()),
+        merge_end: match merge.nose {
+            true => at(start.shape.first()),
+            false => at(end.shape.last()),
+        },
         weaves_into: merge.weaves_into.clone(),
         outer,
+        nose: merge.nose,
     }
 }
 
