@@ -2,11 +2,11 @@
 //! ramp's to change into, and its vehicles move over by driving on, into the lane their lane
 //! and a carriageway lane lead into where the ramp joins. A lane change a controller sends a
 //! CAV on such a ramp's last stretch (its zone, [`MergeZone::nose`]) is therefore a commitment,
-//! not a command SUMO could carry out: from then until the nose the CAV counts as changing
-//! lanes, its frame position moving from the ramp's lane towards the target lane in proportion
-//! to how far it has come, from where it committed, towards the nose (so it reaches the target
-//! lane's centre there, where SUMO puts it). Planners, the shield and the merge rule see a
-//! change under way, as on an acceleration lane: never cancelled, occupying both lanes.
+//! not a command SUMO could carry out: from then until the nose (where its junction lane, on
+//! the target lane, begins) the CAV counts as changing lanes, its frame position moving from
+//! the ramp's lane towards the target lane with its distance or time since it committed
+//! ([`NoseCommitments::apply`]). Planners, the shield and the merge rule see a change under
+//! way, as on an acceleration lane: never cancelled, occupying both lanes.
 
 use std::collections::BTreeMap;
 use std::sync::Arc;

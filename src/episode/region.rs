@@ -147,12 +147,6 @@ fn merge_edges(road: &Road) -> Vec<String> {
     joins.chain(drops).collect()
 }
 
-/// Where the planner of `road`'s region stops driving CAVs: the start of its last edge, so that
-/// SUMO takes a CAV back while the vehicles ahead of it are still in the region's scene. The
-/// planner sees nobody past the region's end: a CAV planned up to there drove on, planning as if
-/// the road ahead were empty, into a truck that had just left the region (SUMO's `ramp` game,
-/// bk-mastar, seed 2: a controllable crash 12 m past the end, 0.6 s after the hand-back).
-/// Where that edge holds the end of a merge zone, the region's end.
 /// Frame `s` from which the planner drives CAVs: the end of the region's first edge (the main
 /// edges come first in the frame: the second one starts where the first ends), or earlier,
 /// where a ramp joins at the nose: a nose zone's length before the zone (clamped at the
@@ -173,6 +167,12 @@ fn control_start(road: &Road) -> f64 {
     before_noses.max(0.0)
 }
 
+/// Where the planner of `road`'s region stops driving CAVs: the start of its last edge, so that
+/// SUMO takes a CAV back while the vehicles ahead of it are still in the region's scene. The
+/// planner sees nobody past the region's end: a CAV planned up to there drove on, planning as if
+/// the road ahead were empty, into a truck that had just left the region (SUMO's `ramp` game,
+/// bk-mastar, seed 2: a controllable crash 12 m past the end, 0.6 s after the hand-back).
+/// Where that edge holds the end of a merge zone, the region's end.
 fn control_end(road: &Road) -> f64 {
     let region_end = road.section_end;
     let last_start = road
