@@ -18,7 +18,7 @@
 mod common;
 
 use std::collections::BTreeMap;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use common::flows::{within_3_percent, FlowCount};
 use common::netconvert::{layout, network};
@@ -66,6 +66,15 @@ const AS_A_RULE: [(&str, Held); 3] = [
     ("idm-mobil", Held::Counts),
 ];
 
+/// Layout `name` copied into a fresh directory (kept while the guard lives), its net built:
+/// the guard, the configuration's path and what `bkpbs network` says of the net.
+fn layout_and_network(name: &str) -> (tempfile::TempDir, PathBuf, String) {
+    let dir = tempfile::tempdir().unwrap();
+    let (net, cfg) = layout(dir.path(), name);
+    let said = network(&net);
+    (dir, cfg, said)
+}
+
 /// Each planner at α = 0.6 against SUMO alone on the same seed, held to what `held` says; and
 /// neither bk-pbs nor bk-mastar takes part in a controllable collision.
 fn flows_as_under_sumo_alone(cfg: &Path, seed: &str, held: &[(&str, Held)]) {
@@ -100,9 +109,7 @@ fn flows_as_under_sumo_alone(cfg: &Path, seed: &str, held: &[(&str, Held)]) {
 
 #[test]
 fn a_two_lane_ramp_whose_lanes_end_in_turn_is_planned_and_never_closed() {
-    let dir = tempfile::tempdir().unwrap();
-    let (net, cfg) = layout(dir.path(), "two-lane-ramp");
-    let said = network(&net);
+    let (_dir, cfg, said) = layout_and_network("two-lane-ramp");
     has_line(&said, &["two-lane on-ramp", "'on'", "planned in region 1"]);
     has_line(
         &said,
@@ -113,9 +120,7 @@ fn a_two_lane_ramp_whose_lanes_end_in_turn_is_planned_and_never_closed() {
 
 #[test]
 fn a_two_lane_gain_dropped_later_is_planned_and_never_closed() {
-    let dir = tempfile::tempdir().unwrap();
-    let (net, cfg) = layout(dir.path(), "two-lane-gain");
-    let said = network(&net);
+    let (_dir, cfg, said) = layout_and_network("two-lane-gain");
     has_line(
         &said,
         &["lane gain dropped later", "'on'", "planned in region 1"],
@@ -134,9 +139,7 @@ fn a_two_lane_gain_dropped_later_is_planned_and_never_closed() {
 
 #[test]
 fn a_main_road_lane_drop_is_planned_and_never_closed() {
-    let dir = tempfile::tempdir().unwrap();
-    let (net, cfg) = layout(dir.path(), "lane-drop");
-    let said = network(&net);
+    let (_dir, cfg, said) = layout_and_network("lane-drop");
     has_line(
         &said,
         &["lane drop 3 → 2 lanes on 'mid'", "planned in region 1"],
@@ -147,9 +150,7 @@ fn a_main_road_lane_drop_is_planned_and_never_closed() {
 
 #[test]
 fn two_ramps_alongside_are_planned_and_never_closed() {
-    let dir = tempfile::tempdir().unwrap();
-    let (net, cfg) = layout(dir.path(), "two-ramps-alongside");
-    let said = network(&net);
+    let (_dir, cfg, said) = layout_and_network("two-ramps-alongside");
     has_line(
         &said,
         &[
@@ -173,9 +174,7 @@ fn two_ramps_alongside_are_planned_and_never_closed() {
 
 #[test]
 fn a_cloverleaf_is_planned_and_never_closed() {
-    let dir = tempfile::tempdir().unwrap();
-    let (net, cfg) = layout(dir.path(), "cloverleaf");
-    let said = network(&net);
+    let (_dir, cfg, said) = layout_and_network("cloverleaf");
     has_line(
         &said,
         &["weaving section", "'loop_on'", "planned in region 1"],
@@ -202,9 +201,7 @@ fn a_cloverleaf_is_planned_and_never_closed() {
 
 #[test]
 fn a_left_side_ramp_is_planned_and_never_closed() {
-    let dir = tempfile::tempdir().unwrap();
-    let (net, cfg) = layout(dir.path(), "left-side-ramp");
-    let said = network(&net);
+    let (_dir, cfg, said) = layout_and_network("left-side-ramp");
     has_line(&said, &["left-side on-ramp", "'on'", "planned in region 1"]);
     has_line(&said, &["on-ramp 1: on → acc lane 2"]);
     assert!(
@@ -216,9 +213,7 @@ fn a_left_side_ramp_is_planned_and_never_closed() {
 
 #[test]
 fn a_left_lane_drop_is_planned_and_never_closed() {
-    let dir = tempfile::tempdir().unwrap();
-    let (net, cfg) = layout(dir.path(), "left-lane-drop");
-    let said = network(&net);
+    let (_dir, cfg, said) = layout_and_network("left-lane-drop");
     has_line(
         &said,
         &[
@@ -238,9 +233,7 @@ fn a_left_lane_drop_is_planned_and_never_closed() {
 /// the counts: its ramp delays run 2.9 and 3.8 s above SUMO alone's on seeds 5 and 6.
 #[test]
 fn a_nose_merge_is_planned_and_never_closed() {
-    let dir = tempfile::tempdir().unwrap();
-    let (net, cfg) = layout(dir.path(), "nose-merge");
-    let said = network(&net);
+    let (_dir, cfg, said) = layout_and_network("nose-merge");
     has_line(&said, &["nose merge 'on' → 'down'", "planned in region 1"]);
     has_line(&said, &["on-ramp 1: on → down lane 0: joins at the nose"]);
     flows_as_under_sumo_alone(&cfg, "5", &AS_A_RULE[..2]);
