@@ -112,6 +112,7 @@ impl WorstCase {
                 cav_decel: config.planner.emergency_decel,
                 hdv_decel: config.idm.max_decel,
                 hdv_accel: config.idm.accel,
+                step: config.scenario.dt,
             },
         }
     }

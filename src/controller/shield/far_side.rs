@@ -20,6 +20,15 @@
 //! carriageway with 16.5 m trucks (`tests/shield_far_side.rs`, seed 27, α 0.55) a CAV in lane
 //! 2 changed right at 149.2 s beside a ramp truck whose centre was 0.13 m behind its own, the
 //! truck merged in the same step, and they collided at 150.0 s, under bk-pbs and bk-mastar.
+//!
+//! Only an HDV SUMO decides before the CAV can do so: SUMO's lane changer takes an edge's
+//! vehicles front first (`MSLaneChanger::findCandidate`, the largest position on the lane), and
+//! from the CAV's turn on its change holds the target lane (its shadow leads there), so an HDV
+//! whose front is behind the CAV's after the step's move sees the CAV in the target lane and
+//! changes behind it only with SUMO's own safe gap. Both trucks above had their front ahead of
+//! the CAV's. Expecting also the HDVs behind kept ramp CAVs on a gained lane level with the
+//! main road's right lane until its traffic passed (the two-lane gain layout: its outer lane's
+//! delay 3.1 to 5.6 s above SUMO alone's under bk-mastar).
 
 use crate::model::road::Road;
 use crate::model::scene::{Kind, VehicleState};
@@ -38,14 +47,17 @@ pub struct FarSide {
     pub hdv_decel: f64,
     /// Strongest acceleration of the HDV (m/s²).
     pub hdv_accel: f64,
+    /// The simulation step (s): SUMO moves its vehicles before it changes their lanes.
+    pub step: f64,
 }
 
 impl FarSide {
     /// Whether HDV `o`, on the lane beyond `target` seen from CAV `me`'s lane, may change into
     /// `target` in the same second as `me`, which starts its change driving at `speed`:
     /// anywhere when both `me` and `o` drive on main lanes, or when `me` is on an auxiliary lane
-    /// of a weaving section; else, when one of them is on an acceleration lane, only when `o`
-    /// comes level with `me` within the change ([`FarSide::comes_level`]).
+    /// of a weaving section; else, when one of them is on an acceleration lane, only when SUMO
+    /// can decide `o`'s lane change first ([`FarSide::goes_first`]) and `o` comes level with
+    /// `me` within the change ([`FarSide::comes_level`]).
     pub fn may_enter(
         &self,
         road: &Road,
@@ -59,7 +71,20 @@ impl FarSide {
         o.kind == Kind::Hdv
             && !o.on_ramp
             && o.lane == beyond
-            && (between_main || weaving || self.comes_level((me, speed), o))
+            && (between_main || weaving || self.first_and_level((me, speed), o))
+    }
+
+    fn first_and_level(&self, me: (&VehicleState, f64), o: &VehicleState) -> bool {
+        self.goes_first(me, o) && self.comes_level(me, o)
+    }
+
+    /// Whether SUMO's lane changer may take `o` before `me` in the step `me`'s change starts:
+    /// when `o`'s front can be ahead of `me`'s after the step's move (`me` driving at `speed`,
+    /// `o` accelerating as hard as it can).
+    pub fn goes_first(&self, (me, speed): (&VehicleState, f64), o: &VehicleState) -> bool {
+        // SUMO moves a vehicle by its new speed over the step (Euler).
+        let o_most = (o.speed + self.hdv_accel * self.step) * self.step;
+        o.front() + o_most >= me.front() + speed * self.step
     }
 
     /// Whether the bodies of `me` (driving at `speed`) and `o`, taken side by side, overlap

@@ -88,8 +88,9 @@ fn a_ramp_cav_does_not_weave_into_lane_1_beside_a_crossing_hdv() {
 /// scenario with trucks: the CAV, sent left from a round's best node, braked at 6 m/s² and hit
 /// the truck 18 m into the merge edge). The change is refused, keeping the lane is not; a car
 /// alongside counts the same. A truck that cannot come level within the change does not
-/// count: 60 m ahead or behind, or 9 m behind at the CAV's speed; 8 m/s faster, from 9 m
-/// behind it can.
+/// count: 60 m ahead or behind, or 9 m behind at the CAV's speed. Nor does one SUMO decides
+/// after the CAV, its front behind the CAV's after the step: alongside 8 m behind by centre,
+/// or 8 m/s faster from 20 m behind; from there it sees the CAV in lane 1 and stays.
 #[test]
 fn a_ramp_cav_does_not_change_into_lane_1_beside_a_truck_in_lane_2() {
     let b = worst_case();
@@ -100,15 +101,15 @@ fn a_ramp_cav_does_not_change_into_lane_1_beside_a_truck_in_lane_2() {
         other.length = length;
         Scene::on_paper_road(0.0, vec![ramp_cav, other])
     };
-    for s in [192.0, 198.0, 204.0, 210.0] {
+    for s in [198.0, 204.0, 210.0] {
         assert!(!is_safe(&scene(16.5, s, 20.0), 0, &left, &b, &[]), "{s}");
         assert!(is_safe(&scene(16.5, s, 20.0), 0, &go(20.0, None), &b, &[]));
     }
     assert!(!is_safe(&scene(5.0, 201.0, 20.0), 0, &left, &b, &[]));
-    for (s, speed) in [(260.0, 20.0), (140.0, 20.0), (180.0, 20.0)] {
+    for (s, speed) in [(260.0, 20.0), (140.0, 20.0), (180.0, 20.0), (192.0, 20.0)] {
         assert!(is_safe(&scene(16.5, s, speed), 0, &left, &b, &[]), "{s}");
     }
-    assert!(!is_safe(&scene(16.5, 180.0, 28.0), 0, &left, &b, &[]));
+    assert!(is_safe(&scene(16.5, 180.0, 28.0), 0, &left, &b, &[]));
     let me = VehicleState::on_lane("cav", Kind::Cav, Origin::Ramp, 200.0, 0, 20.0);
     let truck = |s: f64| {
         let mut t = hdv("truck", s, 2, 20.0);
@@ -117,6 +118,8 @@ fn a_ramp_cav_does_not_change_into_lane_1_beside_a_truck_in_lane_2() {
     };
     assert!(b.far_side.comes_level((&me, 20.0), &truck(198.0)));
     assert!(!b.far_side.comes_level((&me, 20.0), &truck(180.0)));
+    assert!(b.far_side.goes_first((&me, 20.0), &truck(198.0)));
+    assert!(!b.far_side.goes_first((&me, 20.0), &truck(192.0)));
 }
 
 #[test]
