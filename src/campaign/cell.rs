@@ -3,6 +3,7 @@
 //! together).
 
 use std::fmt;
+use std::ops::RangeInclusive;
 use std::path::{Path, PathBuf};
 
 use super::comparison::{first_difference, results_settings};
@@ -101,6 +102,25 @@ pub fn rows_counted(
     let expected = expected.to_string();
     if rows.len().to_string() != expected {
         return Err(format!("{name} has {} rows, not {expected}", rows.len()));
+    }
+    Ok(rows)
+}
+
+/// The rows of the cell's file `name` in `dir`, read with `header`, if their number is within
+/// `counts`; otherwise what is wrong.
+pub fn rows_within(
+    dir: &Path,
+    name: &str,
+    header: &[String],
+    counts: RangeInclusive<usize>,
+) -> Result<Vec<csv::StringRecord>, String> {
+    let rows = read_records(&dir.join(name), header).map_err(|e| e.to_string())?;
+    if !counts.contains(&rows.len()) {
+        let (least, most) = (counts.start(), counts.end());
+        return Err(format!(
+            "{name} has {} rows, not {least} to {most}",
+            rows.len()
+        ));
     }
     Ok(rows)
 }

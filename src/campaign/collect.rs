@@ -13,12 +13,13 @@
 //! again, and a damaged, foreign or edited cell is run again, with the reason printed (a cell
 //! of an earlier bkpbs, without a file or with fewer columns, among them).
 
+use std::ops::RangeInclusive;
 use std::path::Path;
 
 pub use super::cell::{cell_dir, EPISODES_DIR};
 use super::cell::{
     check_run, check_settings_record, column_value, episode_row, failure_of, rows_counted,
-    CellState,
+    rows_within, CellState,
 };
 use super::grid::{Cell, Grid};
 use super::provenance::check_provenance;
@@ -70,13 +71,14 @@ fn vehicle_rows(axes: Axes, column: impl Fn(&str) -> String) -> String {
     }
 }
 
-/// How many `regions.csv` and `entries.csv` rows the `episode.csv` row's `regions` announces:
-/// per region one, and one entry for its main carriageway and one per on-ramp, which its name
-/// lists by the edge each joins.
-fn region_rows(regions: &str) -> (usize, usize) {
+/// How many `regions.csv` rows the `episode.csv` row's `regions` announces, one per region, and
+/// how many `entries.csv` rows it allows: per region one for its main carriageway and at most
+/// one per name its name lists (the edges its on-ramps join, one entry each, and those its lanes
+/// drop on, none: a region of lane drops alone has its main entry only).
+fn region_rows(regions: &str) -> (usize, RangeInclusive<usize>) {
     let names = || regions.split("; ").filter(|r| !r.is_empty());
-    let entries = names().map(|r| 1 + r.split(' ').count()).sum();
-    (names().count(), entries)
+    let most = names().map(|r| 1 + r.split(' ').count()).sum();
+    (names().count(), names().count()..=most)
 }
 
 /// The files of `cell` in `dir` if they are whole and this campaign's; otherwise what is
@@ -108,11 +110,11 @@ fn finished(dir: &Path, settings: &Settings, cell: &Cell) -> Result<Finished, St
     let timing = rows_counted(dir, "timing.csv", &own(results::timings_header(axes)), 1)?;
     let (mut regions, mut entries) = (Vec::new(), Vec::new());
     if axes.scenario {
-        let (region_count, entry_count) = region_rows(&column("regions"));
+        let (region_count, entry_counts) = region_rows(&column("regions"));
         let (region_columns, entry_columns) =
             (results::regions_header(axes), results::entries_header(axes));
         regions = rows_counted(dir, "regions.csv", &region_columns, region_count)?;
-        entries = rows_counted(dir, "entries.csv", &entry_columns, entry_count)?;
+        entries = rows_within(dir, "entries.csv", &entry_columns, entry_counts)?;
     }
     check_settings_record(dir, &config)?;
     check_provenance(dir, &config)?;
@@ -222,12 +224,12 @@ fn gather(res: &mut Results, cell: &Cell, done: &Finished) {
 mod tests {
     use super::*;
 
-    /// A region's name lists the edges its on-ramps join: one entry row for its main
-    /// carriageway and one per ramp.
+    /// A region's name lists the edges its on-ramps join and its lanes drop on: one entry row
+    /// for its main carriageway and one per ramp, so at most one per name.
     #[test]
     fn the_regions_announce_their_entry_rows() {
-        assert_eq!(region_rows(""), (0, 0));
-        assert_eq!(region_rows("gneE7"), (1, 2));
-        assert_eq!(region_rows("264308374; 4054057 4054058"), (2, 2 + 3));
+        assert_eq!(region_rows(""), (0, 0..=0));
+        assert_eq!(region_rows("gneE7"), (1, 1..=2));
+        assert_eq!(region_rows("264308374; 4054057 4054058"), (2, 2..=2 + 3));
     }
 }

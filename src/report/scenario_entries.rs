@@ -9,7 +9,7 @@
 //! each planner's vehicles that came in by the entry and arrived, per episode (the mean over the
 //! paired seeds). Its Markdown table closes `tables.md`.
 
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, BTreeSet};
 
 use super::scenario_common::{column, fmt_opt, paired_t, PairedT};
 
@@ -27,6 +27,16 @@ type EntryKey = (String, String, String, String);
 
 /// Entry → planner → seed → sample.
 type ByEntry = BTreeMap<EntryKey, BTreeMap<String, BTreeMap<u64, EntrySample>>>;
+
+/// The (scenario, region) pairs of `entries.csv`'s `rows` that have an on-ramp entry: a region
+/// of lane drops alone has its main carriageway's only.
+pub fn regions_with_ramps(rows: &[csv::StringRecord], h: &[String]) -> BTreeSet<(String, String)> {
+    let get = |r: &csv::StringRecord, name: &str| r.get(column(h, name)).unwrap_or("").to_string();
+    rows.iter()
+        .filter(|r| get(r, "origin") == "ramp")
+        .map(|r| (get(r, "scenario"), get(r, "region")))
+        .collect()
+}
 
 fn by_entry(rows: &[csv::StringRecord], h: &[String]) -> ByEntry {
     let get = |r: &csv::StringRecord, name: &str| r.get(column(h, name)).unwrap_or("").to_string();

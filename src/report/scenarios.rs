@@ -24,11 +24,11 @@
 //! Wilcoxon a smallest p of 0.25), and the per-seed differences of a mean over hundreds of
 //! vehicles are close to normal.
 
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
 
 use super::scenario_common::{column, fmt_opt, paired_t, records};
-use super::scenario_entries::paired_entries;
+use super::scenario_entries::{paired_entries, regions_with_ramps};
 use super::scenario_inserted::inserted_tables;
 use super::signif::fisher_exact;
 use super::stats::Estimate;
@@ -121,9 +121,10 @@ pub fn report(res: &Results, out: &Path, versus: &[String]) -> Result<Report, Re
     let regions = by_region(&regions, &res.regions.header);
     let (paired, paired_md) = paired_csv(&regions, &versus);
     let (inserted, inserted_md) = inserted_tables(&episodes, &planners);
-    let (by_entry, by_entry_md) =
-        paired_entries(&records(&res.entries), &res.entries.header, &versus);
-    let markdown = inserted_md + &unused_merges_md(&regions) + &paired_md + &by_entry_md;
+    let entries = records(&res.entries);
+    let (by_entry, by_entry_md) = paired_entries(&entries, &res.entries.header, &versus);
+    let ramps = regions_with_ramps(&entries, &res.entries.header);
+    let markdown = inserted_md + &unused_merges_md(&regions, &ramps) + &paired_md + &by_entry_md;
     let files = [
         ("regions.csv", summary_csv(&regions)),
         ("paired_regions.csv", paired),
@@ -150,10 +151,14 @@ pub fn report(res: &Results, out: &Path, versus: &[String]) -> Result<Report, Re
 
 /// The regions whose merge no ramp vehicle entered in some episode, as a Markdown section: the
 /// A10KW game's two merges once got 2 and 0 ramp vehicles in 30 minutes, and their delays were
-/// read as merge results.
-fn unused_merges_md(regions: &ByRegion) -> String {
+/// read as merge results. Only regions with an on-ramp (`ramps`, by scenario and region) can be
+/// so: a region of lane drops alone has none to leave unused.
+fn unused_merges_md(regions: &ByRegion, ramps: &BTreeSet<(String, String)>) -> String {
     let mut rows = String::new();
     for ((scenario, region, alpha), planners) in regions {
+        if !ramps.contains(&(scenario.clone(), region.clone())) {
+            continue;
+        }
         for (planner, samples) in planners {
             let none = samples.iter().filter(|x| x.from_ramp == 0.0).count();
             if none > 0 {
@@ -166,7 +171,9 @@ fn unused_merges_md(regions: &ByRegion) -> String {
     }
     let head = "### Merges without ramp traffic\n\n";
     if rows.is_empty() {
-        return format!("{head}Every region received ramp vehicles in every episode.\n\n");
+        return format!(
+            "{head}Every region with an on-ramp received ramp vehicles in every episode.\n\n"
+        );
     }
     format!(
         "{head}In these episodes no vehicle entered the region from an on-ramp: its delays there \
@@ -318,7 +325,8 @@ mod tests {
             vec![sample(1, 0.0), sample(2, 0.0), sample(3, 2.0)],
         );
         planners.insert("bk-pbs".into(), vec![sample(1, 5.0)]);
-        let md = unused_merges_md(&regions);
+        let ramps = BTreeSet::from([("A10KW.sumocfg".to_string(), "4054057".to_string())]);
+        let md = unused_merges_md(&regions, &ramps);
         assert!(
             md.contains("| A10KW.sumocfg | 4054057 | 0.3 | sumo | 2 of 3 |"),
             "{md}"
@@ -329,10 +337,20 @@ mod tests {
             csv.contains(",sumo,3,1.0000,0.0000,2.0000,0.00,0,0.67,2\n"),
             "{csv}"
         );
+        // A region of lane drops alone has no ramp to leave unused.
+        let no_ramp = unused_merges_md(&regions, &BTreeSet::new());
+        assert!(
+            no_ramp.contains("Every region with an on-ramp received ramp vehicles"),
+            "{no_ramp}"
+        );
         regions
             .values_mut()
             .for_each(|p| p.remove("sumo").map(drop).unwrap_or(()));
-        assert!(unused_merges_md(&regions).contains("Every region received ramp vehicles"));
+        let md = unused_merges_md(&regions, &ramps);
+        assert!(
+            md.contains("Every region with an on-ramp received ramp vehicles"),
+            "{md}"
+        );
     }
 
     #[test]
