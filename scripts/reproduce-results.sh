@@ -195,6 +195,14 @@ if wanted scenarios-plots; then
     fi
 fi
 
+# The merge-layout study (results/layouts, ~30 min on 2 cores): every layout of
+# sumo_net/layouts, each planner against SUMO alone on the same seeds, paired per region and
+# entry.
+layouts="two-lane-ramp two-lane-gain lane-drop left-lane-drop nose-merge left-side-ramp two-ramps-alongside cloverleaf trucks-beside-merge"
+layout_cfgs=$(for l in $layouts; do printf 'sumo_net/layouts/%s/%s.sumocfg,' "$l" "$l"; done)
+result_versus layouts results/layouts sumo "$BIN" campaign --sumocfg "${layout_cfgs%,}" \
+    --planners bk-pbs,bk-mastar,idm-mobil,sumo --alphas 0.3,0.6 --seeds 10 --seed-base 1000
+
 # The paper grid's traced episode and its figures.
 if wanted paper-grid-plots; then
     start=$SECONDS
