@@ -98,12 +98,13 @@ pub fn rows_counted(
     header: &[String],
     expected: impl fmt::Display,
 ) -> Result<Vec<csv::StringRecord>, String> {
-    let rows = read_records(&dir.join(name), header).map_err(|e| e.to_string())?;
     let expected = expected.to_string();
-    if rows.len().to_string() != expected {
-        return Err(format!("{name} has {} rows, not {expected}", rows.len()));
-    }
-    Ok(rows)
+    rows_where(
+        dir,
+        (name, header),
+        |n| n.to_string() == expected,
+        &expected,
+    )
 }
 
 /// The rows of the cell's file `name` in `dir`, read with `header`, if their number is within
@@ -114,13 +115,21 @@ pub fn rows_within(
     header: &[String],
     counts: RangeInclusive<usize>,
 ) -> Result<Vec<csv::StringRecord>, String> {
+    let wanted = format!("{} to {}", counts.start(), counts.end());
+    rows_where(dir, (name, header), |n| counts.contains(&n), &wanted)
+}
+
+/// The rows of file `name` (read with `header`) in `dir` if their number passes `fits`;
+/// otherwise what is wrong, saying the `wanted` number.
+fn rows_where(
+    dir: &Path,
+    (name, header): (&str, &[String]),
+    fits: impl Fn(usize) -> bool,
+    wanted: &str,
+) -> Result<Vec<csv::StringRecord>, String> {
     let rows = read_records(&dir.join(name), header).map_err(|e| e.to_string())?;
-    if !counts.contains(&rows.len()) {
-        let (least, most) = (counts.start(), counts.end());
-        return Err(format!(
-            "{name} has {} rows, not {least} to {most}",
-            rows.len()
-        ));
+    if !fits(rows.len()) {
+        return Err(format!("{name} has {} rows, not {wanted}", rows.len()));
     }
     Ok(rows)
 }
