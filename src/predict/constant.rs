@@ -1,8 +1,10 @@
 //! The constant-speed predictor: every vehicle keeps its speed and its lane, except that a ramp
 //! HDV on the acceleration lane merges when the scenario's stochastic rule makes it more likely
 //! than not to have decided, executing the lane change as SUMO does (constant lateral speed over
-//! the lane-change duration).
+//! the lane-change duration); a standing one only once the lane beside it is free
+//! ([`super::blocked`]).
 
+use super::blocked::Blocking;
 use super::longitudinal::Longitudinal;
 use super::Predictor;
 use crate::config::Config;
@@ -19,6 +21,8 @@ pub struct ConstantSpeed {
     hdv_brake: f64,
     /// How predicted HDVs move along their lane (the name's constant speed by default).
     longitudinal: Longitudinal,
+    /// When a standing HDV can start its merge.
+    blocking: Blocking,
 }
 
 impl ConstantSpeed {
@@ -32,6 +36,7 @@ impl ConstantSpeed {
             merge_exponent: config.ramp_merge.exponent,
             hdv_brake: config.idm.max_decel,
             longitudinal: Longitudinal::ConstantSpeed,
+            blocking: Blocking::new(config),
         }
     }
 
@@ -86,7 +91,9 @@ impl Predictor for ConstantSpeed {
         let merge_at = (merging && road.is_auxiliary(v.lane))
             .then(|| self.median_merge_step(scene, (v.lane, v.front()), forward, horizon))
             .flatten();
-        let inward = f64::from(road.toward_main(v.lane) - v.lane);
+        let into = road.toward_main(v.lane);
+        let merge_at = self.blocking.first_free(scene, i, into, merge_at, horizon);
+        let inward = f64::from(into - v.lane);
         let lc = self.lane_change_steps as f64;
         let poses = self
             .longitudinal

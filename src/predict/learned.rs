@@ -10,7 +10,8 @@
 //! constant-speed predictor does for ramp merges). The change is then executed as SUMO does it:
 //! one lane at constant lateral speed over the lane-change duration (5 steps of 0.9 m), towards
 //! the only lane the HDV can go to (acceleration lane and right main lane: left; left main lane:
-//! right). At most one lane change is predicted per horizon. A vehicle already changing lanes
+//! right), and by a standing HDV only once the lane beside it is free ([`super::blocked`]). At
+//! most one lane change is predicted per horizon. A vehicle already changing lanes
 //! finishes its manoeuvre in the direction of its heading, and nothing more is predicted.
 //!
 //! With plans of higher-priority CAVs given, the conditioned model is used, otherwise the
@@ -19,6 +20,7 @@
 use std::cell::RefCell;
 use std::sync::Arc;
 
+use super::blocked::Blocking;
 use super::features::{
     cav_node, ego_of, lane_change_direction, neighbours, select_cavs, Agent, Observation, PREVIEW,
     SENSING_RANGE,
@@ -44,6 +46,8 @@ pub struct Learned {
     decision_probability: f64,
     /// How predicted HDVs move along their lane.
     longitudinal: Longitudinal,
+    /// When a standing HDV can start its change.
+    blocking: Blocking,
 }
 
 /// Per-thread buffers, so predicting allocates nothing but the trajectory it returns.
@@ -92,6 +96,7 @@ impl Learned {
             decision_probability: config.predictor.decision_probability,
             hdv_brake: config.idm.max_decel,
             longitudinal: Longitudinal::ConstantSpeed,
+            blocking: Blocking::new(config),
         }
     }
 
@@ -378,7 +383,9 @@ impl Predictor for Learned {
                 false,
             )
         });
-        self.executing_decision(scene, i, y0, &r, horizon)
+        let target = v.lane + r.direction;
+        let start = self.blocking.first_free(scene, i, target, r.start, horizon);
+        self.executing_decision(scene, i, y0, &Rollout { start, ..r }, horizon)
     }
 }
 

@@ -11,6 +11,7 @@
 mod constant;
 
 // The learned lane-change model b_θ: features, network shape, inference, model file, predictor.
+pub mod blocked;
 pub mod calibration;
 pub mod features;
 pub mod gcn;
