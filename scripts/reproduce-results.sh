@@ -172,7 +172,7 @@ result_versus long-run-fresh results/long-run/fresh idm-mobil,bk-mastar "$BIN" c
 result_versus long-run-unseen results/long-run/unseen idm-mobil,bk-mastar "$BIN" campaign --config results/long-run/long-run.toml \
     --planners idm-mobil,bk-mastar,bk-pbs $long --lambdas 3000 --seeds 30 --seed-base 50000
 
-# The study on SUMO's own game scenarios (results/scenarios, ~30 min on 2 cores: its episodes' wall times sum to an hour): copies of the
+# The study on SUMO's own game scenarios (results/scenarios, ~20 min on 2 cores: its episodes' wall times sum to 39 minutes): copies of the
 # games as a user brings them, then the campaign over A10KW and ramp, then one merge's figures.
 if wanted scenarios || wanted scenarios-plots; then
     scripts/scenario-games.sh target/scenario-games
@@ -195,7 +195,7 @@ if wanted scenarios-plots; then
     fi
 fi
 
-# The merge-layout study (results/layouts, ~30 min on 2 cores): every layout of
+# The merge-layout study (results/layouts, ~11 min on 2 cores): every layout of
 # sumo_net/layouts, each planner against SUMO alone on the same seeds, paired per region and
 # entry.
 layouts="two-lane-ramp two-lane-gain lane-drop left-lane-drop nose-merge left-side-ramp two-ramps-alongside cloverleaf trucks-beside-merge"
