@@ -8,7 +8,7 @@
 //! so a CAV standing beside it finds no plan, brakes, and both stand for good. Seen on the
 //! left-lane drop layout under bk-mastar (α 0.6, seeds 16 and 21 of 11–40): a CAV came to a
 //! stand in the middle lane overlapping an HDV that waited at the left lane's end, and the 21
-//! and 29 vehicles behind them never arrived. Predicted to wait while the lane beside it is
+//! and 28 vehicles behind them never arrived. Predicted to wait while the lane beside it is
 //! blocked, the HDV no longer holds the CAV, which drives on; the HDV changes in behind it.
 //!
 //! Only a standing HDV is so predicted: one that moves may drop back or pull ahead into a gap
