@@ -33,7 +33,7 @@ pub use drivers::{Idm, Mobil, RampMerge};
 pub use hdv::{HdvProfile, HdvSettings};
 pub use planning::{
     Grouping, LowSpeedLaneChanges, PbsSettings, PlannerSettings, PredictorKind, PredictorSettings,
-    RlSettings, SafetySettings, AUTO_GROUPING_ABOVE,
+    RlSettings, SafetySettings, AUTO_GROUPING_ABOVE, PAPER_ACCEL,
 };
 pub use rules::MAX_RATE;
 use rules::{

@@ -34,8 +34,10 @@ pub struct PlannerSettings {
     /// beside a gap it kept planning to take (docs/src/planners.md tells the deadlock and its
     /// rules).
     pub lane_change_deferral_penalty: f64,
-    /// Acceleration of the `accelerate` primitive (m/s²).
-    pub accel: f64,
+    /// Acceleration of the `accelerate` primitive (m/s²), at most the vehicle's own. Unset
+    /// (the default): each CAV's own type's `accel` where the scenario gives it one (a user's
+    /// SUMO scenario), else [`PAPER_ACCEL`] (the paper's demand, whose types can do more).
+    pub accel: Option<f64>,
     /// Deceleration of the `decelerate` primitive (m/s², positive).
     pub decel: f64,
     /// Deceleration of the `emergency-brake` primitive (m/s², positive).
@@ -63,6 +65,17 @@ pub struct PlannerSettings {
     pub v_bin: f64,
 }
 
+/// The `accelerate` primitive's acceleration where neither the configuration nor the vehicle
+/// sets one (m/s²): the paper's.
+pub const PAPER_ACCEL: f64 = 2.0;
+
+impl PlannerSettings {
+    /// The `accelerate` primitive's acceleration for a vehicle with no limit of its own.
+    pub fn accel_or_paper(&self) -> f64 {
+        self.accel.unwrap_or(PAPER_ACCEL)
+    }
+}
+
 impl Default for PlannerSettings {
     fn default() -> Self {
         PlannerSettings {
@@ -74,7 +87,7 @@ impl Default for PlannerSettings {
             phase1_lane_change_penalty: 0.1,
             phase2_lane_change_penalty: 2.0,
             lane_change_deferral_penalty: 0.1,
-            accel: 2.0,
+            accel: None,
             decel: 2.0,
             emergency_decel: 6.0,
             min_lane_change_speed: 10.0,

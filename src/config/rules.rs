@@ -264,7 +264,16 @@ pub(super) fn check_planner(p: &PlannerSettings) -> Result<(), ConfigError> {
         phase2_budget => Between(1.0, 1e6, SEARCH_BUDGET_RANGE),
         goal_distance => Positive,
         fallback_goal_distance => Positive,
-        accel => Positive,
+    ))?;
+    if let Some(accel) = p.accel {
+        check(
+            "planner.accel",
+            accel,
+            Positive.holds(accel),
+            Positive.reason(),
+        )?;
+    }
+    check_rows(&rows!(planner: p;
         decel => Positive,
         emergency_decel => Positive,
         s_bin => Positive,

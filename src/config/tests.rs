@@ -34,6 +34,19 @@ fn partial_file_keeps_defaults() {
     assert_eq!(c.scenario.lambda, 3000.0);
 }
 
+/// `[planner] accel` unset means each CAV's own acceleration (the paper's 2 m/s² where it has
+/// none of its own); written, it is kept and round-trips.
+#[test]
+fn planner_accel_is_unset_unless_written() {
+    assert_eq!(Config::default().planner.accel, None);
+    assert_eq!(Config::default().planner.accel_or_paper(), PAPER_ACCEL);
+    let c: Config = toml::from_str("[planner]\naccel = 2.6\n").unwrap();
+    assert_eq!(c.planner.accel, Some(2.6));
+    assert_eq!(c.planner.accel_or_paper(), 2.6);
+    let back: Config = toml::from_str(&c.to_toml()).unwrap();
+    assert_eq!(back, c);
+}
+
 #[test]
 fn the_shield_is_on_by_default_and_can_be_switched_off() {
     assert!(Config::default().safety.shield);
@@ -188,7 +201,9 @@ const CASES: [Case; 47] = [
     ("planner.fallback_goal_distance", "0", POSITIVE, |c| {
         c.planner.fallback_goal_distance = 0.0
     }),
-    ("planner.accel", "0", POSITIVE, |c| c.planner.accel = 0.0),
+    ("planner.accel", "0", POSITIVE, |c| {
+        c.planner.accel = Some(0.0)
+    }),
     ("planner.decel", "0", POSITIVE, |c| c.planner.decel = 0.0),
     ("planner.emergency_decel", "0", POSITIVE, |c| {
         c.planner.emergency_decel = 0.0

@@ -96,6 +96,9 @@ pub struct Library {
     pub dt: f64,
     /// Acceleration of `Accelerate` (m/s²).
     pub accel: f64,
+    /// Whether a vehicle with an acceleration limit of its own accelerates at it rather than at
+    /// `accel` ([`Library::limited`]; `[planner] accel` unset).
+    pub accel_own: bool,
     /// Deceleration of `Decelerate` (m/s², positive).
     pub decel: f64,
     /// Deceleration of `EmergencyBrake` (m/s², positive).
@@ -131,6 +134,7 @@ impl Library {
             },
             dt,
             accel: 2.0,
+            accel_own: false,
             decel: 2.0,
             emergency_decel: 6.0,
             lane_change_steps: Scenario::lane_change_steps_of(lane_change_duration, dt),
@@ -145,10 +149,15 @@ impl Library {
     }
 
     /// The library of a vehicle that can do no more than `limits`: its primitives'
-    /// accelerations lowered to the vehicle's where they are lower (`None`: none is; the
+    /// accelerations lowered to the vehicle's where they are lower, and its `Accelerate` the
+    /// vehicle's own where `accel_own` says so and it has one (`None`: nothing changes; the
     /// lane-change table, at constant speed, is the same).
     pub fn limited(&self, limits: &Limits) -> Option<Library> {
-        let accel = self.accel.min(limits.accel);
+        let accel = if self.accel_own && limits.accel.is_finite() {
+            limits.accel
+        } else {
+            self.accel.min(limits.accel)
+        };
         let decel = self.decel.min(limits.decel);
         let emergency_decel = self.emergency_decel.min(limits.emergency_decel);
         let same =

@@ -40,7 +40,7 @@ impl Rules {
         Rules {
             dt: config.scenario.dt,
             v_max: config.scenario.v_max,
-            accel: p.accel,
+            accel: p.accel_or_paper(),
             decel: p.decel,
             emergency_decel: p.emergency_decel,
             min_lane_change_speed: p.min_lane_change_speed,

@@ -175,7 +175,8 @@ impl Mastar {
         v_max: f64,
     ) -> Self {
         let mut library = Library::new(dt, road.lane_width, lane_change_duration, v_max);
-        library.accel = settings.accel;
+        library.accel = settings.accel_or_paper();
+        library.accel_own = settings.accel.is_none();
         library.decel = settings.decel;
         library.emergency_decel = settings.emergency_decel;
         library.min_lane_change_speed = settings.min_lane_change_speed;
