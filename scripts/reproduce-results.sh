@@ -37,9 +37,10 @@ agreed() {
     if [ $update = 1 ]; then echo updated; else echo identical; fi
 }
 
-# wanted NAME: whether this run re-runs result NAME (every result without --only).
+# wanted NAME: whether this run re-runs result NAME (every result without --only); a NAME
+# GROUP/PART is also wanted with GROUP.
 wanted() {
-    [ -z "$only" ] || [[ "$only" == *",$1,"* ]]
+    [ -z "$only" ] || [[ "$only" == *",$1,"* ]] || [[ "$only" == *",${1%%/*},"* ]]
 }
 
 # compare DIR_COMMITTED DIR_NEW: every committed file but timings.csv and README.md must match.
@@ -202,6 +203,46 @@ layouts="two-lane-ramp two-lane-gain lane-drop left-lane-drop nose-merge left-si
 layout_cfgs=$(for l in $layouts; do printf 'sumo_net/layouts/%s/%s.sumocfg,' "$l" "$l"; done)
 result_versus layouts results/layouts sumo "$BIN" campaign --sumocfg "${layout_cfgs%,}" \
     --planners bk-pbs,bk-mastar,idm-mobil,sumo --alphas 0.3,0.6 --seeds 10 --seed-base 1000
+
+# The learned parts trained on SUMO's ramp game against the paper-trained ones
+# (results/learned-per-scenario, ~15 min on 2 cores): b_θ and the RL policy of
+# models/scenarios/ramp, seeds 500-519 at α 0.6, then the paired tables.
+ramp_game=target/scenario-games/ramp.sumocfg
+lps=results/learned-per-scenario
+lps_grid="--sumocfg $ramp_game --alphas 0.6 --seeds 20 --seed-base 500"
+if wanted learned-per-scenario && [ ! -f "$ramp_game" ]; then
+    scripts/scenario-games.sh target/scenario-games
+fi
+# shellcheck disable=SC2086
+result learned-per-scenario/paper-trained $lps/paper-trained "$BIN" campaign $lps_grid --planners bk-pbs \
+    --predictors learned,constant
+# shellcheck disable=SC2086
+result learned-per-scenario/ramp-trained $lps/ramp-trained "$BIN" campaign $lps_grid --planners bk-pbs,rl-ppo \
+    --config $lps/ramp-trained.toml
+# shellcheck disable=SC2086
+result learned-per-scenario/baselines $lps/baselines "$BIN" campaign $lps_grid --planners sumo,rl-ppo
+# shellcheck disable=SC2086
+result learned-per-scenario/rl-shield-on/paper $lps/rl-shield-on/paper "$BIN" campaign $lps_grid --planners rl-ppo \
+    --config results/rl-ppo/shield-on.toml
+# shellcheck disable=SC2086
+result learned-per-scenario/rl-shield-on/ramp-trained $lps/rl-shield-on/ramp-trained "$BIN" campaign $lps_grid --planners rl-ppo \
+    --config $lps/ramp-trained-shield-on.toml
+if wanted learned-per-scenario; then
+    start=$SECONDS
+    python3 $lps/pairs.py "$scratch/learned-per-scenario" > "$scratch/learned-per-scenario/pairs.md"
+    same_files learned-per-scenario-pairs $lps "$scratch/learned-per-scenario" pairs.md
+    # b_θ's accuracy on fresh episodes of the game (seeds 90000-90003), paper- and ramp-trained.
+    start=$SECONDS
+    eval_dir="$scratch/learned-per-scenario/predictor"
+    mkdir -p "$eval_dir"
+    "$BIN" collect --sumocfg $ramp_game --episodes 4 --steps 2000 --seed-base 90000 \
+        --out "$eval_dir/eval.bin" >/dev/null 2>&1
+    "$BIN" eval-predictor --data "$eval_dir/eval.bin" >"$eval_dir/paper-trained.txt" 2>/dev/null
+    "$BIN" eval-predictor --data "$eval_dir/eval.bin" --model models/scenarios/ramp/gcn-conditioned.json \
+        >"$eval_dir/ramp-trained.txt" 2>/dev/null
+    rm "$eval_dir/eval.bin"
+    same_files learned-per-scenario-predictor $lps/predictor "$eval_dir" paper-trained.txt ramp-trained.txt
+fi
 
 # The paper grid's traced episode and its figures.
 if wanted paper-grid-plots; then
