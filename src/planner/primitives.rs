@@ -15,7 +15,7 @@
 //! the acceleration lane may slide (`planner.low_speed_lane_changes`): the guide's planners
 //! chapter (docs/src/planners.md) tells the deadlock this prevents.
 
-use crate::config::Scenario;
+use crate::config::{Scenario, PAPER_ACCEL};
 use crate::model::kinematics::{Bicycle, BicycleState, Input};
 use crate::model::math::{wrap_angle, Point};
 use crate::model::scene::Limits;
@@ -133,7 +133,7 @@ impl Library {
                 ..Bicycle::default()
             },
             dt,
-            accel: 2.0,
+            accel: PAPER_ACCEL,
             accel_own: false,
             decel: 2.0,
             emergency_decel: 6.0,
