@@ -179,15 +179,24 @@ fn a_cloverleaf_is_planned_and_never_closed() {
             "planned in region 1",
         ],
     );
-    // bk-mastar's delays are not held: in this run a ramp CAV and an HDV bound for the loop
-    // off-ramp stand side by side at the weaving lane's end, each needing the other's lane,
-    // until SUMO teleports the HDV (a weaving standoff bk-mastar does not foresee).
     let held = [
         ("bk-pbs", Held::CountsAndDelay),
-        ("bk-mastar", Held::Counts),
+        ("bk-mastar", Held::CountsAndDelay),
         ("idm-mobil", Held::Counts),
     ];
     flows_as_under_sumo_alone(&cfg, "5", &held);
+}
+
+/// A ramp CAV on the cloverleaf's weaving lane plans to be able to stop 20 m before its end
+/// (`WEAVING_ROOM`), so a CAV bound for the loop off-ramp, left to SUMO, can move in front of
+/// it. Planned to stop at the very end, on this seed the two stood side by side there, each
+/// needing the other's lane, until SUMO teleported one: under bk-pbs the loop off-ramp's flow
+/// delivered 16 of its 17 vehicles with a mean delay of 190.9 s.
+#[test]
+fn a_ramp_cav_on_a_weaving_lane_leaves_room_for_an_exiting_vehicle() {
+    let (_dir, cfg, _) = layout_and_network("cloverleaf");
+    let held = [("bk-pbs", Held::CountsAndDelay)];
+    flows_as_under_sumo_alone(&cfg, "1009", &held);
 }
 
 #[test]

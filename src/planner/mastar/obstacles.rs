@@ -7,6 +7,7 @@
 //! the search that calls them and the obstacles' bodies are worked out once per call.
 
 use crate::model::kinematics::BicycleState;
+use crate::model::road::MergeZone;
 use crate::model::trajectory::Trajectory;
 use crate::planner::mastar::{pose, Mastar, Request};
 use crate::planner::safety::Body;
@@ -57,6 +58,14 @@ impl Obstacles {
 /// 120 m, beyond which it never counts. A practical range, not a proven bound: changing it can
 /// change plans.
 const OBSTACLE_RANGE: f64 = 200.0;
+
+/// How far before a weaving section's end a ramp CAV on its lane plans to be able to stop (m),
+/// while it still can: the room a vehicle bound for the off-ramp needs to move into the lane in
+/// front of it. Planned to stop right at the end, a ramp CAV once stood there side by side
+/// with a CAV bound for the exit (left to SUMO), each needing the other's lane, until SUMO
+/// teleported one (the cloverleaf, seed 1009, `tests/lane_roles.rs`). A car's length and a
+/// half and the gap SUMO's drivers accept in front; a practical value, not a proven bound.
+pub(super) const WEAVING_ROOM: f64 = 20.0;
 
 /// The road and the other vehicles, as a search checks them.
 impl Mastar {
@@ -114,7 +123,24 @@ impl Mastar {
         }
         // Fully in the lane, the CAV must still be able to stop before its end, or the plan
         // could leave it in a state from which the crash is certain.
-        crossing || stop <= zone.end - s_hi + 1e-9
+        crossing || stop <= zone.end - self.weaving_room(zone, req) - s_hi + 1e-9
+    }
+
+    /// The room a ramp CAV leaves before the end of `zone`'s lane when it plans to stop:
+    /// [`WEAVING_ROOM`] on a weaving section's lane if it can still stop that far before the
+    /// end from where it starts, none otherwise (then it may stop at the end, as on any lane).
+    fn weaving_room(&self, zone: &MergeZone, req: &Request) -> f64 {
+        if !zone.weaving {
+            return 0.0;
+        }
+        let start = &req.start;
+        let front = start.pos.x + 0.5 * req.length;
+        let stop = start.speed * start.speed / (2.0 * self.library.emergency_decel);
+        if front + stop + WEAVING_ROOM <= zone.end {
+            WEAVING_ROOM
+        } else {
+            0.0
+        }
     }
 
     /// Whether the CAV at `st` at `step` is clear of every obstacle (see [`SafetyRule`](crate::planner::safety::SafetyRule)).
