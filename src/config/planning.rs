@@ -63,6 +63,17 @@ pub struct PlannerSettings {
     pub s_bin: f64,
     /// Closed-set bin of M-A* in speed (m/s).
     pub v_bin: f64,
+    /// Whether a ramp CAV on its acceleration lane keeps behind the nearest vehicle ahead of it
+    /// in the lane it merges into, as if in its own lane (`planner::mastar::gap_seeking`): off
+    /// by default, the paper's search. Written into a campaign's settings only when on, so
+    /// campaigns of earlier versions still match.
+    #[serde(skip_serializing_if = "is_off")]
+    pub gap_seeking: bool,
+}
+
+/// Whether a switch is off (serde's `skip_serializing_if` for options echoed only when on).
+fn is_off(on: &bool) -> bool {
+    !on
 }
 
 /// The `accelerate` primitive's acceleration where neither the configuration nor the vehicle
@@ -98,6 +109,7 @@ impl Default for PlannerSettings {
             reaction_time: 0.2,
             s_bin: 1.0,
             v_bin: 0.5,
+            gap_seeking: false,
         }
     }
 }

@@ -47,6 +47,19 @@ fn planner_accel_is_unset_unless_written() {
     assert_eq!(back, c);
 }
 
+/// `[planner] gap_seeking` is off by default and then not written, so the settings of campaigns
+/// from before it still match; on, it is written and round-trips.
+#[test]
+fn gap_seeking_is_off_unless_written() {
+    assert!(!Config::default().planner.gap_seeking);
+    assert!(!Config::default().to_toml().contains("gap_seeking"));
+    let c: Config = toml::from_str("[planner]\ngap_seeking = true\n").unwrap();
+    assert!(c.planner.gap_seeking);
+    assert!(c.to_toml().contains("gap_seeking = true"));
+    let back: Config = toml::from_str(&c.to_toml()).unwrap();
+    assert_eq!(back, c);
+}
+
 #[test]
 fn the_shield_is_on_by_default_and_can_be_switched_off() {
     assert!(Config::default().safety.shield);

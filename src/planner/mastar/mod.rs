@@ -18,7 +18,8 @@
 //! The rooms: this file is the public face (the planner, a request, a plan, and why there is
 //! none) and runs the phases; `phase` is one phase's A* problem (its nodes, successors,
 //! heuristic and goal) and the plan along the path found; `obstacles` holds what a search keeps
-//! clear of (other vehicles' bodies per step, the road's edges); `first_moves` keeps a CAV's
+//! clear of (other vehicles' bodies per step, the road's edges); `gap_seeking` the vehicle a
+//! ramp CAV on its acceleration lane keeps behind (`[planner] gap_seeking`); `first_moves` keeps a CAV's
 //! moves from its start between the searches of a round. The check every lane-change start must
 //! pass is a [`StartGuard`](crate::planner::guard::StartGuard), defined in
 //! [`crate::planner::guard`] and implemented by the controllers' safety shield.
@@ -37,6 +38,7 @@ use crate::planner::safety::SafetyRule;
 use crate::planner::search::{astar, Stop};
 
 mod first_moves;
+mod gap_seeking;
 mod obstacles;
 mod phase;
 #[cfg(test)]
@@ -210,8 +212,17 @@ impl Mastar {
 
     /// Phase 1, then phase 2 if needed.
     pub fn plan(&self, req: &Request) -> Result<Plan, NoPlan> {
+        let gap_leader = self.gap_leader(req);
+        let with_leader: Vec<&Trajectory>;
+        let obstacles = match &gap_leader {
+            Some(leader) => {
+                with_leader = req.obstacles.iter().copied().chain([leader]).collect();
+                &with_leader[..]
+            }
+            None => req.obstacles,
+        };
         let near = Obstacles::near(
-            req.obstacles,
+            obstacles,
             req.start.pos.x,
             self.check_horizon(),
             self.library.dt,

@@ -417,3 +417,38 @@ fn an_outer_ramp_lane_cav_moves_inward_when_it_cannot_merge_yet() {
     assert_eq!(m.road.lanes_to_main(0), 1);
     assert_eq!(m.road.lanes_to_main(2), 0);
 }
+
+/// A ramp CAV at 8 m/s on the acceleration lane beside a lane 1 packed at 5 m/s: without gap
+/// seeking its plan runs on past the slow lane (no gap to merge into at its speed); with it the
+/// plan keeps behind the nearest lane-1 vehicle ahead of it, as if that one drove in its lane.
+#[test]
+fn gap_seeking_keeps_a_ramp_cav_behind_the_target_lane_vehicle_ahead() {
+    let zone = Road::paper_default().zones[0];
+    let s = zone.start + 20.0;
+    // Lane 1: a car every 11 m (6 m gaps) from 30 m behind the CAV to the lane's end.
+    let lane_1: Vec<Trajectory> = (0..)
+        .map(|k| s - 30.0 + 11.0 * f64::from(k))
+        .take_while(|&x| x < zone.end)
+        .map(|x| other(x, 1, 5.0))
+        .collect();
+    let obs: Vec<&Trajectory> = lane_1.iter().collect();
+    let leader = (lane_1.iter())
+        .find(|t| t.poses[0].s - 2.5 > s + 2.5)
+        .unwrap();
+    let plan_with = |gap_seeking: bool| {
+        let settings = PlannerSettings {
+            gap_seeking,
+            ..PlannerSettings::default()
+        };
+        let m = Mastar::new(&settings, Road::paper_default(), 0.2, 1.0, 35.0);
+        m.plan(&request(&m, s, 0, 8.0, true, &obs)).unwrap()
+    };
+    let behind_leader = |plan: &Plan| {
+        (plan.trajectory.poses.iter().enumerate())
+            .all(|(k, p)| p.s + 2.5 <= leader.poses[k].s - 2.5)
+    };
+    assert!(!behind_leader(&plan_with(false)));
+    let seeking = plan_with(true);
+    assert!(behind_leader(&seeking), "{seeking:?}");
+    assert!(collision_free(&seeking, &obs));
+}

@@ -1,0 +1,44 @@
+//! Gap seeking on the acceleration lane (`[planner] gap_seeking`): a ramp CAV keeps behind the
+//! nearest vehicle ahead of it in the lane it merges into, as if that vehicle drove in its own
+//! lane, so it lines up behind a gap at the target lane's speed instead of racing down an empty
+//! acceleration lane past a slow lane 1 and braking to a stand at its end (IDM+MOBIL's CAVs and
+//! SUMO's drivers adapt their speed so).
+//!
+//! Measured on SUMO's `ramp` game (α 0.6, seeds 400–409, `--trajectories`): without it a ramp
+//! CAV ran the acceleration lane at 22 m/s beside a lane 1 crawling at 4 m/s, braked at 6 m/s²
+//! to 2.6 m/s at the lane's end and merged from there, and after the game's demand steps up
+//! 136 of 177 ramp-CAV merges started below 5 m/s; lane 1 at the merge broke down. The guide's
+//! "Your own scenario" chapter gives the paired comparisons.
+
+use crate::model::trajectory::Trajectory;
+use crate::planner::mastar::{Mastar, Request};
+
+impl Mastar {
+    /// The vehicle a ramp CAV on its auxiliary lane keeps behind: the nearest one in the lane
+    /// it merges into whose rear is ahead of the CAV's front, before the lane's end, carried
+    /// over into the CAV's lane (its trajectory, at the CAV's lane centre). `None` when gap
+    /// seeking is off, for a CAV not yet on the acceleration lane, one already changing lanes,
+    /// and where no such vehicle is among `req.obstacles`.
+    pub(super) fn gap_leader(&self, req: &Request) -> Option<Trajectory> {
+        let seeks = self.settings.gap_seeking && req.must_merge && req.ongoing.is_none();
+        if !seeks || !self.road.is_auxiliary(req.lane) {
+            return None;
+        }
+        let front = req.start.pos.x + 0.5 * req.length;
+        let zone = self.road.zone_on(req.lane, front)?;
+        if front < zone.start {
+            return None;
+        }
+        let target_y = self.lane_y(self.road.toward_main(req.lane));
+        let half_lane = 0.5 * self.road.lane_width;
+        let leader = (req.obstacles.iter())
+            .filter(|t| (t.poses[0].y - target_y).abs() < half_lane)
+            .filter(|t| t.poses[0].s - 0.5 * t.length > front && t.poses[0].s < zone.end)
+            .min_by(|a, b| a.poses[0].s.total_cmp(&b.poses[0].s))?;
+        let own_y = self.lane_y(req.lane);
+        let mut beside = Trajectory::clone(leader);
+        beside.poses.iter_mut().for_each(|p| p.y = own_y);
+        beside.committed = false;
+        Some(beside)
+    }
+}
