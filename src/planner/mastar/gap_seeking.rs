@@ -29,10 +29,9 @@ impl Mastar {
         if front < zone.start {
             return None;
         }
-        let target_y = self.lane_y(self.road.toward_main(req.lane));
-        let half_lane = 0.5 * self.road.lane_width;
+        let target = self.road.toward_main(req.lane);
         let leader = (req.obstacles.iter())
-            .filter(|t| (t.poses[0].y - target_y).abs() < half_lane)
+            .filter(|t| self.road.lane_at(t.poses[0].y) == target)
             .filter(|t| t.poses[0].s - 0.5 * t.length > front && t.poses[0].s < zone.end)
             .min_by(|a, b| a.poses[0].s.total_cmp(&b.poses[0].s))?;
         let own_y = self.lane_y(req.lane);

@@ -84,7 +84,7 @@ impl Mastar {
         if y_lo < edge(bottom, -1.0) - EPS || y_hi > edge(top, 1.0) + EPS {
             return false;
         }
-        let stop = st.speed * st.speed / (2.0 * self.library.emergency_decel);
+        let stop = self.stopping_distance(st.speed);
         let auxiliary = (bottom..=top).filter(|&l| self.road.is_auxiliary(l));
         auxiliary.into_iter().all(|lane| {
             // The lane's line towards the carriageway and its outer one; the body overlaps the
@@ -135,12 +135,17 @@ impl Mastar {
         }
         let start = &req.start;
         let front = start.pos.x + 0.5 * req.length;
-        let stop = start.speed * start.speed / (2.0 * self.library.emergency_decel);
+        let stop = self.stopping_distance(start.speed);
         if front + stop + WEAVING_ROOM <= zone.end {
             WEAVING_ROOM
         } else {
             0.0
         }
+    }
+
+    /// Metres the CAV needs to stop from `speed` at the emergency deceleration.
+    fn stopping_distance(&self, speed: f64) -> f64 {
+        speed * speed / (2.0 * self.library.emergency_decel)
     }
 
     /// Whether the CAV at `st` at `step` is clear of every obstacle (see [`SafetyRule`](crate::planner::safety::SafetyRule)).
