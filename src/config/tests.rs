@@ -47,17 +47,23 @@ fn planner_accel_is_unset_unless_written() {
     assert_eq!(back, c);
 }
 
-/// `[planner] gap_seeking` is off by default and then not written, so the settings of campaigns
-/// from before it still match; on, it is written and round-trips.
+/// `[planner] gap_seeking` is unset by default and then not written, so the settings of
+/// campaigns from before it still match: on a scenario of the user's own ramp CAVs seek gaps,
+/// on the paper's demand they do not. Set either way, it holds everywhere, is written and
+/// round-trips.
 #[test]
-fn gap_seeking_is_off_unless_written() {
-    assert!(!Config::default().planner.gap_seeking);
-    assert!(!Config::default().to_toml().contains("gap_seeking"));
-    let c: Config = toml::from_str("[planner]\ngap_seeking = true\n").unwrap();
-    assert!(c.planner.gap_seeking);
-    assert!(c.to_toml().contains("gap_seeking = true"));
-    let back: Config = toml::from_str(&c.to_toml()).unwrap();
-    assert_eq!(back, c);
+fn gap_seeking_unset_is_on_for_a_scenario_only() {
+    let unset = Config::default();
+    assert!(unset.planner.gap_seeking.is_none());
+    assert!(!unset.to_toml().contains("gap_seeking"));
+    assert!(unset.planner.seeks_gaps(true) && !unset.planner.seeks_gaps(false));
+    for (text, on) in [("true", true), ("false", false)] {
+        let c: Config = toml::from_str(&format!("[planner]\ngap_seeking = {text}\n")).unwrap();
+        assert!(c.planner.seeks_gaps(true) == on && c.planner.seeks_gaps(false) == on);
+        assert!(c.to_toml().contains(&format!("gap_seeking = {text}")));
+        let back: Config = toml::from_str(&c.to_toml()).unwrap();
+        assert_eq!(back, c);
+    }
 }
 
 #[test]

@@ -1,4 +1,5 @@
-//! Gap seeking on the acceleration lane (`[planner] gap_seeking`): a ramp CAV keeps behind the
+//! Gap seeking on the acceleration lane (`[planner] gap_seeking`, on by default on a scenario
+//! of the user's own, off on the paper's demand): a ramp CAV keeps behind the
 //! nearest vehicle ahead of it in the lane it merges into, as if that vehicle drove in its own
 //! lane, so it lines up behind a gap at the target lane's speed instead of racing down an empty
 //! acceleration lane past a slow lane 1 and braking to a stand at its end (IDM+MOBIL's CAVs and
@@ -20,7 +21,7 @@ impl Mastar {
     /// seeking is off, for a CAV not yet on the acceleration lane, one already changing lanes,
     /// and where no such vehicle is among `req.obstacles`.
     pub(super) fn gap_leader(&self, req: &Request) -> Option<Trajectory> {
-        let seeks = self.settings.gap_seeking && req.must_merge && req.ongoing.is_none();
+        let seeks = self.seeks_gaps && req.must_merge && req.ongoing.is_none();
         if !seeks || !self.road.is_auxiliary(req.lane) {
             return None;
         }

@@ -151,6 +151,8 @@ pub struct Mastar {
     pub v_max: f64,
     /// The safety rule a plan keeps to other vehicles' trajectories.
     pub rule: SafetyRule,
+    /// Whether ramp CAVs seek gaps ([`PlannerSettings::seeks_gaps`], `gap_seeking`).
+    pub seeks_gaps: bool,
 }
 
 impl Mastar {
@@ -165,10 +167,12 @@ impl Mastar {
         let s = &config.scenario;
         let mut planner = Mastar::new(&config.planner, road, s.dt, s.lane_change_duration, s.v_max);
         planner.rule.follower_brake = config.idm.decel;
+        planner.seeks_gaps = config.planner.seeks_gaps(s.sumocfg.is_some());
         planner
     }
 
-    /// A planner for steps of `dt` on `road`, lane changes taking `lane_change_duration`.
+    /// A planner for steps of `dt` on `road`, lane changes taking `lane_change_duration`;
+    /// ramp CAVs seek gaps only where `settings` says so.
     pub fn new(
         settings: &PlannerSettings,
         road: Road,
@@ -192,6 +196,7 @@ impl Mastar {
             road,
             v_max,
             rule,
+            seeks_gaps: settings.seeks_gaps(false),
         }
     }
 

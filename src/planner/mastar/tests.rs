@@ -437,7 +437,7 @@ fn gap_seeking_keeps_a_ramp_cav_behind_the_target_lane_vehicle_ahead() {
         .unwrap();
     let plan_with = |gap_seeking: bool| {
         let settings = PlannerSettings {
-            gap_seeking,
+            gap_seeking: Some(gap_seeking),
             ..PlannerSettings::default()
         };
         let m = Mastar::new(&settings, Road::paper_default(), 0.2, 1.0, 35.0);
@@ -451,4 +451,21 @@ fn gap_seeking_keeps_a_ramp_cav_behind_the_target_lane_vehicle_ahead() {
     let seeking = plan_with(true);
     assert!(behind_leader(&seeking), "{seeking:?}");
     assert!(collision_free(&seeking, &obs));
+}
+
+/// Unset, gap seeking is on for a scenario of the user's own (`scenario.sumocfg`) and off on
+/// the paper's demand; set, it holds on both.
+#[test]
+fn gap_seeking_unset_follows_the_scenario() {
+    let seeks = |gap_seeking: Option<bool>, sumocfg: Option<&str>| {
+        let mut config = crate::config::Config::default();
+        config.planner.gap_seeking = gap_seeking;
+        config.scenario.sumocfg = sumocfg.map(Into::into);
+        Mastar::from_config(&config, Road::paper_default()).seeks_gaps
+    };
+    assert!(seeks(None, Some("ramp.sumocfg")));
+    assert!(!seeks(None, None));
+    assert!(!seeks(Some(false), Some("ramp.sumocfg")));
+    assert!(seeks(Some(true), None));
+    assert!(!Mastar::on_paper_road().seeks_gaps);
 }
