@@ -8,7 +8,7 @@ mod common;
 use std::path::{Path, PathBuf};
 
 use common::netconvert::merge;
-use common::{csv_rows, scenario_run, stderr};
+use common::{csv_rows, scenario_run, stderr, write_scenario};
 
 /// A two-lane motorway with a 300 m acceleration lane that ends, fed by a one-lane ramp; main
 /// traffic, and vehicles departing on the acceleration lane itself, for 200 s.
@@ -23,18 +23,7 @@ fn scenario(dir: &Path) -> PathBuf {
     <flow id="s" type="starter" route="onacc" begin="0" end="200" vehsPerHour="300" departLane="0" departPos="20" departSpeed="10"/>
 </routes>
 "#;
-    std::fs::write(dir.join("acc.rou.xml"), routes).unwrap();
-    let cfg = format!(
-        r#"<configuration>
-    <input><net-file value="{}"/><route-files value="acc.rou.xml"/></input>
-    <time><begin value="0"/><end value="200"/><step-length value="0.2"/></time>
-</configuration>
-"#,
-        net.file_name().unwrap().to_str().unwrap()
-    );
-    let path = dir.join("acc.sumocfg");
-    std::fs::write(&path, cfg).unwrap();
-    path
+    write_scenario(dir, "acc", &net, routes, 200)
 }
 
 #[test]

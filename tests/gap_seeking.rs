@@ -8,7 +8,7 @@ mod common;
 use std::path::{Path, PathBuf};
 
 use common::netconvert::merge;
-use common::{csv_rows, scenario_run, stderr};
+use common::{csv_rows, scenario_run, stderr, write_scenario};
 
 /// Lane 1's cars drive at most this fast (m/s).
 const SLOW: f64 = 8.0;
@@ -28,18 +28,7 @@ fn scenario(dir: &Path) -> PathBuf {
 </routes>
 "#
     );
-    std::fs::write(dir.join("gap.rou.xml"), routes).unwrap();
-    let cfg = format!(
-        r#"<configuration>
-    <input><net-file value="{}"/><route-files value="gap.rou.xml"/></input>
-    <time><begin value="0"/><end value="150"/><step-length value="0.2"/></time>
-</configuration>
-"#,
-        net.file_name().unwrap().to_str().unwrap()
-    );
-    let path = dir.join("gap.sumocfg");
-    std::fs::write(&path, cfg).unwrap();
-    path
+    write_scenario(dir, "gap", &net, &routes, 150)
 }
 
 /// Where and how fast each ramp CAV that moved over on the acceleration lane started to: its

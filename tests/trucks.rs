@@ -9,7 +9,7 @@ mod common;
 use std::path::{Path, PathBuf};
 
 use common::netconvert::merge;
-use common::{csv_rows, scenario_run, stderr};
+use common::{csv_rows, scenario_run, stderr, write_scenario};
 
 /// Cars, 12 m trucks and 16.5 m trucks with their own accelerations and top speeds, on the
 /// main road and the ramp, for 300 s at the planners' step.
@@ -27,18 +27,7 @@ fn scenario(dir: &Path) -> PathBuf {
     <flow id="r" type="mix" route="ramp" begin="0" end="300" vehsPerHour="400" departSpeed="max"/>
 </routes>
 "#;
-    std::fs::write(dir.join("mix.rou.xml"), routes).unwrap();
-    let cfg = format!(
-        r#"<configuration>
-    <input><net-file value="{}"/><route-files value="mix.rou.xml"/></input>
-    <time><begin value="0"/><end value="300"/><step-length value="0.2"/></time>
-</configuration>
-"#,
-        net.file_name().unwrap().to_str().unwrap()
-    );
-    let path = dir.join("mix.sumocfg");
-    std::fs::write(&path, cfg).unwrap();
-    path
+    write_scenario(dir, "mix", &net, routes, 300)
 }
 
 #[test]

@@ -21,18 +21,7 @@ pub fn scenario(dir: &Path, net: &Path, flows: &[Flow], (flows_end, end): (u32, 
              vehsPerHour=\"{rate}\" departSpeed=\"max\" departLane=\"{lane}\"/>\n"
         );
     }
-    std::fs::write(dir.join("s.rou.xml"), routes + "</routes>\n").unwrap();
-    let cfg = format!(
-        r#"<configuration>
-    <input><net-file value="{}"/><route-files value="s.rou.xml"/></input>
-    <time><begin value="0"/><end value="{end}"/><step-length value="0.2"/></time>
-</configuration>
-"#,
-        net.file_name().unwrap().to_str().unwrap()
-    );
-    let path = dir.join("s.sumocfg");
-    std::fs::write(&path, cfg).unwrap();
-    path
+    super::write_scenario(dir, "s", net, &(routes + "</routes>\n"), end)
 }
 
 /// Per flow: vehicles inserted, arrived, and their mean delay (SUMO's timeLoss plus the wait

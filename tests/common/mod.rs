@@ -53,6 +53,29 @@ pub fn random_obs(rng: &mut ChaCha8Rng) -> Observation {
     o
 }
 
+/// Writes `routes` as `NAME.rou.xml` and `NAME.sumocfg` into `dir`: the network `net` (in
+/// `dir`) and those routes from 0 to `end` s at 0.2 s steps. Returns the configuration's path.
+pub fn write_scenario(
+    dir: &std::path::Path,
+    name: &str,
+    net: &std::path::Path,
+    routes: &str,
+    end: u32,
+) -> std::path::PathBuf {
+    std::fs::write(dir.join(format!("{name}.rou.xml")), routes).unwrap();
+    let cfg = format!(
+        r#"<configuration>
+    <input><net-file value="{}"/><route-files value="{name}.rou.xml"/></input>
+    <time><begin value="0"/><end value="{end}"/><step-length value="0.2"/></time>
+</configuration>
+"#,
+        net.file_name().unwrap().to_str().unwrap()
+    );
+    let path = dir.join(format!("{name}.sumocfg"));
+    std::fs::write(&path, cfg).unwrap();
+    path
+}
+
 /// The `bkpbs` binary run with `args`.
 pub fn bkpbs(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_bkpbs"))
