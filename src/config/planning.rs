@@ -70,6 +70,12 @@ pub struct PlannerSettings {
     /// into a campaign's settings only when set, so campaigns of earlier versions still match.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub gap_seeking: Option<bool>,
+    /// Whether a main-road CAV leaves a ramp HDV ahead of it, about to merge into its lane, the
+    /// gap SUMO's lane-change model asks of that merger's new follower, where it can by braking
+    /// comfortably (`planner::mastar::courtesy`). Unset (the default): on for a scenario of the
+    /// user's own, off on the paper's demand, as `gap_seeking`; written only when set.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub courtesy: Option<bool>,
 }
 
 /// The `accelerate` primitive's acceleration where neither the configuration nor the vehicle
@@ -89,6 +95,13 @@ impl PlannerSettings {
     /// search is kept.
     pub fn seeks_gaps(&self, own_scenario: bool) -> bool {
         self.gap_seeking.unwrap_or(own_scenario)
+    }
+
+    /// Whether main-road CAVs leave a ramp HDV ahead the gap SUMO asks for it (`courtesy`), on a
+    /// scenario of the user's own (`own_scenario`) or on the paper's demand: as set, else only
+    /// on the user's own (docs/src/own-scenario.md gives what it changed on SUMO's `ramp` game).
+    pub fn is_courteous(&self, own_scenario: bool) -> bool {
+        self.courtesy.unwrap_or(own_scenario)
     }
 }
 
@@ -115,6 +128,7 @@ impl Default for PlannerSettings {
             s_bin: 1.0,
             v_bin: 0.5,
             gap_seeking: None,
+            courtesy: None,
         }
     }
 }

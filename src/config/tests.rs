@@ -47,22 +47,30 @@ fn planner_accel_is_unset_unless_written() {
     assert_eq!(back, c);
 }
 
-/// `[planner] gap_seeking` is unset by default and then not written, so the settings of
-/// campaigns from before it still match: on a scenario of the user's own ramp CAVs seek gaps,
-/// on the paper's demand they do not. Set either way, it holds everywhere, is written and
-/// round-trips.
+/// `[planner] gap_seeking` and `courtesy` are unset by default and then not written, so the
+/// settings of campaigns from before them still match: on a scenario of the user's own ramp CAVs
+/// seek gaps and main-road CAVs are courteous, on the paper's demand neither. Set either way,
+/// each holds everywhere, is written and round-trips.
 #[test]
-fn gap_seeking_unset_is_on_for_a_scenario_only() {
+fn gap_seeking_and_courtesy_unset_are_on_for_a_scenario_only() {
     let unset = Config::default();
-    assert!(unset.planner.gap_seeking.is_none());
-    assert!(!unset.to_toml().contains("gap_seeking"));
+    assert!(unset.planner.gap_seeking.is_none() && unset.planner.courtesy.is_none());
+    assert!(!unset.to_toml().contains("gap_seeking") && !unset.to_toml().contains("courtesy"));
     assert!(unset.planner.seeks_gaps(true) && !unset.planner.seeks_gaps(false));
+    assert!(unset.planner.is_courteous(true) && !unset.planner.is_courteous(false));
     for (text, on) in [("true", true), ("false", false)] {
-        let c: Config = toml::from_str(&format!("[planner]\ngap_seeking = {text}\n")).unwrap();
-        assert!(c.planner.seeks_gaps(true) == on && c.planner.seeks_gaps(false) == on);
-        assert!(c.to_toml().contains(&format!("gap_seeking = {text}")));
-        let back: Config = toml::from_str(&c.to_toml()).unwrap();
-        assert_eq!(back, c);
+        for key in ["gap_seeking", "courtesy"] {
+            let c: Config = toml::from_str(&format!("[planner]\n{key} = {text}\n")).unwrap();
+            let p = &c.planner;
+            let (own, paper) = match key {
+                "courtesy" => (p.is_courteous(true), p.is_courteous(false)),
+                _ => (p.seeks_gaps(true), p.seeks_gaps(false)),
+            };
+            assert!(own == on && paper == on, "{key} = {text}");
+            assert!(c.to_toml().contains(&format!("{key} = {text}")));
+            let back: Config = toml::from_str(&c.to_toml()).unwrap();
+            assert_eq!(back, c);
+        }
     }
 }
 

@@ -18,10 +18,12 @@ use std::sync::Arc;
 
 use crate::model::kinematics::BicycleState;
 use crate::model::math::Point;
-use crate::model::scene::{Origin, Scene};
+use crate::model::scene::{Kind, Origin, Scene};
 use crate::model::trajectory::Trajectory;
 use crate::planner::guard::{Guard, StartGuard};
-use crate::planner::mastar::{FirstMoves, Mastar, NoPlan, OngoingLaneChange, Plan, Request};
+use crate::planner::mastar::{
+    FirstMoves, Mastar, Merger, NoPlan, OngoingLaneChange, Plan, Request,
+};
 use crate::planner::memo::SearchMemo;
 use crate::planner::pbs::RequestFor;
 
@@ -110,8 +112,35 @@ impl LaneChanges {
                 agent: i,
             }),
             first_moves: None,
+            merger: merger_ahead(scene, i, lane),
         }
     }
+}
+
+/// The ramp HDV nearest ahead of scene vehicle `i` (in `lane`, a main-road lane) on an
+/// auxiliary lane merging into `lane`, past the start of its merge zone and not yet changing.
+fn merger_ahead(scene: &Scene, i: usize, lane: i32) -> Option<Merger> {
+    let road = &scene.road;
+    let me = &scene.vehicles[i];
+    if road.is_auxiliary(lane) {
+        return None;
+    }
+    (scene.vehicles.iter())
+        .filter(|o| o.kind == Kind::Hdv && o.origin == Origin::Ramp && !o.changing_lanes())
+        .filter(|o| road.is_auxiliary(o.lane) && road.toward_main(o.lane) == lane)
+        .filter(|o| o.rear() > me.front())
+        .filter_map(|o| {
+            let zone = road.zone_on(o.lane, o.front())?;
+            (o.front() >= zone.start && o.front() <= zone.end).then_some((o, zone.end))
+        })
+        .min_by(|(a, _), (b, _)| a.s.total_cmp(&b.s))
+        .map(|(o, lane_end)| Merger {
+            s: o.s,
+            speed: o.speed,
+            length: o.length,
+            width: o.width,
+            lane_end,
+        })
 }
 
 /// How BK-PBS plans each agent of a scene: the M-A* request of its current state, continuing

@@ -42,6 +42,7 @@ use super::far_side::FarSide;
 use crate::config::hdv::RampMergeStyle;
 use crate::config::Config;
 use crate::controller::Maneuver;
+use crate::model::braking::{stays_clear, Braking};
 use crate::model::road::{Road, FORCED_MERGE_ZONE};
 use crate::model::scene::{Kind, Origin, Scene, VehicleState};
 
@@ -221,50 +222,9 @@ fn lanes_of_cav(v: &VehicleState, m: &Maneuver) -> u64 {
     lanes_beside(v) | m.lane_change.map_or(0, |lc| bit(v.lane + lc.offset()))
 }
 
-/// One vehicle's worst-case longitudinal motion: `first` as the speed at the end of the first
-/// step (none: braking from the start), then braking at `decel` to a stop, or stopped dead after
-/// `reach` metres (the end of the acceleration lane, where SUMO halts a vehicle on the spot).
-#[derive(Debug, Clone, Copy)]
-struct Motion {
-    speed: f64,
-    first: Option<f64>,
-    decel: f64,
-    reach: f64,
-}
-
-impl Motion {
-    fn speed_after(&self, step: usize, previous: f64, dt: f64) -> f64 {
-        match (step, self.first) {
-            (1, Some(v)) => v,
-            _ => (previous - self.decel * dt).max(0.0),
-        }
-    }
-}
-
-/// Whether `back`, `gap` metres (bumper to bumper) behind `front`, stays at least `margin` behind
-/// it at every step end until it stands, both moving as SUMO steps them.
-fn stays_clear(back: Motion, front: Motion, gap: f64, margin: f64, b: &WorstCase) -> bool {
-    let (mut vb, mut vf, mut gap, mut moved) = (back.speed, front.speed, gap, 0.0);
-    for step in 1..=10_000 {
-        vb = back.speed_after(step, vb, b.dt);
-        vf = front.speed_after(step, vf, b.dt);
-        let advance = (vf * b.dt).min(front.reach - moved).max(0.0);
-        moved += advance;
-        gap += advance - vb * b.dt;
-        if gap < margin {
-            return false;
-        }
-        if vb <= 0.0 {
-            // The one behind stands; the one in front never moves backwards.
-            return true;
-        }
-    }
-    true
-}
-
 /// The CAV's own worst case after `m`: `m.speed` for one step, then its emergency braking.
-fn cav_motion(v: &VehicleState, m: &Maneuver, b: &WorstCase) -> Motion {
-    Motion {
+fn cav_motion(v: &VehicleState, m: &Maneuver, b: &WorstCase) -> Braking {
+    Braking {
         speed: v.speed,
         first: Some(m.speed),
         decel: b.cav_decel,
@@ -288,13 +248,13 @@ fn clear_of_lane_end(scene: &Scene, v: &VehicleState, m: &Maneuver, b: &WorstCas
     if lanes_of_cav(v, m) != bit(v.lane) {
         return true;
     }
-    let wall = Motion {
+    let wall = Braking {
         speed: 0.0,
         first: None,
         decel: b.cav_decel,
         reach: 0.0,
     };
-    stays_clear(cav_motion(v, m, b), wall, end - v.front(), b.margin, b)
+    stays_clear(cav_motion(v, m, b), wall, end - v.front(), b.margin, b.dt)
 }
 
 /// What the shield let through this step, before the command under check, for one scene vehicle.
@@ -389,7 +349,7 @@ pub fn clear_of_leaders(c: &Candidate) -> bool {
             } else {
                 return true;
             };
-            let worst = Motion {
+            let worst = Braking {
                 speed: o.speed,
                 first: None,
                 decel,
@@ -397,7 +357,7 @@ pub fn clear_of_leaders(c: &Candidate) -> bool {
             };
             let yields = yields_to(road, me, target, o);
             let margin = b.margin + if yields { b.yield_gap } else { 0.0 };
-            stays_clear(motion, worst, o.rear() - me.front(), margin, b)
+            stays_clear(motion, worst, o.rear() - me.front(), margin, b.dt)
         })
 }
 
@@ -513,7 +473,7 @@ pub fn clear_of_new_follower(c: &Candidate) -> bool {
         .max_by(|(_, a), (_, c)| a.s.total_cmp(&c.s));
     follower.is_none_or(|(j, f)| {
         // A CAV whose command went first this step drives it before it can brake.
-        let back = Motion {
+        let back = Braking {
             speed: f.speed,
             first: c.sent_speed(j),
             decel: b.follower_decel,
@@ -524,7 +484,7 @@ pub fn clear_of_new_follower(c: &Candidate) -> bool {
             cav_motion(me, c.m, b),
             me.rear() - f.front(),
             b.margin,
-            b,
+            b.dt,
         )
     })
 }

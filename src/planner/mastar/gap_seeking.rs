@@ -11,7 +11,10 @@
 //! 136 of 177 ramp-CAV merges started below 5 m/s; lane 1 at the merge broke down. The guide's
 //! "Your own scenario" chapter gives the paired comparisons.
 
+use crate::model::braking::{stays_clear, Braking};
+use crate::model::kinematics::BicycleState;
 use crate::model::trajectory::Trajectory;
+use crate::planner::mastar::obstacles::Obstacles;
 use crate::planner::mastar::{Mastar, Request};
 
 impl Mastar {
@@ -40,5 +43,49 @@ impl Mastar {
         beside.poses.iter_mut().for_each(|p| p.y = own_y);
         beside.committed = false;
         Some(beside)
+    }
+
+    /// Whether a ramp CAV at `st` (`length` long) may start its merge into lane `target` at
+    /// `step` of its plan, with gap seeking on: the nearest obstacle behind it in `target` then
+    /// (as predicted) must stay clear of it braking at `rule.follower_brake` while the CAV drives
+    /// one step and brakes at its emergency deceleration, the check the safety shield makes of
+    /// the new follower when the start comes ([`crate::model::braking`]). The safety rule alone
+    /// has that follower braking from the plan's start, as if it saw the change coming; SUMO's
+    /// drivers do not open gaps for a CAV under TraCI control, so plans kept promising merges a
+    /// few steps ahead that the shield refused when they came (SUMO's `ramp` game, seed 407:
+    /// 2 486 plans moved over later after the shield had refused the move now, 250 moved now).
+    /// True with gap seeking off and at the plan's first step, which the start guard judges.
+    pub(super) fn merge_start_admitted(
+        &self,
+        (st, length): (&BicycleState, f64),
+        target: i32,
+        step: usize,
+        obstacles: &Obstacles,
+    ) -> bool {
+        if !self.seeks_gaps || step == 0 {
+            return true;
+        }
+        let target_y = self.lane_y(target);
+        let follower = (obstacles.at(step).iter())
+            .filter(|o| (o.pose.y - target_y).abs() < self.road.lane_width - 1e-6)
+            .filter(|o| o.pose.s <= st.pos.x)
+            .max_by(|a, b| a.pose.s.total_cmp(&b.pose.s));
+        follower.is_none_or(|f| {
+            let back = Braking {
+                speed: f.forward_speed(),
+                first: None,
+                decel: self.rule.follower_brake,
+                reach: f64::INFINITY,
+            };
+            let speed = st.speed * st.heading.cos();
+            let front = Braking {
+                speed,
+                first: Some(speed),
+                decel: self.rule.brake,
+                reach: f64::INFINITY,
+            };
+            let gap = (st.pos.x - 0.5 * length) - (f.pose.s + 0.5 * f.length);
+            stays_clear(back, front, gap, self.rule.margin_long, self.library.dt)
+        })
     }
 }

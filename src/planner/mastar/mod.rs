@@ -37,6 +37,7 @@ use crate::planner::primitives::{Library, Primitive, Throttle};
 use crate::planner::safety::SafetyRule;
 use crate::planner::search::{astar, Stop};
 
+mod courtesy;
 mod first_moves;
 mod gap_seeking;
 mod obstacles;
@@ -44,6 +45,7 @@ mod phase;
 #[cfg(test)]
 mod tests;
 
+pub use crate::planner::mastar::courtesy::Merger;
 pub use crate::planner::mastar::first_moves::FirstMoves;
 
 /// Which phase produced a plan.
@@ -100,6 +102,8 @@ pub struct Request<'a> {
     /// Where the moves from this start are kept between searches (none: worked out each time).
     /// It must belong to this start, guard and lane change under way.
     pub first_moves: Option<&'a FirstMoves>,
+    /// The ramp HDV ahead that merges into this CAV's lane, if any ([`courtesy`]).
+    pub merger: Option<Merger>,
 }
 
 /// A plan found by M-A*.
@@ -153,6 +157,9 @@ pub struct Mastar {
     pub rule: SafetyRule,
     /// Whether ramp CAVs seek gaps ([`PlannerSettings::seeks_gaps`], `gap_seeking`).
     pub seeks_gaps: bool,
+    /// Whether main-road CAVs leave a ramp HDV ahead the gap SUMO asks of its new follower
+    /// ([`PlannerSettings::is_courteous`], `courtesy`).
+    pub courtesy: bool,
 }
 
 impl Mastar {
@@ -168,6 +175,7 @@ impl Mastar {
         let mut planner = Mastar::new(&config.planner, road, s.dt, s.lane_change_duration, s.v_max);
         planner.rule.follower_brake = config.idm.decel;
         planner.seeks_gaps = config.planner.seeks_gaps(s.sumocfg.is_some());
+        planner.courtesy = config.planner.is_courteous(s.sumocfg.is_some());
         planner
     }
 
@@ -197,6 +205,7 @@ impl Mastar {
             v_max,
             rule,
             seeks_gaps: settings.seeks_gaps(false),
+            courtesy: settings.is_courteous(false),
         }
     }
 
@@ -217,14 +226,21 @@ impl Mastar {
 
     /// Phase 1, then phase 2 if needed.
     pub fn plan(&self, req: &Request) -> Result<Plan, NoPlan> {
-        let gap_leader = self.gap_leader(req);
-        let with_leader: Vec<&Trajectory>;
-        let obstacles = match &gap_leader {
-            Some(leader) => {
-                with_leader = req.obstacles.iter().copied().chain([leader]).collect();
-                &with_leader[..]
-            }
-            None => req.obstacles,
+        let virtual_leaders: Vec<Trajectory> = [self.gap_leader(req), self.courtesy_leader(req)]
+            .into_iter()
+            .flatten()
+            .collect();
+        let with_leaders: Vec<&Trajectory>;
+        let obstacles = if virtual_leaders.is_empty() {
+            req.obstacles
+        } else {
+            with_leaders = req
+                .obstacles
+                .iter()
+                .copied()
+                .chain(&virtual_leaders)
+                .collect();
+            &with_leaders[..]
         };
         let near = Obstacles::near(
             obstacles,

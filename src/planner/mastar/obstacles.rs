@@ -46,7 +46,7 @@ impl Obstacles {
 
     /// The obstacles' bodies at `step`.
     #[inline]
-    fn at(&self, step: usize) -> &[Body] {
+    pub(super) fn at(&self, step: usize) -> &[Body] {
         &self.by_step[step]
     }
 }

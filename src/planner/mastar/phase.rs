@@ -301,11 +301,16 @@ impl<'p> PhaseSearch<'p> {
                         continue;
                     }
                     // From an auxiliary lane only towards the carriageway.
-                    if p.is_lane_change()
-                        && road.is_auxiliary(n.lane)
-                        && !road.is_merge(n.lane, lane)
-                    {
-                        continue;
+                    if p.is_lane_change() && road.is_auxiliary(n.lane) {
+                        let admitted = self.planner.merge_start_admitted(
+                            (&n.state, self.req.length),
+                            lane,
+                            n.step,
+                            self.obstacles,
+                        );
+                        if !road.is_merge(n.lane, lane) || !admitted {
+                            continue;
+                        }
                     }
                     let seg = if n.step == 0 {
                         library.rollout(p, &n.state, self.planner.lane_y(n.lane))

@@ -2,6 +2,7 @@
 
 use super::*;
 use crate::config::{LowSpeedLaneChanges, PlannerSettings};
+use crate::model::braking::{stays_clear, Braking};
 use crate::model::road::Road;
 use crate::model::scene::Scene;
 use crate::planner::guard::{Guard, StartGuard};
@@ -36,6 +37,7 @@ fn request<'a>(
         obstacles,
         guard: None,
         first_moves: None,
+        merger: None,
     }
 }
 
@@ -468,4 +470,115 @@ fn gap_seeking_unset_follows_the_scenario() {
     assert!(!seeks(Some(false), Some("ramp.sumocfg")));
     assert!(seeks(Some(true), None));
     assert!(!Mastar::on_paper_road().seeks_gaps);
+}
+
+/// A ramp CAV at 20 m/s on the acceleration lane, a car 40 m behind it in lane 1 at 27.7 m/s,
+/// the start guard refusing a merge now. The safety rule alone has that car braking from the
+/// plan's start, so a merge in front of it a few steps on passes; the safety shield, when that
+/// step comes, has it brake only then (at 5 m/s² while the CAV may brake at 6) and refuses. With
+/// gap seeking every merge the plan starts later is one the shield's check admits when it comes.
+#[test]
+fn gap_seeking_plans_no_later_merge_the_shield_would_refuse() {
+    let zone = Road::paper_default().zones[0];
+    let s = zone.start + 10.0;
+    let follower = other(s - 40.0, 1, 27.7);
+    let obs = [&follower];
+    let scene = Scene::on_paper_road(0.0, Vec::new());
+    let plan_with = |gap_seeking: bool| {
+        let mut config = crate::config::Config::default();
+        config.planner.gap_seeking = Some(gap_seeking);
+        let m = Mastar::from_config(&config, Road::paper_default());
+        let req = Request {
+            guard: Some(Guard {
+                check: &Closed,
+                scene: &scene,
+                agent: 0,
+            }),
+            ..request(&m, s, 0, 20.0, true, &obs)
+        };
+        (m.plan(&req).unwrap(), m)
+    };
+    // The step the merge starts at: the last one still on the acceleration lane's centre.
+    let merge_start = |plan: &Plan| (plan.trajectory.poses.iter()).position(|p| p.y.abs() > 1e-6);
+    let shield_admits = |plan: &Plan, m: &Mastar, k: usize| {
+        let (me, f) = (&plan.trajectory.poses[k], follower.at(k, 0.2));
+        let back = Braking {
+            speed: f.speed,
+            first: None,
+            decel: m.rule.follower_brake,
+            reach: f64::INFINITY,
+        };
+        let front = Braking {
+            speed: me.speed,
+            first: Some(me.speed),
+            decel: m.rule.brake,
+            reach: f64::INFINITY,
+        };
+        let gap = (me.s - 2.5) - (f.s + 2.5);
+        f.s > me.s || stays_clear(back, front, gap, m.rule.margin_long, 0.2)
+    };
+    let (without, m) = plan_with(false);
+    let k = merge_start(&without).expect("without gap seeking the plan merges");
+    assert!(without.trajectory.poses[k].s > follower.at(k, 0.2).s);
+    assert!(!shield_admits(&without, &m, k - 1), "{without:?}");
+    let (with, m) = plan_with(true);
+    // It speeds up first, shrinking the braking distances' difference, and moves over in
+    // front of the car once the shield will let it.
+    let k = merge_start(&with).expect("with gap seeking the plan merges too");
+    assert!(with.trajectory.poses[k].s > follower.at(k, 0.2).s);
+    assert!(shield_admits(&with, &m, k - 1), "{with:?}");
+}
+
+/// A main-road CAV at 25 m/s in lane 1, a ramp HDV at 20 m/s ahead of it on the acceleration
+/// lane. With courtesy the CAV keeps the gap SUMO asks of the merger's new follower behind it
+/// (2.5 m + 1 s at its speed), as if it drove in lane 1 already; too close to leave it by
+/// braking comfortably, it plans as without.
+#[test]
+fn courtesy_leaves_a_ramp_hdv_ahead_the_gap_sumo_asks_for() {
+    let zone = Road::paper_default().zones[0];
+    let s = zone.start + 10.0;
+    let plan_with = |courtesy: bool, gap: f64| {
+        let settings = PlannerSettings {
+            courtesy: Some(courtesy),
+            ..PlannerSettings::default()
+        };
+        let m = Mastar::new(&settings, Road::paper_default(), 0.2, 1.0, 35.0);
+        let merger = Merger {
+            s: s + 5.0 + gap,
+            speed: 20.0,
+            length: 5.0,
+            width: 2.0,
+            lane_end: zone.end,
+        };
+        let req = Request {
+            merger: Some(merger),
+            ..request(&m, s, 1, 25.0, false, &[])
+        };
+        (m.plan(&req).unwrap(), merger)
+    };
+    // Bumper gap behind the merger driving on at its speed, at each planned step.
+    let gaps = |plan: &Plan, merger: Merger| -> Vec<f64> {
+        let lane_end_stop = zone.end - 0.5 * merger.length;
+        (plan.trajectory.poses.iter().enumerate())
+            .map(|(k, p)| {
+                let hdv = (merger.s + merger.speed * 0.2 * k as f64).min(lane_end_stop);
+                (hdv - 2.5) - (p.s + 2.5)
+            })
+            .collect()
+    };
+    let sumo_gap = 2.5 + 20.0;
+    let (polite, merger) = plan_with(true, 40.0);
+    let (rude, _) = plan_with(false, 40.0);
+    assert!(
+        gaps(&polite, merger).iter().all(|&g| g >= sumo_gap - 0.5),
+        "{polite:?}"
+    );
+    assert!(
+        gaps(&rude, merger).iter().any(|&g| g < sumo_gap - 0.5),
+        "{rude:?}"
+    );
+    // 12 m behind at 5 m/s faster: braking at 2 m/s² to 20 m/s costs 6.25 m, so no.
+    let (close, _) = plan_with(true, 12.0);
+    let (close_rude, _) = plan_with(false, 12.0);
+    assert_eq!(close.trajectory.poses, close_rude.trajectory.poses);
 }
