@@ -8,7 +8,7 @@ mod common;
 use std::path::{Path, PathBuf};
 
 use common::netconvert::merge_of;
-use common::{csv_rows, scenario_run, stderr, write_scenario};
+use common::{csv_rows, scenario_run_safely, write_scenario};
 
 /// A one-lane motorway with a 200 m acceleration lane: a file of CAVs at up to 25 m/s on the
 /// main road (3000 veh/h, 1.2 s apart) and SUMO's drivers entering from the ramp, for 150 s.
@@ -46,10 +46,7 @@ fn main_road_cavs_let_a_ramp_hdv_ahead_merge() {
         let out = dir.path().join(name);
         let mut flags = vec!["--cav-types", "cav", "--seed", "5"];
         flags.extend_from_slice(extra);
-        let o = scenario_run(&cfg, "bk-pbs", &flags, &out);
-        assert!(o.status.success(), "{name}: {}", stderr(&o));
-        let ep = &csv_rows(&std::fs::read(out.join("episode.csv")).unwrap())[0];
-        assert_eq!(ep["controllable_crashed"], "0", "{name}: {ep:?}");
+        scenario_run_safely(&cfg, "bk-pbs", &flags, &out, name);
         ramp_hdv_delays(&out)
     };
     let mean = |d: &[f64]| d.iter().sum::<f64>() / d.len() as f64;

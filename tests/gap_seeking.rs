@@ -8,7 +8,7 @@ mod common;
 use std::path::{Path, PathBuf};
 
 use common::netconvert::merge;
-use common::{csv_rows, scenario_run, stderr, write_scenario};
+use common::{csv_rows, scenario_run_safely, write_scenario};
 
 /// Lane 1's cars drive at most this fast (m/s).
 const SLOW: f64 = 8.0;
@@ -66,10 +66,7 @@ fn a_ramp_cav_beside_a_slow_lane_keeps_to_its_speed() {
         let out = dir.path().join(name);
         let mut flags = vec!["--cav-types", "ramp", "--seed", "3", "--trajectories"];
         flags.extend_from_slice(extra);
-        let o = scenario_run(&cfg, "bk-pbs", &flags, &out);
-        assert!(o.status.success(), "{name}: {}", stderr(&o));
-        let ep = &csv_rows(&std::fs::read(out.join("episode.csv")).unwrap())[0];
-        assert_eq!(ep["controllable_crashed"], "0", "{name}: {ep:?}");
+        scenario_run_safely(&cfg, "bk-pbs", &flags, &out, name);
         merges(&out)
     };
     // The first three find lane 1 still free; the later ones meet its file of slow cars, and

@@ -127,6 +127,23 @@ pub fn scenario_run(
     bkpbs(&args)
 }
 
+/// [`scenario_run`], asserting that the episode succeeded with no vehicle in a controllable
+/// collision; returns its `episode.csv` row. `name` labels the run in a failure.
+pub fn scenario_run_safely(
+    cfg: &std::path::Path,
+    planner: &str,
+    flags: &[&str],
+    out: &std::path::Path,
+    name: &str,
+) -> BTreeMap<String, String> {
+    let o = scenario_run(cfg, planner, flags, out);
+    assert!(o.status.success(), "{name}: {}", stderr(&o));
+    let rows = csv_rows(&std::fs::read(out.join("episode.csv")).unwrap());
+    let ep = rows.into_iter().next().expect("one episode row");
+    assert_eq!(ep["controllable_crashed"], "0", "{name}: {ep:?}");
+    ep
+}
+
 /// What a run printed to stderr.
 pub fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
