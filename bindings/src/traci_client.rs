@@ -9,7 +9,7 @@ use std::collections::HashMap;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use bkpbs::model::scene::Limits;
+use bkpbs::model::scene::{Following, Limits};
 use bkpbs::sumo::{Collision, NewVehicle, RawVehicleState, SumoClient, SumoError, VehicleReadings};
 
 /// The caller's module, and the codes of the edges whose vehicles are read by index.
@@ -188,6 +188,10 @@ impl SumoClient for TraciClient<'_> {
             accel: self.call("vehicle.getAccel", (id,))?,
             decel: self.call("vehicle.getDecel", (id,))?,
             emergency_decel: self.call("vehicle.getEmergencyDecel", (id,))?,
+            following: Some(Following {
+                tau: self.call("vehicle.getTau", (id,))?,
+                min_gap: self.call("vehicle.getMinGap", (id,))?,
+            }),
         })
     }
     fn driving_distance(&self, id: &str, edge: &str, pos: f64) -> Result<f64, SumoError> {

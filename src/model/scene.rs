@@ -92,9 +92,9 @@ pub struct VehicleState {
 }
 
 /// What a vehicle can do longitudinally (m/s², positive): its SUMO type's `accel`, `decel` and
-/// `emergencyDecel` on a scenario of the user's own. A planner's own accelerations apply where
-/// they are lower (the paper's: 2, 2 and 6 m/s², below every SUMO default but a truck's or a
-/// bus's `accel`, 1.3 and 1.2).
+/// `emergencyDecel` on a scenario of the user's own, and the gap it follows at. A planner's own
+/// accelerations apply where they are lower (the paper's: 2, 2 and 6 m/s², below every SUMO
+/// default but a truck's or a bus's `accel`, 1.3 and 1.2).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Limits {
     /// Greatest acceleration.
@@ -103,6 +103,31 @@ pub struct Limits {
     pub decel: f64,
     /// Greatest deceleration.
     pub emergency_decel: f64,
+    /// The gap its SUMO type follows at (none: not a SUMO vehicle's, the paper's demand).
+    pub following: Option<Following>,
+}
+
+/// The gap a SUMO vehicle type keeps to its leader at equal speeds: `minGap` + `tau` · speed.
+/// SUMO's lane-change model asks as much of a merger's new follower.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Following {
+    /// `tau` (s).
+    pub tau: f64,
+    /// `minGap` (m).
+    pub min_gap: f64,
+}
+
+impl Following {
+    /// SUMO's defaults (`tau` 1 s, `minGap` 2.5 m).
+    pub const SUMO_DEFAULT: Following = Following {
+        tau: 1.0,
+        min_gap: 2.5,
+    };
+
+    /// The bumper gap kept behind a leader at `speed` (m).
+    pub fn gap_at(&self, speed: f64) -> f64 {
+        self.min_gap + self.tau * speed
+    }
 }
 
 impl Limits {
@@ -112,6 +137,7 @@ impl Limits {
         accel: f64::INFINITY,
         decel: f64::INFINITY,
         emergency_decel: f64::INFINITY,
+        following: None,
     };
 }
 

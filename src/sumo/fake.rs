@@ -10,7 +10,7 @@
 use std::collections::{HashMap, HashSet};
 
 use super::{Collision, NewVehicle, RawVehicleState, SumoClient, SumoError, VehicleReadings};
-use crate::model::scene::Limits;
+use crate::model::scene::{Following, Limits};
 
 /// A vehicle SUMO inserts, with what its type tells the loop about it.
 #[derive(Debug, Clone)]
@@ -46,6 +46,7 @@ impl FakeVehicle {
                 accel: 2.6,
                 decel: 4.5,
                 emergency_decel: 9.0,
+                following: Some(Following::SUMO_DEFAULT),
             },
             distance: 1000.0,
         }

@@ -97,7 +97,7 @@ shim_functions! {
     fn bk_vehicle_size / bkt_vehicle_size(id: *const c_char, length: *mut f64, width: *mut f64) -> i32;
     fn bk_vehicle_max_speed / bkt_vehicle_max_speed(id: *const c_char, out: *mut f64) -> i32;
     fn bk_vehicle_speed_factor / bkt_vehicle_speed_factor(id: *const c_char, out: *mut f64) -> i32;
-    fn bk_vehicle_limits / bkt_vehicle_limits(id: *const c_char, accel: *mut f64, decel: *mut f64, emergency: *mut f64) -> i32;
+    fn bk_vehicle_limits / bkt_vehicle_limits(id: *const c_char, accel: *mut f64, decel: *mut f64, emergency: *mut f64, tau: *mut f64, min_gap: *mut f64) -> i32;
     fn bk_read_vehicles / bkt_read_vehicles(states: *mut *const RawVehicleState, count: *mut usize, strings: *mut *const c_char, strings_len: *mut usize) -> i32;
     fn bk_collisions / bkt_collisions(items: *mut *const RawCollision, count: *mut usize, strings: *mut *const c_char, strings_len: *mut usize) -> i32;
     fn bk_set_speed / bkt_set_speed(id: *const c_char, speed: f64) -> i32;

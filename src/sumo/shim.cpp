@@ -304,11 +304,14 @@ int BK(vehicle_speed_factor)(const char* id, double* out) {
     return guarded([&] { *out = api::Vehicle::getSpeedFactor(id); });
 }
 
-int BK(vehicle_limits)(const char* id, double* accel, double* decel, double* emergency) {
+int BK(vehicle_limits)(const char* id, double* accel, double* decel, double* emergency,
+                       double* tau, double* min_gap) {
     return guarded([&] {
         *accel = api::Vehicle::getAccel(id);
         *decel = api::Vehicle::getDecel(id);
         *emergency = api::Vehicle::getEmergencyDecel(id);
+        *tau = api::Vehicle::getTau(id);
+        *min_gap = api::Vehicle::getMinGap(id);
     });
 }
 

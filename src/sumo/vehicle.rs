@@ -4,7 +4,7 @@
 use std::os::raw::c_char;
 
 use super::{c_string, decode, ffi, Simulation, SumoError};
-use crate::model::scene::Limits;
+use crate::model::scene::{Following, Limits};
 
 impl Simulation {
     /// The edges of a vehicle's route, in order (also of one SUMO has not inserted yet).
@@ -73,19 +73,32 @@ impl Simulation {
         Ok(factor)
     }
 
-    /// The vehicle's own acceleration, deceleration and emergency deceleration (m/s²): its
-    /// type's `accel`, `decel` and `emergencyDecel`, or what was set for it.
+    /// The vehicle's own acceleration, deceleration and emergency deceleration (m/s²) and the
+    /// gap it follows at: its type's `accel`, `decel`, `emergencyDecel`, `tau` and `minGap`, or
+    /// what was set for it.
     pub fn vehicle_limits(&self, id: &str) -> Result<Limits, SumoError> {
         let cid = c_string(id)?;
         let (mut accel, mut decel, mut emergency_decel) = (0.0, 0.0, 0.0);
+        let (mut tau, mut min_gap) = (0.0, 0.0);
         // SAFETY: a valid C string and out-pointers.
-        decode("vehicle.getAccel/getDecel/getEmergencyDecel", unsafe {
-            ffi::bk_vehicle_limits(cid.as_ptr(), &mut accel, &mut decel, &mut emergency_decel)
-        })?;
+        decode(
+            "vehicle.getAccel/getDecel/getEmergencyDecel/getTau/getMinGap",
+            unsafe {
+                ffi::bk_vehicle_limits(
+                    cid.as_ptr(),
+                    &mut accel,
+                    &mut decel,
+                    &mut emergency_decel,
+                    &mut tau,
+                    &mut min_gap,
+                )
+            },
+        )?;
         Ok(Limits {
             accel,
             decel,
             emergency_decel,
+            following: Some(Following { tau, min_gap }),
         })
     }
 

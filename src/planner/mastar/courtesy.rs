@@ -1,7 +1,9 @@
 //! Courtesy toward a ramp HDV: a main-road CAV in the lane a ramp HDV ahead of it merges into
-//! leaves it the gap SUMO's lane-change model asks of a merger's new follower, as SUMO's own
-//! drivers do for it (LC2013's cooperation), where it can by braking comfortably.
+//! leaves it the gap SUMO's lane-change model asks of a merger's new follower (the follower's
+//! own `minGap` and `tau` at the merger's speed: the CAV type's), as SUMO's own drivers do for it
+//! (LC2013's cooperation), where it can by braking comfortably.
 
+use crate::model::scene::Following;
 use crate::model::trajectory::{Pose, Trajectory};
 use crate::planner::mastar::{Mastar, Request};
 
@@ -21,11 +23,6 @@ pub struct Merger {
     pub lane_end: f64,
 }
 
-/// The gap SUMO's lane-change model asks of a merger's new follower at equal speeds: the
-/// follower's minGap and its time headway `tau` (SUMO's defaults: 2.5 m, 1 s).
-const SUMO_MIN_GAP: f64 = 2.5;
-const SUMO_TAU: f64 = 1.0;
-
 impl Mastar {
     /// The merger of `req` as a vehicle in the CAV's own lane, its rear moved back so that the
     /// safety rule's gap behind it is the one SUMO's lane-change model asks of its new follower;
@@ -38,7 +35,9 @@ impl Mastar {
         let v = req.start.speed;
         let closing = (v - m.speed).max(0.0);
         let slack = closing * closing / (2.0 * self.library.decel);
-        let wanted = SUMO_MIN_GAP + SUMO_TAU * m.speed;
+        // SUMO asks the follower's own `minGap` and `tau`: the CAV's type's, or SUMO's defaults.
+        let following = req.limits.following.unwrap_or(Following::SUMO_DEFAULT);
+        let wanted = following.gap_at(m.speed);
         if gap - slack < wanted {
             return None;
         }

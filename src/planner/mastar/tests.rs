@@ -5,6 +5,7 @@ use crate::config::{LowSpeedLaneChanges, PlannerSettings};
 use crate::model::braking::{stays_clear, Braking};
 use crate::model::road::Road;
 use crate::model::scene::Scene;
+use crate::model::scene::{Following, Limits};
 use crate::planner::guard::{Guard, StartGuard};
 use crate::planner::primitives::Primitive;
 
@@ -370,6 +371,7 @@ fn a_cav_is_planned_within_its_own_accelerations() {
         accel,
         decel: 4.0,
         emergency_decel: 7.0,
+        following: None,
     };
     let mut capped = crate::config::Config::default();
     capped.planner.accel = Some(2.0);
@@ -581,4 +583,58 @@ fn courtesy_leaves_a_ramp_hdv_ahead_the_gap_sumo_asks_for() {
     let (close, _) = plan_with(true, 12.0);
     let (close_rude, _) = plan_with(false, 12.0);
     assert_eq!(close.trajectory.poses, close_rude.trajectory.poses);
+}
+
+/// The courtesy gap is the CAV type's own (`tau`, `minGap`, read from SUMO), SUMO's defaults
+/// only where the CAV has none: 50 m behind a merger 5 m/s slower, with `tau` 2 s it keeps
+/// 2.5 m + 2 s behind it at 20 m/s; with SUMO's 1 s it closes in to about 35 m.
+#[test]
+fn courtesy_keeps_the_cav_types_own_following_gap() {
+    let zone = Road::paper_default().zones[0];
+    let s = zone.start + 10.0;
+    let settings = PlannerSettings {
+        courtesy: Some(true),
+        ..PlannerSettings::default()
+    };
+    let m = Mastar::new(&settings, Road::paper_default(), 0.2, 1.0, 35.0);
+    let merger = Merger {
+        s: s + 5.0 + 50.0,
+        speed: 20.0,
+        length: 5.0,
+        width: 2.0,
+        lane_end: zone.end,
+    };
+    // A car beside it in lane 2 keeps it in lane 1.
+    let beside = other(s, 2, 25.0);
+    let obs = [&beside];
+    let plan = |following: Option<Following>| {
+        let base = request(&m, s, 1, 25.0, false, &obs);
+        let limits = Limits {
+            following,
+            ..base.limits
+        };
+        let req = Request {
+            merger: Some(merger),
+            limits,
+            ..base
+        };
+        m.plan(&req).unwrap()
+    };
+    let least_gap = |plan: &Plan| {
+        let stop = zone.end - 0.5 * merger.length;
+        (plan.trajectory.poses.iter().enumerate())
+            .map(|(k, p)| (merger.s + merger.speed * 0.2 * k as f64).min(stop) - 2.5 - (p.s + 2.5))
+            .fold(f64::INFINITY, f64::min)
+    };
+    let patient = Following {
+        tau: 2.0,
+        min_gap: 2.5,
+    };
+    let (own, default) = (plan(Some(patient)), plan(None));
+    assert!(least_gap(&own) >= patient.gap_at(20.0) - 0.5, "{own:?}");
+    assert!(
+        least_gap(&default) < patient.gap_at(20.0) - 0.5,
+        "{default:?}"
+    );
+    assert!(least_gap(&default) >= Following::SUMO_DEFAULT.gap_at(20.0) - 0.5);
 }
