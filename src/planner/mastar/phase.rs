@@ -302,13 +302,11 @@ impl<'p> PhaseSearch<'p> {
                     }
                     // From an auxiliary lane only towards the carriageway.
                     if p.is_lane_change() && road.is_auxiliary(n.lane) {
-                        let admitted = self.planner.merge_start_admitted(
-                            (&n.state, self.req.length),
-                            lane,
-                            n.step,
-                            self.obstacles,
-                        );
-                        if !road.is_merge(n.lane, lane) || !admitted {
+                        let admitted = || {
+                            let me = (&n.state, self.req.length);
+                            (self.planner).merge_start_admitted(me, lane, n.step, self.obstacles)
+                        };
+                        if !road.is_merge(n.lane, lane) || !admitted() {
                             continue;
                         }
                     }

@@ -531,6 +531,15 @@ fn gap_seeking_plans_no_later_merge_the_shield_would_refuse() {
     assert!(shield_admits(&with, &m, k - 1), "{with:?}");
 }
 
+/// The bumper gap from a planned 5 m CAV to `merger` (5 m, driving on at its speed and stopping
+/// at its lane's end) at each step of `plan`.
+fn gaps_behind(plan: &Plan, merger: Merger) -> Vec<f64> {
+    let stop = merger.lane_end - 0.5 * merger.length;
+    (plan.trajectory.poses.iter().enumerate())
+        .map(|(k, p)| (merger.s + merger.speed * 0.2 * k as f64).min(stop) - 2.5 - (p.s + 2.5))
+        .collect()
+}
+
 /// A main-road CAV at 25 m/s in lane 1, a ramp HDV at 20 m/s ahead of it on the acceleration
 /// lane. With courtesy the CAV keeps the gap SUMO asks of the merger's new follower behind it
 /// (2.5 m + 1 s at its speed), as if it drove in lane 1 already; too close to leave it by
@@ -558,16 +567,7 @@ fn courtesy_leaves_a_ramp_hdv_ahead_the_gap_sumo_asks_for() {
         };
         (m.plan(&req).unwrap(), merger)
     };
-    // Bumper gap behind the merger driving on at its speed, at each planned step.
-    let gaps = |plan: &Plan, merger: Merger| -> Vec<f64> {
-        let lane_end_stop = zone.end - 0.5 * merger.length;
-        (plan.trajectory.poses.iter().enumerate())
-            .map(|(k, p)| {
-                let hdv = (merger.s + merger.speed * 0.2 * k as f64).min(lane_end_stop);
-                (hdv - 2.5) - (p.s + 2.5)
-            })
-            .collect()
-    };
+    let gaps = |plan: &Plan, merger: Merger| gaps_behind(plan, merger);
     let sumo_gap = 2.5 + 20.0;
     let (polite, merger) = plan_with(true, 40.0);
     let (rude, _) = plan_with(false, 40.0);
@@ -621,9 +621,8 @@ fn courtesy_keeps_the_cav_types_own_following_gap() {
         m.plan(&req).unwrap()
     };
     let least_gap = |plan: &Plan| {
-        let stop = zone.end - 0.5 * merger.length;
-        (plan.trajectory.poses.iter().enumerate())
-            .map(|(k, p)| (merger.s + merger.speed * 0.2 * k as f64).min(stop) - 2.5 - (p.s + 2.5))
+        gaps_behind(plan, merger)
+            .into_iter()
             .fold(f64::INFINITY, f64::min)
     };
     let patient = Following {
