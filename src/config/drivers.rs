@@ -55,6 +55,35 @@ pub struct Mobil {
     pub merge_min_gap: f64,
     /// Minimum time between two lane-change decisions of one vehicle (s).
     pub decision_interval: f64,
+    /// Whether each CAV follows with its SUMO type's `accel`, `decel`, `tau` and `minGap` as
+    /// IDM's a, b, T and s0 (as SUMO's own IDM reads them) instead of `[idm]`'s, where SUMO gives
+    /// them (`controller::idm_mobil`). Unset (the default): on for a scenario of the user's own
+    /// (`scenario.sumocfg`), off on the paper's demand; written into a campaign's settings only
+    /// when set.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub type_following: Option<bool>,
+    /// Whether CAVs cooperate at merges: a main-road CAV leaves the ramp HDV whose new follower
+    /// it would be room, braking for it up to `merge_safe_braking`; a CAV whose merge is blocked
+    /// drops back behind the car alongside; no CAV changes into a lane another vehicle is moving
+    /// into nearby (`controller::merging`, `controller::lane_claims`). Unset (the default): on
+    /// for a scenario of the user's own, off on the paper's demand; written only when set.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub cooperative: Option<bool>,
+}
+
+impl Mobil {
+    /// Whether CAVs follow with their type's `tau` and `minGap` (`type_following`), on a scenario
+    /// of the user's own (`own_scenario`) or on the paper's demand: as set, else only on the
+    /// user's own.
+    pub fn follows_type(&self, own_scenario: bool) -> bool {
+        self.type_following.unwrap_or(own_scenario)
+    }
+
+    /// Whether CAVs cooperate at merges (`cooperative`), on a scenario of the user's own
+    /// (`own_scenario`) or on the paper's demand: as set, else only on the user's own.
+    pub fn cooperates(&self, own_scenario: bool) -> bool {
+        self.cooperative.unwrap_or(own_scenario)
+    }
 }
 
 impl Default for Mobil {
@@ -66,6 +95,8 @@ impl Default for Mobil {
             merge_safe_braking: 3.0,
             merge_min_gap: 2.5,
             decision_interval: 1.0,
+            type_following: None,
+            cooperative: None,
         }
     }
 }

@@ -47,23 +47,35 @@ fn planner_accel_is_unset_unless_written() {
     assert_eq!(back, c);
 }
 
-/// `[planner] gap_seeking` and `courtesy` are unset by default and then not written, so the
-/// settings of campaigns from before them still match: on a scenario of the user's own ramp CAVs
-/// seek gaps and main-road CAVs are courteous, on the paper's demand neither. Set either way,
-/// each holds everywhere, is written and round-trips.
+/// `[planner] gap_seeking` and `courtesy` and `[mobil] type_following` and `cooperative` are
+/// unset by default and then not written, so the settings of campaigns from before them still
+/// match: on a scenario of the user's own ramp CAVs seek gaps, main-road CAVs are courteous and
+/// IDM+MOBIL's CAVs follow with their type's parameters and cooperate, on the paper's demand
+/// none. Set either way, each holds everywhere, is written and round-trips.
 #[test]
-fn gap_seeking_and_courtesy_unset_are_on_for_a_scenario_only() {
+fn merge_behaviours_unset_are_on_for_a_scenario_only() {
     let unset = Config::default();
     assert!(unset.planner.gap_seeking.is_none() && unset.planner.courtesy.is_none());
-    assert!(!unset.to_toml().contains("gap_seeking") && !unset.to_toml().contains("courtesy"));
+    assert!(unset.mobil.type_following.is_none() && unset.mobil.cooperative.is_none());
+    for key in ["gap_seeking", "courtesy", "type_following", "cooperative"] {
+        assert!(!unset.to_toml().contains(key), "{key}");
+    }
     assert!(unset.planner.seeks_gaps(true) && !unset.planner.seeks_gaps(false));
     assert!(unset.planner.is_courteous(true) && !unset.planner.is_courteous(false));
+    assert!(unset.mobil.follows_type(true) && !unset.mobil.follows_type(false));
     for (text, on) in [("true", true), ("false", false)] {
-        for key in ["gap_seeking", "courtesy"] {
-            let c: Config = toml::from_str(&format!("[planner]\n{key} = {text}\n")).unwrap();
+        for key in ["gap_seeking", "courtesy", "type_following"] {
+            let section = if key == "type_following" {
+                "mobil"
+            } else {
+                "planner"
+            };
+            let c: Config = toml::from_str(&format!("[{section}]\n{key} = {text}\n")).unwrap();
             let p = &c.planner;
             let (own, paper) = match key {
                 "courtesy" => (p.is_courteous(true), p.is_courteous(false)),
+                "type_following" => (c.mobil.follows_type(true), c.mobil.follows_type(false)),
+                "cooperative" => (c.mobil.cooperates(true), c.mobil.cooperates(false)),
                 _ => (p.seeks_gaps(true), p.seeks_gaps(false)),
             };
             assert!(own == on && paper == on, "{key} = {text}");

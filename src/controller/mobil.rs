@@ -103,16 +103,21 @@ pub fn idm_in_lane(p: &Idm, scene: &Scene, i: usize, lane: i32) -> f64 {
 /// `merge_safe_braking` to cancel the speed difference before the gap shrinks to `merge_min_gap`.
 pub fn merge_is_safe(mobil: &Mobil, scene: &Scene, i: usize, target: i32) -> bool {
     let me = &scene.vehicles[i];
-    let ok = |back: &VehicleState, front: &VehicleState| {
-        let gap = front.rear() - back.front();
-        let room = gap - mobil.merge_min_gap;
-        let closing = (back.speed - front.speed).max(0.0);
-        room >= 0.0 && closing * closing <= 2.0 * mobil.merge_safe_braking * room
-    };
+    let ok = |back: &VehicleState, front: &VehicleState| gap_is_safe(mobil, back, front);
     let leader_ok = leader_index(scene, target, me.s, i).is_none_or(|l| ok(me, &scene.vehicles[l]));
     let follower_ok =
         follower_index(scene, target, me.s, i).is_none_or(|f| ok(&scene.vehicles[f], me));
     leader_ok && follower_ok
+}
+
+/// The merge's gap acceptance between two vehicles in one lane: the gap from `back` to `front`
+/// at least `merge_min_gap`, and `back` need brake no harder than `merge_safe_braking` to
+/// cancel the speed difference before it shrinks to that.
+pub fn gap_is_safe(mobil: &Mobil, back: &VehicleState, front: &VehicleState) -> bool {
+    let gap = front.rear() - back.front();
+    let room = gap - mobil.merge_min_gap;
+    let closing = (back.speed - front.speed).max(0.0);
+    room >= 0.0 && closing * closing <= 2.0 * mobil.merge_safe_braking * room
 }
 
 /// The MOBIL verdict for vehicle `i` moving to lane `target`: `Some(gain)` if the change is

@@ -9,6 +9,8 @@ pub mod bk_pbs;
 pub mod execute;
 pub mod idm;
 pub mod idm_mobil;
+pub mod lane_claims;
+pub mod merging;
 pub mod mobil;
 pub mod planner_kind;
 pub mod rl_ppo;
