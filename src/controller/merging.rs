@@ -7,13 +7,14 @@ use super::idm::{self, Leader};
 use super::mobil;
 use crate::config::{Idm, Mobil};
 use crate::model::road::MergeZone;
-use crate::model::scene::{Kind, Origin, Scene, VehicleState};
+use crate::model::scene::{Scene, VehicleState};
+use crate::planner::lane_changes::ramp_hdv_merging_ahead;
 
 /// The nose zone `v`'s front is on, past its start: where a ramp that joins without an
 /// acceleration lane lets its vehicles commit to the merge.
 pub fn nose_zone<'s>(scene: &'s Scene, v: &VehicleState) -> Option<&'s MergeZone> {
-    let z = scene.road.zone_on(v.lane, v.front())?;
-    (z.nose && (z.start..=z.end).contains(&v.front())).then_some(z)
+    let z = scene.road.nose_zone_at(v.lane, v.front())?;
+    (v.front() >= z.start).then_some(z)
 }
 
 /// The lane vehicle `v` must merge into and lines up for: from an acceleration lane (on the ramp
@@ -106,20 +107,8 @@ pub fn courtesy_acceleration((p, m): (&Idm, &Mobil), scene: &Scene, i: usize) ->
 
 /// The ramp HDV whose new follower scene vehicle `i` (on a main-road lane) would be.
 fn merger_yielded_to(scene: &Scene, i: usize) -> Option<usize> {
-    let road = &scene.road;
     let me = &scene.vehicles[i];
-    if road.is_auxiliary(me.lane) {
-        return None;
-    }
-    let (m, _) = (scene.vehicles.iter().enumerate())
-        .filter(|(_, o)| o.kind == Kind::Hdv && o.origin == Origin::Ramp && !o.changing_lanes())
-        .filter(|(_, o)| road.is_auxiliary(o.lane) && road.toward_main(o.lane) == me.lane)
-        .filter(|(_, o)| o.rear() > me.front())
-        .filter(|(_, o)| {
-            let zone = road.zone_on(o.lane, o.front());
-            zone.is_some_and(|z| (z.start..=z.end).contains(&o.front()))
-        })
-        .min_by(|(_, a), (_, b)| a.s.total_cmp(&b.s))?;
+    let (m, _) = ramp_hdv_merging_ahead(scene, i, me.lane)?;
     let s = scene.vehicles[m].s;
     (mobil::follower_index(scene, me.lane, s, m) == Some(i)).then_some(m)
 }
@@ -128,6 +117,7 @@ fn merger_yielded_to(scene: &Scene, i: usize) -> Option<usize> {
 mod tests {
     use super::*;
     use crate::model::road::Road;
+    use crate::model::scene::{Kind, Origin};
 
     fn car(id: &str, kind: Kind, origin: Origin, s: f64, lane: i32, speed: f64) -> VehicleState {
         VehicleState {

@@ -29,8 +29,7 @@ pub struct NoseCommitments {
 
 /// The nose zone of the lane vehicle `v` drives on, if it drives on one.
 fn nose_zone<'r>(road: &'r Road, v: &VehicleState) -> Option<&'r MergeZone> {
-    let z = road.zone_on(v.lane, v.front())?;
-    (z.nose && z.holds(v.front())).then_some(z)
+    road.nose_zone_at(v.lane, v.front())
 }
 
 impl NoseCommitments {

@@ -227,6 +227,13 @@ impl Road {
         on.find(|z| z.end >= s).or(last)
     }
 
+    /// The nose zone (a ramp joining without an acceleration lane, [`MergeZone::nose`]) on
+    /// `lane` that holds `s`, from where its ramp begins to the nose.
+    pub fn nose_zone_at(&self, lane: i32, s: f64) -> Option<&MergeZone> {
+        let z = self.zone_on(lane, s)?;
+        (z.nose && z.holds(s)).then_some(z)
+    }
+
     /// The zone whose traffic moves into `lane` that a vehicle there at `s` deals with (the
     /// first ahead, or the last), `None` if no auxiliary lane merges into it.
     pub fn zone_into(&self, lane: i32, s: f64) -> Option<&MergeZone> {

@@ -118,29 +118,36 @@ impl LaneChanges {
 }
 
 /// The ramp HDV nearest ahead of scene vehicle `i` (in `lane`, a main-road lane) on an
-/// auxiliary lane merging into `lane`, past the start of its merge zone and not yet changing.
-fn merger_ahead(scene: &Scene, i: usize, lane: i32) -> Option<Merger> {
+/// auxiliary lane merging into `lane`, past the start of its merge zone and not yet changing:
+/// its scene index and where its lane ends. M-A*'s courtesy and IDM+MOBIL's yield to it.
+pub fn ramp_hdv_merging_ahead(scene: &Scene, i: usize, lane: i32) -> Option<(usize, f64)> {
     let road = &scene.road;
     let me = &scene.vehicles[i];
     if road.is_auxiliary(lane) {
         return None;
     }
-    (scene.vehicles.iter())
-        .filter(|o| o.kind == Kind::Hdv && o.origin == Origin::Ramp && !o.changing_lanes())
-        .filter(|o| road.is_auxiliary(o.lane) && road.toward_main(o.lane) == lane)
-        .filter(|o| o.rear() > me.front())
-        .filter_map(|o| {
+    (scene.vehicles.iter().enumerate())
+        .filter(|(_, o)| o.kind == Kind::Hdv && o.origin == Origin::Ramp && !o.changing_lanes())
+        .filter(|(_, o)| road.is_auxiliary(o.lane) && road.toward_main(o.lane) == lane)
+        .filter(|(_, o)| o.rear() > me.front())
+        .filter_map(|(j, o)| {
             let zone = road.zone_on(o.lane, o.front())?;
-            (o.front() >= zone.start && o.front() <= zone.end).then_some((o, zone.end))
+            (o.front() >= zone.start && o.front() <= zone.end).then_some((j, zone.end))
         })
-        .min_by(|(a, _), (b, _)| a.s.total_cmp(&b.s))
-        .map(|(o, lane_end)| Merger {
-            s: o.s,
-            speed: o.speed,
-            length: o.length,
-            width: o.width,
-            lane_end,
-        })
+        .min_by(|&(a, _), &(b, _)| scene.vehicles[a].s.total_cmp(&scene.vehicles[b].s))
+}
+
+/// [`ramp_hdv_merging_ahead`] as the M-A* request carries it.
+fn merger_ahead(scene: &Scene, i: usize, lane: i32) -> Option<Merger> {
+    let (m, lane_end) = ramp_hdv_merging_ahead(scene, i, lane)?;
+    let o = &scene.vehicles[m];
+    Some(Merger {
+        s: o.s,
+        speed: o.speed,
+        length: o.length,
+        width: o.width,
+        lane_end,
+    })
 }
 
 /// How BK-PBS plans each agent of a scene: the M-A* request of its current state, continuing
